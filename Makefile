@@ -1,0 +1,44 @@
+# Thin wrapper around CMake. Every target installs what it needs first (idempotent).
+BUILD_DIR ?= build
+BUILD_TYPE ?= Release
+JOBS ?= 2
+DEMO_DIR ?= out/demo
+
+CMAKE_FLAGS := -DCMAKE_BUILD_TYPE=$(BUILD_TYPE)
+ifneq ($(shell command -v ccache 2>/dev/null),)
+CMAKE_FLAGS += -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache
+endif
+
+.PHONY: all deps configure build test demo bench test-data asan-test clean
+
+all: build
+
+deps:
+	bash scripts/install-deps.sh
+
+configure: deps
+	cmake -S . -B $(BUILD_DIR) $(CMAKE_FLAGS)
+
+build: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS)
+
+test-data: deps
+	bash scripts/fetch-test-data.sh
+
+test: build test-data
+	cd $(BUILD_DIR) && ctest --output-on-failure -j$(JOBS)
+
+demo: build test-data
+	bash scripts/demo.sh $(BUILD_DIR) $(DEMO_DIR)
+
+bench: build test-data
+	bash scripts/bench.sh $(BUILD_DIR)
+
+# AddressSanitizer + UndefinedBehaviorSanitizer build of the whole suite.
+asan-test: deps test-data
+	cmake --preset asan
+	cmake --build --preset asan -j$(JOBS)
+	ctest --preset asan -j$(JOBS)
+
+clean:
+	rm -rf $(BUILD_DIR) build-asan

@@ -1,0 +1,11 @@
+// commands.h: each subcommand of `cenote` registers itself on the top-level CLI11 app.
+// A subcommand's callback throws cenote::Error for bad input; main() prints it and exits 1.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace cenote::apps {
+
+void registerStereoCommand(CLI::App& app);
+
+}  // namespace cenote::apps

@@ -1,0 +1,25 @@
+// cenote: command-line front end of the mapping pipeline. `cenote --help` lists the subcommands.
+#include <spdlog/spdlog.h>
+
+#include <iostream>
+
+#include "apps/cenote/commands.h"
+#include "common/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"cenote: real-time dense 3D mapping for underwater robots"};
+  app.require_subcommand(1);
+  cenote::apps::registerStereoCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const cenote::Error& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "error: unexpected failure: " << e.what() << "\n";
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,128 @@
+// `cenote stereo`: disparity, confidence and depth of one stereo pair.
+#include <algorithm>
+#include <chrono>
+#include <iostream>
+#include <memory>
+#include <vector>
+
+#include "apps/cenote/commands.h"
+#include "common/error.h"
+#include "common/yaml_section.h"
+#include "pipeline/calibration/rectifier.h"
+#include "pipeline/image/image_io.h"
+#include "pipeline/stereo/stereo_matcher.h"
+
+namespace cenote::apps {
+namespace {
+
+struct StereoOptions {
+  std::string left, right, calib, config;
+  std::string out_disparity, out_confidence, out_depth, out_preview;
+  std::string cost;
+  int disparities = 0, min_disparity = -1, window = 0, paths = 0, repeat = 0;
+  bool lr_check = false;
+  double focal_px = 0.0, baseline_m = 0.0;
+};
+
+pipeline::StereoConfig makeConfig(const StereoOptions& o) {
+  pipeline::StereoConfig config;
+  if (!o.config.empty()) {
+    YamlSection root(loadYamlFile(o.config), "", o.config);
+    YamlSection section = root.section("stereo");
+    config.read(section);
+    section.finish();
+  }
+  if (!o.cost.empty()) {
+    config.cost = pipeline::parseMatchingCost(o.cost);
+    if (o.window == 0 && config.cost == pipeline::MatchingCost::kCensus) config.window_px = 5;
+  }
+  if (o.disparities > 0) config.num_disparities = o.disparities;
+  if (o.min_disparity >= 0) config.min_disparity_px = o.min_disparity;
+  if (o.window > 0) config.window_px = o.window;
+  if (o.paths > 0) config.num_paths = o.paths;
+  if (o.lr_check) config.lr_check = true;
+  return config;
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+void run(const StereoOptions& o) {
+  pipeline::StereoMatcher matcher(makeConfig(o));
+  pipeline::StereoFrame frame;
+  frame.left = pipeline::readImage(o.left, cv::IMREAD_COLOR);
+  frame.right = pipeline::readImage(o.right, cv::IMREAD_COLOR);
+  double focal_px = o.focal_px, baseline_m = o.baseline_m;
+  cv::Mat left = frame.left, right = frame.right;
+  if (!o.calib.empty()) {
+    const pipeline::Rectifier rectifier(pipeline::readStereoCalibration(o.calib));
+    const pipeline::RectifiedPair pair = rectifier.rectify(frame);
+    left = pair.left;
+    right = pair.right;
+    focal_px = pair.geometry.fx;
+    baseline_m = pair.geometry.baseline_m;
+  } else if (left.size() != right.size()) {
+    throw Error("stereo: right image " + o.right + " is " + std::to_string(right.cols) + "x" +
+                std::to_string(right.rows) + " but left image " + o.left + " is " + std::to_string(left.cols) +
+                "x" + std::to_string(left.rows));
+  }
+  if (!o.out_depth.empty() && !(focal_px > 0.0 && baseline_m > 0.0)) {
+    throw Error("stereo: --out-depth needs --calib (or --focal-px and --baseline-m)");
+  }
+
+  pipeline::DisparityMap result = matcher.match(left, right);
+  if (o.repeat > 0) {
+    std::vector<double> ms;
+    for (int i = 0; i < o.repeat; ++i) {
+      const auto start = std::chrono::steady_clock::now();
+      result = matcher.match(left, right);
+      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    }
+    std::cout << "stereo_ms_median=" << median(ms) << "\n";
+  }
+
+  pipeline::writePfm(o.out_disparity, result.disparity);
+  if (!o.out_confidence.empty()) pipeline::writePfm(o.out_confidence, result.confidence);
+  if (!o.out_depth.empty()) {
+    pipeline::writePfm(o.out_depth, pipeline::disparityToDepth(result.disparity, focal_px, baseline_m));
+  }
+  if (!o.out_preview.empty()) {
+    const auto& c = matcher.config();
+    pipeline::writeImage(o.out_preview, pipeline::colorizeMap(result.disparity, c.min_disparity_px,
+                                                              c.min_disparity_px + c.num_disparities));
+  }
+  const int valid = cv::countNonZero(result.confidence > 0.0f);
+  std::cout << "disparity " << left.cols << "x" << left.rows << ", valid "
+            << (100.0 * valid / std::max(1, left.cols * left.rows)) << " %, written to " << o.out_disparity << "\n";
+}
+
+}  // namespace
+
+void registerStereoCommand(CLI::App& app) {
+  auto options = std::make_shared<StereoOptions>();
+  CLI::App* cmd = app.add_subcommand("stereo", "Disparity, confidence and depth of one stereo pair");
+  cmd->add_option("--left", options->left, "Left image")->required();
+  cmd->add_option("--right", options->right, "Right image")->required();
+  cmd->add_option("--calib", options->calib, "Stereo calibration YAML (raw pairs are rectified)");
+  cmd->add_option("--config", options->config, "YAML file with a `stereo:` section");
+  cmd->add_option("--disparities", options->disparities, "Number of disparities (multiple of 16)");
+  cmd->add_option("--min-disparity", options->min_disparity, "First disparity searched");
+  cmd->add_option("--cost", options->cost, "Matching cost")->check(CLI::IsMember({"sad", "census"}));
+  cmd->add_option("--window", options->window, "Cost window side (SAD 1..9 odd, census 3 or 5)");
+  cmd->add_option("--paths", options->paths, "SGM paths")->check(CLI::IsMember({4, 8}));
+  cmd->add_flag("--lr-check", options->lr_check, "Left-right consistency check");
+  cmd->add_option("--focal-px", options->focal_px, "Focal length for depth without --calib");
+  cmd->add_option("--baseline-m", options->baseline_m, "Baseline for depth without --calib");
+  cmd->add_option("--out-disparity", options->out_disparity, "Disparity PFM (+inf = invalid)")->required();
+  cmd->add_option("--out-confidence", options->out_confidence, "PKRN confidence PFM");
+  cmd->add_option("--out-depth", options->out_depth, "Depth PFM in metres (+inf = none)");
+  cmd->add_option("--out-preview", options->out_preview, "Colour-mapped disparity PNG");
+  cmd->add_option("--repeat", options->repeat, "Match N more times and print stereo_ms_median")
+      ->check(CLI::NonNegativeNumber);
+  cmd->callback([options] { run(*options); });
+}
+
+}  // namespace cenote::apps

@@ -1,0 +1,116 @@
+// stereo_bench: ms/frame of cenote's matcher beside OpenCV's StereoSGBM on the same images, in
+// the same run, on the same number of threads. Prints a Markdown table for docs/PERFORMANCE.md.
+//   stereo_bench [--threads 2] [--repeat 15]
+// Inputs: Middlebury Cloth3 resized to 800x600 (the paper's image size) with 112 disparities,
+// and the Middlebury pairs at their own size (cones 64, Cloth3 128 disparities).
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
+
+#include "pipeline/stereo/stereo_matcher.h"
+#include "tests/support/test_data.h"
+
+using namespace cenote;
+
+namespace {
+
+struct Input {
+  std::string name;
+  cv::Mat left, right;  // grey
+  int disparities;
+};
+
+double medianMs(const std::function<void()>& run, int repeat) {
+  run();  // warm-up: allocations, page faults
+  std::vector<double> ms;
+  for (int i = 0; i < repeat; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    run();
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  std::sort(ms.begin(), ms.end());
+  return ms[ms.size() / 2];
+}
+
+cv::Mat grey(const cv::Mat& bgr) {
+  cv::Mat g;
+  cv::cvtColor(bgr, g, cv::COLOR_BGR2GRAY);
+  return g;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int threads = 2, repeat = 15;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--repeat")) repeat = std::atoi(argv[i + 1]);
+  }
+  omp_set_num_threads(threads);
+  cv::setNumThreads(threads);
+
+  std::vector<Input> inputs;
+  if (auto cloth = test::loadCloth3()) {
+    Input big{"Cloth3 resized 800x600", {}, {}, 112};
+    cv::resize(grey(cloth->left), big.left, cv::Size(800, 600), 0, 0, cv::INTER_AREA);
+    cv::resize(grey(cloth->right), big.right, cv::Size(800, 600), 0, 0, cv::INTER_AREA);
+    inputs.push_back(big);
+    inputs.push_back({"Cloth3 626x555", grey(cloth->left), grey(cloth->right), 128});
+  }
+  if (auto cones = test::loadCones()) inputs.push_back({"cones 450x375", grey(cones->left), grey(cones->right), 64});
+  if (inputs.empty()) {
+    // No data beside the project: a textured random pair still measures speed.
+    cv::Mat left(600, 800, CV_8U), right;
+    cv::randu(left, 0, 255);
+    cv::GaussianBlur(left, left, cv::Size(3, 3), 0);
+    cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, -20, 0, 1, 0);
+    cv::warpAffine(left, right, shift, left.size());
+    inputs.push_back({"random 800x600", left, right, 112});
+  }
+
+  std::printf("threads: %d, median of %d runs\n\n", threads, repeat);
+  std::printf("| input | disparities | method | ms/frame | Mcells/s | OpenCV 3WAY / this |\n");
+  std::printf("|---|---|---|---|---|---|\n");
+  for (const Input& in : inputs) {
+    const double cells = static_cast<double>(in.left.total()) * in.disparities;
+    struct Row {
+      std::string name;
+      double ms;
+    };
+    std::vector<Row> rows;
+    auto ours = [&](const char* name, pipeline::MatchingCost cost, int window, int paths) {
+      pipeline::StereoConfig c;
+      c.num_disparities = in.disparities;
+      c.cost = cost;
+      c.window_px = window;
+      c.num_paths = paths;
+      pipeline::StereoMatcher matcher(c);
+      rows.push_back({name, medianMs([&] { matcher.match(in.left, in.right); }, repeat)});
+    };
+    auto opencv = [&](const char* name, int mode) {
+      pipeline::StereoConfig c;  // same penalties as ours
+      auto sgbm = cv::StereoSGBM::create(0, in.disparities, 3, c.effectiveP1(), c.effectiveP2(), -1, 0, 0, 0, 0, mode);
+      cv::Mat out;
+      rows.push_back({name, medianMs([&] { sgbm->compute(in.left, in.right, out); }, repeat)});
+    };
+    ours("cenote SAD 3x3, 4 paths", pipeline::MatchingCost::kSad, 3, 4);
+    ours("cenote census 5x5, 4 paths", pipeline::MatchingCost::kCensus, 5, 4);
+    ours("cenote SAD 3x3, 8 paths", pipeline::MatchingCost::kSad, 3, 8);
+    opencv("OpenCV StereoSGBM MODE_HH4", cv::StereoSGBM::MODE_HH4);
+    opencv("OpenCV StereoSGBM MODE_SGBM_3WAY", cv::StereoSGBM::MODE_SGBM_3WAY);
+    const double three_way = rows.back().ms;
+    for (const Row& r : rows) {
+      std::printf("| %s | %d | %s | %.1f | %.0f | %.2fx |\n", in.name.c_str(), in.disparities, r.name.c_str(), r.ms,
+                  cells / (r.ms * 1e3), three_way / r.ms);
+    }
+  }
+  return 0;
+}

@@ -1,0 +1,63 @@
+// yaml_section.h: strict reading of one YAML mapping into a typed config struct.
+// Every key read is remembered; finish() rejects any key that was not read, so a typo such as
+// `stereo.window_sise` is an error naming the file and the key, never a silent default.
+// A value of the wrong type is an error naming the key and the expected type.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <set>
+#include <string>
+
+#include "common/error.h"
+
+namespace cenote {
+
+class YamlSection {
+ public:
+  // `node` must be a mapping (or null: an absent section keeps every default).
+  // `path` is the dotted name used in messages ("stereo"), `file` the source file name.
+  // @throws Error when node is neither a mapping nor null.
+  YamlSection(const YAML::Node& node, std::string path, std::string file);
+
+  // Reads `key` into `value` when present; leaves `value` unchanged when absent.
+  // @throws Error when the value cannot be converted to T.
+  template <typename T>
+  void read(const std::string& key, T& value) {
+    seen_.insert(key);
+    if (!node_ || node_.IsNull()) return;
+    const YAML::Node child = node_[key];
+    if (!child) return;
+    try {
+      value = child.as<T>();
+    } catch (const YAML::Exception&) {
+      throw Error(file_ + ": " + path_ + "." + key + " = '" + YAML::Dump(child) +
+                  "': expected " + typeName<T>());
+    }
+  }
+
+  // The sub-mapping `key` as a section of its own (which the caller must finish()).
+  YamlSection section(const std::string& key);
+
+  // @throws Error naming every key of the mapping that was never read.
+  void finish() const;
+
+ private:
+  template <typename T>
+  static const char* typeName() {
+    if constexpr (std::is_same_v<T, bool>) return "true or false";
+    else if constexpr (std::is_integral_v<T>) return "an integer";
+    else if constexpr (std::is_floating_point_v<T>) return "a number";
+    else return "a string";
+  }
+
+  YAML::Node node_;
+  std::string path_;
+  std::string file_;
+  std::set<std::string> seen_;
+};
+
+// Loads a YAML file. @throws Error when missing or unparsable (with the line of the error).
+YAML::Node loadYamlFile(const std::string& path);
+
+}  // namespace cenote

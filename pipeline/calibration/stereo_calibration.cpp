@@ -1,0 +1,252 @@
+#include "pipeline/calibration/stereo_calibration.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "common/error.h"
+
+namespace cenote::pipeline {
+namespace {
+
+void requireFile(const std::string& path) {
+  if (!std::filesystem::exists(path)) throw Error("calibration file not found: " + path);
+}
+
+cv::Mat readMatrix(const cv::FileStorage& fs, const std::string& path,
+                   std::initializer_list<const char*> names, int rows, int cols, bool required) {
+  for (const char* name : names) {
+    cv::FileNode node = fs[name];
+    if (node.empty()) continue;
+    cv::Mat m;
+    node >> m;
+    if (m.empty()) throw Error(path + ": " + name + " is not a matrix");
+    m.convertTo(m, CV_64F);
+    if (rows > 0 && m.total() != static_cast<size_t>(rows * cols)) {
+      throw Error(path + ": " + name + " must have " + std::to_string(rows * cols) + " values, has " +
+                  std::to_string(m.total()));
+    }
+    return rows > 0 ? m.reshape(1, rows) : m.reshape(1, 1);
+  }
+  if (required) throw Error(path + ": missing " + std::string(*names.begin()));
+  return {};
+}
+
+std::vector<double> toVector(const cv::Mat& m) {
+  std::vector<double> v;
+  for (size_t i = 0; i < m.total(); ++i) v.push_back(m.at<double>(static_cast<int>(i)));
+  return v;
+}
+
+StereoGeometry geometryFromProjections(const cv::Matx34d& P_left, const cv::Matx34d& P_right,
+                                       const cv::Size& size) {
+  StereoGeometry g;
+  g.fx = P_left(0, 0);
+  g.fy = P_left(1, 1);
+  g.cx = P_left(0, 2);
+  g.cy = P_left(1, 2);
+  // P_right = K [I | t] with t = (-b, 0, 0) relative to the left camera (both relative to the
+  // same reference camera, as KITTI's P0..P3 are).
+  g.baseline_m = (P_left(0, 3) - P_right(0, 3)) / P_right(0, 0);
+  g.image_size = size;
+  return g;
+}
+
+}  // namespace
+
+void StereoCalibration::validate() const {
+  if (image_size.width <= 0 || image_size.height <= 0) throw Error("calibration: image size is empty");
+  if (rectified) {
+    const StereoGeometry& g = rectified_geometry;
+    if (!(g.fx > 0 && g.fy > 0)) throw Error("calibration: rectified focal length must be positive");
+    if (!(std::abs(g.baseline_m) > 1e-9)) throw Error("calibration: rectified baseline is zero");
+    return;
+  }
+  for (const CameraIntrinsics* cam : {&left, &right}) {
+    const char* which = cam == &left ? "left" : "right";
+    if (!(cam->K(0, 0) > 0 && cam->K(1, 1) > 0)) {
+      throw Error(std::string("calibration: ") + which + " focal length must be positive");
+    }
+    const size_t n = cam->distortion.size();
+    if (!(n == 0 || n == 4 || n == 5 || n == 8)) {
+      throw Error(std::string("calibration: ") + which + " distortion must have 4, 5 or 8 coefficients, has " +
+                  std::to_string(n));
+    }
+  }
+  const cv::Matx33d should_be_identity = R.t() * R;
+  if (cv::norm(should_be_identity - cv::Matx33d::eye()) > 1e-6 || cv::determinant(R) < 0) {
+    throw Error("calibration: R is not a rotation matrix");
+  }
+  if (cv::norm(T) < 1e-9) throw Error("calibration: baseline T is zero");
+}
+
+StereoCalibration readStereoCalibration(const std::string& path) {
+  requireFile(path);
+  cv::FileStorage fs;
+  try {
+    fs.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw Error(path + ": not a readable calibration file: " + e.what());
+  }
+  if (!fs.isOpened()) throw Error(path + ": not a readable calibration file");
+  StereoCalibration c;
+  int width = 0, height = 0;
+  fs["image_width"] >> width;
+  fs["image_height"] >> height;
+  if (width <= 0 || height <= 0) throw Error(path + ": missing image_width / image_height");
+  c.image_size = cv::Size(width, height);
+  const cv::Mat P1 = readMatrix(fs, path, {"P1"}, 3, 4, false);
+  const cv::Mat K1 = readMatrix(fs, path, {"K1", "M1"}, 3, 3, false);
+  if (K1.empty() && !P1.empty()) {
+    const cv::Mat P2 = readMatrix(fs, path, {"P2"}, 3, 4, true);
+    c.rectified = true;
+    c.rectified_geometry = geometryFromProjections(cv::Matx34d(P1), cv::Matx34d(P2), c.image_size);
+  } else {
+    if (K1.empty()) throw Error(path + ": missing K1 (or P1/P2 for a rectified rig)");
+    c.left.K = cv::Matx33d(K1);
+    c.right.K = cv::Matx33d(readMatrix(fs, path, {"K2", "M2"}, 3, 3, true));
+    c.left.distortion = toVector(readMatrix(fs, path, {"D1"}, 0, 0, false));
+    c.right.distortion = toVector(readMatrix(fs, path, {"D2"}, 0, 0, false));
+    c.R = cv::Matx33d(readMatrix(fs, path, {"R"}, 3, 3, true));
+    const cv::Mat T = readMatrix(fs, path, {"T"}, 3, 1, true);
+    c.T = cv::Vec3d(T.at<double>(0), T.at<double>(1), T.at<double>(2));
+  }
+  try {
+    c.validate();
+  } catch (const Error& e) {
+    throw Error(path + ": " + e.what());
+  }
+  return c;
+}
+
+void writeStereoCalibration(const std::string& path, const StereoCalibration& c) {
+  const std::string tmp = path + ".tmp.yaml";
+  {
+    cv::FileStorage fs(tmp, cv::FileStorage::WRITE);
+    if (!fs.isOpened()) throw Error("cannot write " + path);
+    fs << "image_width" << c.image_size.width << "image_height" << c.image_size.height;
+    fs << "K1" << cv::Mat(c.left.K) << "D1" << cv::Mat(c.left.distortion, true);
+    fs << "K2" << cv::Mat(c.right.K) << "D2" << cv::Mat(c.right.distortion, true);
+    fs << "R" << cv::Mat(c.R) << "T" << cv::Mat(c.T);
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw Error("cannot write " + path + ": " + ec.message());
+}
+
+namespace {
+
+// EuRoC files start with "%YAML:1.0", which is OpenCV's spelling, not YAML's.
+YAML::Node loadEurocYaml(const std::string& path) {
+  requireFile(path);
+  std::ifstream in(path);
+  std::stringstream text;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("%YAML", 0) == 0) continue;
+    text << line << "\n";
+  }
+  try {
+    return YAML::Load(text.str());
+  } catch (const YAML::Exception& e) {
+    throw Error(path + ": not valid YAML: " + e.what());
+  }
+}
+
+template <typename T>
+std::vector<T> readList(const YAML::Node& root, const std::string& path, const std::string& key, size_t n) {
+  const YAML::Node node = root[key];
+  if (!node) throw Error(path + ": missing " + key);
+  std::vector<T> values;
+  try {
+    values = node.as<std::vector<T>>();
+  } catch (const YAML::Exception&) {
+    throw Error(path + ": " + key + " must be a list of numbers");
+  }
+  if (n > 0 && values.size() != n) {
+    throw Error(path + ": " + key + " must have " + std::to_string(n) + " values, has " + std::to_string(values.size()));
+  }
+  return values;
+}
+
+}  // namespace
+
+cv::Matx44d readEurocBodyFromSensor(const std::string& path) {
+  const YAML::Node root = loadEurocYaml(path);
+  const YAML::Node tbs = root["T_BS"];
+  if (!tbs) throw Error(path + ": missing T_BS");
+  const std::vector<double> data = readList<double>(tbs, path, "data", 16);
+  cv::Matx44d T;
+  for (int i = 0; i < 16; ++i) T.val[i] = data[i];
+  return T;
+}
+
+StereoCalibration readEurocSensorPair(const std::string& left_path, const std::string& right_path) {
+  StereoCalibration c;
+  cv::Matx44d T_body_cam[2];
+  for (int i = 0; i < 2; ++i) {
+    const std::string& path = i == 0 ? left_path : right_path;
+    const YAML::Node root = loadEurocYaml(path);
+    if (root["distortion_model"] && root["distortion_model"].as<std::string>() != "radial-tangential" &&
+        root["distortion_model"].as<std::string>() != "radtan") {
+      throw Error(path + ": distortion_model " + root["distortion_model"].as<std::string>() +
+                  " is not supported (radial-tangential only)");
+    }
+    const auto k = readList<double>(root, path, "intrinsics", 4);
+    const auto resolution = readList<int>(root, path, "resolution", 2);
+    CameraIntrinsics& cam = i == 0 ? c.left : c.right;
+    cam.K = cv::Matx33d(k[0], 0, k[2], 0, k[1], k[3], 0, 0, 1);
+    cam.distortion = readList<double>(root, path, "distortion_coefficients", 0);
+    const cv::Size size(resolution[0], resolution[1]);
+    if (i == 0) c.image_size = size;
+    if (i == 1 && size != c.image_size) {
+      throw Error(right_path + ": resolution differs from the left camera's");
+    }
+    T_body_cam[i] = readEurocBodyFromSensor(path);
+  }
+  // p_right = T_right_left * p_left, T_right_left = inv(T_body_right) * T_body_left.
+  const cv::Matx44d T_right_left = T_body_cam[1].inv() * T_body_cam[0];
+  c.R = T_right_left.get_minor<3, 3>(0, 0);
+  c.T = cv::Vec3d(T_right_left(0, 3), T_right_left(1, 3), T_right_left(2, 3));
+  try {
+    c.validate();
+  } catch (const Error& e) {
+    throw Error(left_path + " + " + right_path + ": " + e.what());
+  }
+  return c;
+}
+
+StereoCalibration readKittiCalibration(const std::string& path, const cv::Size& image_size,
+                                       const std::string& left, const std::string& right) {
+  requireFile(path);
+  std::ifstream in(path);
+  std::string line;
+  cv::Matx34d P[2];
+  bool found[2] = {false, false};
+  while (std::getline(in, line)) {
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    const std::string key = line.substr(0, colon);
+    for (int i = 0; i < 2; ++i) {
+      if (key != (i == 0 ? left : right)) continue;
+      std::istringstream values(line.substr(colon + 1));
+      for (int j = 0; j < 12; ++j) {
+        if (!(values >> P[i].val[j])) throw Error(path + ": row " + key + " must have 12 numbers");
+      }
+      found[i] = true;
+    }
+  }
+  for (int i = 0; i < 2; ++i) {
+    if (!found[i]) throw Error(path + ": missing row " + (i == 0 ? left : right));
+  }
+  StereoCalibration c;
+  c.image_size = image_size;
+  c.rectified = true;
+  c.rectified_geometry = geometryFromProjections(P[0], P[1], image_size);
+  c.validate();
+  return c;
+}
+
+}  // namespace cenote::pipeline

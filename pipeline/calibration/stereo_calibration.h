@@ -1,0 +1,59 @@
+// stereo_calibration.h: a calibrated stereo rig, and the file formats it is read from.
+//
+// Conventions (OpenCV's stereoCalibrate / stereoRectify): R, T map points of the left camera
+// to the right camera, p_right = R * p_left + T, with T in metres. Distortion is radial-tangential
+// (k1, k2, p1, p2[, k3]).
+// An already rectified rig (KITTI-style projection matrices) has `rectified` set and carries
+// its geometry directly; it passes through the rectifier untouched.
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "pipeline/frame/frames.h"
+
+namespace cenote::pipeline {
+
+struct CameraIntrinsics {
+  cv::Matx33d K = cv::Matx33d::eye();
+  std::vector<double> distortion;  // empty = none
+};
+
+struct StereoCalibration {
+  cv::Size image_size;
+  CameraIntrinsics left, right;
+  cv::Matx33d R = cv::Matx33d::eye();
+  cv::Vec3d T = {0.0, 0.0, 0.0};
+  bool rectified = false;
+  StereoGeometry rectified_geometry;  // only when rectified
+
+  // @throws cenote::Error naming the first implausible value (non-positive focal length,
+  // zero baseline, non-orthonormal R, empty size).
+  void validate() const;
+};
+
+// OpenCV FileStorage YAML (the layout `cenote calibrate` writes):
+//   image_width, image_height, K1, D1, K2, D2, R, T      (raw rig), or
+//   image_width, image_height, P1, P2                    (rectified; baseline = -P2(0,3) / P2(0,0))
+// M1/M2 are accepted for K1/K2 (OpenCV samples' names). @throws cenote::Error.
+StereoCalibration readStereoCalibration(const std::string& path);
+
+// Writes the raw-rig layout above. @throws cenote::Error.
+void writeStereoCalibration(const std::string& path, const StereoCalibration& calibration);
+
+// EuRoC / Kalibr-style `sensor.yaml` of each camera: intrinsics [fu, fv, cu, cv],
+// distortion_coefficients (radial-tangential), resolution [w, h], T_BS (camera to body).
+// @throws cenote::Error.
+StereoCalibration readEurocSensorPair(const std::string& left_sensor_yaml,
+                                      const std::string& right_sensor_yaml);
+
+// Camera-to-body transform (T_BS) of one EuRoC sensor.yaml. @throws cenote::Error.
+cv::Matx44d readEurocBodyFromSensor(const std::string& sensor_yaml);
+
+// KITTI `calib.txt` (rectified): rows "P0: 12 numbers" ...; `left`/`right` name the rows
+// ("P0"/"P1" grey, "P2"/"P3" colour). @throws cenote::Error.
+StereoCalibration readKittiCalibration(const std::string& path, const cv::Size& image_size,
+                                       const std::string& left = "P0", const std::string& right = "P1");
+
+}  // namespace cenote::pipeline

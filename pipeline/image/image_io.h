@@ -1,0 +1,29 @@
+// image_io.h: reading and writing the image files of the pipeline.
+//   PFM: float32 maps (Middlebury's format: rows bottom to top, little-endian, +inf = invalid).
+//   PNG/JPG: 8-bit images through OpenCV, with errors that name the file and the problem.
+// Writes go to a temporary file renamed into place, so a crash never leaves half a file.
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+
+namespace cenote::pipeline {
+
+// @param image CV_32FC1 or CV_32FC3. @throws cenote::Error when the file cannot be written.
+void writePfm(const std::string& path, const cv::Mat& image);
+
+// @return CV_32FC1 or CV_32FC3. @throws cenote::Error when missing, truncated or not a PFM file.
+cv::Mat readPfm(const std::string& path);
+
+// @param flags cv::IMREAD_* flags. @throws cenote::Error when missing or not a readable image.
+cv::Mat readImage(const std::string& path, int flags);
+
+// @throws cenote::Error when the image cannot be encoded or written.
+void writeImage(const std::string& path, const cv::Mat& image);
+
+// Colour-mapped preview (turbo) of a float map over [min_value, max_value]; non-finite pixels
+// black. When min_value >= max_value the range of the finite values is used.
+cv::Mat colorizeMap(const cv::Mat& map, double min_value = 0.0, double max_value = 0.0);
+
+}  // namespace cenote::pipeline

@@ -1,0 +1,103 @@
+#include "pipeline/stereo/stereo_config.h"
+
+#include "common/error.h"
+#include "common/yaml_section.h"
+
+namespace cenote::pipeline {
+namespace {
+
+// Census window side -> number of comparison bits (every pixel but the centre).
+int censusBits(int window_px) { return window_px * window_px - 1; }
+
+}  // namespace
+
+int StereoConfig::sadShift() const {
+  int shift = 0;
+  while (((window_px * window_px * 255) >> shift) > 4095) ++shift;
+  return shift;
+}
+
+int StereoConfig::maxCost() const {
+  if (cost == MatchingCost::kCensus) return censusBits(window_px);
+  return (window_px * window_px * 255) >> sadShift();
+}
+
+// Defaults from a sweep on Middlebury cones and Cloth3 (bad-1 / bad-2 of
+// tests/pipeline/stereo/middlebury_test.cpp); the penalties scale with the cost's range, as
+// OpenCV's 8*w*w / 32*w*w do for its own cost. SAD 3x3: P1 = 90, P2 = 360; census 5x5: 10, 30.
+int StereoConfig::effectiveP1() const {
+  if (p1 >= 0) return p1;
+  if (cost == MatchingCost::kCensus) return (5 * censusBits(window_px) + 6) / 12;
+  return std::max(1, (10 * window_px * window_px) >> sadShift());
+}
+
+int StereoConfig::effectiveP2() const {
+  if (p2 >= 0) return p2;
+  if (cost == MatchingCost::kCensus) return (5 * censusBits(window_px) + 2) / 4;
+  return std::max(2, (40 * window_px * window_px) >> sadShift());
+}
+
+std::vector<ConfigError> StereoConfig::validate() const {
+  ConfigErrors errors("stereo");
+  errors.check(num_disparities >= 16 && num_disparities <= 512 && num_disparities % 16 == 0,
+               "num_disparities", num_disparities, "must be a multiple of 16 in [16, 512]");
+  errors.check(min_disparity_px >= 0 && min_disparity_px <= 4096, "min_disparity_px",
+               min_disparity_px, "must be in [0, 4096]");
+  if (cost == MatchingCost::kSad) {
+    errors.check(window_px >= 1 && window_px <= 9 && window_px % 2 == 1, "window_px", window_px,
+                 "SAD window must be odd in [1, 9]");
+  } else {
+    errors.check(window_px == 3 || window_px == 5, "window_px", window_px,
+                 "census window must be 3 or 5");
+  }
+  errors.check(num_paths == 4 || num_paths == 8, "num_paths", num_paths, "must be 4 or 8");
+  errors.check(p1 >= -1, "p1", p1, "must be >= 0 (or -1 for the default)");
+  errors.check(p2 >= -1, "p2", p2, "must be >= 0 (or -1 for the default)");
+  const bool window_ok = window_px >= 1 && window_px <= 9;
+  if (p1 >= -1 && p2 >= -1 && window_ok) {
+    errors.check(effectiveP2() >= effectiveP1(), "p2", effectiveP2(),
+                 "must be >= p1 (" + std::to_string(effectiveP1()) + ")");
+    // Path costs are bounded by maxCost + P2; the sum over all paths must fit in 16 bits.
+    const long bound = static_cast<long>(num_paths) * (maxCost() + effectiveP2() + effectiveP1());
+    errors.check(bound <= 65535, "p2", effectiveP2(),
+                 "num_paths * (max cost " + std::to_string(maxCost()) + " + p1 + p2) must be <= 65535");
+  }
+  errors.check(p2_gradient_scale > 0.0, "p2_gradient_scale", p2_gradient_scale, "must be > 0");
+  errors.check(min_confidence >= 0.0, "min_confidence", min_confidence, "must be >= 0");
+  errors.check(lr_max_diff_px >= 0, "lr_max_diff_px", lr_max_diff_px, "must be >= 0");
+  errors.check(num_strips >= 1 && num_strips <= 64, "num_strips", num_strips, "must be in [1, 64]");
+  errors.check(strip_overlap_px >= 0 && strip_overlap_px <= 256, "strip_overlap_px",
+               strip_overlap_px, "must be in [0, 256]");
+  return errors.take();
+}
+
+void StereoConfig::read(YamlSection& section) {
+  std::string cost_name = toString(cost);
+  section.read("cost", cost_name);
+  cost = parseMatchingCost(cost_name);
+  section.read("num_disparities", num_disparities);
+  section.read("min_disparity_px", min_disparity_px);
+  section.read("window_px", window_px);
+  section.read("num_paths", num_paths);
+  section.read("p1", p1);
+  section.read("p2", p2);
+  section.read("adaptive_p2", adaptive_p2);
+  section.read("p2_gradient_scale", p2_gradient_scale);
+  section.read("subpixel", subpixel);
+  section.read("pkrn_exclude_neighbours", pkrn_exclude_neighbours);
+  section.read("min_confidence", min_confidence);
+  section.read("lr_check", lr_check);
+  section.read("lr_max_diff_px", lr_max_diff_px);
+  section.read("num_strips", num_strips);
+  section.read("strip_overlap_px", strip_overlap_px);
+}
+
+const char* toString(MatchingCost cost) { return cost == MatchingCost::kSad ? "sad" : "census"; }
+
+MatchingCost parseMatchingCost(const std::string& name) {
+  if (name == "sad") return MatchingCost::kSad;
+  if (name == "census") return MatchingCost::kCensus;
+  throw Error("stereo.cost = " + name + ": must be 'sad' or 'census'");
+}
+
+}  // namespace cenote::pipeline

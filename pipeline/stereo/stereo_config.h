@@ -1,0 +1,57 @@
+// stereo_config.h: settings of StereoMatcher. Disparities are in pixels of the rectified left image;
+// costs are in the matcher's integer cost units (SAD: grey levels summed over the window, shifted
+// right so that the largest window cost stays <= 4095; census: Hamming distance in bits).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "common/config_error.h"
+
+namespace cenote {
+class YamlSection;
+}
+
+namespace cenote::pipeline {
+
+enum class MatchingCost { kSad, kCensus };
+
+struct StereoConfig {
+  MatchingCost cost = MatchingCost::kSad;
+  int num_disparities = 112;   // search range size; a multiple of 16 in [16, 512]
+  int min_disparity_px = 0;    // first disparity searched; >= 0
+  int window_px = 3;           // SAD: odd side in [1, 9]; census: 3 or 5
+  int num_paths = 4;           // SGM: 4 = one top-down pass (rSGM), 8 = two passes
+  int p1 = -1;                 // penalty for a disparity step of 1; -1 = default of the cost
+  int p2 = -1;                 // penalty for larger steps; -1 = default of the cost
+  bool adaptive_p2 = false;    // P2 / (1 + |I(p) - I(p-r)| / p2_gradient_scale), never below P1 + 1
+  double p2_gradient_scale = 8.0;  // grey levels; only with adaptive_p2
+  bool subpixel = true;        // parabola through the aggregated costs at d-1, d, d+1
+  bool pkrn_exclude_neighbours = true;  // second minimum taken outside d*-1..d*+1 (see stereo_matcher.h)
+  double min_confidence = 0.0; // PKRN below this marks the pixel invalid; PKRN >= 1, so 0 keeps all
+  bool lr_check = false;       // left-right consistency check on integer disparities
+  int lr_max_diff_px = 1;      // allowed |d_left - d_right| with lr_check
+  int num_strips = 4;          // fixed horizontal strips matched independently (threads share them);
+                               // fixed so that the result does not depend on the thread count
+  int strip_overlap_px = 24;   // rows matched above (and below, 8 paths) a strip before its own rows,
+                               // so that vertical paths arrive warmed up at the strip border
+
+  // Penalties with the per-cost defaults resolved.
+  int effectiveP1() const;
+  int effectiveP2() const;
+  // Largest cost of one pixel and disparity in cost units.
+  int maxCost() const;
+  // Right shift applied to SAD window sums so that maxCost() <= 4095.
+  int sadShift() const;
+
+  // Every failed rule, empty when valid.
+  std::vector<ConfigError> validate() const;
+  // Reads keys of a `stereo:` section; unknown keys are errors.
+  void read(YamlSection& section);
+};
+
+const char* toString(MatchingCost cost);
+// @throws cenote::Error for anything but "sad" or "census".
+MatchingCost parseMatchingCost(const std::string& name);
+
+}  // namespace cenote::pipeline

@@ -1,0 +1,50 @@
+// stereo_matcher.h: dense disparity of a rectified pair by semi-global matching.
+//
+//   cost:        SAD over a w x w window (the paper's), or census w x w with Hamming distance
+//                (robust to exposure differences between the cameras)
+//   aggregation: 4 paths in one top-down pass (rSGM, Spangenberg et al. 2014) or 8 paths in two
+//   disparity:   winner-take-all, parabola through the aggregated costs at d-1, d, d+1
+//   confidence:  PKRN = (c2 + 1) / (c1 + 1), c1 the smallest aggregated cost and c2 the second
+//                smallest; c2 is taken outside d*-1..d*+1 by default, since the naive second
+//                smallest is nearly always the winner's neighbour and says little about ambiguity
+//                (measured on cones in tests/pipeline/stereo/middlebury_test.cpp)
+//   validity:    +inf disparity where the pixel has no right match, fails the optional
+//                left-right check, or falls below min_confidence
+//
+// Threads: match() uses OpenMP over a fixed number of horizontal strips; the result is
+// bit-identical for any thread count. One StereoMatcher must not be used from two threads at once
+// (it owns its working memory, allocated at the first frame and reused).
+#pragma once
+
+#include <memory>
+
+#include "pipeline/frame/frames.h"
+#include "pipeline/stereo/stereo_config.h"
+
+namespace cenote::pipeline {
+
+class StereoMatcher {
+ public:
+  // @throws cenote::Error listing every invalid setting.
+  explicit StereoMatcher(const StereoConfig& config);
+  ~StereoMatcher();
+  StereoMatcher(StereoMatcher&&) noexcept;
+  StereoMatcher& operator=(StereoMatcher&&) noexcept;
+
+  // @param left, right  rectified 8-bit images (grey or BGR, converted to grey), same size
+  // @throws cenote::Error for empty images, different sizes or unsupported pixel types.
+  DisparityMap match(const cv::Mat& left, const cv::Mat& right);
+
+  const StereoConfig& config() const { return config_; }
+
+ private:
+  struct Impl;
+  StereoConfig config_;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Z = f * b / d per pixel; +inf where the disparity is invalid or not positive.
+// @param focal_px rectified focal length, @param baseline_m stereo baseline.
+cv::Mat disparityToDepth(const cv::Mat& disparity, double focal_px, double baseline_m);
+
+}  // namespace cenote::pipeline

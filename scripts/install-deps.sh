@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# install-deps.sh: every Debian package cenote needs to build, test, benchmark and run its demo.
+# Idempotent and non-interactive: packages already present are not fetched again, and
+# `apt-get update` runs at most once per invocation (and only when something is missing).
+set -euo pipefail
+
+PACKAGES=(
+  # toolchain
+  build-essential cmake ninja-build ccache pkg-config git
+  # pipeline: images, calibration, SIMD, threads
+  libopencv-dev libeigen3-dev libhwy-dev
+  # command line, config, logs
+  libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+  # test data scripts
+  python3 python3-numpy
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+if [ "$(id -u)" -ne 0 ]; then
+  SUDO=sudo
+else
+  SUDO=
+fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

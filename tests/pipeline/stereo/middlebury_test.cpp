@@ -1,0 +1,172 @@
+// Accuracy of the stereo engine on real Middlebury pairs with ground truth (skipped when the
+// data is absent). Numbers are printed so that a failing threshold shows how far off it is.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+#include "pipeline/stereo/stereo_matcher.h"
+#include "tests/support/test_data.h"
+
+namespace cenote::pipeline {
+namespace {
+
+using test::BadPixelStats;
+using test::StereoPairWithTruth;
+
+StereoConfig configFor(const StereoPairWithTruth& pair, MatchingCost cost, int window, int paths) {
+  StereoConfig c;
+  c.num_disparities = pair.num_disparities;
+  c.cost = cost;
+  c.window_px = window;
+  c.num_paths = paths;
+  return c;
+}
+
+BadPixelStats evaluate(const StereoPairWithTruth& pair, const StereoConfig& config, DisparityMap* out = nullptr) {
+  StereoMatcher matcher(config);
+  DisparityMap map = matcher.match(pair.left, pair.right);
+  const BadPixelStats s = test::badPixels(map.disparity, pair);
+  std::cout << pair.name << " " << toString(config.cost) << " " << config.window_px << "x" << config.window_px
+            << " " << config.num_paths << " paths: bad-1 " << s.bad1 << " %, bad-2 " << s.bad2 << " %, density "
+            << s.density << " %\n";
+  if (out) *out = std::move(map);
+  return s;
+}
+
+// OpenCV's StereoSGBM with the same window, disparities and penalties; its disparities are
+// fixed point (x16) and invalid below minDisparity.
+BadPixelStats evaluateOpenCv(const StereoPairWithTruth& pair, const StereoConfig& config, int mode) {
+  auto sgbm = cv::StereoSGBM::create(0, config.num_disparities, config.window_px, config.effectiveP1(),
+                                     config.effectiveP2(), -1, 0, 0, 0, 0, mode);
+  cv::Mat left, right, fixed;
+  cv::cvtColor(pair.left, left, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(pair.right, right, cv::COLOR_BGR2GRAY);
+  sgbm->compute(left, right, fixed);
+  cv::Mat disparity(fixed.size(), CV_32F);
+  for (int y = 0; y < fixed.rows; ++y) {
+    for (int x = 0; x < fixed.cols; ++x) {
+      const int16_t v = fixed.at<int16_t>(y, x);
+      disparity.at<float>(y, x) = v < 0 ? INFINITY : v / 16.0f;
+    }
+  }
+  const BadPixelStats s = test::badPixels(disparity, pair);
+  std::cout << pair.name << " OpenCV StereoSGBM mode " << mode << ": bad-1 " << s.bad1 << " %, bad-2 " << s.bad2
+            << " %, density " << s.density << " %\n";
+  return s;
+}
+
+#define REQUIRE_PAIR(var, loader)                                           \
+  auto var = loader();                                                      \
+  if (!var) GTEST_SKIP() << "test data absent (" #loader ")";
+
+TEST(MiddleburyCones, SadThreeByThreeFourPathsBad1AtMostTenPercent) {
+  REQUIRE_PAIR(pair, test::loadCones);
+  EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 4)).bad1, 10.0);
+}
+
+TEST(MiddleburyCones, CensusFiveByFiveFourPathsBad1AtMostFiveAndHalfPercent) {
+  REQUIRE_PAIR(pair, test::loadCones);
+  EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kCensus, 5, 4)).bad1, 5.5);
+}
+
+TEST(MiddleburyCones, EightPathsNoWorseThanFour) {
+  REQUIRE_PAIR(pair, test::loadCones);
+  const double four = evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 4)).bad1;
+  const double eight = evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 8)).bad1;
+  EXPECT_LE(eight, four);
+}
+
+TEST(MiddleburyCones, LeftRightCheckRemovesMoreBadThanGoodPixels) {
+  REQUIRE_PAIR(pair, test::loadCones);
+  StereoConfig config = configFor(*pair, MatchingCost::kSad, 3, 4);
+  DisparityMap plain, checked;
+  evaluate(*pair, config, &plain);
+  config.lr_check = true;
+  evaluate(*pair, config, &checked);
+  int removed_bad = 0, removed_good = 0;
+  for (int y = 0; y < pair->mask.rows; ++y) {
+    for (int x = 0; x < pair->mask.cols; ++x) {
+      if (!pair->mask.at<uint8_t>(y, x)) continue;
+      if (std::isfinite(plain.disparity.at<float>(y, x)) && !std::isfinite(checked.disparity.at<float>(y, x))) {
+        const bool bad = std::abs(plain.disparity.at<float>(y, x) - pair->truth.at<float>(y, x)) > 1.0f;
+        (bad ? removed_bad : removed_good)++;
+      }
+    }
+  }
+  std::cout << "LR check removed " << removed_bad << " bad and " << removed_good << " good pixels\n";
+  EXPECT_GT(removed_bad, 0);
+  EXPECT_GT(removed_bad, removed_good);
+}
+
+// bad-1 among the `fraction` most confident evaluated pixels.
+double bad1OfMostConfident(const StereoPairWithTruth& pair, const DisparityMap& map, double fraction) {
+  std::vector<std::pair<float, bool>> pixels;  // (confidence, bad)
+  for (int y = 0; y < pair.mask.rows; ++y) {
+    for (int x = 0; x < pair.mask.cols; ++x) {
+      if (!pair.mask.at<uint8_t>(y, x)) continue;
+      const float d = map.disparity.at<float>(y, x);
+      const bool bad = !std::isfinite(d) || std::abs(d - pair.truth.at<float>(y, x)) > 1.0f;
+      pixels.push_back({map.confidence.at<float>(y, x), bad});
+    }
+  }
+  std::stable_sort(pixels.begin(), pixels.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  const size_t n = static_cast<size_t>(fraction * pixels.size());
+  size_t bad = 0;
+  for (size_t i = 0; i < n; ++i) bad += pixels[i].second;
+  return 100.0 * bad / std::max<size_t>(1, n);
+}
+
+TEST(MiddleburyCones, MostConfidentFifthHasAtMostAThirdOfOverallBad1) {
+  REQUIRE_PAIR(pair, test::loadCones);
+  const StereoConfig config = configFor(*pair, MatchingCost::kSad, 3, 4);
+  DisparityMap map;
+  const double overall = evaluate(*pair, config, &map).bad1;
+  const double top = bad1OfMostConfident(*pair, map, 0.2);
+  std::cout << "PKRN (neighbours excluded): bad-1 of the 20 % most confident " << top << " % vs " << overall
+            << " % overall\n";
+  EXPECT_LE(top, overall / 3.0);
+}
+
+// The reason for excluding d*-1..d*+1 from the second minimum: measured, not assumed.
+TEST(MiddleburyCones, PkrnExcludingNeighboursRanksBetterThanNaiveSecondMinimum) {
+  REQUIRE_PAIR(pair, test::loadCones);
+  StereoConfig config = configFor(*pair, MatchingCost::kSad, 3, 4);
+  DisparityMap excluded, naive;
+  evaluate(*pair, config, &excluded);
+  config.pkrn_exclude_neighbours = false;
+  evaluate(*pair, config, &naive);
+  for (double fraction : {0.2, 0.5}) {
+    const double e = bad1OfMostConfident(*pair, excluded, fraction);
+    const double n = bad1OfMostConfident(*pair, naive, fraction);
+    std::cout << "most confident " << fraction * 100 << " %: bad-1 " << e << " % (excluding neighbours) vs " << n
+              << " % (naive)\n";
+    EXPECT_LT(e, n) << "fraction " << fraction;
+  }
+}
+
+TEST(MiddleburyCloth3, Bad2NoWorseThanOpenCvSgbm) {
+  REQUIRE_PAIR(pair, test::loadCloth3);
+  const StereoConfig config = configFor(*pair, MatchingCost::kSad, 3, 4);
+  const double ours = evaluate(*pair, config).bad2;
+  const double hh4 = evaluateOpenCv(*pair, config, cv::StereoSGBM::MODE_HH4).bad2;
+  const double three_way = evaluateOpenCv(*pair, config, cv::StereoSGBM::MODE_SGBM_3WAY).bad2;
+  EXPECT_LE(ours, hh4);
+  EXPECT_LE(ours, three_way);
+}
+
+TEST(MiddleburyMotorcycle, Bad2NoWorseThanOpenCvSgbm) {
+  REQUIRE_PAIR(pair, test::loadMotorcycle);
+  const StereoConfig config = configFor(*pair, MatchingCost::kSad, 3, 4);
+  const double ours = evaluate(*pair, config).bad2;
+  const double hh4 = evaluateOpenCv(*pair, config, cv::StereoSGBM::MODE_HH4).bad2;
+  const double three_way = evaluateOpenCv(*pair, config, cv::StereoSGBM::MODE_SGBM_3WAY).bad2;
+  EXPECT_LE(ours, hh4);
+  EXPECT_LE(ours, three_way);
+}
+
+}  // namespace
+}  // namespace cenote::pipeline
