@@ -31,6 +31,71 @@ using VU16 = hn::Vec<DU16>;
 
 constexpr uint16_t kNoCost = 0xFFFF;  // masks lanes out of the winner search
 
+// Smallest lane of a uint16 vector: halve to 128 bits, then one PHMINPOSUW on x86 (Highway's
+// generic MinOfLanes costs several shuffles per halving and dominated the profile).
+template <class D>
+HWY_INLINE uint16_t minLane(D d, hn::Vec<D> v) {
+#if HWY_TARGET == HWY_SCALAR
+  return hn::GetLane(v);
+#else
+  if constexpr (hn::MaxLanes(D()) * sizeof(uint16_t) > 16) {
+    const hn::Half<D> dh;
+    return minLane(dh, hn::Min(hn::LowerHalf(dh, v), hn::UpperHalf(dh, v)));
+  } else {
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSE4
+    if constexpr (hn::MaxLanes(D()) == 8) {
+      return static_cast<uint16_t>(_mm_cvtsi128_si32(_mm_minpos_epu16(v.raw)) & 0xFFFF);
+    }
+#endif
+    return hn::GetLane(hn::MinOfLanes(d, v));
+  }
+#endif
+}
+
+// Lane shifts across a whole vector: [prev[N-1], cur[0..N-2]] (the d-1 neighbours of `cur`) and
+// [cur[1..N-1], next[0]] (the d+1 neighbours). The along-row path needs them in registers: the
+// previous pixel's path costs were stored just before, and an unaligned reload of them would miss
+// store-to-load forwarding on every vector (it dominated the profile).
+HWY_INLINE VU16 shiftInPrevious(VU16 prev, VU16 cur) {
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+  alignas(64) static constexpr uint16_t kIndex[32] = {63, 0,  1,  2,  3,  4,  5,  6,  7,  8,  9,
+                                                      10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20,
+                                                      21, 22, 23, 24, 25, 26, 27, 28, 29, 30};
+  return VU16{_mm512_permutex2var_epi16(cur.raw, _mm512_load_si512(kIndex), prev.raw)};
+#elif HWY_ARCH_X86 && HWY_TARGET == HWY_AVX2
+  return VU16{_mm256_alignr_epi8(cur.raw, _mm256_permute2x128_si256(prev.raw, cur.raw, 0x21), 14)};
+#elif HWY_ARCH_X86 && HWY_TARGET <= HWY_SSSE3 && HWY_TARGET >= HWY_SSE4
+  return VU16{_mm_alignr_epi8(cur.raw, prev.raw, 14)};
+#else
+  const DU16 d;
+  HWY_ALIGN uint16_t lanes[2 * hn::MaxLanes(DU16())];
+  const size_t N = hn::Lanes(d);
+  hn::Store(prev, d, lanes);
+  hn::Store(cur, d, lanes + N);
+  return hn::LoadU(d, lanes + N - 1);
+#endif
+}
+
+HWY_INLINE VU16 shiftInNext(VU16 cur, VU16 next) {
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+  alignas(64) static constexpr uint16_t kIndex[32] = {1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11,
+                                                      12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22,
+                                                      23, 24, 25, 26, 27, 28, 29, 30, 31, 32};
+  return VU16{_mm512_permutex2var_epi16(cur.raw, _mm512_load_si512(kIndex), next.raw)};
+#elif HWY_ARCH_X86 && HWY_TARGET == HWY_AVX2
+  return VU16{_mm256_alignr_epi8(_mm256_permute2x128_si256(cur.raw, next.raw, 0x21), cur.raw, 2)};
+#elif HWY_ARCH_X86 && HWY_TARGET <= HWY_SSSE3 && HWY_TARGET >= HWY_SSE4
+  return VU16{_mm_alignr_epi8(next.raw, cur.raw, 2)};
+#else
+  const DU16 d;
+  HWY_ALIGN uint16_t lanes[2 * hn::MaxLanes(DU16())];
+  const size_t N = hn::Lanes(d);
+  hn::Store(cur, d, lanes);
+  hn::Store(next, d, lanes + N);
+  return hn::LoadU(d, lanes + 1);
+#endif
+}
+
 // Directions of one pass: index 0 = along the row (from x - dx), 1 = from the previous row at x,
 // 2 = previous row at x - dx, 3 = previous row at x + dx.
 constexpr int kPrevRowPaths = 3;
@@ -50,7 +115,7 @@ struct StripBuffers {
   uint16_t* min_prev[kPrevRowPaths] = {};  // W + 2 each
   uint16_t* min_cur[kPrevRowPaths] = {};
   uint16_t* along[2] = {};        // the along-row path: previous and current pixel
-  uint16_t* sums = nullptr;       // Dp, path sums of the current pixel
+  uint16_t* sums = nullptr;       // [x][Dp] path sums of the current row
   uint16_t* right_min = nullptr;  // LR check: best sum per right pixel, stored reversed
   uint16_t* right_arg = nullptr;
   int16_t* winner = nullptr;      // W, integer winner per pixel of the row (-1 = invalid)
@@ -79,7 +144,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws) {
   b.reversed_length = static_cast<int>(alignUp(W + p.min_disparity + Dp + 2 * b.lanes, 64));
   const std::size_t rev = b.reversed_length;
   const int ring_rows = p.census ? 0 : p.window;
-  const std::size_t total = row * (ring_rows + 2) + alignUp(Dp, 64) * 2 + path_row * 2 * kPrevRowPaths +
+  const std::size_t total = row * (ring_rows + 3) + alignUp(Dp, 64) * 2 + path_row * 2 * kPrevRowPaths +
                             min_row * 2 * kPrevRowPaths + alignUp(b.pixel_stride, 64) * 2 +
                             rev * 2 + alignUp(W, 64) + rev / 2 + 64 + rev * 2 + 64;
   if (ws.buffer_elements < total) {
@@ -96,7 +161,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws) {
   b.column_sum = take(row);
   b.cost = take(row);
   b.running = take(Dp);
-  b.sums = take(Dp);
+  b.sums = take(row);
   for (int i = 0; i < kPrevRowPaths; ++i) {
     b.path_prev[i] = take(path_row);
     b.path_cur[i] = take(path_row);
@@ -320,10 +385,11 @@ PenaltyTable makePenaltyTable(const SgmParams& p) {
 
 // Winner, sub-pixel offset and PKRN of one pixel's path sums (b.sums); returns the integer winner
 // k (or -1) and writes the outputs.
-int selectWinner(const SgmParams& p, const StripBuffers& b, int x, float* disparity,
+int selectWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, float* disparity,
                  float* confidence) {
   const DU16 d;
-  const int N = b.lanes, D = p.num_disparities;
+  const hn::RebindToSigned<DU16> di;
+  const int N = b.lanes, D = p.num_disparities, Dp = b.padded;
   // Disparities k with a right pixel: k <= x - min_d.
   const int valid = std::min(D, x - p.min_disparity + 1);
   if (valid <= 0) {
@@ -331,31 +397,32 @@ int selectWinner(const SgmParams& p, const StripBuffers& b, int x, float* dispar
     *confidence = 0.0f;
     return -1;
   }
-  uint16_t* s = b.sums;
   // Lanes past D hold sentinel sums, larger than any real one; only at the left border do lanes
   // without a right pixel need masking.
-  if (valid < D) std::fill(s + valid, s + b.padded, kNoCost);
-  VU16 best = hn::Set(d, kNoCost);
-  for (int k = 0; k < valid; k += N) best = hn::Min(best, hn::Load(d, s + k));
-  const uint16_t c1 = hn::GetLane(hn::MinOfLanes(d, best));
+  if (valid < D) std::fill(s + valid, s + Dp, kNoCost);
+  VU16 best = hn::Load(d, s);
+  for (int k = N; k < Dp; k += N) best = hn::Min(best, hn::Load(d, s + k));
+  const uint16_t c1 = minLane(d, best);
   int winner = 0;
-  for (int k = 0; k < valid; k += N) {
+  for (int k = 0; k < Dp; k += N) {
     const intptr_t lane = hn::FindFirstTrue(d, hn::Eq(hn::Load(d, s + k), hn::Set(d, c1)));
     if (lane >= 0) {
       winner = k + static_cast<int>(lane);
       break;
     }
   }
-  const int below = winner > 0 ? s[winner - 1] : -1;
-  const int above = winner + 1 < valid ? s[winner + 1] : -1;
   // Second minimum: outside winner-1..winner+1 (neighbours of the winner are the same match
   // seen at a sub-pixel offset), or anywhere but the winner.
-  const int lo = p.pkrn_exclude_neighbours ? std::max(0, winner - 1) : winner;
-  const int hi = p.pkrn_exclude_neighbours ? std::min(valid - 1, winner + 1) : winner;
-  for (int k = lo; k <= hi; ++k) s[k] = kNoCost;
+  const int reach = p.pkrn_exclude_neighbours ? 1 : 0;
+  const auto lo = hn::Set(di, static_cast<int16_t>(winner - reach - 1));
+  const auto hi = hn::Set(di, static_cast<int16_t>(winner + reach + 1));
   VU16 second = hn::Set(d, kNoCost);
-  for (int k = 0; k < valid; k += N) second = hn::Min(second, hn::Load(d, s + k));
-  const uint16_t c2 = hn::GetLane(hn::MinOfLanes(d, second));
+  for (int k = 0; k < Dp; k += N) {
+    const auto index = hn::Iota(di, k);
+    const auto near = hn::RebindMask(d, hn::And(hn::Gt(index, lo), hn::Lt(index, hi)));
+    second = hn::Min(second, hn::IfThenElse(near, hn::Set(d, kNoCost), hn::Load(d, s + k)));
+  }
+  const uint16_t c2 = minLane(d, second);
   // PKRN = c2 / c1, with one cost unit added to both so that it is defined for c1 = 0. A pixel
   // with no second candidate at all is as ambiguous as it can be: confidence 1.
   const float pkrn = c2 == kNoCost ? 1.0f : (c2 + 1.0f) / (c1 + 1.0f);
@@ -365,7 +432,8 @@ int selectWinner(const SgmParams& p, const StripBuffers& b, int x, float* dispar
     return -1;
   }
   float offset = 0.0f;
-  if (p.subpixel && below >= 0 && above >= 0) {
+  if (p.subpixel && winner > 0 && winner + 1 < valid) {
+    const int below = s[winner - 1], above = s[winner + 1];
     const int denominator = below + above - 2 * c1;
     if (denominator > 0) offset = static_cast<float>(below - above) / (2.0f * denominator);
   }
@@ -376,14 +444,14 @@ int selectWinner(const SgmParams& p, const StripBuffers& b, int x, float* dispar
 
 // Right image's best sum per pixel (for the LR check): right pixel xr = x - min_d - k, stored
 // reversed at W - 1 - xr so that one left pixel's disparities are contiguous.
-void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x) {
+void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const uint16_t* sums) {
   const DU16 d;
   const int N = b.lanes;
   const std::ptrdiff_t base = p.width - 1 - x + p.min_disparity;
   for (int k = 0; k < b.padded; k += N) {
     const VU16 m = hn::LoadU(d, b.right_min + base + k);
     const VU16 a = hn::LoadU(d, b.right_arg + base + k);
-    const VU16 s = hn::Load(d, b.sums + k);
+    const VU16 s = hn::Load(d, sums + k);
     const auto better = hn::Lt(s, m);
     hn::StoreU(hn::Min(m, s), d, b.right_min + base + k);
     hn::StoreU(hn::IfThenElse(better, hn::Iota(d, k), a), d, b.right_arg + base + k);
@@ -447,14 +515,26 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
          pen.p2[g_up_fwd], b.pathPixel(b.path_cur[2], x)},
     };
     VU16 mins[4] = {sentinel_v, sentinel_v, sentinel_v, sentinel_v};
+    // Along-row predecessor, rolled through registers: vectors k - 1, k and k + 1 (the pads
+    // before and after the Dp values hold sentinels).
+    VU16 along_before = hn::Load(d, along_prev - N);
+    VU16 along_here = hn::Load(d, along_prev);
     uint16_t* stored = stored_sums ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp : nullptr;
+    uint16_t* sums = b.sums + static_cast<std::ptrdiff_t>(x) * Dp;
     for (int k = 0; k < Dp; k += N) {
       const VU16 cost = hn::Load(d, c + k);
       VU16 sum = add_stored ? hn::Load(d, stored + k) : hn::Zero(d);
+      const VU16 along_after = hn::Load(d, along_prev + k + N);
       for (int r = 0; r < 4; ++r) {
         const PathStep& st = steps[r];
-        const VU16 same = hn::Load(d, st.prev + k);
-        const VU16 step1 = hn::Add(hn::Min(hn::LoadU(d, st.prev + k - 1), hn::LoadU(d, st.prev + k + 1)), p1);
+        VU16 same, step1;
+        if (r == 0) {
+          same = along_here;
+          step1 = hn::Add(hn::Min(shiftInPrevious(along_before, along_here), shiftInNext(along_here, along_after)), p1);
+        } else {
+          same = hn::Load(d, st.prev + k);
+          step1 = hn::Add(hn::Min(hn::LoadU(d, st.prev + k - 1), hn::LoadU(d, st.prev + k + 1)), p1);
+        }
         const VU16 jump = hn::Set(d, static_cast<uint16_t>(st.min_prev + st.p2));
         VU16 path = hn::Add(cost, hn::Sub(hn::Min(hn::Min(same, step1), jump), hn::Set(d, st.min_prev)));
         if (k + N == Dp) path = hn::IfThenElse(last_mask, path, sentinel_v);
@@ -462,19 +542,22 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
         mins[r] = hn::Min(mins[r], path);
         sum = hn::Add(sum, path);
       }
-      if (output == RowOutput::kStoreSums) {
-        hn::Store(sum, d, stored + k);
-      } else {
-        hn::Store(sum, d, b.sums + k);
-      }
+      hn::Store(sum, d, output == RowOutput::kStoreSums ? stored + k : sums + k);
+      along_before = along_here;
+      along_here = along_after;
     }
-    along_min = hn::GetLane(hn::MinOfLanes(d, mins[0]));
-    for (int r = 1; r < 4; ++r) b.min_cur[r - 1][x + 1] = hn::GetLane(hn::MinOfLanes(d, mins[r]));
+    along_min = minLane(d, mins[0]);
+    for (int r = 1; r < 4; ++r) b.min_cur[r - 1][x + 1] = minLane(d, mins[r]);
     along_cur = 1 - along_cur;
-    if (output == RowOutput::kWinner) {
+  }
+  // Winners after the row, not inside the path loop: pixels are independent here, so their
+  // horizontal minima overlap in the out-of-order core instead of lengthening the path chain.
+  if (output == RowOutput::kWinner) {
+    for (int x = 0; x < W; ++x) {
+      uint16_t* sums = b.sums + static_cast<std::ptrdiff_t>(x) * Dp;
       // The right image's minimum first: selectWinner() masks lanes of the sums.
-      if (p.lr_check) updateRightMinimum(p, b, x);
-      b.winner[x] = static_cast<int16_t>(selectWinner(p, b, x, disparity + x, confidence + x));
+      if (p.lr_check) updateRightMinimum(p, b, x, sums);
+      b.winner[x] = static_cast<int16_t>(selectWinner(p, b, x, sums, disparity + x, confidence + x));
     }
   }
   for (int r = 0; r < kPrevRowPaths; ++r) {

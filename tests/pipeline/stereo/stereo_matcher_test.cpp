@@ -1,1 +1,265 @@
+#include "pipeline/stereo/stereo_matcher.h"
+
 #include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "common/error.h"
+#include "tests/pipeline/stereo/sgm_reference.h"
+#include "tests/support/test_data.h"
+
+namespace cenote::pipeline {
+namespace {
+
+// A textured pair: smooth random texture, the right image shifted by a known disparity field.
+struct SyntheticPair {
+  cv::Mat left, right;   // CV_8U
+  cv::Mat disparity;     // CV_32F, true disparity of the left view
+};
+
+cv::Mat randomTexture(int width, int height, uint32_t seed) {
+  cv::Mat texture(height, width, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(texture, cv::RNG::UNIFORM, 0.0, 255.0);
+  cv::GaussianBlur(texture, texture, cv::Size(0, 0), 1.2);
+  cv::normalize(texture, texture, 20, 235, cv::NORM_MINMAX);
+  return texture;
+}
+
+// A slanted plane: d(x, y) = d0 + a x + b y; the right image samples the left texture at x - d
+// (bilinear on a 4x oversampled texture, so sub-pixel shifts are real).
+SyntheticPair slantedPlane(int width, int height, double d0, double a, double b, uint32_t seed) {
+  const cv::Mat texture = randomTexture(width * 2, height, seed);
+  SyntheticPair pair;
+  pair.left.create(height, width, CV_8U);
+  pair.right.create(height, width, CV_8U);
+  pair.disparity.create(height, width, CV_32F);
+  cv::Mat map_x(height, width, CV_32F), map_y(height, width, CV_32F), left_x(height, width, CV_32F);
+  // Left pixel x sees texture column x + 100; right pixel xr sees the surface point whose left
+  // column satisfies x - d(x) = xr, solved by fixed-point iteration (the plane is gentle).
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const double d = d0 + a * x + b * y;
+      pair.disparity.at<float>(y, x) = static_cast<float>(d);
+      left_x.at<float>(y, x) = static_cast<float>(x + 100);
+      double xl = x + d0;
+      for (int it = 0; it < 20; ++it) xl = x + d0 + a * xl + b * y;
+      map_x.at<float>(y, x) = static_cast<float>(xl + 100);
+      map_y.at<float>(y, x) = static_cast<float>(y);
+    }
+  }
+  cv::Mat left_f, right_f;
+  cv::remap(texture, left_f, left_x, map_y, cv::INTER_CUBIC);
+  cv::remap(texture, right_f, map_x, map_y, cv::INTER_CUBIC);
+  left_f.convertTo(pair.left, CV_8U);
+  right_f.convertTo(pair.right, CV_8U);
+  return pair;
+}
+
+void expectBitIdentical(const DisparityMap& a, const DisparityMap& b, const std::string& what) {
+  ASSERT_EQ(a.disparity.size(), b.disparity.size());
+  int mismatches = 0;
+  for (int y = 0; y < a.disparity.rows; ++y) {
+    for (int x = 0; x < a.disparity.cols; ++x) {
+      const float da = a.disparity.at<float>(y, x), db = b.disparity.at<float>(y, x);
+      const float ca = a.confidence.at<float>(y, x), cb = b.confidence.at<float>(y, x);
+      const bool same = (da == db || (std::isinf(da) && std::isinf(db))) && ca == cb;
+      if (!same && ++mismatches <= 5) {
+        ADD_FAILURE() << what << ": pixel (" << x << ", " << y << "): disparity " << da << " vs " << db
+                      << ", confidence " << ca << " vs " << cb;
+      }
+    }
+  }
+  EXPECT_EQ(mismatches, 0) << what;
+}
+
+cv::Mat greyCrop(const cv::Mat& bgr, const cv::Rect& roi) {
+  cv::Mat grey;
+  cv::cvtColor(bgr(roi), grey, cv::COLOR_BGR2GRAY);
+  return grey;
+}
+
+struct ReferenceCase {
+  const char* name;
+  MatchingCost cost;
+  int window, paths, min_disparity;
+  bool adaptive, lr, naive_pkrn;
+};
+
+class MatchesScalarReference : public ::testing::TestWithParam<ReferenceCase> {};
+
+TEST_P(MatchesScalarReference, BitForBitWithOneStrip) {
+  const ReferenceCase& rc = GetParam();
+  cv::Mat left, right;
+  if (auto cones = test::loadCones()) {
+    left = greyCrop(cones->left, cv::Rect(150, 100, 120, 60));
+    right = greyCrop(cones->right, cv::Rect(150, 100, 120, 60));
+  } else {
+    const SyntheticPair pair = slantedPlane(120, 60, 12.0, 0.02, 0.01, 3);
+    left = pair.left;
+    right = pair.right;
+  }
+  StereoConfig config;
+  config.cost = rc.cost;
+  config.window_px = rc.window;
+  config.num_paths = rc.paths;
+  config.num_disparities = 48;
+  config.min_disparity_px = rc.min_disparity;
+  config.adaptive_p2 = rc.adaptive;
+  config.lr_check = rc.lr;
+  config.pkrn_exclude_neighbours = !rc.naive_pkrn;
+  config.num_strips = 1;
+  StereoMatcher matcher(config);
+  expectBitIdentical(matcher.match(left, right), test::referenceSgm(left, right, config), rc.name);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Modes, MatchesScalarReference,
+    ::testing::Values(ReferenceCase{"sad3_4paths", MatchingCost::kSad, 3, 4, 0, false, false, false},
+                      ReferenceCase{"sad1_4paths", MatchingCost::kSad, 1, 4, 0, false, false, false},
+                      ReferenceCase{"sad7_4paths_shifted", MatchingCost::kSad, 7, 4, 0, false, false, false},
+                      ReferenceCase{"sad5_8paths", MatchingCost::kSad, 5, 8, 0, false, false, false},
+                      ReferenceCase{"census5_4paths", MatchingCost::kCensus, 5, 4, 0, false, false, false},
+                      ReferenceCase{"census3_8paths", MatchingCost::kCensus, 3, 8, 0, false, false, false},
+                      ReferenceCase{"sad3_min_disparity", MatchingCost::kSad, 3, 4, 9, false, false, false},
+                      ReferenceCase{"sad3_adaptive_p2", MatchingCost::kSad, 3, 4, 0, true, false, false},
+                      ReferenceCase{"sad3_lr_check", MatchingCost::kSad, 3, 4, 0, false, true, false},
+                      ReferenceCase{"sad3_8paths_lr_check", MatchingCost::kSad, 3, 8, 0, false, true, false},
+                      ReferenceCase{"sad3_naive_pkrn", MatchingCost::kSad, 3, 4, 0, false, false, true}),
+    [](const ::testing::TestParamInfo<ReferenceCase>& info) { return std::string(info.param.name); });
+
+TEST(StereoMatcher, OneAndTwoThreadsGiveBitIdenticalResults) {
+  const SyntheticPair pair = slantedPlane(320, 240, 20.0, 0.03, 0.02, 7);
+  for (int paths : {4, 8}) {
+    StereoConfig config;
+    config.num_disparities = 64;
+    config.num_paths = paths;
+    config.lr_check = true;
+    StereoMatcher matcher(config);
+    const int saved = omp_get_max_threads();
+    omp_set_num_threads(1);
+    const DisparityMap one = matcher.match(pair.left, pair.right);
+    omp_set_num_threads(2);
+    const DisparityMap two = matcher.match(pair.left, pair.right);
+    omp_set_num_threads(saved);
+    expectBitIdentical(one, two, paths == 4 ? "4 paths" : "8 paths");
+  }
+}
+
+TEST(StereoMatcher, RepeatedMatchesReuseMemoryAndGiveTheSameResult) {
+  const SyntheticPair pair = slantedPlane(200, 120, 15.0, 0.0, 0.0, 11);
+  StereoConfig config;
+  config.num_disparities = 32;
+  StereoMatcher matcher(config);
+  const DisparityMap first = matcher.match(pair.left, pair.right);
+  const DisparityMap second = matcher.match(pair.left, pair.right);
+  expectBitIdentical(first, second, "second call");
+}
+
+TEST(StereoMatcher, SubpixelErrorOnSlantedPlaneBelowFifteenHundredths) {
+  const SyntheticPair pair = slantedPlane(400, 300, 18.0, 0.021, 0.013, 5);
+  for (MatchingCost cost : {MatchingCost::kSad, MatchingCost::kCensus}) {
+    StereoConfig config;
+    config.cost = cost;
+    config.window_px = cost == MatchingCost::kSad ? 3 : 5;
+    config.num_disparities = 48;
+    StereoMatcher matcher(config);
+    const DisparityMap map = matcher.match(pair.left, pair.right);
+    double sum = 0.0;
+    int n = 0, invalid = 0;
+    // Away from the borders, where the window and the search range are complete.
+    for (int y = 10; y < 290; ++y) {
+      for (int x = 60; x < 390; ++x) {
+        const float d = map.disparity.at<float>(y, x);
+        if (!std::isfinite(d)) {
+          ++invalid;
+          continue;
+        }
+        sum += std::abs(d - pair.disparity.at<float>(y, x));
+        ++n;
+      }
+    }
+    const double mae = sum / std::max(1, n);
+    std::cout << toString(cost) << ": sub-pixel mean absolute error " << mae << " px over " << n << " pixels\n";
+    EXPECT_LT(mae, 0.15) << toString(cost);
+    EXPECT_EQ(invalid, 0);
+  }
+}
+
+TEST(StereoMatcher, PixelsWithoutRightMatchAreInvalidNotZero) {
+  const SyntheticPair pair = slantedPlane(100, 40, 10.0, 0.0, 0.0, 2);
+  StereoConfig config;
+  config.num_disparities = 16;
+  config.min_disparity_px = 8;
+  StereoMatcher matcher(config);
+  const DisparityMap map = matcher.match(pair.left, pair.right);
+  for (int y = 0; y < 40; ++y) {
+    for (int x = 0; x < 8; ++x) {
+      EXPECT_TRUE(std::isinf(map.disparity.at<float>(y, x))) << "(" << x << ", " << y << ")";
+      EXPECT_EQ(map.confidence.at<float>(y, x), 0.0f);
+    }
+    EXPECT_TRUE(std::isfinite(map.disparity.at<float>(y, 8)));
+  }
+}
+
+TEST(StereoMatcher, MinConfidenceInvalidatesExactlyThePixelsBelowIt) {
+  SyntheticPair pair = slantedPlane(160, 100, 12.0, 0.0, 0.0, 4);
+  pair.left(cv::Rect(60, 30, 50, 40)).setTo(cv::Scalar(128));  // a textureless patch: ambiguous
+  pair.right(cv::Rect(48, 30, 50, 40)).setTo(cv::Scalar(128));
+  StereoConfig config;
+  config.num_disparities = 32;
+  const DisparityMap all = StereoMatcher(config).match(pair.left, pair.right);
+  config.min_confidence = 1.1;
+  const DisparityMap kept = StereoMatcher(config).match(pair.left, pair.right);
+  int removed = 0;
+  for (int y = 0; y < 100; ++y) {
+    for (int x = 0; x < 160; ++x) {
+      const bool below = all.confidence.at<float>(y, x) < 1.1f;
+      EXPECT_EQ(std::isinf(kept.disparity.at<float>(y, x)), below) << "(" << x << ", " << y << ")";
+      removed += below;
+    }
+  }
+  EXPECT_GT(removed, 0);
+}
+
+TEST(StereoMatcher, RejectsImagesOfDifferentSizes) {
+  StereoMatcher matcher(StereoConfig{});
+  const cv::Mat a(100, 200, CV_8U, cv::Scalar(0)), b(99, 200, CV_8U, cv::Scalar(0));
+  try {
+    matcher.match(a, b);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "stereo: right image is 200x99 but left is 200x100");
+  }
+}
+
+TEST(StereoMatcher, RejectsEmptyAndNonEightBitImages) {
+  StereoMatcher matcher(StereoConfig{});
+  EXPECT_THROW(matcher.match(cv::Mat(), cv::Mat(10, 10, CV_8U)), Error);
+  EXPECT_THROW(matcher.match(cv::Mat(10, 10, CV_16U), cv::Mat(10, 10, CV_16U)), Error);
+}
+
+TEST(StereoMatcher, ImagesNarrowerThanTheSearchRangeGiveInvalidPixelsNotACrash) {
+  const cv::Mat a(5, 7, CV_8U, cv::Scalar(9)), b(5, 7, CV_8U, cv::Scalar(9));
+  StereoConfig config;
+  config.num_disparities = 64;
+  config.min_disparity_px = 10;
+  StereoMatcher matcher(config);
+  const DisparityMap map = matcher.match(a, b);
+  EXPECT_EQ(cv::countNonZero(map.confidence > 0.0f), 0);
+}
+
+TEST(DisparityToDepth, FocalTimesBaselineOverDisparityAndInfinityWhereInvalid) {
+  cv::Mat d = (cv::Mat_<float>(1, 4) << 10.0f, 0.0f, std::numeric_limits<float>::infinity(), 2.5f);
+  const cv::Mat z = disparityToDepth(d, 500.0, 0.1);
+  EXPECT_FLOAT_EQ(z.at<float>(0, 0), 5.0f);
+  EXPECT_TRUE(std::isinf(z.at<float>(0, 1)));
+  EXPECT_TRUE(std::isinf(z.at<float>(0, 2)));
+  EXPECT_FLOAT_EQ(z.at<float>(0, 3), 20.0f);
+}
+
+}  // namespace
+}  // namespace cenote::pipeline

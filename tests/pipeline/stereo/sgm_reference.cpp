@@ -1,0 +1,164 @@
+#include "tests/pipeline/stereo/sgm_reference.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace cenote::test {
+namespace {
+
+using pipeline::StereoConfig;
+
+struct Volume {
+  int W, H, D;
+  std::vector<int> v;
+  Volume(int w, int h, int d) : W(w), H(h), D(d), v(static_cast<size_t>(w) * h * d, 0) {}
+  int& at(int x, int y, int k) { return v[(static_cast<size_t>(y) * W + x) * D + k]; }
+};
+
+uint8_t pixel(const cv::Mat& img, int x, int y) {
+  return img.at<uint8_t>(std::clamp(y, 0, img.rows - 1), std::clamp(x, 0, img.cols - 1));
+}
+
+uint32_t census(const cv::Mat& img, int x, int y, int window) {
+  const int r = window / 2;
+  uint32_t bits = 0;
+  for (int dy = -r; dy <= r; ++dy) {
+    for (int dx = -r; dx <= r; ++dx) {
+      if (dx == 0 && dy == 0) continue;
+      bits = (bits << 1) | (pixel(img, x + dx, y + dy) < pixel(img, x, y) ? 1u : 0u);
+    }
+  }
+  return bits;
+}
+
+Volume matchingCost(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c) {
+  const int W = L.cols, H = L.rows, D = c.num_disparities, r = c.window_px / 2;
+  Volume cost(W, H, D);
+  for (int y = 0; y < H; ++y) {
+    for (int x = 0; x < W; ++x) {
+      for (int k = 0; k < D; ++k) {
+        const int d = c.min_disparity_px + k;
+        int value = 0;
+        if (x - d < 0) {
+          value = c.maxCost();
+        } else if (c.cost == pipeline::MatchingCost::kCensus) {
+          value = __builtin_popcount(census(L, x, y, c.window_px) ^ census(R, x - d, y, c.window_px));
+        } else {
+          for (int i = -r; i <= r; ++i) {
+            for (int j = -r; j <= r; ++j) {
+              const int column = std::clamp(x + j, 0, W - 1);
+              // Right pixels left of the image repeat column 0.
+              value += std::abs(pixel(L, column, y + i) - pixel(R, std::max(column - d, 0), y + i));
+            }
+          }
+          value >>= c.sadShift();
+        }
+        cost.at(x, y, k) = value;
+      }
+    }
+  }
+  return cost;
+}
+
+int adaptedP2(const StereoConfig& c, int gradient) {
+  if (!c.adaptive_p2) return c.effectiveP2();
+  int value = static_cast<int>(std::lround(c.effectiveP2() / (1.0 + gradient / c.p2_gradient_scale)));
+  return std::min(std::max(value, c.effectiveP1() + 1), c.effectiveP2());
+}
+
+// Adds the path costs along direction (rx, ry) to `sums`. Pixels are visited so that the
+// predecessor (x - rx, y - ry) always comes first.
+void aggregate(const Volume& cost, const cv::Mat& L, const StereoConfig& c, int rx, int ry, Volume& sums) {
+  const int W = cost.W, H = cost.H, D = cost.D, P1 = c.effectiveP1();
+  Volume path(W, H, D);
+  const int y0 = ry >= 0 ? 0 : H - 1, ystep = ry >= 0 ? 1 : -1;
+  const int x0 = rx >= 0 ? 0 : W - 1, xstep = rx >= 0 ? 1 : -1;
+  for (int y = y0; y >= 0 && y < H; y += ystep) {
+    for (int x = x0; x >= 0 && x < W; x += xstep) {
+      const int px = x - rx, py = y - ry;
+      const bool has_prev = px >= 0 && px < W && py >= 0 && py < H && !(rx == 0 && ry == 0);
+      int min_prev = std::numeric_limits<int>::max();
+      if (has_prev) {
+        for (int k = 0; k < D; ++k) min_prev = std::min(min_prev, path.at(px, py, k));
+      }
+      const int P2 = has_prev ? adaptedP2(c, std::abs(pixel(L, x, y) - pixel(L, px, py))) : 0;
+      for (int k = 0; k < D; ++k) {
+        int value = const_cast<Volume&>(cost).at(x, y, k);
+        if (has_prev) {
+          int best = path.at(px, py, k);
+          if (k > 0) best = std::min(best, path.at(px, py, k - 1) + P1);
+          if (k + 1 < D) best = std::min(best, path.at(px, py, k + 1) + P1);
+          best = std::min(best, min_prev + P2);
+          value += best - min_prev;
+        }
+        path.at(x, y, k) = value;
+        sums.at(x, y, k) += value;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c) {
+  const int W = L.cols, H = L.rows, D = c.num_disparities;
+  const Volume cost = matchingCost(L, R, c);
+  Volume sums(W, H, D);
+  const int directions[8][2] = {{1, 0}, {0, 1}, {1, 1}, {-1, 1}, {-1, 0}, {0, -1}, {-1, -1}, {1, -1}};
+  for (int i = 0; i < c.num_paths; ++i) aggregate(cost, L, c, directions[i][0], directions[i][1], sums);
+
+  pipeline::DisparityMap out;
+  out.disparity.create(H, W, CV_32F);
+  out.confidence.create(H, W, CV_32F);
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int y = 0; y < H; ++y) {
+    // Right image's winner per right pixel (smallest k on ties), for the LR check.
+    std::vector<int> right_best(W, std::numeric_limits<int>::max()), right_arg(W, 0);
+    for (int x = 0; x < W; ++x) {
+      for (int k = 0; k < D; ++k) {
+        const int xr = x - c.min_disparity_px - k;
+        if (xr < 0) continue;
+        const int s = sums.at(x, y, k);
+        if (s < right_best[xr] || (s == right_best[xr] && k < right_arg[xr])) {
+          right_best[xr] = s;
+          right_arg[xr] = k;
+        }
+      }
+    }
+    for (int x = 0; x < W; ++x) {
+      float& disparity = out.disparity.at<float>(y, x);
+      float& confidence = out.confidence.at<float>(y, x);
+      disparity = inf;
+      confidence = 0.0f;
+      const int valid = std::min(D, x - c.min_disparity_px + 1);
+      if (valid <= 0) continue;
+      int winner = 0;
+      for (int k = 1; k < valid; ++k) {
+        if (sums.at(x, y, k) < sums.at(x, y, winner)) winner = k;
+      }
+      const int c1 = sums.at(x, y, winner);
+      const int reach = c.pkrn_exclude_neighbours ? 1 : 0;
+      int c2 = -1;
+      for (int k = 0; k < valid; ++k) {
+        if (std::abs(k - winner) <= reach) continue;
+        if (c2 < 0 || sums.at(x, y, k) < c2) c2 = sums.at(x, y, k);
+      }
+      const float pkrn = c2 < 0 ? 1.0f : (c2 + 1.0f) / (c1 + 1.0f);
+      if (pkrn < c.min_confidence) continue;
+      if (c.lr_check && std::abs(right_arg[x - c.min_disparity_px - winner] - winner) > c.lr_max_diff_px) continue;
+      float offset = 0.0f;
+      if (c.subpixel && winner > 0 && winner + 1 < valid) {
+        const int below = sums.at(x, y, winner - 1), above = sums.at(x, y, winner + 1);
+        const int denominator = below + above - 2 * c1;
+        if (denominator > 0) offset = static_cast<float>(below - above) / (2.0f * denominator);
+      }
+      disparity = static_cast<float>(c.min_disparity_px + winner) + offset;
+      confidence = pkrn;
+    }
+  }
+  return out;
+}
+
+}  // namespace cenote::test

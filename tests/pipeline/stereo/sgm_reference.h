@@ -1,0 +1,13 @@
+// sgm_reference.h: a plain scalar semi-global matcher that stores the whole cost volume, written
+// for clarity, not speed. With one strip the SIMD engine must reproduce it bit for bit.
+#pragma once
+
+#include "pipeline/frame/frames.h"
+#include "pipeline/stereo/stereo_config.h"
+
+namespace cenote::test {
+
+pipeline::DisparityMap referenceSgm(const cv::Mat& left_grey, const cv::Mat& right_grey,
+                                    const pipeline::StereoConfig& config);
+
+}  // namespace cenote::test
