@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 
 #include "pipeline/stereo/sgm_engine.h"
 
@@ -26,7 +27,10 @@ namespace cenote::pipeline::detail {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-using DU16 = hn::ScalableTag<uint16_t>;
+#ifndef CENOTE_SGM_MAX_LANES
+#define CENOTE_SGM_MAX_LANES 32
+#endif
+using DU16 = hn::CappedTag<uint16_t, CENOTE_SGM_MAX_LANES>;
 using VU16 = hn::Vec<DU16>;
 
 constexpr uint16_t kNoCost = 0xFFFF;  // masks lanes out of the winner search
@@ -56,75 +60,95 @@ HWY_INLINE uint16_t minLane(D d, hn::Vec<D> v) {
 // [cur[1..N-1], next[0]] (the d+1 neighbours). The along-row path needs them in registers: the
 // previous pixel's path costs were stored just before, and an unaligned reload of them would miss
 // store-to-load forwarding on every vector (it dominated the profile).
-HWY_INLINE VU16 shiftInPrevious(VU16 prev, VU16 cur) {
+template <class V>
+HWY_INLINE V shiftInPrevious(V prev, V cur) {
+  constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
-  alignas(64) static constexpr uint16_t kIndex[32] = {63, 0,  1,  2,  3,  4,  5,  6,  7,  8,  9,
-                                                      10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20,
-                                                      21, 22, 23, 24, 25, 26, 27, 28, 29, 30};
-  return VU16{_mm512_permutex2var_epi16(cur.raw, _mm512_load_si512(kIndex), prev.raw)};
-#elif HWY_ARCH_X86 && HWY_TARGET == HWY_AVX2
-  return VU16{_mm256_alignr_epi8(cur.raw, _mm256_permute2x128_si256(prev.raw, cur.raw, 0x21), 14)};
-#elif HWY_ARCH_X86 && HWY_TARGET <= HWY_SSSE3 && HWY_TARGET >= HWY_SSE4
-  return VU16{_mm_alignr_epi8(cur.raw, prev.raw, 14)};
-#else
+  if constexpr (kLanes == 32) {
+    alignas(64) static constexpr uint16_t kIndex[32] = {63, 0,  1,  2,  3,  4,  5,  6,  7,  8,  9,
+                                                        10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20,
+                                                        21, 22, 23, 24, 25, 26, 27, 28, 29, 30};
+    return V{_mm512_permutex2var_epi16(cur.raw, _mm512_load_si512(kIndex), prev.raw)};
+  }
+#endif
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
+  if constexpr (kLanes == 16) {
+    return V{_mm256_alignr_epi8(cur.raw, _mm256_permute2x128_si256(prev.raw, cur.raw, 0x21), 14)};
+  }
+#endif
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSSE3
+  if constexpr (kLanes == 8) return V{_mm_alignr_epi8(cur.raw, prev.raw, 14)};
+#endif
   const DU16 d;
-  HWY_ALIGN uint16_t lanes[2 * hn::MaxLanes(DU16())];
-  const size_t N = hn::Lanes(d);
+  HWY_ALIGN uint16_t lanes[2 * kLanes];
   hn::Store(prev, d, lanes);
-  hn::Store(cur, d, lanes + N);
-  return hn::LoadU(d, lanes + N - 1);
-#endif
+  hn::Store(cur, d, lanes + hn::Lanes(d));
+  return hn::LoadU(d, lanes + hn::Lanes(d) - 1);
 }
 
-HWY_INLINE VU16 shiftInNext(VU16 cur, VU16 next) {
+template <class V>
+HWY_INLINE V shiftInNext(V cur, V next) {
+  constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
-  alignas(64) static constexpr uint16_t kIndex[32] = {1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11,
-                                                      12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22,
-                                                      23, 24, 25, 26, 27, 28, 29, 30, 31, 32};
-  return VU16{_mm512_permutex2var_epi16(cur.raw, _mm512_load_si512(kIndex), next.raw)};
-#elif HWY_ARCH_X86 && HWY_TARGET == HWY_AVX2
-  return VU16{_mm256_alignr_epi8(_mm256_permute2x128_si256(cur.raw, next.raw, 0x21), cur.raw, 2)};
-#elif HWY_ARCH_X86 && HWY_TARGET <= HWY_SSSE3 && HWY_TARGET >= HWY_SSE4
-  return VU16{_mm_alignr_epi8(next.raw, cur.raw, 2)};
-#else
-  const DU16 d;
-  HWY_ALIGN uint16_t lanes[2 * hn::MaxLanes(DU16())];
-  const size_t N = hn::Lanes(d);
-  hn::Store(cur, d, lanes);
-  hn::Store(next, d, lanes + N);
-  return hn::LoadU(d, lanes + 1);
+  if constexpr (kLanes == 32) {
+    alignas(64) static constexpr uint16_t kIndex[32] = {1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11,
+                                                        12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22,
+                                                        23, 24, 25, 26, 27, 28, 29, 30, 31, 32};
+    return V{_mm512_permutex2var_epi16(cur.raw, _mm512_load_si512(kIndex), next.raw)};
+  }
 #endif
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
+  if constexpr (kLanes == 16) {
+    return V{_mm256_alignr_epi8(_mm256_permute2x128_si256(cur.raw, next.raw, 0x21), cur.raw, 2)};
+  }
+#endif
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSSE3
+  if constexpr (kLanes == 8) return V{_mm_alignr_epi8(next.raw, cur.raw, 2)};
+#endif
+  const DU16 d;
+  HWY_ALIGN uint16_t lanes[2 * kLanes];
+  hn::Store(cur, d, lanes);
+  hn::Store(next, d, lanes + hn::Lanes(d));
+  return hn::LoadU(d, lanes + 1);
 }
 
-// Directions of one pass: index 0 = along the row (from x - dx), 1 = from the previous row at x,
-// 2 = previous row at x - dx, 3 = previous row at x + dx.
-constexpr int kPrevRowPaths = 3;
+// Winners are taken for this many pixels at a time, after their paths: the pixels are
+// independent there, so the long chain of horizontal minima of one overlaps the next's.
+constexpr int kWinnerBatch = 16;
 
 // Carves the strip's buffers out of the workspace.
+//
+// Path rows hold the previous row's path costs for the three directions that come from the row
+// before (0: same x, 1: x - dx, 2: x + dx), updated in place as the row is swept: direction 0
+// reads and writes pixel x; direction 2 reads x + dx, which the sweep has not reached yet;
+// direction 1 reads x - dx, which the sweep has just passed, so its new values wait one pixel in
+// `delay` before they overwrite the row. One row per direction keeps the strip's working set in
+// the L2 cache.
 struct StripBuffers {
   int width = 0;
-  int lanes = 0;
-  int padded = 0;         // Dp
-  int pixel_stride = 0;   // Dp + 2 * lanes
-  uint16_t* ring = nullptr;       // window rows of absolute differences (SAD)
-  uint16_t* column_sum = nullptr; // SAD column sums over the window rows
-  uint16_t* running = nullptr;    // SAD running horizontal sum, Dp
-  uint16_t* cost = nullptr;
-  uint16_t* path_prev[kPrevRowPaths] = {};
-  uint16_t* path_cur[kPrevRowPaths] = {};
-  uint16_t* min_prev[kPrevRowPaths] = {};  // W + 2 each
-  uint16_t* min_cur[kPrevRowPaths] = {};
-  uint16_t* along[2] = {};        // the along-row path: previous and current pixel
-  uint16_t* sums = nullptr;       // [x][Dp] path sums of the current row
-  uint16_t* right_min = nullptr;  // LR check: best sum per right pixel, stored reversed
+  int lanes = 0;          // N
+  int padded = 0;         // Dp: disparities rounded up to N
+  int pixel_stride = 0;   // Dp, plus N sentinel lanes when Dp == D
+  uint16_t* path[3] = {};
+  uint16_t* path_min[3] = {};  // W + 2 each, pixel x at x + 1
+  uint16_t* along[2] = {};     // [N sentinels][Dp][N sentinels]: previous and current pixel
+  uint16_t* delay[2] = {};     // Dp each: direction 1's new costs, one pixel late
+  uint16_t* column_sum = nullptr;  // SAD: [x][Dp] sums over the window rows
+  uint8_t* ring = nullptr;         // SAD: window rows of [x][Dp] absolute differences
+  uint16_t* running = nullptr;     // SAD: Dp, running horizontal window sum
+  uint16_t* sums = nullptr;        // [kWinnerBatch][Dp]: path sums of the pixels awaiting their winner
+  uint16_t* batch_best = nullptr;  // [kWinnerBatch][N]: lane-wise minimum of each pixel's sums
+  uint16_t* batch_index = nullptr; // [kWinnerBatch][N]: and the first disparity that has it
+  uint16_t* iota = nullptr;        // Dp: 0, 1, 2, ...
+  uint16_t* right_min = nullptr;   // LR check: best sum per right pixel, stored reversed
   uint16_t* right_arg = nullptr;
-  int16_t* winner = nullptr;      // W, integer winner per pixel of the row (-1 = invalid)
-  uint8_t* right_reversed = nullptr;      // right image row, reversed and padded
-  uint32_t* census_reversed = nullptr;    // right census row, reversed and padded
+  int16_t* winner = nullptr;       // W: integer winner per pixel of the row (-1 = invalid)
+  uint8_t* right_reversed = nullptr;     // SAD: entering right row, reversed and padded
+  uint16_t* census_reversed[2] = {};     // census: right row's low and high 16 bits, reversed
   int reversed_length = 0;
 
   uint16_t* pathPixel(uint16_t* row, int x) const {
-    return row + static_cast<std::ptrdiff_t>(x + 1) * pixel_stride + lanes;
+    return row + lanes + static_cast<std::ptrdiff_t>(x + 1) * pixel_stride;
   }
 };
 
@@ -136,17 +160,16 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws) {
   b.width = p.width;
   b.lanes = static_cast<int>(hn::Lanes(d));
   b.padded = static_cast<int>(alignUp(p.num_disparities, b.lanes));
-  b.pixel_stride = b.padded + 2 * b.lanes;
-  const std::size_t W = p.width, Dp = b.padded;
-  const std::size_t row = alignUp(W * Dp, 64);
-  const std::size_t path_row = alignUp((W + 2) * b.pixel_stride, 64);
-  const std::size_t min_row = alignUp(W + 2, 64);
-  b.reversed_length = static_cast<int>(alignUp(W + p.min_disparity + Dp + 2 * b.lanes, 64));
+  b.pixel_stride = b.padded + (b.padded > p.num_disparities ? 0 : b.lanes);
+  const std::size_t W = p.width, Dp = b.padded, N = b.lanes;
+  b.reversed_length = static_cast<int>(alignUp(W + p.min_disparity + Dp + 2 * N, 64));
   const std::size_t rev = b.reversed_length;
-  const int ring_rows = p.census ? 0 : p.window;
-  const std::size_t total = row * (ring_rows + 3) + alignUp(Dp, 64) * 2 + path_row * 2 * kPrevRowPaths +
-                            min_row * 2 * kPrevRowPaths + alignUp(b.pixel_stride, 64) * 2 +
-                            rev * 2 + alignUp(W, 64) + rev / 2 + 64 + rev * 2 + 64;
+  const std::size_t path_row = (W + 2) * b.pixel_stride + 2 * N;
+  const std::size_t sad = p.census ? 0 : W * Dp + (W * Dp * p.window + 1) / 2;
+  // Every piece is rounded up to 64 elements by take(); 20 pieces at most.
+  const std::size_t total = 3 * (path_row + W + 2) + 2 * (Dp + 2 * N) + 2 * Dp + sad + 2 * Dp +
+                            kWinnerBatch * (Dp + 2 * N) + 2 * rev + W +
+                            (rev / 2 + 32) + 2 * rev + 20 * 64;
   if (ws.buffer_elements < total) {
     ws.buffer = hwy::AllocateAligned<uint16_t>(total);
     ws.buffer_elements = total;
@@ -157,212 +180,190 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws) {
     next += alignUp(n, 64);
     return out;
   };
-  b.ring = take(row * ring_rows);
-  b.column_sum = take(row);
-  b.cost = take(row);
-  b.running = take(Dp);
-  b.sums = take(row);
-  for (int i = 0; i < kPrevRowPaths; ++i) {
-    b.path_prev[i] = take(path_row);
-    b.path_cur[i] = take(path_row);
-    b.min_prev[i] = take(min_row);
-    b.min_cur[i] = take(min_row);
+  for (int i = 0; i < 3; ++i) {
+    b.path[i] = take(path_row);
+    b.path_min[i] = take(W + 2);
   }
-  b.along[0] = take(b.pixel_stride);
-  b.along[1] = take(b.pixel_stride);
+  b.along[0] = take(Dp + 2 * N);
+  b.along[1] = take(Dp + 2 * N);
+  b.delay[0] = take(Dp);
+  b.delay[1] = take(Dp);
+  if (!p.census) {
+    b.column_sum = take(W * Dp);
+    b.ring = reinterpret_cast<uint8_t*>(take((W * Dp * p.window + 1) / 2));  // window rows of bytes
+  }
+  b.running = take(Dp);
+  b.sums = take(kWinnerBatch * Dp);
+  b.batch_best = take(kWinnerBatch * N);
+  b.batch_index = take(kWinnerBatch * N);
+  b.iota = take(Dp);
+  for (std::size_t k = 0; k < Dp; ++k) b.iota[k] = static_cast<uint16_t>(k);
   b.right_min = take(rev);
   b.right_arg = take(rev);
   b.winner = reinterpret_cast<int16_t*>(take(W));
   b.right_reversed = reinterpret_cast<uint8_t*>(take(rev / 2 + 32));
-  b.census_reversed = reinterpret_cast<uint32_t*>(take(rev * 2 + 32));
+  b.census_reversed[0] = take(rev);
+  b.census_reversed[1] = take(rev);
   return b;
 }
 
 // ---------------------------------------------------------------------------------------------
-// Matching cost of one row: cost[x][k] for disparity min_disparity + k.
+// Matching cost, built on the fly for each pixel as the row is swept.
 
-// Right image row y reversed: reversed[j] = right[W - 1 - j], so that the pixels x - k of one
-// left pixel x are contiguous in k. Past the left image border the row is replicated (those
-// disparities are masked out of the cost later).
+int clampRow(int y, int height) { return std::clamp(y, 0, height - 1); }
+int clampColumn(int x, int width) { return std::clamp(x, 0, width - 1); }
+int ringSlot(int y, int window) { return ((y % window) + window) % window; }
+
+// Right image row reversed: reversed[j] = row[W - 1 - j], so that the right pixels x - k of one
+// left pixel x are contiguous in k. Left of the image the row repeats its first pixel (those
+// disparities are masked out of the cost).
 template <typename T>
 void reverseRow(const T* row, int width, int length, T* reversed) {
   for (int j = 0; j < width; ++j) reversed[j] = row[width - 1 - j];
   for (int j = width; j < length; ++j) reversed[j] = row[0];
 }
 
-// Absolute differences of left row y against the reversed right row, for every x and k.
-void absDiffRow(const SgmParams& p, const StripBuffers& b, const uint8_t* left_row,
-                const uint8_t* right_reversed, uint16_t* out) {
-  const DU16 d;
-  const hn::Rebind<uint8_t, DU16> d8;
-  const int N = b.lanes, Dp = b.padded, W = p.width;
-  for (int x = 0; x < W; ++x) {
-    const VU16 l = hn::Set(d, left_row[x]);
-    const uint8_t* r = right_reversed + (W - 1 - x + p.min_disparity);
-    uint16_t* o = out + static_cast<std::ptrdiff_t>(x) * Dp;
-    for (int k = 0; k < Dp; k += N) {
-      const VU16 rv = hn::PromoteTo(d, hn::LoadU(d8, r + k));
-      hn::Store(hn::Sub(hn::Max(l, rv), hn::Min(l, rv)), d, o + k);
-    }
-  }
+using D8 = hn::Rebind<uint8_t, DU16>;
+
+// |left - right| for the disparities of vector k, as bytes.
+HWY_INLINE hn::Vec<D8> absDiffBytes(uint8_t left, const uint8_t* right_reversed_at_x, int k) {
+  const D8 d8;
+  const auto l = hn::Set(d8, left);
+  const auto r = hn::LoadU(d8, right_reversed_at_x + k);
+  return hn::Or(hn::SaturatedSub(l, r), hn::SaturatedSub(r, l));
 }
 
-struct CostRowState {
-  int current_row = std::numeric_limits<int>::min();
-};
-
-int clampRow(int y, int height) { return std::clamp(y, 0, height - 1); }
-int ringSlot(int y, int window) { return ((y % window) + window) % window; }
-
-// Absolute differences of image row `y` (clamped) into the ring slot of y.
-void loadDiffRow(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y,
-                 uint16_t* out) {
-  const int yc = clampRow(y, p.height);
-  reverseRow(im.right + yc * im.image_stride, p.width, b.reversed_length, b.right_reversed);
-  absDiffRow(p, b, im.left + yc * im.image_stride, b.right_reversed, out);
+const uint8_t* reversedAt(const SgmParams& p, const uint8_t* reversed, int x) {
+  return reversed + (p.width - 1 - x + p.min_disparity);
 }
 
-// Column sums over rows [y - r, y + r] for the first row of a pass.
+// Column sums over rows [y - r, y + r] for the first row of a pass: every ring slot filled.
 void initColumnSums(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y) {
   const DU16 d;
-  const int r = p.window / 2;
-  const std::size_t n = static_cast<std::size_t>(p.width) * b.padded;
+  const D8 d8;
+  const int r = p.window / 2, N = b.lanes, Dp = b.padded, W = p.width;
+  const std::size_t n = static_cast<std::size_t>(W) * Dp;
   std::fill(b.column_sum, b.column_sum + n, 0);
   for (int yy = y - r; yy <= y + r; ++yy) {
-    uint16_t* slot = b.ring + static_cast<std::size_t>(ringSlot(yy, p.window)) * n;
-    loadDiffRow(p, im, b, yy, slot);
-    for (std::size_t i = 0; i < n; i += b.lanes) {
-      hn::Store(hn::Add(hn::Load(d, b.column_sum + i), hn::Load(d, slot + i)), d, b.column_sum + i);
+    const int yc = clampRow(yy, p.height);
+    uint8_t* slot = b.ring + static_cast<std::size_t>(ringSlot(yy, p.window)) * n;
+    reverseRow(im.right + yc * im.image_stride, W, b.reversed_length, b.right_reversed);
+    const uint8_t* left = im.left + yc * im.image_stride;
+    for (int x = 0; x < W; ++x) {
+      const uint8_t* rev = reversedAt(p, b.right_reversed, x);
+      for (int k = 0; k < Dp; k += N) {
+        const auto ad = absDiffBytes(left[x], rev, k);
+        const std::size_t at = static_cast<std::size_t>(x) * Dp + k;
+        hn::Store(ad, d8, slot + at);
+        hn::Store(hn::Add(hn::Load(d, b.column_sum + at), hn::PromoteTo(d, ad)), d, b.column_sum + at);
+      }
     }
   }
 }
 
-// Slides the column sums one row (dy = +1 down, -1 up): the entering row replaces the leaving
-// one, which sits in the same ring slot since they are `window` rows apart.
-void slideColumnSums(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y,
-                     int dy) {
+// Where the matching cost of the current row comes from, set up once per row.
+struct CostSource {
+  // SAD: the entering image row of the vertical window (its differences replace those of the
+  // row leaving the window, in the same ring slot) and whether columns must be updated at all.
+  bool update_columns = false;
+  const uint8_t* entering_left = nullptr;
+  uint8_t* entering_slot = nullptr;
+  // Census: the left descriptors of the row.
+  const uint32_t* census_left = nullptr;
+};
+
+// New differences of the entering row at column c, vector k: swaps them into the ring slot and
+// returns the updated column sum.
+HWY_INLINE VU16 updateColumn(const SgmParams& p, const StripBuffers& b, const CostSource& src, int c, int k) {
   const DU16 d;
-  const int r = p.window / 2;
-  const int entering = y + dy * r;
-  const std::size_t n = static_cast<std::size_t>(p.width) * b.padded;
-  uint16_t* slot = b.ring + static_cast<std::size_t>(ringSlot(entering, p.window)) * n;
-  // The entering row's differences go to `cost` first (free at this point), then into the slot.
-  loadDiffRow(p, im, b, entering, b.cost);
-  for (std::size_t i = 0; i < n; i += b.lanes) {
-    const VU16 fresh = hn::Load(d, b.cost + i);
-    const VU16 sum = hn::Sub(hn::Add(hn::Load(d, b.column_sum + i), fresh), hn::Load(d, slot + i));
-    hn::Store(sum, d, b.column_sum + i);
-    hn::Store(fresh, d, slot + i);
-  }
+  const D8 d8;
+  const std::size_t at = static_cast<std::size_t>(c) * b.padded + k;
+  const auto ad = absDiffBytes(src.entering_left[c], reversedAt(p, b.right_reversed, c), k);
+  const VU16 old = hn::PromoteTo(d, hn::Load(d8, src.entering_slot + at));
+  hn::Store(ad, d8, src.entering_slot + at);
+  const VU16 sum = hn::Sub(hn::Add(hn::Load(d, b.column_sum + at), hn::PromoteTo(d, ad)), old);
+  hn::Store(sum, d, b.column_sum + at);
+  return sum;
 }
 
-// cost[x] = (sum of column_sum[clamp(x - r .. x + r)]) >> sad_shift, by a running sum over x.
-void horizontalBox(const SgmParams& p, const StripBuffers& b) {
+// Prepares row y (dy: direction of the sweep over rows, dx: over columns) and the window sum of
+// the sweep's first pixel.
+CostSource beginCostRow(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y, int dy, int dx,
+                        bool first_row) {
   const DU16 d;
-  const int N = b.lanes, Dp = b.padded, W = p.width, r = p.window / 2;
-  auto column = [&](int x) { return b.column_sum + static_cast<std::ptrdiff_t>(std::clamp(x, 0, W - 1)) * Dp; };
+  CostSource src;
+  const int W = p.width, Dp = b.padded, N = b.lanes;
+  if (p.census) {
+    const int yc = clampRow(y, p.height);
+    const uint32_t* right = im.census_right + yc * im.census_stride;
+    for (int j = 0; j < b.reversed_length; ++j) {
+      const uint32_t c = right[j < W ? W - 1 - j : 0];
+      b.census_reversed[0][j] = static_cast<uint16_t>(c & 0xFFFF);
+      b.census_reversed[1][j] = static_cast<uint16_t>(c >> 16);
+    }
+    src.census_left = im.census_left + yc * im.census_stride;
+    return src;
+  }
+  const int r = p.window / 2;
+  if (first_row) {
+    initColumnSums(p, im, b, y);
+  } else {
+    const int entering = y + dy * r;
+    const int yc = clampRow(entering, p.height);
+    src.update_columns = true;
+    src.entering_left = im.left + yc * im.image_stride;
+    src.entering_slot = b.ring + static_cast<std::size_t>(ringSlot(entering, p.window)) * W * Dp;
+    reverseRow(im.right + yc * im.image_stride, W, b.reversed_length, b.right_reversed);
+  }
+  // Window sum of the first pixel x0: columns x0 - r .. x0 + r (clamped); the columns ahead of
+  // x0 in the sweep direction are brought to the new row first.
+  const int x0 = dx > 0 ? 0 : W - 1;
   for (int k = 0; k < Dp; k += N) {
+    if (src.update_columns) {
+      for (int i = 0; i <= r; ++i) {
+        const int c = x0 + dx * i;
+        if (c >= 0 && c < W) updateColumn(p, b, src, c, k);
+      }
+    }
     VU16 acc = hn::Zero(d);
-    for (int i = -r; i <= r; ++i) acc = hn::Add(acc, hn::Load(d, column(i) + k));
+    for (int i = -r; i <= r; ++i) {
+      acc = hn::Add(acc, hn::Load(d, b.column_sum + static_cast<std::size_t>(clampColumn(x0 + i, W)) * Dp + k));
+    }
     hn::Store(acc, d, b.running + k);
   }
-  for (int x = 0; x < W; ++x) {
-    uint16_t* out = b.cost + static_cast<std::ptrdiff_t>(x) * Dp;
-    const uint16_t* in = column(x + r);
-    const uint16_t* leave = column(x - r - 1);
-    for (int k = 0; k < Dp; k += N) {
-      VU16 acc = hn::Load(d, b.running + k);
-      if (x > 0) {
-        acc = hn::Sub(hn::Add(acc, hn::Load(d, in + k)), hn::Load(d, leave + k));
-        hn::Store(acc, d, b.running + k);
-      }
-      hn::Store(hn::ShiftRightSame(acc, p.sad_shift), d, out + k);
-    }
-  }
-}
-
-// Census cost: Hamming distance of the left descriptor to each right descriptor x - k.
-void censusCostRow(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y) {
-  const hn::Repartition<uint32_t, DU16> d32;
-  const hn::Rebind<int32_t, decltype(d32)> di32;
-  const hn::Rebind<uint16_t, decltype(d32)> d16h;
-  const int N32 = static_cast<int>(hn::Lanes(d32)), Dp = b.padded, W = p.width;
-  const int yc = clampRow(y, p.height);
-  reverseRow(im.census_right + yc * im.census_stride, W, b.reversed_length, b.census_reversed);
-  const uint32_t* left = im.census_left + yc * im.census_stride;
-  for (int x = 0; x < W; ++x) {
-    const auto l = hn::Set(d32, left[x]);
-    const uint32_t* r = b.census_reversed + (W - 1 - x + p.min_disparity);
-    uint16_t* o = b.cost + static_cast<std::ptrdiff_t>(x) * Dp;
-    for (int k = 0; k < Dp; k += N32) {
-      const auto bits = hn::PopulationCount(hn::Xor(l, hn::LoadU(d32, r + k)));
-      hn::StoreU(hn::DemoteTo(d16h, hn::BitCast(di32, bits)), d16h, o + k);
-    }
-  }
-}
-
-// Disparities with no right pixel (x - min_disparity - k < 0) get the largest cost.
-void maskLeftBorder(const SgmParams& p, const StripBuffers& b) {
-  const DU16 d;
-  const int N = b.lanes, Dp = b.padded;
-  const VU16 worst = hn::Set(d, static_cast<uint16_t>(p.max_cost));
-  const int last = std::min(p.width, p.min_disparity + Dp);
-  for (int x = 0; x < last; ++x) {
-    uint16_t* c = b.cost + static_cast<std::ptrdiff_t>(x) * Dp;
-    const VU16 max_k = hn::Set(d, static_cast<uint16_t>(std::max(-1, x - p.min_disparity)));
-    for (int k = 0; k < Dp; k += N) {
-      // x - min_d - k < 0  <=>  k > x - min_d; all lanes when x < min_d.
-      const auto beyond = x < p.min_disparity ? hn::FirstN(d, N) : hn::Gt(hn::Iota(d, k), max_k);
-      hn::Store(hn::IfThenElse(beyond, worst, hn::Load(d, c + k)), d, c + k);
-    }
-  }
-}
-
-// Brings the cost row to image row y; `first` starts a pass there, otherwise y = previous y + dy.
-void costRow(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y, int dy,
-             bool first) {
-  if (p.census) {
-    censusCostRow(p, im, b, y);
-  } else {
-    if (first) {
-      initColumnSums(p, im, b, y);
-    } else {
-      slideColumnSums(p, im, b, y, dy);
-    }
-    horizontalBox(p, b);
-  }
-  maskLeftBorder(p, b);
+  return src;
 }
 
 // ---------------------------------------------------------------------------------------------
 // Aggregation along the paths, and the winner.
 
-void resetPaths(const StripBuffers& b, uint16_t sentinel) {
+// Every path row to "no predecessor": zero costs (so that a path starts with L = C), sentinels in
+// the lanes past D.
+void resetPaths(const SgmParams& p, const StripBuffers& b, uint16_t sentinel) {
+  const int N = b.lanes, D = p.num_disparities;
   const std::size_t pixels = static_cast<std::size_t>(b.width) + 2;
-  for (int i = 0; i < kPrevRowPaths; ++i) {
-    for (uint16_t* row : {b.path_prev[i], b.path_cur[i]}) {
-      for (std::size_t px = 0; px < pixels; ++px) {
-        uint16_t* pixel = row + px * b.pixel_stride;
-        std::fill(pixel, pixel + b.lanes, sentinel);
-        std::fill(pixel + b.lanes, pixel + b.lanes + b.padded, 0);
-        std::fill(pixel + b.lanes + b.padded, pixel + b.pixel_stride, sentinel);
-      }
+  for (int i = 0; i < 3; ++i) {
+    uint16_t* row = b.path[i];
+    std::fill(row, row + N, sentinel);
+    for (std::size_t px = 0; px < pixels; ++px) {
+      uint16_t* pixel = row + N + px * b.pixel_stride;
+      std::fill(pixel, pixel + D, 0);
+      std::fill(pixel + D, pixel + b.pixel_stride, sentinel);
     }
-    std::fill(b.min_prev[i], b.min_prev[i] + pixels, 0);
-    std::fill(b.min_cur[i], b.min_cur[i] + pixels, 0);
-  }
-  for (uint16_t* pixel : {b.along[0], b.along[1]}) {
-    std::fill(pixel, pixel + b.pixel_stride, sentinel);
-    std::fill(pixel + b.lanes, pixel + b.lanes + b.padded, 0);
+    uint16_t* end = row + N + pixels * b.pixel_stride;
+    std::fill(end, end + N, sentinel);
+    std::fill(b.path_min[i], b.path_min[i] + pixels, 0);
   }
 }
 
-struct PathStep {
-  const uint16_t* prev;  // predecessor's path costs
-  uint16_t min_prev;     // their minimum
-  uint16_t p2;           // P2 for this step
-  uint16_t* out;         // where the new path costs go
-};
+// The along-row path starts fresh at the first pixel of every row.
+void resetAlong(const SgmParams& p, const StripBuffers& b, uint16_t sentinel) {
+  const int N = b.lanes, Dp = b.padded;
+  for (uint16_t* pixel : {b.along[0], b.along[1]}) {
+    std::fill(pixel, pixel + Dp + 2 * N, sentinel);
+    std::fill(pixel + N, pixel + N + p.num_disparities, 0);
+  }
+}
 
 // Grey level difference -> adapted P2 (Hirschmueller: smaller penalty across intensity edges).
 struct PenaltyTable {
@@ -383,12 +384,11 @@ PenaltyTable makePenaltyTable(const SgmParams& p) {
   return t;
 }
 
-// Winner, sub-pixel offset and PKRN of one pixel's path sums (b.sums); returns the integer winner
-// k (or -1) and writes the outputs.
-int selectWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, float* disparity,
-                 float* confidence) {
+// Winner, sub-pixel offset and PKRN of one pixel's path sums `s` (lane-wise minimum `best`);
+// returns the integer winner k (or -1) and writes the outputs.
+HWY_INLINE int selectWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, VU16 best, VU16 best_index,
+                 float* disparity, float* confidence) {
   const DU16 d;
-  const hn::RebindToSigned<DU16> di;
   const int N = b.lanes, D = p.num_disparities, Dp = b.padded;
   // Disparities k with a right pixel: k <= x - min_d.
   const int valid = std::min(D, x - p.min_disparity + 1);
@@ -399,34 +399,35 @@ int selectWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, 
   }
   // Lanes past D hold sentinel sums, larger than any real one; only at the left border do lanes
   // without a right pixel need masking.
-  if (valid < D) std::fill(s + valid, s + Dp, kNoCost);
-  VU16 best = hn::Load(d, s);
-  for (int k = N; k < Dp; k += N) best = hn::Min(best, hn::Load(d, s + k));
-  const uint16_t c1 = minLane(d, best);
-  int winner = 0;
-  for (int k = 0; k < Dp; k += N) {
-    const intptr_t lane = hn::FindFirstTrue(d, hn::Eq(hn::Load(d, s + k), hn::Set(d, c1)));
-    if (lane >= 0) {
-      winner = k + static_cast<int>(lane);
-      break;
+  if (valid < D) {
+    std::fill(s + valid, s + Dp, kNoCost);
+    best = hn::Set(d, kNoCost);
+    for (int k = 0; k < Dp; k += N) {
+      const VU16 sum = hn::Load(d, s + k);
+      best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, b.iota + k), best_index);
+      best = hn::Min(best, sum);
     }
   }
+  // Smallest sum, and the smallest disparity that has it: each lane already holds its own
+  // minimum and first index (branch-free; searching the vectors for the winner mispredicts).
+  const uint16_t c1 = minLane(d, best);
+  const int winner = minLane(d, hn::IfThenElse(hn::Eq(best, hn::Set(d, c1)), best_index, hn::Set(d, kNoCost)));
   // Second minimum: outside winner-1..winner+1 (neighbours of the winner are the same match
-  // seen at a sub-pixel offset), or anywhere but the winner.
+  // seen at a sub-pixel offset), or anywhere but the winner. In unsigned arithmetic, lanes below
+  // winner - reach wrap around to large values, so one comparison finds the excluded span.
   const int reach = p.pkrn_exclude_neighbours ? 1 : 0;
-  const auto lo = hn::Set(di, static_cast<int16_t>(winner - reach - 1));
-  const auto hi = hn::Set(di, static_cast<int16_t>(winner + reach + 1));
+  const VU16 first_near = hn::Set(d, static_cast<uint16_t>(winner - reach));
+  const VU16 span = hn::Set(d, static_cast<uint16_t>(2 * reach + 1));
   VU16 second = hn::Set(d, kNoCost);
   for (int k = 0; k < Dp; k += N) {
-    const auto index = hn::Iota(di, k);
-    const auto near = hn::RebindMask(d, hn::And(hn::Gt(index, lo), hn::Lt(index, hi)));
+    const auto near = hn::Lt(hn::Sub(hn::Load(d, b.iota + k), first_near), span);
     second = hn::Min(second, hn::IfThenElse(near, hn::Set(d, kNoCost), hn::Load(d, s + k)));
   }
   const uint16_t c2 = minLane(d, second);
   // PKRN = c2 / c1, with one cost unit added to both so that it is defined for c1 = 0. A pixel
   // with no second candidate at all is as ambiguous as it can be: confidence 1.
   const float pkrn = c2 == kNoCost ? 1.0f : (c2 + 1.0f) / (c1 + 1.0f);
-  if (pkrn < p.min_confidence) {
+  if (c2 == kNoCost ? 1.0f < p.min_confidence : (c2 + 1.0f) < p.min_confidence * (c1 + 1.0f)) {
     *disparity = std::numeric_limits<float>::infinity();
     *confidence = 0.0f;
     return -1;
@@ -443,8 +444,9 @@ int selectWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, 
 }
 
 // Right image's best sum per pixel (for the LR check): right pixel xr = x - min_d - k, stored
-// reversed at W - 1 - xr so that one left pixel's disparities are contiguous.
-void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const uint16_t* sums) {
+// reversed at W - 1 - xr so that one left pixel's disparities are contiguous. Ties keep the
+// smaller k, whichever way the row is swept.
+void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const uint16_t* sums, int dx) {
   const DU16 d;
   const int N = b.lanes;
   const std::ptrdiff_t base = p.width - 1 - x + p.min_disparity;
@@ -452,9 +454,11 @@ void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const 
     const VU16 m = hn::LoadU(d, b.right_min + base + k);
     const VU16 a = hn::LoadU(d, b.right_arg + base + k);
     const VU16 s = hn::Load(d, sums + k);
-    const auto better = hn::Lt(s, m);
+    // Left to right, k grows for a fixed right pixel: keep the first. Right to left, k shrinks:
+    // an equal sum replaces.
+    const auto better = dx > 0 ? hn::Lt(s, m) : hn::Not(hn::Lt(m, s));
     hn::StoreU(hn::Min(m, s), d, b.right_min + base + k);
-    hn::StoreU(hn::IfThenElse(better, hn::Iota(d, k), a), d, b.right_arg + base + k);
+    hn::StoreU(hn::IfThenElse(better, hn::Load(d, b.iota + k), a), d, b.right_arg + base + k);
   }
 }
 
@@ -474,101 +478,205 @@ void leftRightCheck(const SgmParams& p, const StripBuffers& b, float* disparity,
 
 enum class RowOutput { kNone, kStoreSums, kWinner };
 
-// Aggregates the 4 paths of one pass over row y (dx = +1: left to right; -1: right to left; the
-// previous row is y - dx, i.e. above for the first pass and below for the second).
-// `stored_sums`: first-pass sums to add (8-path second pass) or to write (8-path first pass).
-void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen,
-                  int y, int dx, bool first_row, RowOutput output, uint16_t* stored_sums,
-                  bool add_stored, float* disparity, float* confidence) {
+// Copies one pixel's path costs (aligned vectors).
+void copyPixel(const StripBuffers& b, const uint16_t* from, uint16_t* to) {
   const DU16 d;
-  const int N = b.lanes, Dp = b.padded, W = p.width, D = p.num_disparities;
+  for (int k = 0; k < b.padded; k += b.lanes) hn::Store(hn::Load(d, from + k), d, to + k);
+}
+
+// One row of one pass: builds the matching cost on the fly, advances the four paths and sums
+// them (dx = +1: left to right, previous row above; -1: right to left, previous row below).
+// Path directions: 0 along the row (from x - dx, kept in `along`), 1 from (x, y - dx),
+// 2 from (x - dx, y - dx), 3 from (x + dx, y - dx); rows 0..2 of b.path hold directions 1..3.
+// `stored_sums`: first-pass sums to add (8-path second pass) or to write (8-path first pass).
+void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y,
+                  int dx, bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored,
+                  float* disparity, float* confidence) {
+  const DU16 d;
+  const int N = b.lanes, Dp = b.padded, W = p.width, D = p.num_disparities, r = p.window / 2;
   const VU16 p1 = hn::Set(d, static_cast<uint16_t>(p.p1));
   const uint16_t sentinel = static_cast<uint16_t>(p.max_cost + p.p2 + p.p1);
   const VU16 sentinel_v = hn::Set(d, sentinel);
+  const VU16 worst_cost = hn::Set(d, static_cast<uint16_t>(p.max_cost));
   const auto last_mask = hn::FirstN(d, D - (Dp - N));  // data lanes of the last vector
   const uint8_t* row = im.left + y * im.image_stride;
   const uint8_t* prev_row = im.left + (y - dx) * im.image_stride;  // inside the image border
+  const CostSource src = beginCostRow(p, im, b, y, dx, dx, first_row);
   if (output == RowOutput::kWinner && p.lr_check) {
     std::fill(b.right_min, b.right_min + b.reversed_length, kNoCost);
     std::fill(b.right_arg, b.right_arg + b.reversed_length, 0);
   }
-  uint16_t along_min = 0;
-  int along_cur = 0;
-  // The along-row path starts fresh at the first pixel of the row.
-  std::fill(b.along[1] + N, b.along[1] + N + Dp, 0);
+  resetAlong(p, b, sentinel);
+  uint16_t along_min = 0, delayed_min = 0;
+  int along_cur = 0, delay_cur = 0;
   for (int i = 0; i < W; ++i) {
     const int x = dx > 0 ? i : W - 1 - i;
-    const uint16_t* c = b.cost + static_cast<std::ptrdiff_t>(x) * Dp;
-    const int g_along = std::abs(row[x] - row[x - dx]);
-    const int g_up = std::abs(row[x] - prev_row[x]);
-    const int g_up_back = std::abs(row[x] - prev_row[x - dx]);
-    const int g_up_fwd = std::abs(row[x] - prev_row[x + dx]);
-    const uint16_t* along_prev = b.along[1 - along_cur] + N;
-    if (i == 0) along_min = 0;
-    PathStep steps[4] = {
-        {along_prev, along_min, pen.p2[g_along], b.along[along_cur] + N},
-        {b.pathPixel(b.path_prev[0], x), first_row ? uint16_t(0) : b.min_prev[0][x + 1], pen.p2[g_up],
-         b.pathPixel(b.path_cur[0], x)},
-        {b.pathPixel(b.path_prev[1], x - dx), first_row ? uint16_t(0) : b.min_prev[1][x - dx + 1],
-         pen.p2[g_up_back], b.pathPixel(b.path_cur[1], x)},
-        {b.pathPixel(b.path_prev[2], x + dx), first_row ? uint16_t(0) : b.min_prev[2][x + dx + 1],
-         pen.p2[g_up_fwd], b.pathPixel(b.path_cur[2], x)},
-    };
-    VU16 mins[4] = {sentinel_v, sentinel_v, sentinel_v, sentinel_v};
+    // SAD window columns: the one entering ahead of x and the one leaving behind it.
+    const int ahead = x + dx * r;
+    const bool update_ahead = src.update_columns && i > 0 && ahead >= 0 && ahead < W;
+    const uint16_t* add_column =
+        p.census ? nullptr : b.column_sum + static_cast<std::ptrdiff_t>(clampColumn(ahead, W)) * Dp;
+    const uint16_t* leave_column =
+        p.census ? nullptr : b.column_sum + static_cast<std::ptrdiff_t>(clampColumn(x - dx * (r + 1), W)) * Dp;
+    const bool left_border = x - p.min_disparity < D;
+    const bool no_match = x < p.min_disparity;
+    const VU16 max_valid_k = hn::Set(d, static_cast<uint16_t>(no_match ? 0 : x - p.min_disparity));
+    const uint16_t census_lo = p.census ? static_cast<uint16_t>(src.census_left[x] & 0xFFFF) : 0;
+    const uint16_t census_hi = p.census ? static_cast<uint16_t>(src.census_left[x] >> 16) : 0;
+    const std::ptrdiff_t census_base = W - 1 - x + p.min_disparity;
+
+    // Predecessors of the four directions (see above) and their penalties. Everything the
+    // vector loop reads is copied into locals: Highway's stores may alias anything, and the
+    // compiler would otherwise reload struct fields after every store.
+    const uint16_t* const along_prev = b.along[1 - along_cur] + N;
+    uint16_t* const along_out = b.along[along_cur] + N;
+    uint16_t* const vertical = b.pathPixel(b.path[0], x);
+    const uint16_t* const back = b.pathPixel(b.path[1], x - dx);
+    uint16_t* const back_out = b.delay[delay_cur];
+    const uint16_t* const fwd = b.pathPixel(b.path[2], x + dx);
+    uint16_t* const fwd_out = b.pathPixel(b.path[2], x);
+    const uint16_t min_along = along_min, min_vertical = b.path_min[0][x + 1];
+    const uint16_t min_back = b.path_min[1][x - dx + 1], min_fwd = b.path_min[2][x + dx + 1];
+    const VU16 min_along_v = hn::Set(d, min_along), min_vertical_v = hn::Set(d, min_vertical);
+    const VU16 min_back_v = hn::Set(d, min_back), min_fwd_v = hn::Set(d, min_fwd);
+    const VU16 jump_along = hn::Set(d, static_cast<uint16_t>(min_along + pen.p2[std::abs(row[x] - row[x - dx])]));
+    const VU16 jump_vertical =
+        hn::Set(d, static_cast<uint16_t>(min_vertical + pen.p2[std::abs(row[x] - prev_row[x])]));
+    const VU16 jump_back =
+        hn::Set(d, static_cast<uint16_t>(min_back + pen.p2[std::abs(row[x] - prev_row[x - dx])]));
+    const VU16 jump_fwd = hn::Set(d, static_cast<uint16_t>(min_fwd + pen.p2[std::abs(row[x] - prev_row[x + dx])]));
+    const int slot = i % kWinnerBatch;
+    uint16_t* const sums_out = output == RowOutput::kStoreSums
+                                   ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp
+                                   : b.sums + slot * Dp;
+    const uint16_t* const sums_in = add_stored ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp : nullptr;
+    const uint16_t* const iota = b.iota;
+    uint16_t* const running = b.running;
+    const uint16_t* const census_right_lo = b.census_reversed[0] + census_base;
+    const uint16_t* const census_right_hi = b.census_reversed[1] + census_base;
+    const bool census = p.census, has_running = !census && i > 0;
+    const int sad_shift = p.sad_shift;
+
+    VU16 mins_along = sentinel_v, mins_vertical = sentinel_v, mins_back = sentinel_v, mins_fwd = sentinel_v;
+    VU16 best = hn::Set(d, kNoCost), best_index = hn::Zero(d);
     // Along-row predecessor, rolled through registers: vectors k - 1, k and k + 1 (the pads
     // before and after the Dp values hold sentinels).
     VU16 along_before = hn::Load(d, along_prev - N);
     VU16 along_here = hn::Load(d, along_prev);
-    uint16_t* stored = stored_sums ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp : nullptr;
-    uint16_t* sums = b.sums + static_cast<std::ptrdiff_t>(x) * Dp;
-    for (int k = 0; k < Dp; k += N) {
-      const VU16 cost = hn::Load(d, c + k);
-      VU16 sum = add_stored ? hn::Load(d, stored + k) : hn::Zero(d);
-      const VU16 along_after = hn::Load(d, along_prev + k + N);
-      for (int r = 0; r < 4; ++r) {
-        const PathStep& st = steps[r];
-        VU16 same, step1;
-        if (r == 0) {
-          same = along_here;
-          step1 = hn::Add(hn::Min(shiftInPrevious(along_before, along_here), shiftInNext(along_here, along_after)), p1);
-        } else {
-          same = hn::Load(d, st.prev + k);
-          step1 = hn::Add(hn::Min(hn::LoadU(d, st.prev + k - 1), hn::LoadU(d, st.prev + k + 1)), p1);
+    VU16 vertical_pending = sentinel_v;
+    // SAD column entering the window ahead of x: its new differences, hoisted out of the loop.
+    const uint8_t ahead_left = update_ahead ? src.entering_left[ahead] : 0;
+    const uint8_t* const ahead_right = update_ahead ? reversedAt(p, b.right_reversed, ahead) : nullptr;
+    uint8_t* const ahead_slot = update_ahead ? src.entering_slot + static_cast<std::ptrdiff_t>(ahead) * Dp : nullptr;
+    uint16_t* const ahead_sum = update_ahead ? b.column_sum + static_cast<std::ptrdiff_t>(ahead) * Dp : nullptr;
+
+    // One vector of disparities; `is_last` (a compile-time constant) keeps the lanes past D at
+    // the sentinel.
+    auto vector_step = [&](int k, auto is_last) HWY_ATTR {
+      VU16 cost;
+      if (census) {
+        const VU16 lo = hn::Xor(hn::Set(d, census_lo), hn::LoadU(d, census_right_lo + k));
+        const VU16 hi = hn::Xor(hn::Set(d, census_hi), hn::LoadU(d, census_right_hi + k));
+        cost = hn::Add(hn::PopulationCount(lo), hn::PopulationCount(hi));
+      } else {
+        VU16 acc = hn::Load(d, running + k);
+        if (has_running) {
+          VU16 add;
+          if (update_ahead) {
+            const D8 d8;
+            const auto ad = absDiffBytes(ahead_left, ahead_right, k);
+            const VU16 old = hn::PromoteTo(d, hn::Load(d8, ahead_slot + k));
+            hn::Store(ad, d8, ahead_slot + k);
+            add = hn::Sub(hn::Add(hn::Load(d, ahead_sum + k), hn::PromoteTo(d, ad)), old);
+            hn::Store(add, d, ahead_sum + k);
+          } else {
+            add = hn::Load(d, add_column + k);
+          }
+          acc = hn::Sub(hn::Add(acc, add), hn::Load(d, leave_column + k));
+          hn::Store(acc, d, running + k);
         }
-        const VU16 jump = hn::Set(d, static_cast<uint16_t>(st.min_prev + st.p2));
-        VU16 path = hn::Add(cost, hn::Sub(hn::Min(hn::Min(same, step1), jump), hn::Set(d, st.min_prev)));
-        if (k + N == Dp) path = hn::IfThenElse(last_mask, path, sentinel_v);
-        hn::Store(path, d, st.out + k);
-        mins[r] = hn::Min(mins[r], path);
-        sum = hn::Add(sum, path);
+        cost = hn::ShiftRightSame(acc, sad_shift);
       }
-      hn::Store(sum, d, output == RowOutput::kStoreSums ? stored + k : sums + k);
+      if (left_border) {
+        // x - min_d - k < 0: no right pixel, largest cost.
+        const auto beyond = no_match ? hn::FirstN(d, N) : hn::Gt(hn::Load(d, iota + k), max_valid_k);
+        cost = hn::IfThenElse(beyond, worst_cost, cost);
+      }
+      // L = C + min(L(d), min(L(d-1), L(d+1)) + P1, min_k L + P2) - min_k L.
+      auto step = [&](VU16 same, VU16 neighbours, VU16 jump, VU16 min_prev) HWY_ATTR {
+        const VU16 path = hn::Add(cost, hn::Sub(hn::Min(hn::Min(same, hn::Add(neighbours, p1)), jump), min_prev));
+        if constexpr (decltype(is_last)::value) return hn::IfThenElse(last_mask, path, sentinel_v);
+        return path;
+      };
+      const VU16 along_after = hn::Load(d, along_prev + k + N);
+      const VU16 l0 = step(along_here,
+                           hn::Min(shiftInPrevious(along_before, along_here), shiftInNext(along_here, along_after)),
+                           jump_along, min_along_v);
+      const VU16 l1 = step(hn::Load(d, vertical + k),
+                           hn::Min(hn::LoadU(d, vertical + k - 1), hn::LoadU(d, vertical + k + 1)), jump_vertical,
+                           min_vertical_v);
+      const VU16 l2 = step(hn::Load(d, back + k), hn::Min(hn::LoadU(d, back + k - 1), hn::LoadU(d, back + k + 1)),
+                           jump_back, min_back_v);
+      const VU16 l3 = step(hn::Load(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)),
+                           jump_fwd, min_fwd_v);
+      hn::Store(l0, d, along_out + k);
+      // Direction 1 overwrites the pixel it reads: vector k's neighbour loads still need vector
+      // k - 1's old last lane, so each vector is stored one step late.
+      if (k > 0) hn::Store(vertical_pending, d, vertical + k - N);
+      vertical_pending = l1;
+      hn::Store(l2, d, back_out + k);
+      hn::Store(l3, d, fwd_out + k);
+      mins_along = hn::Min(mins_along, l0);
+      mins_vertical = hn::Min(mins_vertical, l1);
+      mins_back = hn::Min(mins_back, l2);
+      mins_fwd = hn::Min(mins_fwd, l3);
+      VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
+      if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
+      hn::Store(sum, d, sums_out + k);
+      best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
+      best = hn::Min(best, sum);
       along_before = along_here;
       along_here = along_after;
+    };
+    for (int k = 0; k + N < Dp; k += N) vector_step(k, std::false_type());
+    vector_step(Dp - N, std::true_type());
+    hn::Store(vertical_pending, d, vertical + Dp - N);
+    along_min = minLane(d, mins_along);
+    b.path_min[0][x + 1] = minLane(d, mins_vertical);
+    b.path_min[2][x + 1] = minLane(d, mins_fwd);
+    // Direction 2: the previous pixel's new costs may now replace its old ones in the row.
+    if (i > 0) {
+      copyPixel(b, b.delay[1 - delay_cur], b.pathPixel(b.path[1], x - dx));
+      b.path_min[1][x - dx + 1] = delayed_min;
     }
-    along_min = minLane(d, mins[0]);
-    for (int r = 1; r < 4; ++r) b.min_cur[r - 1][x + 1] = minLane(d, mins[r]);
+    delayed_min = minLane(d, mins_back);
+    delay_cur = 1 - delay_cur;
     along_cur = 1 - along_cur;
-  }
-  // Winners after the row, not inside the path loop: pixels are independent here, so their
-  // horizontal minima overlap in the out-of-order core instead of lengthening the path chain.
-  if (output == RowOutput::kWinner) {
-    for (int x = 0; x < W; ++x) {
-      uint16_t* sums = b.sums + static_cast<std::ptrdiff_t>(x) * Dp;
-      // The right image's minimum first: selectWinner() masks lanes of the sums.
-      if (p.lr_check) updateRightMinimum(p, b, x, sums);
-      b.winner[x] = static_cast<int16_t>(selectWinner(p, b, x, sums, disparity + x, confidence + x));
+    if (output == RowOutput::kWinner) {
+      hn::Store(best, d, b.batch_best + slot * N);
+      hn::Store(best_index, d, b.batch_index + slot * N);
+      if (slot == kWinnerBatch - 1 || i == W - 1) {
+        for (int j = i - slot; j <= i; ++j) {
+          const int xj = dx > 0 ? j : W - 1 - j;
+          uint16_t* sums = b.sums + (j % kWinnerBatch) * Dp;
+          // The right image's minimum first: selectWinner() masks lanes of the sums.
+          if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx);
+          b.winner[xj] = static_cast<int16_t>(selectWinner(p, b, xj, sums,
+                                                           hn::Load(d, b.batch_best + (j % kWinnerBatch) * N),
+                                                           hn::Load(d, b.batch_index + (j % kWinnerBatch) * N),
+                                                           disparity + xj, confidence + xj));
+        }
+      }
     }
   }
-  for (int r = 0; r < kPrevRowPaths; ++r) {
-    std::swap(b.path_prev[r], b.path_cur[r]);
-    std::swap(b.min_prev[r], b.min_cur[r]);
-  }
+  const int last = dx > 0 ? W - 1 : 0;
+  copyPixel(b, b.delay[1 - delay_cur], b.pathPixel(b.path[1], last));
+  b.path_min[1][last + 1] = delayed_min;
   if (output == RowOutput::kWinner && p.lr_check) leftRightCheck(p, b, disparity, confidence);
 }
 
-void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int row_end,
-                    int overlap, SgmWorkspace& ws, const SgmOutput& out) {
+void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int row_end, int overlap,
+                    SgmWorkspace& ws, const SgmOutput& out) {
   StripBuffers b = carveBuffers(p, ws);
   const PenaltyTable pen = makePenaltyTable(p);
   const uint16_t sentinel = static_cast<uint16_t>(p.max_cost + p.p2 + p.p1);
@@ -581,39 +689,35 @@ void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int 
     }
     volume = ws.volume.get();
   }
-  auto volumeRow = [&](int y) {
-    return volume + static_cast<std::size_t>(y - row_begin) * p.width * b.padded;
-  };
+  auto volumeRow = [&](int y) { return volume + static_cast<std::size_t>(y - row_begin) * p.width * b.padded; };
   auto outRow = [&](float* base, int y) { return base + y * out.stride; };
 
   // Pass 1: top-down, left to right.
-  resetPaths(b, sentinel);
+  resetPaths(p, b, sentinel);
   const int top = std::max(0, row_begin - overlap);
   for (int y = top; y < row_end; ++y) {
-    costRow(p, im, b, y, +1, y == top);
-    const bool own = y >= row_begin;
-    if (!own) {
-      aggregateRow(p, im, b, pen, y, +1, y == top, RowOutput::kNone, nullptr, false, nullptr, nullptr);
+    const bool first = y == top;
+    if (y < row_begin) {
+      aggregateRow(p, im, b, pen, y, +1, first, RowOutput::kNone, nullptr, false, nullptr, nullptr);
     } else if (!p.eight_paths) {
-      aggregateRow(p, im, b, pen, y, +1, y == top, RowOutput::kWinner, nullptr, false,
-                   outRow(out.disparity, y), outRow(out.confidence, y));
+      aggregateRow(p, im, b, pen, y, +1, first, RowOutput::kWinner, nullptr, false, outRow(out.disparity, y),
+                   outRow(out.confidence, y));
     } else {
-      aggregateRow(p, im, b, pen, y, +1, y == top, RowOutput::kStoreSums, volumeRow(y), false,
-                   nullptr, nullptr);
+      aggregateRow(p, im, b, pen, y, +1, first, RowOutput::kStoreSums, volumeRow(y), false, nullptr, nullptr);
     }
   }
   if (!p.eight_paths) return;
 
   // Pass 2: bottom-up, right to left; adds the first pass's sums and takes the winner.
-  resetPaths(b, sentinel);
+  resetPaths(p, b, sentinel);
   const int bottom = std::min(p.height, row_end + overlap) - 1;
   for (int y = bottom; y >= row_begin; --y) {
-    costRow(p, im, b, y, -1, y == bottom);
+    const bool first = y == bottom;
     if (y >= row_end) {
-      aggregateRow(p, im, b, pen, y, -1, y == bottom, RowOutput::kNone, nullptr, false, nullptr, nullptr);
+      aggregateRow(p, im, b, pen, y, -1, first, RowOutput::kNone, nullptr, false, nullptr, nullptr);
     } else {
-      aggregateRow(p, im, b, pen, y, -1, y == bottom, RowOutput::kWinner, volumeRow(y), true,
-                   outRow(out.disparity, y), outRow(out.confidence, y));
+      aggregateRow(p, im, b, pen, y, -1, first, RowOutput::kWinner, volumeRow(y), true, outRow(out.disparity, y),
+                   outRow(out.confidence, y));
     }
   }
 }
