@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -13,6 +14,8 @@
 
 namespace cenote::pipeline {
 namespace {
+
+constexpr double kMillimetresPerMetre = 1000.0;  // 16-bit depth PNGs store millimetres
 
 std::string temporaryPath(const std::string& path) { return path + ".tmp"; }
 
@@ -70,6 +73,39 @@ cv::Mat readPfm(const std::string& path) {
     }
   }
   return image;
+}
+
+int writeDepthPng16(const std::string& path, const cv::Mat& depth) {
+  if (depth.type() != CV_32FC1) throw Error("writeDepthPng16 " + path + ": depth must be CV_32FC1 (metres)");
+  cv::Mat millimetres(depth.size(), CV_16UC1);
+  int clipped = 0;
+  for (int y = 0; y < depth.rows; ++y) {
+    const float* in = depth.ptr<float>(y);
+    uint16_t* out = millimetres.ptr<uint16_t>(y);
+    for (int x = 0; x < depth.cols; ++x) {
+      const double mm = std::round(in[x] * kMillimetresPerMetre);
+      const bool valid = std::isfinite(in[x]) && in[x] > 0.0f;
+      const bool fits = mm <= std::numeric_limits<uint16_t>::max();
+      clipped += valid && !fits;
+      out[x] = valid && fits ? static_cast<uint16_t>(mm) : 0;
+    }
+  }
+  writeImage(path, millimetres);
+  return clipped;
+}
+
+cv::Mat readDepthPng16(const std::string& path) {
+  const cv::Mat raw = readImage(path, cv::IMREAD_UNCHANGED);
+  if (raw.type() != CV_16UC1) throw Error(path + ": not a 16-bit single-channel depth PNG");
+  cv::Mat depth(raw.size(), CV_32FC1);
+  for (int y = 0; y < raw.rows; ++y) {
+    const uint16_t* in = raw.ptr<uint16_t>(y);
+    float* out = depth.ptr<float>(y);
+    for (int x = 0; x < raw.cols; ++x) {
+      out[x] = in[x] == 0 ? std::numeric_limits<float>::infinity() : static_cast<float>(in[x] / kMillimetresPerMetre);
+    }
+  }
+  return depth;
 }
 
 cv::Mat readImage(const std::string& path, int flags) {

@@ -16,6 +16,17 @@ void writePfm(const std::string& path, const cv::Mat& image);
 // @return CV_32FC1 or CV_32FC3. @throws cenote::Error when missing, truncated or not a PFM file.
 cv::Mat readPfm(const std::string& path);
 
+// 16-bit PNG of depth in millimetres (the TUM RGB-D convention): round(Z * 1000), 0 where the
+// depth is not finite or <= 0. Depths above 65.535 m do not fit and are written as 0 as well.
+// @param depth CV_32FC1 metres.
+// @return the number of finite positive depths that did not fit (written as 0), for the caller to report.
+// @throws cenote::Error when depth is not CV_32FC1 or the file cannot be written.
+int writeDepthPng16(const std::string& path, const cv::Mat& depth);
+
+// @return CV_32FC1 metres, +inf where the file holds 0.
+// @throws cenote::Error when missing or not a 16-bit single-channel PNG.
+cv::Mat readDepthPng16(const std::string& path);
+
 // @param flags cv::IMREAD_* flags. @throws cenote::Error when missing or not a readable image.
 cv::Mat readImage(const std::string& path, int flags);
 

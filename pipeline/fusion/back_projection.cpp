@@ -1,0 +1,72 @@
+#include "pipeline/fusion/back_projection.h"
+
+#include <omp.h>
+
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "common/error.h"
+
+namespace cenote::pipeline {
+namespace {
+
+bool hasPoint(float depth_m) { return depth_m > 0.0f && depth_m < std::numeric_limits<float>::infinity(); }
+
+// Rows [begin, end) of block b out of `blocks` equal blocks.
+int blockStart(int rows, int blocks, int b) { return static_cast<int>(static_cast<long>(rows) * b / blocks); }
+
+}  // namespace
+
+void backProject(const DepthFrame& frame, PointBatch& out) {
+  if (frame.depth.type() != CV_32FC1) throw Error("backProject: depth map must be CV_32FC1");
+  const bool colored = !frame.color.empty();
+  if (colored && (frame.color.type() != CV_8UC3 || frame.color.size() != frame.depth.size())) {
+    throw Error("backProject: colour image must be CV_8UC3 of the depth map's size");
+  }
+  out.t_s = frame.t_s;
+  out.origin = frame.T_world_cam.translation();
+  const int rows = frame.depth.rows, cols = frame.depth.cols;
+  const float fx = static_cast<float>(frame.K(0, 0)), fy = static_cast<float>(frame.K(1, 1));
+  const float cx = static_cast<float>(frame.K(0, 2)), cy = static_cast<float>(frame.K(1, 2));
+  const Eigen::Matrix3f R = frame.T_world_cam.linear().cast<float>();
+  const Eigen::Vector3d t = frame.T_world_cam.translation();
+
+  // Two passes over contiguous row blocks (count, then fill at the block's offset): the order is
+  // row-major and no thread writes where another does.
+  constexpr int kMaxBlocks = 64;
+  const int blocks = std::max(1, std::min({omp_get_max_threads(), kMaxBlocks, rows}));
+  std::array<size_t, kMaxBlocks + 1> offset{};
+#pragma omp parallel for num_threads(blocks) schedule(static, 1)
+  for (int b = 0; b < blocks; ++b) {
+    size_t count = 0;
+    for (int y = blockStart(rows, blocks, b); y < blockStart(rows, blocks, b + 1); ++y) {
+      const float* depth = frame.depth.ptr<float>(y);
+      for (int x = 0; x < cols; ++x) count += hasPoint(depth[x]);
+    }
+    offset[b + 1] = count;
+  }
+  for (int b = 0; b < blocks; ++b) offset[b + 1] += offset[b];
+  out.points.resize(offset[blocks]);
+  out.colors.resize(colored ? offset[blocks] : 0);
+
+#pragma omp parallel for num_threads(blocks) schedule(static, 1)
+  for (int b = 0; b < blocks; ++b) {
+    size_t i = offset[b];
+    for (int y = blockStart(rows, blocks, b); y < blockStart(rows, blocks, b + 1); ++y) {
+      const float* depth = frame.depth.ptr<float>(y);
+      const uint8_t* bgr = colored ? frame.color.ptr<uint8_t>(y) : nullptr;
+      const float ray_y = (static_cast<float>(y) - cy) / fy;
+      for (int x = 0; x < cols; ++x) {
+        const float z = depth[x];
+        if (!hasPoint(z)) continue;
+        const Eigen::Vector3f p_cam(z * (static_cast<float>(x) - cx) / fx, z * ray_y, z);
+        out.points[i] = ((R * p_cam).cast<double>() + t).cast<float>();
+        if (colored) out.colors[i] = {bgr[3 * x + 2], bgr[3 * x + 1], bgr[3 * x]};
+        ++i;
+      }
+    }
+  }
+}
+
+}  // namespace cenote::pipeline

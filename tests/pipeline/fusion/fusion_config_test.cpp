@@ -1,0 +1,111 @@
+#include "pipeline/fusion/fusion_config.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/error.h"
+#include "common/yaml_section.h"
+
+namespace cenote::pipeline {
+namespace {
+
+// The one error of a config with one bad rule, as text.
+std::string onlyError(const FusionConfig& config) {
+  const auto errors = config.validate();
+  if (errors.size() != 1) return std::to_string(errors.size()) + " errors";
+  return errors[0].toString();
+}
+
+TEST(FusionConfig, DefaultsAreValid) {
+  EXPECT_TRUE(FusionConfig{}.validate().empty());
+  const FusionConfig c;
+  EXPECT_EQ(c.num_views, 3);
+  EXPECT_EQ(c.eps, 0.04);
+  EXPECT_EQ(c.support_radius, SupportRadius::kRelative);
+  EXPECT_EQ(c.min_fused_confidence, 0.5);
+}
+
+TEST(FusionConfig, RejectsEvenOrTooFewOrTooManyViews) {
+  for (int n : {1, 2, 4, 17}) {
+    FusionConfig c;
+    c.num_views = n;
+    EXPECT_EQ(onlyError(c), "fusion.num_views = " + std::to_string(n) +
+                                ": must be odd in [3, 15] (the middle view is the reference)");
+  }
+  FusionConfig c;
+  c.num_views = 15;
+  EXPECT_TRUE(c.validate().empty());
+}
+
+TEST(FusionConfig, RejectsRelativeEpsOutsideZeroOne) {
+  FusionConfig c;
+  c.eps = 1.5;
+  EXPECT_EQ(onlyError(c), "fusion.eps = 1.5: relative support radius must be in (0, 1) (a fraction of depth)");
+  c.eps = 0.0;
+  EXPECT_EQ(c.validate().size(), 1u);
+}
+
+TEST(FusionConfig, AcceptsAbsoluteEpsInMetresAboveOne) {
+  FusionConfig c;
+  c.support_radius = SupportRadius::kAbsolute;
+  c.eps = 1.5;
+  EXPECT_TRUE(c.validate().empty());
+  c.eps = -0.1;
+  EXPECT_EQ(onlyError(c), "fusion.eps = -0.1: absolute support radius must be > 0 metres and finite");
+}
+
+TEST(FusionConfig, RejectsNonPositiveFusedThreshold) {
+  FusionConfig c;
+  c.min_fused_confidence = 0.0;
+  EXPECT_EQ(onlyError(c), "fusion.min_fused_confidence = 0: must be > 0 and finite");
+}
+
+TEST(FusionConfig, RejectsNegativeInputFloor) {
+  FusionConfig c;
+  c.min_input_confidence = -1.0;
+  EXPECT_EQ(onlyError(c), "fusion.min_input_confidence = -1: must be >= 0 and finite");
+}
+
+TEST(FusionConfig, RejectsNonPositiveMaxDepth) {
+  FusionConfig c;
+  c.max_depth_m = 0.0;
+  EXPECT_EQ(onlyError(c), "fusion.max_depth_m = 0: must be > 0 (.inf for no limit)");
+  c.max_depth_m = NAN;
+  EXPECT_EQ(c.validate().size(), 1u);
+}
+
+TEST(FusionConfig, ReportsEveryFailedRule) {
+  FusionConfig c;
+  c.num_views = 2;
+  c.eps = 2.0;
+  c.min_fused_confidence = -1.0;
+  c.max_depth_m = -3.0;
+  EXPECT_EQ(c.validate().size(), 4u);
+}
+
+TEST(FusionConfig, ReadsYamlAndRejectsUnknownKeys) {
+  const YAML::Node root = YAML::Load(
+      "fusion:\n  num_views: 5\n  eps: 0.05\n  support_radius: absolute\n  min_fused_confidence: 1.5\n"
+      "  min_input_confidence: 1.1\n  max_depth_m: 12.0\n");
+  YamlSection section(root["fusion"], "fusion", "test.yaml");
+  FusionConfig c;
+  c.read(section);
+  section.finish();
+  EXPECT_EQ(c.num_views, 5);
+  EXPECT_EQ(c.eps, 0.05);
+  EXPECT_EQ(c.support_radius, SupportRadius::kAbsolute);
+  EXPECT_EQ(c.min_fused_confidence, 1.5);
+  EXPECT_EQ(c.min_input_confidence, 1.1);
+  EXPECT_EQ(c.max_depth_m, 12.0);
+
+  const YAML::Node typo = YAML::Load("fusion:\n  num_veiws: 5\n");
+  YamlSection bad(typo["fusion"], "fusion", "test.yaml");
+  FusionConfig d;
+  d.read(bad);
+  EXPECT_THROW(bad.finish(), Error);
+  EXPECT_THROW(parseSupportRadius("percent"), Error);
+}
+
+}  // namespace
+}  // namespace cenote::pipeline
