@@ -499,8 +499,8 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
   const VU16 sentinel_v = hn::Set(d, sentinel);
   const VU16 worst_cost = hn::Set(d, static_cast<uint16_t>(p.max_cost));
   const auto last_mask = hn::FirstN(d, D - (Dp - N));  // data lanes of the last vector
-  const uint8_t* row = im.left + y * im.image_stride;
-  const uint8_t* prev_row = im.left + (y - dx) * im.image_stride;  // inside the image border
+  const uint8_t* row = im.guide + y * im.image_stride;
+  const uint8_t* prev_row = im.guide + (y - dx) * im.image_stride;  // inside the image border
   const CostSource src = beginCostRow(p, im, b, y, dx, dx, first_row);
   if (output == RowOutput::kWinner && p.lr_check) {
     std::fill(b.right_min, b.right_min + b.reversed_length, kNoCost);

@@ -43,9 +43,10 @@ struct SgmParams {
 // (0, 0) inside the border. Census images hold one 32-bit descriptor per pixel (no border).
 inline constexpr int kImageBorder = 4;
 struct SgmImages {
-  const uint8_t* left = nullptr;
+  const uint8_t* guide = nullptr;  // grey left image: intensity steps adapt P2
+  const uint8_t* left = nullptr;   // what SAD compares (grey or prefiltered)
   const uint8_t* right = nullptr;
-  std::ptrdiff_t image_stride = 0;   // bytes per row of left/right
+  std::ptrdiff_t image_stride = 0;   // bytes per row of guide/left/right
   const uint32_t* census_left = nullptr;
   const uint32_t* census_right = nullptr;
   std::ptrdiff_t census_stride = 0;  // elements per row

@@ -11,20 +11,23 @@ int censusBits(int window_px) { return window_px * window_px - 1; }
 
 }  // namespace
 
+int StereoConfig::sadPixelRange() const { return prefilter == Prefilter::kSobelX ? 2 * prefilter_cap : 255; }
+
 int StereoConfig::sadShift() const {
   int shift = 0;
-  while (((window_px * window_px * 255) >> shift) > 4095) ++shift;
+  while (((window_px * window_px * sadPixelRange()) >> shift) > 4095) ++shift;
   return shift;
 }
 
 int StereoConfig::maxCost() const {
   if (cost == MatchingCost::kCensus) return censusBits(window_px);
-  return (window_px * window_px * 255) >> sadShift();
+  return (window_px * window_px * sadPixelRange()) >> sadShift();
 }
 
-// Defaults from a sweep on Middlebury cones and Cloth3 (bad-1 / bad-2 of
-// tests/pipeline/stereo/middlebury_test.cpp); the penalties scale with the cost's range, as
-// OpenCV's 8*w*w / 32*w*w do for its own cost. SAD 3x3: P1 = 90, P2 = 360; census 5x5: 10, 30.
+// Defaults from a sweep on Middlebury cones, Cloth3 and Motorcycle (bad-1 / bad-2 of
+// tests/pipeline/stereo/middlebury_test.cpp); the penalties scale with the window area, as
+// OpenCV's 8*w*w / 32*w*w do for its own cost. SAD 3x3: P1 = 90, P2 = 720 on the derivative,
+// 360 on grey levels; census 5x5: P1 = 10, P2 = 30.
 int StereoConfig::effectiveP1() const {
   if (p1 >= 0) return p1;
   if (cost == MatchingCost::kCensus) return (5 * censusBits(window_px) + 6) / 12;
@@ -34,7 +37,8 @@ int StereoConfig::effectiveP1() const {
 int StereoConfig::effectiveP2() const {
   if (p2 >= 0) return p2;
   if (cost == MatchingCost::kCensus) return (5 * censusBits(window_px) + 2) / 4;
-  return std::max(2, (40 * window_px * window_px) >> sadShift());
+  const int per_area = prefilter == Prefilter::kSobelX ? 80 : 40;
+  return std::max(2, (per_area * window_px * window_px) >> sadShift());
 }
 
 std::vector<ConfigError> StereoConfig::validate() const {
@@ -50,10 +54,11 @@ std::vector<ConfigError> StereoConfig::validate() const {
     errors.check(window_px == 3 || window_px == 5, "window_px", window_px,
                  "census window must be 3 or 5");
   }
+  errors.check(prefilter_cap >= 1 && prefilter_cap <= 127, "prefilter_cap", prefilter_cap, "must be in [1, 127]");
   errors.check(num_paths == 4 || num_paths == 8, "num_paths", num_paths, "must be 4 or 8");
   errors.check(p1 >= -1, "p1", p1, "must be >= 0 (or -1 for the default)");
   errors.check(p2 >= -1, "p2", p2, "must be >= 0 (or -1 for the default)");
-  const bool window_ok = window_px >= 1 && window_px <= 9;
+  const bool window_ok = window_px >= 1 && window_px <= 9 && prefilter_cap >= 1 && prefilter_cap <= 127;
   if (p1 >= -1 && p2 >= -1 && window_ok) {
     errors.check(effectiveP2() >= effectiveP1(), "p2", effectiveP2(),
                  "must be >= p1 (" + std::to_string(effectiveP1()) + ")");
@@ -78,6 +83,10 @@ void StereoConfig::read(YamlSection& section) {
   section.read("num_disparities", num_disparities);
   section.read("min_disparity_px", min_disparity_px);
   section.read("window_px", window_px);
+  std::string prefilter_name = toString(prefilter);
+  section.read("prefilter", prefilter_name);
+  prefilter = parsePrefilter(prefilter_name);
+  section.read("prefilter_cap", prefilter_cap);
   section.read("num_paths", num_paths);
   section.read("p1", p1);
   section.read("p2", p2);
@@ -93,6 +102,14 @@ void StereoConfig::read(YamlSection& section) {
 }
 
 const char* toString(MatchingCost cost) { return cost == MatchingCost::kSad ? "sad" : "census"; }
+
+const char* toString(Prefilter prefilter) { return prefilter == Prefilter::kNone ? "none" : "sobel_x"; }
+
+Prefilter parsePrefilter(const std::string& name) {
+  if (name == "none") return Prefilter::kNone;
+  if (name == "sobel_x") return Prefilter::kSobelX;
+  throw Error("stereo.prefilter = " + name + ": must be 'none' or 'sobel_x'");
+}
 
 MatchingCost parseMatchingCost(const std::string& name) {
   if (name == "sad") return MatchingCost::kSad;

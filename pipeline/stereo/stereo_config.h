@@ -16,11 +16,19 @@ namespace cenote::pipeline {
 
 enum class MatchingCost { kSad, kCensus };
 
+// What SAD compares. kNone: grey levels (the paper's cost). kSobelX: the horizontal derivative,
+// clipped to +-prefilter_cap (as OpenCV's StereoSGBM): blind to brightness offsets between the
+// cameras and far better on Middlebury Motorcycle (tests/pipeline/stereo/middlebury_test.cpp).
+enum class Prefilter { kNone, kSobelX };
+
 struct StereoConfig {
   MatchingCost cost = MatchingCost::kSad;
   int num_disparities = 112;   // search range size; a multiple of 16 in [16, 512]
   int min_disparity_px = 0;    // first disparity searched; >= 0
   int window_px = 3;           // SAD: odd side in [1, 9]; census: 3 or 5
+  Prefilter prefilter = Prefilter::kSobelX;  // SAD only
+  int prefilter_cap = 63;      // derivative clipped to +-cap grey levels, in [1, 127]; 63 keeps the
+                               // sub-pixel error of a slanted plane at 0.13 px (31: 0.15)
   int num_paths = 4;           // SGM: 4 = one top-down pass (rSGM), 8 = two passes
   int p1 = -1;                 // penalty for a disparity step of 1; -1 = default of the cost
   int p2 = -1;                 // penalty for larger steps; -1 = default of the cost
@@ -43,6 +51,8 @@ struct StereoConfig {
   int maxCost() const;
   // Right shift applied to SAD window sums so that maxCost() <= 4095.
   int sadShift() const;
+  // Largest difference of one pixel pair that SAD sees (255, or 2 * prefilter_cap).
+  int sadPixelRange() const;
 
   // Every failed rule, empty when valid.
   std::vector<ConfigError> validate() const;
@@ -51,6 +61,9 @@ struct StereoConfig {
 };
 
 const char* toString(MatchingCost cost);
+const char* toString(Prefilter prefilter);
+// @throws cenote::Error for anything but "none" or "sobel_x".
+Prefilter parsePrefilter(const std::string& name);
 // @throws cenote::Error for anything but "sad" or "census".
 MatchingCost parseMatchingCost(const std::string& name);
 

@@ -37,7 +37,8 @@ std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + s
 struct StereoMatcher::Impl {
   detail::SgmParams params;
   std::vector<detail::SgmWorkspace> workspaces;  // one per strip
-  cv::Mat left_bordered, right_bordered;
+  cv::Mat guide_bordered;                        // grey left image, for the adaptive P2
+  cv::Mat left_bordered, right_bordered;         // what the cost compares
   cv::Mat census_left, census_right;
 };
 
@@ -77,9 +78,19 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
   p.width = left.cols;
   p.height = left.rows;
   const int b = detail::kImageBorder;
-  cv::copyMakeBorder(left, impl.left_bordered, b, b, b, b, cv::BORDER_REPLICATE);
-  cv::copyMakeBorder(right, impl.right_bordered, b, b, b, b, cv::BORDER_REPLICATE);
+  const bool prefiltered = !p.census && config_.prefilter != Prefilter::kNone;
+  cv::copyMakeBorder(left, impl.guide_bordered, b, b, b, b, cv::BORDER_REPLICATE);
+  if (prefiltered) {
+    cv::copyMakeBorder(prefilterForSad(left, config_.prefilter, config_.prefilter_cap), impl.left_bordered, b, b, b,
+                       b, cv::BORDER_REPLICATE);
+    cv::copyMakeBorder(prefilterForSad(right, config_.prefilter, config_.prefilter_cap), impl.right_bordered, b, b,
+                       b, b, cv::BORDER_REPLICATE);
+  } else {
+    impl.left_bordered = impl.guide_bordered;
+    cv::copyMakeBorder(right, impl.right_bordered, b, b, b, b, cv::BORDER_REPLICATE);
+  }
   detail::SgmImages images;
+  images.guide = impl.guide_bordered.ptr<uint8_t>(b) + b;
   images.left = impl.left_bordered.ptr<uint8_t>(b) + b;
   images.right = impl.right_bordered.ptr<uint8_t>(b) + b;
   images.image_stride = static_cast<std::ptrdiff_t>(impl.left_bordered.step[0]);
@@ -119,6 +130,19 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
     detail::matchStrip(p, images, y0, y1, config_.strip_overlap_px, impl.workspaces[s], output);
   }
   return result;
+}
+
+cv::Mat prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap) {
+  if (prefilter == Prefilter::kNone) return grey;
+  cv::Mat derivative;
+  cv::Sobel(grey, derivative, CV_16S, 1, 0, 3, 1.0, 0.0, cv::BORDER_REPLICATE);
+  cv::Mat out(grey.size(), CV_8UC1);
+  for (int y = 0; y < grey.rows; ++y) {
+    const int16_t* in = derivative.ptr<int16_t>(y);
+    uint8_t* o = out.ptr<uint8_t>(y);
+    for (int x = 0; x < grey.cols; ++x) o[x] = static_cast<uint8_t>(std::clamp<int>(in[x], -cap, cap) + cap);
+  }
+  return out;
 }
 
 cv::Mat disparityToDepth(const cv::Mat& disparity, double focal_px, double baseline_m) {

@@ -43,6 +43,10 @@ class StereoMatcher {
   std::unique_ptr<Impl> impl_;
 };
 
+// The image SAD compares under `prefilter`: for kSobelX, clamp(dI/dx, -cap, cap) + cap per pixel
+// (3x3 Sobel, replicated border); for kNone the image itself. @param grey CV_8UC1.
+cv::Mat prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap);
+
 // Z = f * b / d per pixel; +inf where the disparity is invalid or not positive.
 // @param focal_px rectified focal length, @param baseline_m stereo baseline.
 cv::Mat disparityToDepth(const cv::Mat& disparity, double focal_px, double baseline_m);

@@ -100,8 +100,8 @@ std::optional<StereoPairWithTruth> loadMotorcycle() {
     }
   }
   p.mask = maskFromTruth(p.truth);
-  // Largest true disparity of the quarter-size pair is about 70 px.
-  p.num_disparities = 80;
+  // Largest true disparity of the quarter-size pair is 60 px.
+  p.num_disparities = 64;
   return p;
 }
 

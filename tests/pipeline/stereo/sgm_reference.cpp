@@ -1,5 +1,7 @@
 #include "tests/pipeline/stereo/sgm_reference.h"
 
+#include "pipeline/stereo/stereo_matcher.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -104,7 +106,10 @@ void aggregate(const Volume& cost, const cv::Mat& L, const StereoConfig& c, int 
 
 pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c) {
   const int W = L.cols, H = L.rows, D = c.num_disparities;
-  const Volume cost = matchingCost(L, R, c);
+  const bool sad = c.cost == pipeline::MatchingCost::kSad;
+  const Volume cost = sad ? matchingCost(pipeline::prefilterForSad(L, c.prefilter, c.prefilter_cap),
+                                         pipeline::prefilterForSad(R, c.prefilter, c.prefilter_cap), c)
+                          : matchingCost(L, R, c);
   Volume sums(W, H, D);
   const int directions[8][2] = {{1, 0}, {0, 1}, {1, 1}, {-1, 1}, {-1, 0}, {0, -1}, {-1, -1}, {1, -1}};
   for (int i = 0; i < c.num_paths; ++i) aggregate(cost, L, c, directions[i][0], directions[i][1], sums);

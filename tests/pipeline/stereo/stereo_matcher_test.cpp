@@ -87,6 +87,7 @@ struct ReferenceCase {
   MatchingCost cost;
   int window, paths, min_disparity;
   bool adaptive, lr, naive_pkrn;
+  Prefilter prefilter = Prefilter::kSobelX;
 };
 
 class MatchesScalarReference : public ::testing::TestWithParam<ReferenceCase> {};
@@ -111,6 +112,7 @@ TEST_P(MatchesScalarReference, BitForBitWithOneStrip) {
   config.adaptive_p2 = rc.adaptive;
   config.lr_check = rc.lr;
   config.pkrn_exclude_neighbours = !rc.naive_pkrn;
+  config.prefilter = rc.prefilter;
   config.num_strips = 1;
   StereoMatcher matcher(config);
   expectBitIdentical(matcher.match(left, right), test::referenceSgm(left, right, config), rc.name);
@@ -128,7 +130,11 @@ INSTANTIATE_TEST_SUITE_P(
                       ReferenceCase{"sad3_adaptive_p2", MatchingCost::kSad, 3, 4, 0, true, false, false},
                       ReferenceCase{"sad3_lr_check", MatchingCost::kSad, 3, 4, 0, false, true, false},
                       ReferenceCase{"sad3_8paths_lr_check", MatchingCost::kSad, 3, 8, 0, false, true, false},
-                      ReferenceCase{"sad3_naive_pkrn", MatchingCost::kSad, 3, 4, 0, false, false, true}),
+                      ReferenceCase{"sad3_naive_pkrn", MatchingCost::kSad, 3, 4, 0, false, false, true},
+                      ReferenceCase{"sad3_grey_levels", MatchingCost::kSad, 3, 4, 0, false, false, false,
+                                    Prefilter::kNone},
+                      ReferenceCase{"sad9_grey_levels_8paths", MatchingCost::kSad, 9, 8, 0, true, true, false,
+                                    Prefilter::kNone}),
     [](const ::testing::TestParamInfo<ReferenceCase>& info) { return std::string(info.param.name); });
 
 TEST(StereoMatcher, OneAndTwoThreadsGiveBitIdenticalResults) {
