@@ -7,5 +7,6 @@
 namespace cenote::apps {
 
 void registerStereoCommand(CLI::App& app);
+void registerFuseCommand(CLI::App& app);
 
 }  // namespace cenote::apps

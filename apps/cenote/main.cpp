@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   CLI::App app{"cenote: real-time dense 3D mapping for underwater robots"};
   app.require_subcommand(1);
   cenote::apps::registerStereoCommand(app);
+  cenote::apps::registerFuseCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,230 @@
+// `cenote fuse`: visibility-based fusion of a folder of depth maps with poses (pipeline/fusion/).
+//   DEPTH_DIR/<timestamp>.depth.pfm   metres, +inf or 0 = none (required)
+//   DEPTH_DIR/<timestamp>.conf.pfm    confidence (optional; 1 where absent)
+//   COLOR_DIR/<timestamp>.png         left image (optional, with --color-dir)
+//   trajectory                        TUM text, T_world_cam, matched by timestamp
+// Writes OUT/<timestamp>.depth.pfm and .conf.pfm per fused reference frame (optionally a 16-bit
+// millimetre PNG and a colour-mapped preview) and one merged OUT/points.ply.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <vector>
+
+#include "apps/cenote/commands.h"
+#include "common/error.h"
+#include "common/yaml_section.h"
+#include "pipeline/frame/pose_check.h"
+#include "pipeline/fusion/fusion_window.h"
+#include "pipeline/image/image_io.h"
+#include "pipeline/image/ply_io.h"
+#include "pipeline/trajectory/tum_trajectory.h"
+
+namespace cenote::apps {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kDepthSuffix = ".depth.pfm";
+constexpr const char* kConfidenceSuffix = ".conf.pfm";
+
+struct FuseOptions {
+  std::string depth_dir, color_dir, trajectory, intrinsics, config, out;
+  // Unset (-1 / NaN) keeps the config's value; anything set is validated with the config.
+  int views = -1;
+  double eps = NAN, min_confidence = NAN, min_input_confidence = NAN, max_depth_m = NAN;
+  std::string eps_mode;
+  double pose_tolerance_s = 1e-3;
+  bool png16 = false, preview = false;
+};
+
+struct InputFrame {
+  std::string stamp;  // the file name's timestamp text, reused for the outputs
+  double t_s = 0.0;
+  Eigen::Isometry3d T_world_cam;
+};
+
+pipeline::FusionConfig makeConfig(const FuseOptions& o) {
+  pipeline::FusionConfig config;
+  if (!o.config.empty()) {
+    YamlSection root(loadYamlFile(o.config), "", o.config);
+    YamlSection section = root.section("fusion");
+    config.read(section);
+    section.finish();
+  }
+  if (o.views != -1) config.num_views = o.views;
+  if (!std::isnan(o.eps)) config.eps = o.eps;
+  if (!o.eps_mode.empty()) config.support_radius = pipeline::parseSupportRadius(o.eps_mode);
+  if (!std::isnan(o.min_confidence)) config.min_fused_confidence = o.min_confidence;
+  if (!std::isnan(o.min_input_confidence)) config.min_input_confidence = o.min_input_confidence;
+  if (!std::isnan(o.max_depth_m)) config.max_depth_m = o.max_depth_m;
+  throwIfInvalid(config.validate(), "fusion");
+  return config;
+}
+
+Eigen::Matrix3d parseIntrinsics(const std::string& text) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0') throw Error("--intrinsics '" + text + "': '" + item + "' is not a number");
+    values.push_back(v);
+  }
+  if (values.size() != 4) throw Error("--intrinsics '" + text + "': expected FX,FY,CX,CY (4 numbers)");
+  Eigen::Matrix3d K;
+  K << values[0], 0.0, values[2], 0.0, values[1], values[3], 0.0, 0.0, 1.0;
+  pipeline::checkIntrinsics(K, "--intrinsics");
+  return K;
+}
+
+// Every <timestamp>.depth.pfm of the folder, in time order, each with its pose.
+std::vector<InputFrame> listFrames(const FuseOptions& o, const pipeline::TumTrajectory& trajectory) {
+  if (!fs::is_directory(o.depth_dir)) throw Error("--depth-dir " + o.depth_dir + ": not a directory");
+  std::vector<InputFrame> frames;
+  for (const auto& entry : fs::directory_iterator(o.depth_dir)) {
+    const std::string name = entry.path().filename().string();
+    const size_t suffix = name.size() - std::string(kDepthSuffix).size();
+    if (name.size() <= std::string(kDepthSuffix).size() || name.compare(suffix, std::string::npos, kDepthSuffix) != 0) {
+      continue;
+    }
+    InputFrame frame;
+    frame.stamp = name.substr(0, suffix);
+    char* end = nullptr;
+    frame.t_s = std::strtod(frame.stamp.c_str(), &end);
+    if (*end != '\0' || !std::isfinite(frame.t_s)) {
+      throw Error(entry.path().string() + ": file name must be <timestamp>" + kDepthSuffix + " with a number as timestamp");
+    }
+    frames.push_back(frame);
+  }
+  std::sort(frames.begin(), frames.end(), [](const InputFrame& a, const InputFrame& b) { return a.t_s < b.t_s; });
+  for (size_t i = 1; i < frames.size(); ++i) {
+    if (frames[i].t_s == frames[i - 1].t_s) {
+      throw Error("--depth-dir " + o.depth_dir + ": " + frames[i - 1].stamp + " and " + frames[i].stamp +
+                  " are the same time");
+    }
+  }
+  for (InputFrame& frame : frames) {
+    const auto pose = trajectory.lookup(frame.t_s, o.pose_tolerance_s);
+    if (!pose) {
+      std::ostringstream text;
+      text << "no pose in " << o.trajectory << " within " << o.pose_tolerance_s << " s of t = " << frame.stamp
+           << " (" << (fs::path(o.depth_dir) / (frame.stamp + kDepthSuffix)).string() << ")";
+      throw Error(text.str());
+    }
+    frame.T_world_cam = pose->T_world_cam;
+    pipeline::checkPose(frame.T_world_cam, o.trajectory + ": pose at t = " + frame.stamp);
+  }
+  return frames;
+}
+
+std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
+
+pipeline::DepthFrame loadFrame(const FuseOptions& o, const InputFrame& in, const Eigen::Matrix3d& K) {
+  pipeline::DepthFrame frame;
+  frame.t_s = in.t_s;
+  frame.K = K;
+  frame.T_world_cam = in.T_world_cam;
+  const std::string depth_path = (fs::path(o.depth_dir) / (in.stamp + kDepthSuffix)).string();
+  frame.depth = pipeline::readPfm(depth_path);
+  if (frame.depth.type() != CV_32FC1) throw Error(depth_path + ": depth must be a single-channel PFM");
+  const std::string conf_path = (fs::path(o.depth_dir) / (in.stamp + kConfidenceSuffix)).string();
+  if (fs::exists(conf_path)) {
+    frame.confidence = pipeline::readPfm(conf_path);
+    if (frame.confidence.type() != CV_32FC1 || frame.confidence.size() != frame.depth.size()) {
+      throw Error(conf_path + " is " + sizeText(frame.confidence) + " (or not single-channel) but " + depth_path +
+                  " is " + sizeText(frame.depth));
+    }
+  } else {
+    frame.confidence = cv::Mat(frame.depth.size(), CV_32F, cv::Scalar(1.0f));
+  }
+  if (!o.color_dir.empty()) {
+    const std::string color_path = (fs::path(o.color_dir) / (in.stamp + ".png")).string();
+    frame.color = pipeline::readImage(color_path, cv::IMREAD_COLOR);
+    if (frame.color.size() != frame.depth.size()) {
+      throw Error(color_path + " is " + sizeText(frame.color) + " but " + depth_path + " is " + sizeText(frame.depth));
+    }
+  }
+  return frame;
+}
+
+void run(const FuseOptions& o) {
+  const pipeline::FusionConfig config = makeConfig(o);
+  const Eigen::Matrix3d K = parseIntrinsics(o.intrinsics);
+  const pipeline::TumTrajectory trajectory = pipeline::TumTrajectory::read(o.trajectory);
+  const std::vector<InputFrame> frames = listFrames(o, trajectory);
+  if (static_cast<int>(frames.size()) < config.num_views) {
+    throw Error("--depth-dir " + o.depth_dir + ": " + std::to_string(frames.size()) + " depth maps (*" + kDepthSuffix +
+                "), fusion of " + std::to_string(config.num_views) + " views needs at least that many");
+  }
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (!fs::is_directory(o.out)) throw Error("--out " + o.out + ": cannot create directory");
+
+  pipeline::FusionWindow window(config);
+  pipeline::PlyWriter ply((fs::path(o.out) / "points.ply").string());
+  const int half = config.num_views / 2;
+  int fused_frames = 0;
+  double fusion_ms = 0.0;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const pipeline::DepthFrame frame = loadFrame(o, frames[i], K);
+    const auto start = std::chrono::steady_clock::now();
+    const pipeline::FusedFrame* fused;
+    try {
+      fused = window.push(frame);
+    } catch (const Error& e) {
+      throw Error(std::string(e.what()) + " (" + o.depth_dir + "/" + frames[i].stamp + kDepthSuffix + ")");
+    }
+    fusion_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    if (!fused) continue;
+    const std::string stamp = frames[i - half].stamp;
+    const fs::path base = fs::path(o.out) / stamp;
+    pipeline::writePfm(base.string() + ".depth.pfm", fused->frame.depth);
+    pipeline::writePfm(base.string() + ".conf.pfm", fused->frame.confidence);
+    if (o.png16) {
+      const int clipped = pipeline::writeDepthPng16(base.string() + ".depth.png", fused->frame.depth);
+      if (clipped > 0) std::cerr << "warning: " << stamp << ": " << clipped << " depths above 65.535 m written as 0\n";
+    }
+    if (o.preview) pipeline::writeImage(base.string() + ".preview.png", pipeline::colorizeMap(fused->frame.depth));
+    ply.append(fused->points);
+    ++fused_frames;
+  }
+  ply.close();
+  std::cout << "fused " << fused_frames << " of " << frames.size() << " frames (" << config.num_views
+            << " views), " << ply.count() << " points written to " << (fs::path(o.out) / "points.ply").string()
+            << ", fusion " << fusion_ms / std::max<size_t>(1, frames.size()) << " ms/frame\n";
+}
+
+}  // namespace
+
+void registerFuseCommand(CLI::App& app) {
+  auto options = std::make_shared<FuseOptions>();
+  CLI::App* cmd = app.add_subcommand("fuse", "Fuse a folder of depth maps with poses into cleaner depth and points");
+  cmd->add_option("--depth-dir", options->depth_dir, "Folder of <timestamp>.depth.pfm (+ optional .conf.pfm)")
+      ->required();
+  cmd->add_option("--trajectory", options->trajectory, "TUM trajectory (t tx ty tz qx qy qz qw), camera to world")
+      ->required();
+  cmd->add_option("--intrinsics", options->intrinsics, "Pinhole intrinsics FX,FY,CX,CY in pixels")->required();
+  cmd->add_option("--color-dir", options->color_dir, "Folder of <timestamp>.png left images (colours the points)");
+  cmd->add_option("--config", options->config, "YAML file with a `fusion:` section");
+  cmd->add_option("--views", options->views, "Views in the window, odd >= 3 (default 3)");
+  cmd->add_option("--eps", options->eps, "Support radius: fraction of depth, or metres with --eps-mode absolute");
+  cmd->add_option("--eps-mode", options->eps_mode, "relative (default) or absolute")
+      ->check(CLI::IsMember({"relative", "absolute"}));
+  cmd->add_option("--min-confidence", options->min_confidence, "C_thres: reject fused pixels below (default 0.5)");
+  cmd->add_option("--min-input-confidence", options->min_input_confidence, "Ignore input pixels below (default 0)");
+  cmd->add_option("--max-depth", options->max_depth_m, "Ignore input depths beyond, metres (default none)");
+  cmd->add_option("--pose-tolerance", options->pose_tolerance_s, "Largest time difference to a pose, s")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--png16", options->png16, "Also write <timestamp>.depth.png (16-bit millimetres)");
+  cmd->add_flag("--preview", options->preview, "Also write <timestamp>.preview.png (colour-mapped depth)");
+  cmd->add_option("--out", options->out, "Output folder")->required();
+  cmd->callback([options] { run(*options); });
+}
+
+}  // namespace cenote::apps

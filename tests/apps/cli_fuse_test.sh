@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# End-to-end test of `cenote fuse`: a generated folder fuses, bad input fails with a clear message.
+#   cli_fuse_test.sh CENOTE MAKE_FUSION_FOLDER
+set -euo pipefail
+cenote=$1
+make_folder=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+# expect_error PATTERN ARGS...: cenote must exit 1 and print PATTERN on standard error.
+expect_error() {
+  local pattern=$1
+  shift
+  local status=0
+  "$cenote" "$@" >"$work/stdout" 2>"$work/stderr" || status=$?
+  [[ $status -eq 1 ]] || fail "expected exit 1, got $status for: $* ($(cat "$work/stderr"))"
+  grep -qF -- "$pattern" "$work/stderr" || fail "expected '$pattern' in: $(cat "$work/stderr")"
+}
+
+intrinsics=$("$make_folder" "$work/in")
+[[ -n $intrinsics ]] || fail "no intrinsics printed"
+common=(fuse --depth-dir "$work/in/depth" --color-dir "$work/in/color" --intrinsics "$intrinsics")
+
+# A good run: 5 frames, 3 views -> 3 fused reference frames named like their inputs.
+"$cenote" "${common[@]}" --trajectory "$work/in/traj.txt" --out "$work/out" --png16 --preview >"$work/stdout" \
+  || fail "fuse failed: $(cat "$work/stdout")"
+grep -q "fused 3 of 5 frames" "$work/stdout" || fail "unexpected summary: $(cat "$work/stdout")"
+for t in 100.500000 101.000000 101.500000; do
+  for f in "$t.depth.pfm" "$t.conf.pfm" "$t.depth.png" "$t.preview.png"; do
+    [[ -s $work/out/$f ]] || fail "missing output $f"
+  done
+done
+[[ ! -e $work/out/100.000000.depth.pfm ]] || fail "the first frame is never a reference with 3 views"
+# Binary PLY: header + 15 bytes per point; most of 3 x 160 x 120 pixels survive.
+size=$(stat -c %s "$work/out/points.ply")
+((size > 15 * 30000)) || fail "points.ply too small: $size bytes"
+head -c 300 "$work/out/points.ply" | grep -qa "format binary_little_endian 1.0" || fail "points.ply header"
+
+# Five views use every frame once as the only reference.
+"$cenote" "${common[@]}" --trajectory "$work/in/traj.txt" --out "$work/out5" --views 5 --eps 0.05 >"$work/stdout"
+grep -q "fused 1 of 5 frames" "$work/stdout" || fail "5 views: $(cat "$work/stdout")"
+
+# Bad poses and inputs.
+sed '3s/^\([^ ]*\) [^ ]*/\1 nan/' "$work/in/traj.txt" >"$work/traj_nan.txt"
+expect_error "traj_nan.txt:3: non-finite value" "${common[@]}" --trajectory "$work/traj_nan.txt" --out "$work/o1"
+awk 'NR == 4 { $8 = 0.5 } { print }' "$work/in/traj.txt" >"$work/traj_scaled.txt"
+expect_error "traj_scaled.txt:4: quaternion (qx qy qz qw) has norm" "${common[@]}" \
+  --trajectory "$work/traj_scaled.txt" --out "$work/o2"
+grep -v '^101.000000' "$work/in/traj.txt" >"$work/traj_gap.txt"
+expect_error "no pose in $work/traj_gap.txt within 0.001 s of t = 101.000000" "${common[@]}" \
+  --trajectory "$work/traj_gap.txt" --out "$work/o3"
+expect_error "fusion.num_views = 4" "${common[@]}" --trajectory "$work/in/traj.txt" --out "$work/o4" --views 4
+expect_error "--intrinsics" fuse --depth-dir "$work/in/depth" --intrinsics 1,2,3 --trajectory "$work/in/traj.txt" \
+  --out "$work/o5"
+cp -r "$work/in" "$work/small"
+{ printf 'Pf\n2 2\n-1\n'; printf '\x00\x00\x80\x3f%.0s' 1 2 3 4; } >"$work/small/depth/101.500000.conf.pfm"
+expect_error "101.500000.conf.pfm is 2x2 (or not single-channel) but" fuse --depth-dir "$work/small/depth" \
+  --intrinsics "$intrinsics" --trajectory "$work/in/traj.txt" --out "$work/o6" --max-depth 20
+rm "$work/small/color/101.000000.png"
+expect_error "101.000000.png: no such file" fuse --depth-dir "$work/in/depth" --color-dir "$work/small/color" \
+  --intrinsics "$intrinsics" --trajectory "$work/in/traj.txt" --out "$work/o7"
+echo "cli_fuse_test: all checks passed"
