@@ -39,7 +39,7 @@ struct StereoConfig {
   double min_confidence = 0.0; // PKRN below this marks the pixel invalid; PKRN >= 1, so 0 keeps all
   bool lr_check = false;       // left-right consistency check on integer disparities
   int lr_max_diff_px = 1;      // allowed |d_left - d_right| with lr_check
-  int num_strips = 4;          // fixed horizontal strips matched independently (threads share them);
+  int num_strips = 2;          // fixed horizontal strips matched independently (threads share them);
                                // fixed so that the result does not depend on the thread count
   int strip_overlap_px = 24;   // rows matched above (and below, 8 paths) a strip before its own rows,
                                // so that vertical paths arrive warmed up at the strip border

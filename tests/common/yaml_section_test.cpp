@@ -1,1 +1,71 @@
+#include "common/yaml_section.h"
+
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/config_error.h"
+
+namespace cenote {
+namespace {
+
+TEST(YamlSection, ReadsPresentKeysAndKeepsDefaultsForAbsentOnes) {
+  YamlSection root(YAML::Load("stereo: {window_px: 5}"), "", "test.yaml");
+  YamlSection stereo = root.section("stereo");
+  int window = 3, paths = 4;
+  stereo.read("window_px", window);
+  stereo.read("num_paths", paths);
+  EXPECT_NO_THROW(stereo.finish());
+  EXPECT_NO_THROW(root.finish());
+  EXPECT_EQ(window, 5);
+  EXPECT_EQ(paths, 4);
+}
+
+TEST(YamlSection, UnknownKeyIsAnErrorNamingFileAndDottedKey) {
+  YamlSection root(YAML::Load("stereo: {window_sise: 5}"), "", "config/x.yaml");
+  YamlSection stereo = root.section("stereo");
+  int window = 3;
+  stereo.read("window_px", window);
+  try {
+    stereo.finish();
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "config/x.yaml: unknown configuration key(s): stereo.window_sise");
+  }
+}
+
+TEST(YamlSection, WrongTypeIsAnErrorNamingKeyAndExpectedType) {
+  YamlSection root(YAML::Load("window_px: three"), "stereo", "c.yaml");
+  int window = 3;
+  try {
+    root.read("window_px", window);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "c.yaml: stereo.window_px = 'three': expected an integer");
+  }
+  EXPECT_EQ(window, 3);
+}
+
+TEST(YamlSection, SectionThatIsNotAMappingIsAnError) {
+  EXPECT_THROW(YamlSection(YAML::Load("[1, 2]"), "stereo", "c.yaml"), Error);
+}
+
+TEST(LoadYamlFile, MissingFileAndBrokenYamlAreErrors) {
+  EXPECT_THROW(loadYamlFile("/nonexistent/cenote.yaml"), Error);
+  const std::string path = testing::TempDir() + "/broken.yaml";
+  std::ofstream(path) << "stereo: {window_px: [1, 2\n";
+  EXPECT_THROW(loadYamlFile(path), Error);
+}
+
+TEST(ConfigErrors, FormatsKeyValueAndRule) {
+  ConfigErrors errors("stereo");
+  errors.check(false, "num_disparities", 300, "must be a multiple of 16 in [16, 512]");
+  errors.check(true, "window_px", 3, "never shown");
+  const auto list = errors.take();
+  ASSERT_EQ(list.size(), 1u);
+  EXPECT_EQ(list[0].toString(), "stereo.num_disparities = 300: must be a multiple of 16 in [16, 512]");
+}
+
+}  // namespace
+}  // namespace cenote

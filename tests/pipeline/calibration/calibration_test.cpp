@@ -1,1 +1,189 @@
 #include <gtest/gtest.h>
+
+#include <fstream>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "common/error.h"
+#include "pipeline/calibration/rectifier.h"
+#include "pipeline/calibration/stereo_calibration.h"
+
+namespace cenote::pipeline {
+namespace {
+
+std::string temp(const std::string& name) { return testing::TempDir() + "/" + name; }
+
+StereoCalibration exampleRig() {
+  StereoCalibration c;
+  c.image_size = cv::Size(640, 480);
+  c.left.K = cv::Matx33d(500, 0, 320, 0, 502, 241, 0, 0, 1);
+  c.right.K = cv::Matx33d(505, 0, 318, 0, 506, 238, 0, 0, 1);
+  c.left.distortion = {-0.12, 0.03, 0.001, -0.0005};
+  c.right.distortion = {-0.11, 0.02, -0.0008, 0.0003};
+  cv::Mat R;
+  cv::Rodrigues(cv::Vec3d(0.01, -0.02, 0.005), R);
+  c.R = cv::Matx33d(R);
+  c.T = cv::Vec3d(-0.12, 0.002, 0.001);
+  return c;
+}
+
+TEST(StereoCalibration, WrittenAndReadBackGivesTheSameRig) {
+  const StereoCalibration c = exampleRig();
+  writeStereoCalibration(temp("rig.yaml"), c);
+  const StereoCalibration back = readStereoCalibration(temp("rig.yaml"));
+  EXPECT_EQ(back.image_size, c.image_size);
+  EXPECT_LT(cv::norm(back.left.K - c.left.K), 1e-12);
+  EXPECT_LT(cv::norm(back.R - c.R), 1e-12);
+  EXPECT_LT(cv::norm(back.T - c.T), 1e-12);
+  EXPECT_EQ(back.right.distortion, c.right.distortion);
+  EXPECT_FALSE(back.rectified);
+}
+
+TEST(StereoCalibration, RectifiedLayoutGivesBaselineFromProjectionMatrices) {
+  std::ofstream(temp("rect.yaml")) << "%YAML:1.0\nimage_width: 1241\nimage_height: 376\n"
+                                      "P1: !!opencv-matrix\n  rows: 3\n  cols: 4\n  dt: d\n"
+                                      "  data: [718.856, 0, 607.1928, 0, 0, 718.856, 185.2157, 0, 0, 0, 1, 0]\n"
+                                      "P2: !!opencv-matrix\n  rows: 3\n  cols: 4\n  dt: d\n"
+                                      "  data: [718.856, 0, 607.1928, -386.1448, 0, 718.856, 185.2157, 0, 0, 0, 1, 0]\n";
+  const StereoCalibration c = readStereoCalibration(temp("rect.yaml"));
+  ASSERT_TRUE(c.rectified);
+  EXPECT_NEAR(c.rectified_geometry.baseline_m, 386.1448 / 718.856, 1e-12);
+  EXPECT_DOUBLE_EQ(c.rectified_geometry.cx, 607.1928);
+}
+
+TEST(StereoCalibration, MissingMatrixAndNonRotationAreErrorsNamingTheFile) {
+  std::ofstream(temp("bad.yaml")) << "%YAML:1.0\nimage_width: 640\nimage_height: 480\n"
+                                     "K1: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+                                     "  data: [500, 0, 320, 0, 500, 240, 0, 0, 1]\n";
+  try {
+    readStereoCalibration(temp("bad.yaml"));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml: missing K2"), std::string::npos) << e.what();
+  }
+  StereoCalibration c = exampleRig();
+  c.R = cv::Matx33d(1, 0, 0, 0, 2, 0, 0, 0, 1);
+  writeStereoCalibration(temp("scaled.yaml"), c);
+  try {
+    readStereoCalibration(temp("scaled.yaml"));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("R is not a rotation matrix"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(readStereoCalibration(temp("absent.yaml")), Error);
+}
+
+// EuRoC MH_01 cam0/cam1 sensor.yaml values.
+void writeEurocSensor(const std::string& path, const std::string& T_BS, const std::string& intrinsics,
+                      const std::string& distortion) {
+  std::ofstream(path) << "%YAML:1.0\nsensor_type: camera\ncomment: VI-Sensor\nT_BS:\n  cols: 4\n  rows: 4\n"
+                      << "  data: [" << T_BS << "]\nrate_hz: 20\nresolution: [752, 480]\n"
+                      << "camera_model: pinhole\nintrinsics: [" << intrinsics << "] #fu, fv, cu, cv\n"
+                      << "distortion_model: radial-tangential\ndistortion_coefficients: [" << distortion << "]\n";
+}
+
+TEST(StereoCalibration, EurocSensorPairGivesTheRigBetweenTheCameras) {
+  writeEurocSensor(temp("cam0.yaml"),
+                   "0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975, "
+                   "0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768, "
+                   "-0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949, 0.0, 0.0, 0.0, 1.0",
+                   "458.654, 457.296, 367.215, 248.375", "-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05");
+  writeEurocSensor(temp("cam1.yaml"),
+                   "0.0125552670891, -0.999755099723, 0.0182237714554, -0.0198435579556, "
+                   "0.999598781151, 0.0130119051815, 0.0251588363115, 0.0453689425024, "
+                   "-0.0253898008918, 0.0179005838253, 0.999517347078, 0.00786212447038, 0.0, 0.0, 0.0, 1.0",
+                   "457.587, 456.134, 379.999, 255.238", "-0.28368365, 0.07451284, -0.00010473, -3.55590700e-05");
+  const StereoCalibration c = readEurocSensorPair(temp("cam0.yaml"), temp("cam1.yaml"));
+  EXPECT_EQ(c.image_size, cv::Size(752, 480));
+  EXPECT_DOUBLE_EQ(c.left.K(0, 0), 458.654);
+  EXPECT_DOUBLE_EQ(c.right.K(1, 2), 255.238);
+  ASSERT_EQ(c.left.distortion.size(), 4u);
+  // The published MH_01 baseline is 0.110 m, along the right camera's -x.
+  EXPECT_NEAR(cv::norm(c.T), 0.1101, 5e-4);
+  EXPECT_LT(c.T[0], -0.109);
+  const Rectifier rectifier(c);
+  EXPECT_NEAR(rectifier.geometry().baseline_m, 0.1101, 5e-4);
+}
+
+TEST(StereoCalibration, KittiCalibTxtRowsGiveRectifiedGeometry) {
+  std::ofstream(temp("calib.txt"))
+      << "P0: 7.188560e+02 0.000000e+00 6.071928e+02 0.000000e+00 0.000000e+00 7.188560e+02 1.852157e+02 "
+         "0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00\n"
+      << "P1: 7.188560e+02 0.000000e+00 6.071928e+02 -3.861448e+02 0.000000e+00 7.188560e+02 1.852157e+02 "
+         "0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00\n";
+  const StereoCalibration c = readKittiCalibration(temp("calib.txt"), cv::Size(1241, 376));
+  EXPECT_TRUE(c.rectified);
+  EXPECT_NEAR(c.rectified_geometry.baseline_m, 0.537165, 1e-5);
+  EXPECT_THROW(readKittiCalibration(temp("calib.txt"), cv::Size(1241, 376), "P2", "P3"), Error);
+}
+
+// Draws a small bright blob at a sub-pixel position.
+void drawBlob(cv::Mat& image, cv::Point2d at) {
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) {
+      const double r2 = (x - at.x) * (x - at.x) + (y - at.y) * (y - at.y);
+      image.at<uint8_t>(y, x) = cv::saturate_cast<uint8_t>(image.at<uint8_t>(y, x) + 250.0 * std::exp(-r2 / 8.0));
+    }
+}
+
+cv::Point2d centroid(const cv::Mat& image) {
+  const cv::Moments m = cv::moments(image > 60, true);
+  return {m.m10 / m.m00, m.m01 / m.m00};
+}
+
+TEST(Rectifier, PointsLandOnTheSameRowWithTheDisparityOfTheirDepth) {
+  const StereoCalibration c = exampleRig();
+  const Rectifier rectifier(c);
+  for (const cv::Point3d p_left : {cv::Point3d(0.3, -0.2, 2.0), cv::Point3d(-0.5, 0.4, 3.5), cv::Point3d(0.0, 0.0, 1.5)}) {
+    std::vector<cv::Point2d> in_left, in_right;
+    cv::projectPoints(std::vector<cv::Point3d>{p_left}, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(c.left.K),
+                      cv::Mat(c.left.distortion), in_left);
+    cv::Mat rvec;
+    cv::Rodrigues(cv::Mat(c.R), rvec);
+    cv::projectPoints(std::vector<cv::Point3d>{p_left}, rvec, cv::Mat(c.T), cv::Mat(c.right.K),
+                      cv::Mat(c.right.distortion), in_right);
+    StereoFrame frame;
+    frame.left = cv::Mat(c.image_size, CV_8UC1, cv::Scalar(0));
+    frame.right = frame.left.clone();
+    drawBlob(frame.left, in_left[0]);
+    drawBlob(frame.right, in_right[0]);
+    const RectifiedPair pair = rectifier.rectify(frame);
+    const cv::Point2d l = centroid(pair.left), r = centroid(pair.right);
+    EXPECT_NEAR(l.y, r.y, 0.3) << "rows differ for point " << p_left;
+    // Depth along the rectified left optical axis.
+    const cv::Vec3d p_rect = rectifier.R_rect_left() * cv::Vec3d(p_left.x, p_left.y, p_left.z);
+    const double expected = rectifier.geometry().fx * rectifier.geometry().baseline_m / p_rect[2];
+    EXPECT_NEAR(l.x - r.x, expected, 0.3) << "disparity for point " << p_left;
+  }
+}
+
+TEST(Rectifier, RejectsImagesOfAnotherSize) {
+  const Rectifier rectifier(exampleRig());
+  StereoFrame frame;
+  frame.left = cv::Mat(480, 640, CV_8UC1, cv::Scalar(0));
+  frame.right = cv::Mat(479, 640, CV_8UC1, cv::Scalar(0));
+  try {
+    rectifier.rectify(frame);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "rectifier: right image is 640x479 but the calibration is for 640x480");
+  }
+}
+
+TEST(Rectifier, RectifiedCalibrationPassesImagesThrough) {
+  StereoCalibration c;
+  c.image_size = cv::Size(8, 4);
+  c.rectified = true;
+  c.rectified_geometry = {100, 100, 4, 2, 0.1, c.image_size};
+  const Rectifier rectifier(c);
+  StereoFrame frame;
+  frame.left = cv::Mat(4, 8, CV_8UC1, cv::Scalar(7));
+  frame.right = cv::Mat(4, 8, CV_8UC1, cv::Scalar(9));
+  const RectifiedPair pair = rectifier.rectify(frame);
+  EXPECT_TRUE(rectifier.isPassthrough());
+  EXPECT_EQ(pair.left.data, frame.left.data);
+  EXPECT_DOUBLE_EQ(pair.geometry.baseline_m, 0.1);
+}
+
+}  // namespace
+}  // namespace cenote::pipeline

@@ -1,1 +1,111 @@
+#include "pipeline/stereo/stereo_config.h"
+
 #include <gtest/gtest.h>
+
+#include "common/error.h"
+#include "common/yaml_section.h"
+
+namespace cenote::pipeline {
+namespace {
+
+std::string errorsOf(const StereoConfig& config) { return formatConfigErrors(config.validate()); }
+
+TEST(StereoConfig, DefaultsAreValid) {
+  EXPECT_EQ(errorsOf(StereoConfig{}), "");
+  StereoConfig census;
+  census.cost = MatchingCost::kCensus;
+  census.window_px = 5;
+  EXPECT_EQ(errorsOf(census), "");
+  StereoConfig eight;
+  eight.num_paths = 8;
+  EXPECT_EQ(errorsOf(eight), "");
+}
+
+TEST(StereoConfig, RejectsDisparitiesNotMultipleOf16) {
+  StereoConfig c;
+  c.num_disparities = 100;
+  EXPECT_EQ(errorsOf(c), "stereo.num_disparities = 100: must be a multiple of 16 in [16, 512]");
+}
+
+TEST(StereoConfig, RejectsEvenSadWindowAndCensusWindowOtherThanThreeOrFive) {
+  StereoConfig sad;
+  sad.window_px = 4;
+  EXPECT_EQ(errorsOf(sad), "stereo.window_px = 4: SAD window must be odd in [1, 9]");
+  StereoConfig census;
+  census.cost = MatchingCost::kCensus;
+  census.window_px = 7;
+  EXPECT_EQ(errorsOf(census), "stereo.window_px = 7: census window must be 3 or 5");
+}
+
+TEST(StereoConfig, ReportsEveryFailedRuleNotJustTheFirst) {
+  StereoConfig c;
+  c.num_paths = 6;
+  c.min_disparity_px = -3;
+  c.num_strips = 0;
+  EXPECT_EQ(c.validate().size(), 3u) << errorsOf(c);
+}
+
+TEST(StereoConfig, RejectsPenaltiesThatWouldOverflowSixteenBitSums) {
+  StereoConfig c;
+  c.num_paths = 8;
+  c.p1 = 100;
+  c.p2 = 9000;
+  EXPECT_NE(errorsOf(c).find("stereo.p2 = 9000: num_paths * (max cost"), std::string::npos) << errorsOf(c);
+}
+
+TEST(StereoConfig, RejectsP2BelowP1) {
+  StereoConfig c;
+  c.p1 = 50;
+  c.p2 = 20;
+  EXPECT_EQ(errorsOf(c), "stereo.p2 = 20: must be >= p1 (50)");
+}
+
+TEST(StereoConfig, SadCostRangeFollowsWindowAndPrefilter) {
+  StereoConfig c;
+  c.prefilter = Prefilter::kNone;
+  EXPECT_EQ(c.maxCost(), 9 * 255);
+  EXPECT_EQ(c.sadShift(), 0);
+  c.window_px = 9;
+  EXPECT_EQ(c.sadShift(), 3);  // 81 * 255 = 20655 >> 3 = 2581 <= 4095
+  c.prefilter = Prefilter::kSobelX;
+  c.window_px = 3;
+  EXPECT_EQ(c.maxCost(), 9 * 126);
+}
+
+TEST(StereoConfig, ReadsYamlAndRejectsUnknownCostName) {
+  YamlSection ok(YAML::Load("{cost: census, window_px: 3, num_paths: 8, lr_check: true}"), "stereo", "c.yaml");
+  StereoConfig c;
+  c.read(ok);
+  ok.finish();
+  EXPECT_EQ(c.cost, MatchingCost::kCensus);
+  EXPECT_EQ(c.window_px, 3);
+  EXPECT_EQ(c.num_paths, 8);
+  EXPECT_TRUE(c.lr_check);
+  YamlSection bad(YAML::Load("{cost: ncc}"), "stereo", "c.yaml");
+  try {
+    c.read(bad);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "stereo.cost = ncc: must be 'sad' or 'census'");
+  }
+}
+
+TEST(StereoConfig, ConstructingAMatcherWithAnInvalidConfigThrowsWithEveryRule) {
+  StereoConfig c;
+  c.num_disparities = 7;
+  c.window_px = 2;
+  EXPECT_THROW(
+      {
+        try {
+          throwIfInvalid(c.validate(), "stereo configuration");
+        } catch (const Error& e) {
+          EXPECT_NE(std::string(e.what()).find("stereo.num_disparities = 7"), std::string::npos);
+          EXPECT_NE(std::string(e.what()).find("stereo.window_px = 2"), std::string::npos);
+          throw;
+        }
+      },
+      Error);
+}
+
+}  // namespace
+}  // namespace cenote::pipeline
