@@ -27,11 +27,10 @@ void backProject(const DepthFrame& frame, PointBatch& out) {
   out.t_s = frame.t_s;
   out.origin = frame.T_world_cam.translation();
   const int rows = frame.depth.rows, cols = frame.depth.cols;
-  const float fx = static_cast<float>(frame.K(0, 0)), fy = static_cast<float>(frame.K(1, 1));
-  const float cx = static_cast<float>(frame.K(0, 2)), cy = static_cast<float>(frame.K(1, 2));
-  const Eigen::Matrix3f R = frame.T_world_cam.linear().cast<float>();
-  const Eigen::Vector3d t = frame.T_world_cam.translation();
-
+  // p_world = R (z K^-1 [x y 1]^T) + t = z (R K^-1 [0 y 1]^T + x R K^-1 e_x) + t, in float (the
+  // points are float; t is exact to float precision like the result).
+  const Eigen::Matrix3f RK_inv = (frame.T_world_cam.linear() * frame.K.inverse()).cast<float>();
+  const Eigen::Vector3f t = frame.T_world_cam.translation().cast<float>();
   // Two passes over contiguous row blocks (count, then fill at the block's offset): the order is
   // row-major and no thread writes where another does.
   constexpr int kMaxBlocks = 64;
@@ -56,12 +55,13 @@ void backProject(const DepthFrame& frame, PointBatch& out) {
     for (int y = blockStart(rows, blocks, b); y < blockStart(rows, blocks, b + 1); ++y) {
       const float* depth = frame.depth.ptr<float>(y);
       const uint8_t* bgr = colored ? frame.color.ptr<uint8_t>(y) : nullptr;
-      const float ray_y = (static_cast<float>(y) - cy) / fy;
+      const Eigen::Vector3f row_ray = RK_inv.col(1) * static_cast<float>(y) + RK_inv.col(2);
+      const Eigen::Vector3f step = RK_inv.col(0);
       for (int x = 0; x < cols; ++x) {
         const float z = depth[x];
         if (!hasPoint(z)) continue;
-        const Eigen::Vector3f p_cam(z * (static_cast<float>(x) - cx) / fx, z * ray_y, z);
-        out.points[i] = ((R * p_cam).cast<double>() + t).cast<float>();
+        const Eigen::Vector3f ray = row_ray + static_cast<float>(x) * step;
+        out.points[i] = z * ray + t;
         if (colored) out.colors[i] = {bgr[3 * x + 2], bgr[3 * x + 1], bgr[3 * x]};
         ++i;
       }

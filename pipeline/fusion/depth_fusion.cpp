@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -11,6 +12,7 @@
 
 #include "common/error.h"
 #include "pipeline/frame/pose_check.h"
+#include "pipeline/fusion/fusion_kernels.h"
 
 namespace cenote::pipeline {
 namespace {
@@ -18,19 +20,9 @@ namespace {
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr int kMaxViews = FusionConfig::kMaxViews;
 
-// One cell of a rendered map.
-struct Cell {
-  float depth_m;
-  float confidence;
-};
-static_assert(sizeof(Cell) == 2 * sizeof(float));
-
-// Maps pixel (x, y) of view `from` with depth Z to view `to`: h = Z * (A [x y 1]^T) + k, pixel
-// (h0 / h2, h1 / h2), depth h2 (K's last row is 0 0 1). A = K_to R_to_from K_from^-1, k = K_to t_to_from.
-struct Projector {
-  float a[9];
-  float k[3];
-};
+using detail::FusionLimits;
+using detail::FusionRowInput;
+using detail::Projector;
 
 Projector makeProjector(const DepthFrame& to, const DepthFrame& from) {
   const Eigen::Isometry3d T_to_from = to.T_world_cam.inverse() * from.T_world_cam;
@@ -42,21 +34,11 @@ Projector makeProjector(const DepthFrame& to, const DepthFrame& from) {
   return p;
 }
 
-// Rule 0 of the header, in float.
-struct Validity {
-  float max_depth_m;     // finite
-  float min_confidence;  // > 0
-  bool operator()(float depth_m, float confidence) const {
-    return depth_m > 0.0f && depth_m <= max_depth_m && confidence >= min_confidence;  // NaN fails
-  }
-};
+bool isValid(const FusionLimits& l, float depth_m, float confidence) {
+  return depth_m > 0.0f && depth_m <= l.max_depth_m && confidence >= l.min_confidence;  // NaN fails
+}
 
-// eps(Z) of the header.
-struct SupportRadiusFn {
-  bool relative;
-  float eps;
-  float operator()(float depth_m) const { return relative ? eps * depth_m : eps; }
-};
+float epsAt(const FusionLimits& l, float depth_m) { return l.relative_eps ? l.eps * depth_m : l.eps; }
 
 std::string describe(const DepthFrame& frame) {
   std::ostringstream text;
@@ -66,136 +48,120 @@ std::string describe(const DepthFrame& frame) {
   return text.str();
 }
 
-// Step 1: z-buffer of view `source` in the reference view. One thread writes `out`.
-void renderView(const DepthFrame& source, const Projector& P, const Validity& valid, cv::Mat& out) {
-  out.setTo(cv::Scalar(kInf, 0.0f));
-  const int width = out.cols, height = out.rows;
-  const float width_f = static_cast<float>(width), height_f = static_cast<float>(height);
-  Cell* cells = out.ptr<Cell>(0);
+// Scalar form of detail::projectRow(), for rows narrower than one vector.
+void projectRowScalar(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y,
+                      int width, int target_width, int target_height, int32_t* out_index, float* out_depth) {
+  const float yf = static_cast<float>(y);
+  const float b0 = P.a[1] * yf + P.a[2], b1 = P.a[4] * yf + P.a[5], b2 = P.a[7] * yf + P.a[8];
+  for (int x = 0; x < width; ++x) {
+    out_index[x] = -1;
+    const float z = depth[x], xf = static_cast<float>(x);
+    if (!isValid(limits, z, conf[x])) continue;
+    const float hz = z * (b2 + P.a[6] * xf) + P.k[2];
+    if (!(hz > 0.0f)) continue;
+    const float inv = 1.0f / hz;
+    const float u = (z * (b0 + P.a[0] * xf) + P.k[0]) * inv, v = (z * (b1 + P.a[3] * xf) + P.k[1]) * inv;
+    if (!(u >= -0.5f && u < target_width && v >= -0.5f && v < target_height)) continue;
+    const int iu = static_cast<int>(u + 0.5f), iv = static_cast<int>(v + 0.5f);
+    if (iu >= target_width || iv >= target_height) continue;
+    out_index[x] = iv * target_width + iu;
+    out_depth[x] = hz;
+  }
+}
+
+// Step 1 for one view: z-buffer in the reference view. Rows are projected with SIMD into a row
+// buffer, then written in row-major order (nearest wins, first wins a tie). One thread per call.
+void renderView(const DepthFrame& source, const Projector& P, const FusionLimits& limits, bool simd,
+                FusionScratch::View& out) {
+  const int width = out.depth.cols, height = out.depth.rows;
+  float* z_buffer = out.depth.ptr<float>(0);
+  float* c_buffer = out.confidence.ptr<float>(0);
+  // Only depths are cleared: a confidence is read only where a depth was written.
+  std::fill(z_buffer, z_buffer + static_cast<size_t>(width) * height, kInf);
+  // Dropped points (index -1) go to a sentinel cell past the end, so the loop below has no
+  // unpredictable branch: a write that loses the depth test stores the old values again.
+  const int32_t sentinel = width * height;
+  z_buffer[sentinel] = -kInf;
+  int32_t* index = out.row_index.data();
+  float* depth = out.row_depth.data();
   for (int y = 0; y < source.depth.rows; ++y) {
-    const float* depth = source.depth.ptr<float>(y);
     const float* conf = source.confidence.ptr<float>(y);
-    const float yf = static_cast<float>(y);
-    const float b0 = P.a[1] * yf + P.a[2], b1 = P.a[4] * yf + P.a[5], b2 = P.a[7] * yf + P.a[8];
+    if (simd) {
+      detail::projectRow(P, limits, source.depth.ptr<float>(y), conf, y, source.depth.cols, width, height, index, depth);
+    } else {
+      projectRowScalar(P, limits, source.depth.ptr<float>(y), conf, y, source.depth.cols, width, height, index, depth);
+    }
     for (int x = 0; x < source.depth.cols; ++x) {
-      const float z = depth[x], c = conf[x];
-      if (!valid(z, c)) continue;
-      const float xf = static_cast<float>(x);
-      const float hz = z * (b2 + P.a[6] * xf) + P.k[2];
-      if (!(hz > 0.0f)) continue;
-      const float inv = 1.0f / hz;
-      const float u = (z * (b0 + P.a[0] * xf) + P.k[0]) * inv;
-      const float v = (z * (b1 + P.a[3] * xf) + P.k[1]) * inv;
-      if (!(u >= -0.5f && u < width_f && v >= -0.5f && v < height_f)) continue;
-      const int iu = static_cast<int>(u + 0.5f), iv = static_cast<int>(v + 0.5f);
-      if (iu >= width || iv >= height) continue;
-      Cell& cell = cells[static_cast<size_t>(iv) * width + iu];
-      if (hz < cell.depth_m) cell = {hz, c};
+      const int32_t i = index[x] < 0 ? sentinel : index[x];
+      const float z_old = z_buffer[i];
+      const uint32_t take = 0u - static_cast<uint32_t>(depth[x] < z_old);  // all ones when nearer
+      z_buffer[i] = std::min(z_old, depth[x]);                            // an equal depth keeps the first
+      c_buffer[i] = std::bit_cast<float>((std::bit_cast<uint32_t>(conf[x]) & take) |
+                                         (std::bit_cast<uint32_t>(c_buffer[i]) & ~take));
     }
   }
 }
 
-// Everything the per-pixel fusion needs, resolved once per call.
-struct FusionSetup {
-  int num_views = 0, ref = 0, width = 0, height = 0;
-  std::array<const float*, kMaxViews> depth{}, conf{};  // original maps (row 0; continuous rows of `step` floats)
-  std::array<size_t, kMaxViews> step{};                  // in floats
-  std::array<const Cell*, kMaxViews> rendered{};         // rendered maps (ref: unused)
-  std::array<Projector, kMaxViews> to_view{};            // reference pixel -> view l (ref: unused)
-  Validity valid{};
-  SupportRadiusFn eps{};
-  float min_fused_confidence = 0.0f;
-};
-
-// Steps 2-4 for one row of the reference view.
-void fuseRow(const FusionSetup& s, int y, float* out_depth, float* out_conf) {
+// Scalar form of detail::fuseRow() (steps 2-4), for rows narrower than one vector.
+void fuseRowScalar(const FusionRowInput& s, int y, float* out_depth, float* out_conf) {
   const int n_views = s.num_views, r = s.ref;
+  const FusionLimits& lim = s.limits;
   const float yf = static_cast<float>(y);
-  std::array<std::array<float, 3>, kMaxViews> base{};
-  for (int l = 0; l < n_views; ++l) {
-    if (l == r) continue;
-    const float* a = s.to_view[l].a;
-    base[l] = {a[1] * yf + a[2], a[4] * yf + a[5], a[7] * yf + a[8]};
-  }
   const float* ref_depth = s.depth[r] + y * s.step[r];
   const float* ref_conf = s.conf[r] + y * s.step[r];
-  const size_t row_offset = static_cast<size_t>(y) * s.width;
-  const float width_f = static_cast<float>(s.width), height_f = static_cast<float>(s.height);
-
+  const size_t row = static_cast<size_t>(y) * s.width;
   for (int x = 0; x < s.width; ++x) {
-    // Step 2: candidates.
-    std::array<float, kMaxViews> z, c;
-    std::array<int, kMaxViews> view;
-    int n = 0;
-    for (int v = 0; v < n_views; ++v) {
-      float zv, cv;
-      if (v == r) {
-        zv = ref_depth[x];
-        cv = ref_conf[x];
-        if (!s.valid(zv, cv)) continue;
-      } else {
-        const Cell cell = s.rendered[v][row_offset + x];
-        if (!(cell.depth_m < kInf)) continue;
-        zv = cell.depth_m;
-        cv = cell.confidence;
-      }
-      z[n] = zv;
-      c[n] = cv;
-      view[n] = v;
-      ++n;
-    }
-    const float ref_z = ref_depth[x], ref_c = ref_conf[x];
-    const bool ref_valid = s.valid(ref_z, ref_c);
     const float xf = static_cast<float>(x);
-
-    // Step 3 and 4: a candidate can win only when its support minus occlusion (an upper bound of
-    // its fused confidence, since free-space terms only subtract) beats the best so far, so the
-    // free-space projections are skipped otherwise; the result is the same as evaluating all.
-    bool have_best = false;
-    float best_conf = s.min_fused_confidence, best_depth = kInf;
-    for (int j = 0; j < n; ++j) {
-      const float zj = z[j], e = s.eps(zj);
-      float support = 0.0f, weighted = 0.0f, occlusion = 0.0f;
-      for (int i = 0; i < n; ++i) {
+    std::array<float, kMaxViews> z, c;
+    std::array<bool, kMaxViews> has;
+    for (int v = 0; v < n_views; ++v) {
+      z[v] = v == r ? ref_depth[x] : s.rendered_depth[v][row + x];
+      c[v] = v == r ? ref_conf[x] : s.rendered_conf[v][row + x];
+      has[v] = v == r ? isValid(lim, z[v], c[v]) : z[v] < kInf;
+    }
+    float best_conf = -kInf, best_depth = kInf;
+    for (int j = 0; j < n_views; ++j) {
+      if (!has[j]) continue;
+      const float zj = z[j], e = epsAt(lim, zj);
+      float support = 0.0f, weighted = 0.0f, conflict = 0.0f;
+      for (int i = 0; i < n_views; ++i) {
+        if (!has[i]) continue;
         const float diff = z[i] - zj;
         if (std::abs(diff) < e) {
           support += c[i];
           weighted += c[i] * z[i];
         } else if (diff < -e) {
-          occlusion += c[i];
+          conflict += c[i];  // occlusion
         }
       }
-      const float upper = support - occlusion;
-      if (have_best ? !(upper > best_conf) : !(upper >= best_conf)) continue;
-      float free_space = 0.0f;
       for (int l = 0; l < n_views; ++l) {
-        if (l == view[j]) continue;
+        if (l == j) continue;
         if (l == r) {
-          if (ref_valid && zj < ref_z - e) free_space += ref_c;
+          if (has[r] && zj < z[r] - e) conflict += c[r];
           continue;
         }
         const Projector& P = s.to_view[l];
-        const float hz = zj * (base[l][2] + P.a[6] * xf) + P.k[2];
+        const float hz = zj * (P.a[6] * xf + (P.a[7] * yf + P.a[8])) + P.k[2];
         if (!(hz > 0.0f)) continue;
         const float inv = 1.0f / hz;
-        const float u = (zj * (base[l][0] + P.a[0] * xf) + P.k[0]) * inv;
-        const float v = (zj * (base[l][1] + P.a[3] * xf) + P.k[1]) * inv;
-        if (!(u >= -0.5f && u < width_f && v >= -0.5f && v < height_f)) continue;
+        const float u = (zj * (P.a[0] * xf + (P.a[1] * yf + P.a[2])) + P.k[0]) * inv;
+        const float v = (zj * (P.a[3] * xf + (P.a[4] * yf + P.a[5])) + P.k[1]) * inv;
+        if (!(u >= -0.5f && u < s.width && v >= -0.5f && v < s.height)) continue;
         const int iu = static_cast<int>(u + 0.5f), iv = static_cast<int>(v + 0.5f);
         if (iu >= s.width || iv >= s.height) continue;
         const size_t q = static_cast<size_t>(iv) * s.step[l] + iu;
         const float zl = s.depth[l][q], cl = s.conf[l][q];
-        if (s.valid(zl, cl) && hz < zl - s.eps(hz)) free_space += cl;
+        if (isValid(lim, zl, cl) && hz < zl - epsAt(lim, hz)) conflict += cl;  // free space
       }
-      const float fused = upper - free_space;
-      if (have_best ? fused > best_conf : fused >= best_conf) {
-        have_best = true;
+      const float fused = support - conflict;
+      if (fused > best_conf) {
         best_conf = fused;
         best_depth = weighted / support;
       }
     }
-    out_depth[x] = have_best ? best_depth : kInf;
-    out_conf[x] = have_best ? best_conf : 0.0f;
+    const bool keep = best_conf >= lim.min_fused_confidence;
+    out_depth[x] = keep ? best_depth : kInf;
+    out_conf[x] = keep ? best_conf : 0.0f;
   }
 }
 
@@ -240,52 +206,63 @@ void fuseViews(std::span<const DepthFrame* const> views, const FusionConfig& con
   const cv::Size size = ref.depth.size();
   for (const DepthFrame* view : views) checkFusionInput(*view, size);
 
-  FusionSetup s;
+  FusionRowInput s;
   s.num_views = n_views;
   s.ref = r;
   s.width = size.width;
   s.height = size.height;
-  s.valid.max_depth_m = static_cast<float>(std::min<double>(config.max_depth_m, std::numeric_limits<float>::max()));
-  s.valid.min_confidence =
+  s.limits.max_depth_m = static_cast<float>(std::min<double>(config.max_depth_m, std::numeric_limits<float>::max()));
+  s.limits.min_confidence =
       std::max(static_cast<float>(config.min_input_confidence), std::numeric_limits<float>::denorm_min());
-  s.eps = {config.support_radius == SupportRadius::kRelative, static_cast<float>(config.eps)};
-  s.min_fused_confidence = static_cast<float>(config.min_fused_confidence);
+  s.limits.relative_eps = config.support_radius == SupportRadius::kRelative;
+  s.limits.eps = static_cast<float>(config.eps);
+  s.limits.min_fused_confidence = static_cast<float>(config.min_fused_confidence);
+  const bool simd = size.width >= detail::fusionLanes();
 
-  scratch.rendered.resize(n_views);
+  scratch.views.resize(n_views);
+  std::array<Projector, kMaxViews> to_ref{};
   for (int v = 0; v < n_views; ++v) {
     const DepthFrame& view = *views[v];
-    if (!view.depth.isContinuous() || !view.confidence.isContinuous() || view.depth.step != view.confidence.step) {
-      throw Error(describe(view) + ": depth and confidence maps must be continuous (clone() a region of interest)");
-    }
     s.depth[v] = view.depth.ptr<float>(0);
     s.conf[v] = view.confidence.ptr<float>(0);
     s.step[v] = view.depth.step1();
+    if (view.confidence.step1() != s.step[v]) {
+      throw Error(describe(view) + ": depth and confidence maps must have the same row step (clone() them)");
+    }
     if (v == r) continue;
-    scratch.rendered[v].create(size, CV_32FC2);
-    s.rendered[v] = scratch.rendered[v].ptr<Cell>(0);
+    FusionScratch::View& buffers = scratch.views[v];
+    // One float past the image: the sentinel cell of renderView().
+    buffers.storage.resize(2 * (static_cast<size_t>(size.area()) + 1));  // no-op while the size stays
+    buffers.depth = cv::Mat(size, CV_32FC1, buffers.storage.data());
+    buffers.confidence = cv::Mat(size, CV_32FC1, buffers.storage.data() + size.area() + 1);
+    buffers.row_index.resize(size.width);
+    buffers.row_depth.resize(size.width);
+    s.rendered_depth[v] = buffers.depth.ptr<float>(0);
+    s.rendered_conf[v] = buffers.confidence.ptr<float>(0);
     s.to_view[v] = makeProjector(view, ref);
+    to_ref[v] = makeProjector(ref, view);
   }
 
   // Step 1: one task per view, each writing only its own z-buffer.
   auto start = std::chrono::steady_clock::now();
-  std::array<Projector, kMaxViews> to_ref{};
-  for (int v = 0; v < n_views; ++v) {
-    if (v != r) to_ref[v] = makeProjector(ref, *views[v]);
-  }
 #pragma omp parallel for schedule(static, 1)
   for (int t = 0; t < n_views - 1; ++t) {
     const int v = t < r ? t : t + 1;
-    renderView(*views[v], to_ref[v], s.valid, scratch.rendered[v]);
+    renderView(*views[v], to_ref[v], s.limits, simd, scratch.views[v]);
   }
   if (timings) timings->render_ms = msSince(start);
 
-  // Steps 2-4: rows are independent; each output pixel is written by one thread.
+  // Steps 2-4: rows are independent; each output row is written by one thread.
   start = std::chrono::steady_clock::now();
   fused.depth.create(size, CV_32FC1);
   fused.confidence.create(size, CV_32FC1);
 #pragma omp parallel for schedule(dynamic, 8)
   for (int y = 0; y < size.height; ++y) {
-    fuseRow(s, y, fused.depth.ptr<float>(y), fused.confidence.ptr<float>(y));
+    if (simd) {
+      detail::fuseRow(s, y, fused.depth.ptr<float>(y), fused.confidence.ptr<float>(y));
+    } else {
+      fuseRowScalar(s, y, fused.depth.ptr<float>(y), fused.confidence.ptr<float>(y));
+    }
   }
   if (timings) timings->fuse_ms = msSince(start);
 

@@ -42,6 +42,7 @@
 // calls.
 #pragma once
 
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -53,7 +54,14 @@ namespace cenote::pipeline {
 // Working memory of fuseViews(): allocated at the first call, reused while the image size and
 // N_f stay the same (no allocation per frame after that).
 struct FusionScratch {
-  std::vector<cv::Mat> rendered;  // per view, CV_32FC2 (depth in the reference view, confidence)
+  struct View {
+    cv::Mat depth;       // CV_32F rendered depth in the reference view, +inf where none
+    cv::Mat confidence;  // CV_32F confidence of the rendered point where depth is finite (else stale)
+    std::vector<int32_t> row_index;  // one projected source row: target pixel or -1
+    std::vector<float> row_depth;    // and its depth in the reference camera
+    std::vector<float> storage;      // pixels of depth and confidence, each followed by a sentinel cell
+  };
+  std::vector<View> views;  // per view of the window; the reference's is unused
 };
 
 // Wall time of the two stages of the last fuseViews() call.

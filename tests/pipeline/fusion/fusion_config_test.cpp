@@ -107,5 +107,22 @@ TEST(FusionConfig, ReadsYamlAndRejectsUnknownKeys) {
   EXPECT_THROW(parseSupportRadius("percent"), Error);
 }
 
+TEST(FusionConfig, DefaultYamlSectionIsValidAndMatchesTheDefaults) {
+  const std::string path = std::string(CENOTE_SOURCE_DIR) + "/config/default.yaml";
+  YamlSection root(loadYamlFile(path), "", path);
+  YamlSection section = root.section("fusion");
+  FusionConfig c;
+  c.read(section);
+  section.finish();
+  EXPECT_TRUE(c.validate().empty());
+  const FusionConfig d;
+  EXPECT_EQ(c.num_views, d.num_views);
+  EXPECT_EQ(c.eps, d.eps);
+  EXPECT_EQ(c.support_radius, d.support_radius);
+  EXPECT_EQ(c.min_fused_confidence, d.min_fused_confidence);
+  EXPECT_EQ(c.min_input_confidence, d.min_input_confidence);
+  EXPECT_EQ(c.max_depth_m, d.max_depth_m);
+}
+
 }  // namespace
 }  // namespace cenote::pipeline

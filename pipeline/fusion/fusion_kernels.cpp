@@ -1,0 +1,197 @@
+// fusion_kernels.cpp: Highway implementation of fusion_kernels.h, compiled once per instruction set.
+// Every lane is one pixel and sees the same operations whatever the lane count of neighbours, so a
+// pixel's result does not depend on how rows are shared between threads. The last vector of a row
+// is shifted back to end at the last pixel (overlapping the previous one) instead of a scalar tail.
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "pipeline/fusion/fusion_kernels.cpp"
+#include <hwy/foreach_target.h>  // must precede highway.h
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <limits>
+
+#include "pipeline/fusion/fusion_kernels.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace cenote::pipeline::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+using DF = hn::ScalableTag<float>;
+using DI = hn::RebindToSigned<DF>;
+using VF = hn::Vec<DF>;
+using VI = hn::Vec<DI>;
+using MF = hn::Mask<DF>;
+
+// Rule 0: 0 < Z <= max_depth and C >= min_confidence (NaN fails every comparison).
+HWY_INLINE MF validPixels(DF df, VF z, VF c, const FusionLimits& l) {
+  return hn::And(hn::And(hn::Gt(z, hn::Zero(df)), hn::Le(z, hn::Set(df, l.max_depth_m))),
+                 hn::Ge(c, hn::Set(df, l.min_confidence)));
+}
+
+HWY_INLINE VF epsAt(DF df, VF z, const FusionLimits& l) {
+  return l.relative_eps ? hn::Mul(z, hn::Set(df, l.eps)) : hn::Set(df, l.eps);
+}
+
+// Projection of depth z along ray r = A [x y 1]^T: nearest pixel index (0 where dropped), depth h2,
+// and the mask of lanes that land inside the image in front of the camera.
+struct Projected {
+  VI index;
+  VF depth;
+  MF inside;
+};
+
+HWY_INLINE Projected project(DF df, DI di, VF z, VF r0, VF r1, VF r2, const Projector& P, int width, int height,
+                             size_t step) {
+  const VF hz = hn::MulAdd(z, r2, hn::Set(df, P.k[2]));
+  const VF inv = hn::Div(hn::Set(df, 1.0f), hz);
+  const VF u = hn::Mul(hn::MulAdd(z, r0, hn::Set(df, P.k[0])), inv);
+  const VF v = hn::Mul(hn::MulAdd(z, r1, hn::Set(df, P.k[1])), inv);
+  const VF half = hn::Set(df, 0.5f);
+  MF inside = hn::And(hn::Gt(hz, hn::Zero(df)),
+                      hn::And(hn::And(hn::Ge(u, hn::Neg(half)), hn::Lt(u, hn::Set(df, static_cast<float>(width)))),
+                              hn::And(hn::Ge(v, hn::Neg(half)), hn::Lt(v, hn::Set(df, static_cast<float>(height))))));
+  // u + 0.5 >= 0 in the lanes that count, so truncation is floor(u + 0.5); other lanes are masked.
+  const VI iu = hn::ConvertTo(di, hn::IfThenElseZero(inside, hn::Add(u, half)));
+  const VI iv = hn::ConvertTo(di, hn::IfThenElseZero(inside, hn::Add(v, half)));
+  const auto inside_i = hn::And(hn::RebindMask(di, inside),
+                                hn::And(hn::Lt(iu, hn::Set(di, width)), hn::Lt(iv, hn::Set(di, height))));
+  inside = hn::RebindMask(df, inside_i);
+  const VI index = hn::IfThenElseZero(inside_i, hn::Add(hn::Mul(iv, hn::Set(di, static_cast<int>(step))), iu));
+  return {index, hz, inside};
+}
+
+void ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y,
+                    int width, int target_width, int target_height, int32_t* out_index, float* out_depth) {
+  const DF df;
+  const DI di;
+  const int lanes = static_cast<int>(hn::Lanes(df));
+  const float yf = static_cast<float>(y);
+  const VF b0 = hn::Set(df, P.a[1] * yf + P.a[2]), b1 = hn::Set(df, P.a[4] * yf + P.a[5]);
+  const VF b2 = hn::Set(df, P.a[7] * yf + P.a[8]);
+  const VF a0 = hn::Set(df, P.a[0]), a3 = hn::Set(df, P.a[3]), a6 = hn::Set(df, P.a[6]);
+  for (int start = 0; start < width; start += lanes) {
+    const int x = std::min(start, width - lanes);
+    const VF xs = hn::Iota(df, static_cast<float>(x));
+    const VF z = hn::LoadU(df, depth + x), c = hn::LoadU(df, conf + x);
+    const MF valid = validPixels(df, z, c, limits);
+    const VF z_safe = hn::IfThenElse(valid, z, hn::Set(df, 1.0f));
+    const Projected p = project(df, di, z_safe, hn::MulAdd(xs, a0, b0), hn::MulAdd(xs, a3, b1), hn::MulAdd(xs, a6, b2),
+                                P, target_width, target_height, static_cast<size_t>(target_width));
+    const auto keep = hn::RebindMask(di, hn::And(valid, p.inside));
+    hn::StoreU(hn::IfThenElse(keep, p.index, hn::Set(di, -1)), di, out_index + x);
+    hn::StoreU(p.depth, df, out_depth + x);
+  }
+}
+
+void FuseRowImpl(const FusionRowInput& in, int y, float* out_depth, float* out_conf) {
+  const DF df;
+  const DI di;
+  const int lanes = static_cast<int>(hn::Lanes(df));
+  const int n = in.num_views, r = in.ref;
+  const FusionLimits& lim = in.limits;
+  const float yf = static_cast<float>(y);
+  const VF inf = hn::Set(df, std::numeric_limits<float>::infinity());
+  const VF zero = hn::Zero(df);
+  const size_t row = static_cast<size_t>(y) * in.width;
+  const float* ref_depth = in.depth[r] + y * in.step[r];
+  const float* ref_conf = in.conf[r] + y * in.step[r];
+
+  for (int start = 0; start < in.width; start += lanes) {
+    const int x = std::min(start, in.width - lanes);
+    const VF xs = hn::Iota(df, static_cast<float>(x));
+    // Step 2: candidates, +inf / 0 where a view has none.
+    VF z[kMaxFusionViews], c[kMaxFusionViews];
+    MF has[kMaxFusionViews];
+    for (int v = 0; v < n; ++v) {
+      if (v == r) {
+        const VF zr = hn::LoadU(df, ref_depth + x), cr = hn::LoadU(df, ref_conf + x);
+        has[v] = validPixels(df, zr, cr, lim);
+        z[v] = hn::IfThenElse(has[v], zr, inf);
+        c[v] = hn::IfThenElseZero(has[v], cr);
+      } else {
+        z[v] = hn::LoadU(df, in.rendered_depth[v] + row + x);
+        c[v] = hn::LoadU(df, in.rendered_conf[v] + row + x);
+        has[v] = hn::Lt(z[v], inf);
+      }
+    }
+    // Rays of the reference pixels in every other view.
+    VF ray[kMaxFusionViews][3];
+    for (int l = 0; l < n; ++l) {
+      if (l == r) continue;
+      const float* a = in.to_view[l].a;
+      ray[l][0] = hn::MulAdd(xs, hn::Set(df, a[0]), hn::Set(df, a[1] * yf + a[2]));
+      ray[l][1] = hn::MulAdd(xs, hn::Set(df, a[3]), hn::Set(df, a[4] * yf + a[5]));
+      ray[l][2] = hn::MulAdd(xs, hn::Set(df, a[6]), hn::Set(df, a[7] * yf + a[8]));
+    }
+
+    // Steps 3 and 4: every candidate in full; the first strictly better one wins.
+    VF best_conf = hn::Set(df, -std::numeric_limits<float>::infinity());
+    VF best_weighted = zero, best_support = hn::Set(df, 1.0f);  // depth = weighted / support, once
+    for (int j = 0; j < n; ++j) {
+      const VF zj = hn::IfThenElse(has[j], z[j], hn::Set(df, 1.0f));  // finite in unused lanes
+      const VF e = epsAt(df, zj, lim);
+      const VF minus_e = hn::Neg(e);
+      VF support = zero, weighted = zero, conflict = zero;
+      for (int i = 0; i < n; ++i) {
+        const VF diff = hn::Sub(z[i], zj);
+        const MF supports = hn::Lt(hn::Abs(diff), e);  // false for a missing i (diff = +inf)
+        support = hn::Add(support, hn::IfThenElseZero(supports, c[i]));
+        weighted = hn::Add(weighted, hn::IfThenElseZero(supports, hn::Mul(c[i], z[i])));
+        conflict = hn::Add(conflict, hn::IfThenElseZero(hn::Lt(diff, minus_e), c[i]));  // occlusion
+      }
+      for (int l = 0; l < n; ++l) {
+        if (l == j) continue;
+        if (l == r) {
+          const MF violates = hn::And(has[r], hn::Lt(zj, hn::Sub(z[r], e)));
+          conflict = hn::Add(conflict, hn::IfThenElseZero(violates, c[r]));
+          continue;
+        }
+        const Projected p = project(df, di, zj, ray[l][0], ray[l][1], ray[l][2], in.to_view[l], in.width, in.height,
+                                    in.step[l]);
+        const VF zl = hn::GatherIndex(df, in.depth[l], p.index);
+        const VF cl = hn::GatherIndex(df, in.conf[l], p.index);
+        const MF violates = hn::And(hn::And(p.inside, validPixels(df, zl, cl, lim)),
+                                    hn::Lt(p.depth, hn::Sub(zl, epsAt(df, p.depth, lim))));
+        conflict = hn::Add(conflict, hn::IfThenElseZero(violates, cl));
+      }
+      const VF fused = hn::Sub(support, conflict);
+      const MF better = hn::And(has[j], hn::Gt(fused, best_conf));
+      best_conf = hn::IfThenElse(better, fused, best_conf);
+      best_weighted = hn::IfThenElse(better, weighted, best_weighted);
+      best_support = hn::IfThenElse(better, support, best_support);
+    }
+    const MF keep = hn::Ge(best_conf, hn::Set(df, lim.min_fused_confidence));
+    hn::StoreU(hn::IfThenElse(keep, hn::Div(best_weighted, best_support), inf), df, out_depth + x);
+    hn::StoreU(hn::IfThenElseZero(keep, best_conf), df, out_conf + x);
+  }
+}
+
+int FusionLanesImpl() { return static_cast<int>(hn::Lanes(DF())); }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace cenote::pipeline::detail
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace cenote::pipeline::detail {
+
+HWY_EXPORT(ProjectRowImpl);
+HWY_EXPORT(FuseRowImpl);
+HWY_EXPORT(FusionLanesImpl);
+
+void projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y,
+                int width, int target_width, int target_height, int32_t* out_index, float* out_depth) {
+  HWY_DYNAMIC_DISPATCH(ProjectRowImpl)(P, limits, depth, conf, y, width, target_width, target_height, out_index,
+                                       out_depth);
+}
+
+void fuseRow(const FusionRowInput& in, int y, float* out_depth, float* out_conf) {
+  HWY_DYNAMIC_DISPATCH(FuseRowImpl)(in, y, out_depth, out_conf);
+}
+
+int fusionLanes() { return HWY_DYNAMIC_DISPATCH(FusionLanesImpl)(); }
+
+}  // namespace cenote::pipeline::detail
+#endif

@@ -1,0 +1,58 @@
+// fusion_kernels.h: the per-row SIMD kernels of depth_fusion.cpp (Highway, one build per
+// instruction set, chosen at run time). Internal to pipeline/fusion; the rules they implement are
+// documented in depth_fusion.h, and the plain scalar form lives in depth_fusion.cpp (used for
+// images narrower than one vector) and in tests/support/fusion_reference.cpp.
+// Units: metres, pixels. Threads: pure functions of their arguments; each call writes only its
+// own output row.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "pipeline/fusion/fusion_config.h"
+
+namespace cenote::pipeline::detail {
+
+inline constexpr int kMaxFusionViews = FusionConfig::kMaxViews;
+
+// Maps pixel (x, y) of one view with depth Z to another: h = Z * (A [x y 1]^T) + k, pixel
+// (h0 / h2, h1 / h2), depth h2 (K's last row is 0 0 1). A = K_to R_to_from K_from^-1, k = K_to t_to_from.
+struct Projector {
+  float a[9];
+  float k[3];
+};
+
+// Rule 0 and eps(Z) of depth_fusion.h, in float.
+struct FusionLimits {
+  float max_depth_m;     // finite
+  float min_confidence;  // > 0
+  bool relative_eps;
+  float eps;
+  float min_fused_confidence;
+};
+
+// Everything the per-pixel fusion needs, resolved once per call.
+struct FusionRowInput {
+  int num_views = 0, ref = 0, width = 0, height = 0;
+  std::array<const float*, kMaxFusionViews> depth{}, conf{};  // original maps, row 0
+  std::array<size_t, kMaxFusionViews> step{};                  // their row step, in floats
+  std::array<const float*, kMaxFusionViews> rendered_depth{};  // rendered maps (width-contiguous rows); ref: unused
+  std::array<const float*, kMaxFusionViews> rendered_conf{};
+  std::array<Projector, kMaxFusionViews> to_view{};            // reference pixel -> view l; ref: unused
+  FusionLimits limits{};
+};
+
+// Projects row y of a source view into the target image: for each x, out_index[x] = target pixel
+// index (row * target_width + column) or -1 when the pixel is invalid or its point is dropped, and
+// out_depth[x] = its depth in the target camera.
+void projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y,
+                int width, int target_width, int target_height, int32_t* out_index, float* out_depth);
+
+// Steps 2-4 of depth_fusion.h for row y of the reference view; width >= fusionLanes().
+void fuseRow(const FusionRowInput& in, int y, float* out_depth, float* out_conf);
+
+// Vector width in floats of the instruction set chosen at run time.
+int fusionLanes();
+
+}  // namespace cenote::pipeline::detail
