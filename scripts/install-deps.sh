@@ -11,6 +11,8 @@ PACKAGES=(
   libopencv-dev libeigen3-dev libhwy-dev
   # command line, config, logs
   libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev
+  # mapping: volumetric map (OpenVDB, TBB), OctoMap as peer, reference and file format
+  libopenvdb-dev libtbb-dev liboctomap-dev octomap-tools
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # test data scripts
