@@ -36,10 +36,11 @@
 //     otherwise the fused pixel is +inf / 0.
 //
 // Threads: fuseViews() uses OpenMP. Each rendered map is written by one thread only (views are
-// rendered in parallel, one task per view), the fusion step writes each output pixel from one
-// thread; every pixel's arithmetic is the same whatever the thread count, so the result is
-// bit-identical for any number of threads. A FusionScratch must not be shared between concurrent
-// calls.
+// rendered in parallel, one task per view, so rendering uses at most N_f - 1 threads; no thread
+// ever writes another's z-buffer), and the fusion step writes each output row from one thread.
+// Every pixel's arithmetic (Highway SIMD kernels of fusion_kernels.h, one lane per pixel) is the
+// same whatever the thread count, so the result is bit-identical for any number of threads.
+// A FusionScratch must not be shared between concurrent calls.
 #pragma once
 
 #include <cstdint>

@@ -23,6 +23,7 @@ TumTrajectory TumTrajectory::parse(std::istream& in, const std::string& name) {
   int line_number = 0;
   while (std::getline(in, line)) {
     ++line_number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF files
     const std::string where = name + ":" + std::to_string(line_number) + ": ";
     const size_t first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;

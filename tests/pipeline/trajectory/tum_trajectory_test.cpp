@@ -61,6 +61,11 @@ TEST(TumTrajectory, ErrorsNameFileLineAndProblem) {
   EXPECT_THROW(TumTrajectory::read("/nonexistent/traj.txt"), Error);
 }
 
+TEST(TumTrajectory, AcceptsWindowsLineEndingsAndTabs) {
+  const TumTrajectory t = parse("# comment\r\n1.0\t0 0 0 0 0 0 1\r\n2.0 0 0 0 0 0 0 1\r\n");
+  EXPECT_EQ(t.size(), 2u);
+}
+
 TEST(TumTrajectory, NearlyUnitQuaternionIsNormalised) {
   const TumTrajectory t = parse("1.0 0 0 0 0 0 0 1.0004\n");
   const Eigen::Matrix3d R = t.poses()[0].T_world_cam.linear();
