@@ -10,7 +10,7 @@ PACKAGES=(
   # pipeline: images, calibration, SIMD, threads
   libopencv-dev libeigen3-dev libhwy-dev
   # command line, config, logs
-  libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev
+  libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   # mapping: volumetric map (OpenVDB, TBB), OctoMap as peer, reference and file format
   libopenvdb-dev libtbb-dev liboctomap-dev octomap-tools
   # tests and benchmarks

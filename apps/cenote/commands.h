@@ -8,5 +8,7 @@ namespace cenote::apps {
 
 void registerStereoCommand(CLI::App& app);
 void registerFuseCommand(CLI::App& app);
+void registerRunCommand(CLI::App& app);
+void registerCalibrateCommand(CLI::App& app);
 
 }  // namespace cenote::apps

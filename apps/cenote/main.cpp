@@ -11,6 +11,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   cenote::apps::registerStereoCommand(app);
   cenote::apps::registerFuseCommand(app);
+  cenote::apps::registerRunCommand(app);
+  cenote::apps::registerCalibrateCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,56 @@
+// stereo_dataset.h: a recorded stereo sequence on disk, read frame by frame.
+//   EuRoC / ASL layout (SVIn2, OKVIS, Kimera, OpenVINS users): euroc_dataset.h
+//   KITTI odometry layout: kitti_dataset.h
+// A dataset knows its frames' timestamps, its calibration, where its left camera sits in the frame
+// that its default trajectory describes (T_traj_cam), and which trajectory file that is.
+// Units: seconds, metres. Threads: load() is const and may run on any one thread at a time per
+// dataset object (it only reads files).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "pipeline/calibration/stereo_calibration.h"
+#include "pipeline/frame/frames.h"
+#include "pipeline/trajectory/trajectory.h"
+
+namespace cenote::pipeline {
+
+// A trajectory file a dataset ships with, and what it describes.
+struct TrajectorySource {
+  std::string path;
+  TrajectoryFormat format = TrajectoryFormat::kTum;
+  std::string kitti_times;  // KITTI only
+  bool describes_body = false;  // true: poses of the body (IMU); false: of the left camera
+};
+
+class StereoDataset {
+ public:
+  virtual ~StereoDataset() = default;
+
+  virtual size_t size() const = 0;
+  virtual double timestamp(size_t index) const = 0;
+  // Reads frame `index` (raw images, as recorded).
+  // @throws cenote::Error naming the file when an image is missing or unreadable.
+  virtual StereoFrame load(size_t index) const = 0;
+  virtual const StereoCalibration& calibration() const = 0;
+  // Left camera in the body frame (EuRoC: cam0's T_BS; KITTI: the left camera relative to cam0,
+  // the frame of KITTI's poses).
+  virtual Eigen::Isometry3d T_body_cam() const = 0;
+  // The ground-truth / reference trajectory found inside the dataset, if any.
+  virtual std::optional<TrajectorySource> defaultTrajectory() const = 0;
+  virtual std::string describe() const = 0;
+};
+
+enum class DatasetFormat { kAuto, kEuroc, kKitti };
+
+// "auto", "euroc" or "kitti". @throws cenote::Error otherwise.
+DatasetFormat parseDatasetFormat(const std::string& name);
+
+// Opens `path`; kAuto recognises EuRoC by mav0/cam0/data.csv and KITTI by times.txt + calib.txt.
+// @throws cenote::Error naming the path and what was expected when it is neither.
+std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetFormat format = DatasetFormat::kAuto);
+
+}  // namespace cenote::pipeline

@@ -1,0 +1,78 @@
+#include "pipeline/runner/run_config.h"
+
+#include "common/error.h"
+#include "common/yaml_section.h"
+
+namespace cenote::pipeline {
+
+std::vector<ConfigError> RunConfig::validate() const {
+  ConfigErrors errors("run");
+  errors.check(queue_depth >= 1 && queue_depth <= 64, "queue_depth", queue_depth, "must be in [1, 64]");
+  errors.check(pose_max_gap_s > 0.0, "pose_max_gap_s", pose_max_gap_s, "must be > 0");
+  errors.check(keyframe_translation_m >= 0.0, "keyframe_translation_m", keyframe_translation_m, "must be >= 0");
+  errors.check(keyframe_rotation_deg >= 0.0, "keyframe_rotation_deg", keyframe_rotation_deg, "must be >= 0");
+  errors.check(points_voxel_m >= 0.0, "points_voxel_m", points_voxel_m, "must be >= 0 (0 = every point)");
+  errors.check(max_frames >= 0, "max_frames", max_frames, "must be >= 0 (0 = all)");
+  return errors.take();
+}
+
+void RunConfig::read(YamlSection& section) {
+  section.read("queue_depth", queue_depth);
+  section.read("pose_max_gap_s", pose_max_gap_s);
+  std::string frame = toString(pose_frame);
+  section.read("pose_frame", frame);
+  pose_frame = parsePoseFrame(frame);
+  section.read("keyframe_translation_m", keyframe_translation_m);
+  section.read("keyframe_rotation_deg", keyframe_rotation_deg);
+  section.read("fuse", fuse);
+  section.read("write_depth", write_depth);
+  section.read("points_voxel_m", points_voxel_m);
+  section.read("max_frames", max_frames);
+}
+
+const char* toString(PoseFrame frame) {
+  switch (frame) {
+    case PoseFrame::kAuto:
+      return "auto";
+    case PoseFrame::kBody:
+      return "body";
+    case PoseFrame::kCamera:
+      return "camera";
+  }
+  return "?";
+}
+
+PoseFrame parsePoseFrame(const std::string& name) {
+  if (name == "auto") return PoseFrame::kAuto;
+  if (name == "body") return PoseFrame::kBody;
+  if (name == "camera") return PoseFrame::kCamera;
+  throw Error("run.pose_frame = " + name + ": must be auto, body or camera");
+}
+
+std::vector<ConfigError> PipelineConfig::validate() const {
+  std::vector<ConfigError> all = stereo.validate();
+  for (auto& e : fusion.validate()) all.push_back(e);
+  for (auto& e : run.validate()) all.push_back(e);
+  return all;
+}
+
+PipelineConfig PipelineConfig::load(const std::string& path) {
+  PipelineConfig config;
+  const YAML::Node root = loadYamlFile(path);
+  YamlSection top(root, "", path);
+  YamlSection stereo = top.section("stereo");
+  config.stereo.read(stereo);
+  stereo.finish();
+  YamlSection fusion = top.section("fusion");
+  config.fusion.read(fusion);
+  fusion.finish();
+  YamlSection run = top.section("run");
+  config.run.read(run);
+  run.finish();
+  // Sections of other components are read (and checked) by them.
+  for (const char* other : {"map", "server", "sim", "eval"}) top.section(other);
+  top.finish();
+  return config;
+}
+
+}  // namespace cenote::pipeline

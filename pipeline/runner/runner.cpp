@@ -1,0 +1,334 @@
+#include "pipeline/runner/runner.h"
+
+#include <sys/resource.h>
+
+#include <cmath>
+#include <exception>
+#include <filesystem>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <thread>
+
+#include "common/error.h"
+#include "pipeline/calibration/rectifier.h"
+#include "pipeline/fusion/back_projection.h"
+#include "pipeline/fusion/fusion_window.h"
+#include "pipeline/image/image_io.h"
+#include "pipeline/runner/bounded_queue.h"
+#include "pipeline/runner/point_output.h"
+#include "pipeline/stereo/stereo_matcher.h"
+
+namespace cenote::pipeline {
+namespace fs = std::filesystem;
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct RectifiedItem {
+  RectifiedPair pair;
+  Eigen::Isometry3d T_world_cam;  // rectified left camera
+};
+
+struct OutputItem {
+  DepthFrame frame;   // fused (or raw) depth of the reference view
+  PointBatch points;
+};
+
+// First failure of any stage; the others stop when it is set.
+class Failure {
+ public:
+  void set(std::exception_ptr e) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!error_) error_ = e;
+    failed_ = true;
+  }
+  bool failed() const { return failed_; }
+  void rethrow() const {
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  std::mutex mutex_;
+  std::exception_ptr error_;
+  std::atomic<bool> failed_{false};
+};
+
+std::string timestampName(double t_s) { return std::to_string(static_cast<long long>(std::llround(t_s * 1e9))); }
+
+cv::Mat toBgr(const cv::Mat& image) {
+  if (image.channels() == 3) return image;
+  cv::Mat bgr;
+  cv::cvtColor(image, bgr, image.channels() == 4 ? cv::COLOR_BGRA2BGR : cv::COLOR_GRAY2BGR);
+  return bgr;
+}
+
+double rotationDeg(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * 180.0 / M_PI;
+}
+
+// Skips frames that moved less than both thresholds since the last keyframe (none set: none skipped).
+class KeyframeSelector {
+ public:
+  explicit KeyframeSelector(const RunConfig& c) : translation_m_(c.keyframe_translation_m), rotation_deg_(c.keyframe_rotation_deg) {}
+  bool accept(const Eigen::Isometry3d& pose) {
+    if ((translation_m_ <= 0.0 && rotation_deg_ <= 0.0) || !last_) {
+      last_ = pose;
+      return true;
+    }
+    const bool moved = (translation_m_ > 0.0 && (pose.translation() - last_->translation()).norm() >= translation_m_) ||
+                       (rotation_deg_ > 0.0 && rotationDeg(*last_, pose) >= rotation_deg_);
+    if (moved) last_ = pose;
+    return moved;
+  }
+
+ private:
+  double translation_m_, rotation_deg_;
+  std::optional<Eigen::Isometry3d> last_;
+};
+
+}  // namespace
+
+Runner::Runner(PipelineConfig config) : config_(std::move(config)) {
+  throwIfInvalid(config_.validate(), "pipeline configuration");
+}
+
+RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_trajectory, const std::string& out_dir,
+                      const std::atomic<bool>& stop, const PointSink& sink, const ProgressCallback& progress) {
+  const RunConfig& rc = config_.run;
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw Error("cannot create output folder " + out_dir + ": " + ec.message());
+  if (rc.write_depth) fs::create_directories(fs::path(out_dir) / "depth", ec);
+  PointOutput points((fs::path(out_dir) / "points.ply").string(), rc.points_voxel_m);
+
+  const Rectifier rectifier(dataset.calibration());
+  // p_rect = R1 p_raw: the rectified camera is the raw one rotated by R1^T.
+  Eigen::Isometry3d T_raw_rect = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) T_raw_rect.linear()(r, c) = rectifier.R_rect_left()(c, r);
+
+  const size_t total = rc.max_frames > 0 ? std::min<size_t>(dataset.size(), rc.max_frames) : dataset.size();
+  RunReport report;
+  report.frames_in = total;
+  std::atomic<size_t> no_pose{0}, not_keyframe{0}, unreadable{0}, processed{0}, fused{0}, read_done{0};
+  std::atomic<bool> interrupted{false};
+  StageTimer read_timer, stereo_timer, fusion_timer, output_timer;
+  BoundedQueue<RectifiedItem> rectified(rc.queue_depth);
+  BoundedQueue<DepthFrame> depths(rc.queue_depth);
+  BoundedQueue<OutputItem> outputs(rc.queue_depth);
+  Failure failure;
+  auto closeAll = [&] {
+    rectified.close();
+    depths.close();
+    outputs.close();
+  };
+  const auto start = Clock::now();
+
+  std::thread reader([&] {
+    try {
+      KeyframeSelector keyframes(rc);
+      for (size_t i = 0; i < total && !failure.failed(); ++i, ++read_done) {
+        if (stop.load()) {
+          interrupted = true;
+          break;
+        }
+        const auto t0 = Clock::now();
+        const double t = dataset.timestamp(i);
+        const std::optional<Eigen::Isometry3d> pose = camera_trajectory.poseAt(t, rc.pose_max_gap_s);
+        if (!pose) {
+          ++no_pose;
+          continue;
+        }
+        if (!keyframes.accept(*pose)) {
+          ++not_keyframe;
+          continue;
+        }
+        RectifiedItem item;
+        try {
+          item.pair = rectifier.rectify(dataset.load(i));
+        } catch (const Error& e) {
+          ++unreadable;
+          std::fprintf(stderr, "\nwarning: frame %zu (t = %.6f s) skipped: %s\n", i, t, e.what());
+          continue;
+        }
+        item.T_world_cam = *pose * T_raw_rect;
+        read_timer.add(msSince(t0));
+        if (!rectified.push(std::move(item))) break;
+      }
+    } catch (...) {
+      failure.set(std::current_exception());
+      closeAll();
+    }
+    rectified.close();
+  });
+
+  std::thread stereo([&] {
+    try {
+      StereoMatcher matcher(config_.stereo);
+      while (std::optional<RectifiedItem> item = rectified.pop()) {
+        const auto t0 = Clock::now();
+        const StereoGeometry& g = item->pair.geometry;
+        const DisparityMap map = matcher.match(item->pair.left, item->pair.right);
+        DepthFrame frame;
+        frame.t_s = item->pair.t_s;
+        frame.depth = disparityToDepth(map.disparity, g.fx, g.baseline_m);
+        frame.confidence = map.confidence;
+        frame.color = toBgr(item->pair.left);
+        frame.K = g.K();
+        frame.T_world_cam = item->T_world_cam;
+        ++processed;
+        stereo_timer.add(msSince(t0));
+        if (!depths.push(std::move(frame))) break;
+      }
+    } catch (...) {
+      failure.set(std::current_exception());
+      closeAll();
+    }
+    depths.close();
+  });
+
+  std::thread fusion([&] {
+    try {
+      std::optional<FusionWindow> window;
+      if (rc.fuse) window.emplace(config_.fusion);
+      while (std::optional<DepthFrame> frame = depths.pop()) {
+        const auto t0 = Clock::now();
+        OutputItem out;
+        if (window) {
+          const FusedFrame* result = window->push(*frame);
+          if (!result) continue;
+          out.frame = result->frame;
+          out.frame.depth = result->frame.depth.clone();
+          out.frame.confidence = result->frame.confidence.clone();
+          out.frame.color = result->frame.color.clone();
+          out.points = result->points;
+        } else {
+          backProject(*frame, out.points);
+          out.frame = std::move(*frame);
+        }
+        ++fused;
+        fusion_timer.add(msSince(t0));
+        if (!outputs.push(std::move(out))) break;
+      }
+    } catch (...) {
+      failure.set(std::current_exception());
+      closeAll();
+    }
+    outputs.close();
+  });
+
+  // Output on this thread.
+  try {
+    while (std::optional<OutputItem> item = outputs.pop()) {
+      const auto t0 = Clock::now();
+      if (rc.write_depth) {
+        const std::string base = (fs::path(out_dir) / "depth" / timestampName(item->frame.t_s)).string();
+        writePfm(base + ".depth.pfm", item->frame.depth);
+        writePfm(base + ".conf.pfm", item->frame.confidence);
+      }
+      points.append(item->points);
+      if (sink) sink(item->points);
+      output_timer.add(msSince(t0));
+      if (progress) progress(read_done.load(), total);
+    }
+  } catch (...) {
+    failure.set(std::current_exception());
+    closeAll();
+  }
+  reader.join();
+  stereo.join();
+  fusion.join();
+  if (failure.failed()) {
+    try {
+      points.close();  // keep what was written
+    } catch (const Error&) {
+    }
+    failure.rethrow();
+  }
+  points.close();
+  if (progress) progress(read_done.load(), total);
+
+  report.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  report.frames_processed = processed;
+  report.frames_fused = fused;
+  report.skipped_no_pose = no_pose;
+  report.skipped_not_keyframe = not_keyframe;
+  report.skipped_unreadable = unreadable;
+  report.points_written = points.pointsWritten();
+  report.interrupted = interrupted;
+  report.fps = report.wall_s > 0.0 ? static_cast<double>(report.frames_processed) / report.wall_s : 0.0;
+  report.peak_memory_mb = peakMemoryMb();
+  report.stages["read_rectify"] = read_timer.summary();
+  report.stages["stereo"] = stereo_timer.summary();
+  report.stages["fusion"] = fusion_timer.summary();
+  report.stages["output"] = output_timer.summary();
+  return report;
+}
+
+std::string RunReport::toJson() const {
+  nlohmann::ordered_json j;
+  j["frames_in"] = frames_in;
+  j["frames_processed"] = frames_processed;
+  j["frames_fused"] = frames_fused;
+  j["frames_skipped"] = {{"no_pose", skipped_no_pose}, {"not_keyframe", skipped_not_keyframe}, {"unreadable", skipped_unreadable}};
+  j["points_written"] = points_written;
+  j["interrupted"] = interrupted;
+  j["wall_s"] = wall_s;
+  j["fps"] = fps;
+  j["peak_memory_mb"] = peak_memory_mb;
+  nlohmann::ordered_json stage_json = nlohmann::ordered_json::object();
+  for (const auto& [name, s] : stages) {
+    stage_json[name] = {{"median_ms", s.median_ms}, {"p95_ms", s.p95_ms}, {"mean_ms", s.mean_ms}, {"frames", s.frames}};
+  }
+  j["stages"] = stage_json;
+  return j.dump(2) + "\n";
+}
+
+std::string RunReport::toTable() const {
+  std::ostringstream t;
+  t.setf(std::ios::fixed);
+  t.precision(1);
+  t << "frames: " << frames_in << " in, " << frames_processed << " processed, " << frames_fused << " fused; skipped "
+    << skipped_no_pose << " without pose, " << skipped_not_keyframe << " not keyframes, " << skipped_unreadable
+    << " unreadable" << (interrupted ? " (interrupted)" : "") << "\n";
+  t << "stage           median ms    p95 ms   frames\n";
+  for (const char* name : {"read_rectify", "stereo", "fusion", "output"}) {
+    const auto it = stages.find(name);
+    if (it == stages.end()) continue;
+    char line[128];
+    std::snprintf(line, sizeof(line), "%-14s %10.1f %9.1f %8zu\n", name, it->second.median_ms, it->second.p95_ms,
+                  it->second.frames);
+    t << line;
+  }
+  t << "end to end: " << fps << " fps over " << wall_s << " s, peak memory " << peak_memory_mb << " MiB, "
+    << points_written << " points\n";
+  return t.str();
+}
+
+Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
+                            const std::string& trajectory_format, PoseFrame pose_frame) {
+  TrajectorySource source;
+  if (!trajectory_path.empty()) {
+    source.path = trajectory_path;
+    source.format = trajectory_format.empty() ? detectTrajectoryFormat(trajectory_path) : parseTrajectoryFormat(trajectory_format);
+    source.describes_body = source.format == TrajectoryFormat::kEuroc;
+  } else if (const std::optional<TrajectorySource> own = dataset.defaultTrajectory()) {
+    source = *own;
+  } else {
+    throw Error("no trajectory: " + dataset.describe() + " has no ground truth; give one with --trajectory");
+  }
+  if (pose_frame == PoseFrame::kBody) source.describes_body = true;
+  if (pose_frame == PoseFrame::kCamera) source.describes_body = false;
+  const Trajectory trajectory = Trajectory::read(source.path, source.format, source.kitti_times);
+  return source.describes_body ? trajectory.transformedBy(dataset.T_body_cam()) : trajectory;
+}
+
+double peakMemoryMb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+}  // namespace cenote::pipeline

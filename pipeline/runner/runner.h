@@ -1,0 +1,81 @@
+// runner.h: the real-time pipeline over a recorded sequence.
+//
+//   read + rectify ──► stereo ──► fusion ──► output (+ an optional sink, e.g. the map)
+//
+// Each stage runs on its own thread, connected by bounded queues (run.queue_depth frames), so a
+// slow stage applies back-pressure and memory stays constant whatever the sequence length. Frames
+// without a pose (no trajectory samples bracketing them within run.pose_max_gap_s), frames that
+// are not keyframes (when keyframe thresholds are set) and frames whose images cannot be read are
+// skipped and counted, never guessed. Setting `stop` (e.g. from a Ctrl-C handler) ends reading;
+// the frames already read are finished and everything is written.
+//
+// Outputs in the output folder: points.ply (fused coloured points, world frame), and with
+// run.write_depth, depth/<t_ns>.depth.pfm and .conf.pfm of every fused (or raw) frame.
+// Threads: run() blocks; it uses four threads plus OpenMP inside stereo and fusion.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <map>
+#include <string>
+
+#include "common/point_batch.h"
+#include "pipeline/dataset/stereo_dataset.h"
+#include "pipeline/runner/run_config.h"
+#include "pipeline/runner/stage_timer.h"
+#include "pipeline/trajectory/trajectory.h"
+
+namespace cenote::pipeline {
+
+struct RunReport {
+  size_t frames_in = 0;          // frames in the dataset (up to run.max_frames)
+  size_t frames_processed = 0;   // frames that went through stereo
+  size_t frames_fused = 0;       // fused reference frames emitted (or raw frames without fusion)
+  size_t skipped_no_pose = 0;
+  size_t skipped_not_keyframe = 0;
+  size_t skipped_unreadable = 0;
+  size_t points_written = 0;
+  bool interrupted = false;
+  double wall_s = 0.0;
+  double fps = 0.0;              // frames processed per second of wall time
+  double peak_memory_mb = 0.0;   // resident set, high-water mark of the process
+  std::map<std::string, StageSummary> stages;  // read_rectify, stereo, fusion, output
+
+  // JSON object with the keys above ("stages": {name: {median_ms, p95_ms, mean_ms, frames}}).
+  std::string toJson() const;
+  // A table for a person at a terminal.
+  std::string toTable() const;
+};
+
+// Called on the output thread with every batch of fused points (world frame).
+using PointSink = std::function<void(const PointBatch&)>;
+// Called on the output thread after each frame: frames done (processed or skipped) of total.
+using ProgressCallback = std::function<void(size_t done, size_t total)>;
+
+class Runner {
+ public:
+  // @throws cenote::Error listing every invalid setting.
+  explicit Runner(PipelineConfig config);
+
+  // @param camera_trajectory poses of the dataset's left (raw) camera, T_world_cam.
+  // @param out_dir created if absent.
+  // @throws cenote::Error when an output cannot be written (what was written so far stays).
+  RunReport run(const StereoDataset& dataset, const Trajectory& camera_trajectory, const std::string& out_dir,
+                const std::atomic<bool>& stop, const PointSink& sink = {}, const ProgressCallback& progress = {});
+
+  const PipelineConfig& config() const { return config_; }
+
+ private:
+  PipelineConfig config_;
+};
+
+// The trajectory of the dataset's left camera: `trajectory_path` (format detected from the file
+// unless given) or the dataset's own; body poses are composed with the dataset's T_body_cam.
+// @throws cenote::Error when there is no trajectory at all or it cannot be read.
+Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
+                            const std::string& trajectory_format, PoseFrame pose_frame);
+
+// Peak resident memory of this process in MiB (getrusage).
+double peakMemoryMb();
+
+}  // namespace cenote::pipeline
