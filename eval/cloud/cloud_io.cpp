@@ -1,0 +1,454 @@
+#include "eval/cloud/cloud_io.h"
+
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include "common/error.h"
+
+namespace cenote::eval {
+namespace {
+
+namespace fs = std::filesystem;
+
+enum class ScalarType { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
+
+int sizeOf(ScalarType t) {
+  switch (t) {
+    case ScalarType::kInt8:
+    case ScalarType::kUint8: return 1;
+    case ScalarType::kInt16:
+    case ScalarType::kUint16: return 2;
+    case ScalarType::kInt32:
+    case ScalarType::kUint32:
+    case ScalarType::kFloat32: return 4;
+    case ScalarType::kFloat64: return 8;
+  }
+  return 0;
+}
+
+bool parsePlyType(const std::string& name, ScalarType& t) {
+  static const std::pair<const char*, ScalarType> kNames[] = {
+      {"char", ScalarType::kInt8},     {"int8", ScalarType::kInt8},       {"uchar", ScalarType::kUint8},
+      {"uint8", ScalarType::kUint8},   {"short", ScalarType::kInt16},     {"int16", ScalarType::kInt16},
+      {"ushort", ScalarType::kUint16}, {"uint16", ScalarType::kUint16},   {"int", ScalarType::kInt32},
+      {"int32", ScalarType::kInt32},   {"uint", ScalarType::kUint32},     {"uint32", ScalarType::kUint32},
+      {"float", ScalarType::kFloat32}, {"float32", ScalarType::kFloat32}, {"double", ScalarType::kFloat64},
+      {"float64", ScalarType::kFloat64}};
+  for (const auto& [n, type] : kNames) {
+    if (name == n) {
+      t = type;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Decodes one binary scalar; `swap` for big-endian data on this little-endian host.
+double decode(const char* src, ScalarType t, bool swap) {
+  char bytes[8];
+  const int n = sizeOf(t);
+  std::memcpy(bytes, src, n);
+  if (swap) std::reverse(bytes, bytes + n);
+  switch (t) {
+    case ScalarType::kInt8: { int8_t v; std::memcpy(&v, bytes, 1); return v; }
+    case ScalarType::kUint8: { uint8_t v; std::memcpy(&v, bytes, 1); return v; }
+    case ScalarType::kInt16: { int16_t v; std::memcpy(&v, bytes, 2); return v; }
+    case ScalarType::kUint16: { uint16_t v; std::memcpy(&v, bytes, 2); return v; }
+    case ScalarType::kInt32: { int32_t v; std::memcpy(&v, bytes, 4); return v; }
+    case ScalarType::kUint32: { uint32_t v; std::memcpy(&v, bytes, 4); return v; }
+    case ScalarType::kFloat32: { float v; std::memcpy(&v, bytes, 4); return v; }
+    case ScalarType::kFloat64: { double v; std::memcpy(&v, bytes, 8); return v; }
+  }
+  return 0.0;
+}
+
+std::string readAll(std::ifstream& in) {
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+std::ifstream openOrThrow(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw Error("cannot read " + path + ": " + (fs::exists(path) ? "not readable" : "no such file"));
+  }
+  return in;
+}
+
+// Whitespace-separated number tokens of an ASCII body.
+class TokenReader {
+ public:
+  TokenReader(const std::string& text, size_t pos) : text_(text), pos_(pos) {}
+  bool next(double& value) {
+    while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
+    if (pos_ >= text_.size()) return false;
+    size_t end = pos_;
+    while (end < text_.size() && !std::isspace(static_cast<unsigned char>(text_[end]))) ++end;
+    const std::string token = text_.substr(pos_, end - pos_);
+    char* stop = nullptr;
+    value = std::strtod(token.c_str(), &stop);
+    if (stop == token.c_str() || *stop != '\0') {
+      bad_ = token;
+      return false;
+    }
+    pos_ = end;
+    return true;
+  }
+  const std::string& bad() const { return bad_; }
+
+ private:
+  const std::string& text_;
+  size_t pos_;
+  std::string bad_;
+};
+
+void addPoint(Cloud& cloud, double x, double y, double z) {
+  if (std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) {
+    cloud.points.emplace_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+  } else {
+    ++cloud.non_finite_dropped;
+  }
+}
+
+struct PlyProperty {
+  std::string name;
+  ScalarType type = ScalarType::kFloat32;
+  bool is_list = false;
+  ScalarType count_type = ScalarType::kUint8;
+};
+
+struct PlyElement {
+  std::string name;
+  long count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+}  // namespace
+
+Cloud readPlyCloud(const std::string& path) {
+  std::ifstream in = openOrThrow(path);
+  const std::string data = readAll(in);
+  size_t pos = 0;
+  auto nextLine = [&](std::string& line) {
+    if (pos >= data.size()) return false;
+    size_t end = data.find('\n', pos);
+    if (end == std::string::npos) end = data.size();
+    line = data.substr(pos, end - pos);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    pos = end + 1;
+    return true;
+  };
+  std::string line;
+  if (!nextLine(line) || line != "ply") throw Error(path + ": not a PLY file (first line is not 'ply')");
+  std::string format;
+  std::vector<PlyElement> elements;
+  bool ended = false;
+  int line_number = 1;
+  while (nextLine(line)) {
+    ++line_number;
+    const std::string where = path + ": PLY header line " + std::to_string(line_number) + " '" + line + "': ";
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "end_header") {
+      ended = true;
+      break;
+    }
+    if (keyword == "format") {
+      words >> format;
+      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian") {
+        throw Error(where + "unknown format (ascii, binary_little_endian or binary_big_endian)");
+      }
+    } else if (keyword == "element") {
+      PlyElement e;
+      words >> e.name >> e.count;
+      if (!words || e.count < 0) throw Error(where + "expected 'element NAME COUNT'");
+      elements.push_back(e);
+    } else if (keyword == "property") {
+      if (elements.empty()) throw Error(where + "property before any element");
+      PlyProperty p;
+      std::string type;
+      words >> type;
+      if (type == "list") {
+        std::string count_type, item_type;
+        words >> count_type >> item_type >> p.name;
+        p.is_list = true;
+        if (!parsePlyType(count_type, p.count_type) || !parsePlyType(item_type, p.type)) {
+          throw Error(where + "unknown list type");
+        }
+      } else {
+        words >> p.name;
+        if (!parsePlyType(type, p.type)) throw Error(where + "unknown property type '" + type + "'");
+      }
+      if (!words) throw Error(where + "expected 'property TYPE NAME'");
+      elements.back().properties.push_back(p);
+    } else if (keyword != "comment" && keyword != "obj_info" && !keyword.empty()) {
+      throw Error(where + "unexpected header line");
+    }
+  }
+  if (!ended) throw Error(path + ": PLY header has no end_header");
+  if (format.empty()) throw Error(path + ": PLY header has no format line");
+  const auto vertex = std::find_if(elements.begin(), elements.end(), [](const PlyElement& e) { return e.name == "vertex"; });
+  if (vertex == elements.end()) throw Error(path + ": PLY file has no 'vertex' element");
+  int ix = -1, iy = -1, iz = -1;
+  for (size_t i = 0; i < vertex->properties.size(); ++i) {
+    const std::string& n = vertex->properties[i].name;
+    if (vertex->properties[i].is_list) continue;
+    if (n == "x") ix = static_cast<int>(i);
+    if (n == "y") iy = static_cast<int>(i);
+    if (n == "z") iz = static_cast<int>(i);
+  }
+  if (ix < 0 || iy < 0 || iz < 0) throw Error(path + ": PLY vertex element has no x, y and z properties");
+
+  Cloud cloud;
+  cloud.points.reserve(static_cast<size_t>(vertex->count));
+  std::vector<double> values;
+  if (format == "ascii") {
+    TokenReader tokens(data, pos);
+    for (auto e = elements.begin(); e != elements.end(); ++e) {
+      const bool is_vertex = e == vertex;
+      for (long i = 0; i < e->count; ++i) {
+        values.assign(e->properties.size(), 0.0);
+        for (size_t k = 0; k < e->properties.size(); ++k) {
+          double v = 0.0;
+          auto fail = [&] {
+            throw Error(path + ": PLY " + e->name + " " + std::to_string(i) + " of " + std::to_string(e->count) +
+                        (tokens.bad().empty() ? ": file ends early (truncated)" : ": '" + tokens.bad() + "' is not a number"));
+          };
+          if (!tokens.next(v)) fail();
+          if (e->properties[k].is_list) {
+            for (long j = 0; j < static_cast<long>(v); ++j) {
+              double item = 0.0;
+              if (!tokens.next(item)) fail();
+            }
+          } else {
+            values[k] = v;
+          }
+        }
+        if (is_vertex) addPoint(cloud, values[ix], values[iy], values[iz]);
+      }
+      if (is_vertex) break;
+    }
+    return cloud;
+  }
+  const bool swap = format == "binary_big_endian";
+  for (auto e = elements.begin(); e != elements.end(); ++e) {
+    const bool is_vertex = e == vertex;
+    bool fixed = true;
+    size_t record = 0;
+    std::vector<size_t> offsets;
+    for (const PlyProperty& p : e->properties) {
+      offsets.push_back(record);
+      fixed = fixed && !p.is_list;
+      record += sizeOf(p.type);
+    }
+    const auto truncated = [&](long i) {
+      return Error(path + ": PLY file is truncated in element '" + e->name + "' (" + std::to_string(i) + " of " +
+                   std::to_string(e->count) + " read)");
+    };
+    if (fixed) {
+      const size_t bytes = record * static_cast<size_t>(e->count);
+      if (data.size() - std::min(pos, data.size()) < bytes) {
+        throw truncated(static_cast<long>((data.size() - std::min(pos, data.size())) / std::max<size_t>(record, 1)));
+      }
+      if (is_vertex) {
+        const char* base = data.data() + pos;
+        for (long i = 0; i < e->count; ++i) {
+          const char* r = base + record * i;
+          addPoint(cloud, decode(r + offsets[ix], e->properties[ix].type, swap),
+                   decode(r + offsets[iy], e->properties[iy].type, swap),
+                   decode(r + offsets[iz], e->properties[iz].type, swap));
+        }
+        break;
+      }
+      pos += bytes;
+      continue;
+    }
+    for (long i = 0; i < e->count; ++i) {
+      values.assign(e->properties.size(), 0.0);
+      for (size_t k = 0; k < e->properties.size(); ++k) {
+        const PlyProperty& p = e->properties[k];
+        if (p.is_list) {
+          if (pos + sizeOf(p.count_type) > data.size()) throw truncated(i);
+          const auto n = static_cast<long>(decode(data.data() + pos, p.count_type, swap));
+          pos += sizeOf(p.count_type);
+          if (n < 0) throw Error(path + ": PLY list of negative length in element '" + e->name + "'");
+          pos += static_cast<size_t>(n) * sizeOf(p.type);
+          if (pos > data.size()) throw truncated(i);
+        } else {
+          if (pos + sizeOf(p.type) > data.size()) throw truncated(i);
+          values[k] = decode(data.data() + pos, p.type, swap);
+          pos += sizeOf(p.type);
+        }
+      }
+      if (is_vertex) addPoint(cloud, values[ix], values[iy], values[iz]);
+    }
+    if (is_vertex) break;
+  }
+  return cloud;
+}
+
+Cloud readPcdCloud(const std::string& path) {
+  std::ifstream in = openOrThrow(path);
+  const std::string data = readAll(in);
+  size_t pos = 0;
+  std::vector<std::string> fields;
+  std::vector<int> sizes, counts;
+  std::vector<char> types;
+  long points = -1, width = -1, height = 1;
+  std::string kind;
+  int line_number = 0;
+  while (pos < data.size()) {
+    size_t end = data.find('\n', pos);
+    if (end == std::string::npos) end = data.size();
+    std::string line = data.substr(pos, end - pos);
+    pos = end + 1;
+    ++line_number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    const std::string where = path + ": PCD header line " + std::to_string(line_number) + " '" + line + "': ";
+    std::istringstream words(line);
+    std::string key;
+    words >> key;
+    std::string word;
+    if (key == "FIELDS") {
+      while (words >> word) fields.push_back(word);
+    } else if (key == "SIZE" || key == "COUNT") {
+      std::vector<int>& out = key == "SIZE" ? sizes : counts;
+      while (words >> word) {
+        int v = 0;
+        const auto [p, ec] = std::from_chars(word.data(), word.data() + word.size(), v);
+        if (ec != std::errc() || p != word.data() + word.size() || v <= 0) throw Error(where + "'" + word + "' is not a positive integer");
+        out.push_back(v);
+      }
+    } else if (key == "TYPE") {
+      while (words >> word) {
+        if (word != "F" && word != "I" && word != "U") throw Error(where + "type '" + word + "' is not F, I or U");
+        types.push_back(word[0]);
+      }
+    } else if (key == "WIDTH") {
+      words >> width;
+    } else if (key == "HEIGHT") {
+      words >> height;
+    } else if (key == "POINTS") {
+      words >> points;
+      if (!words || points < 0) throw Error(where + "POINTS must be a number >= 0");
+    } else if (key == "DATA") {
+      words >> kind;
+      break;
+    } else if (key != "VERSION" && key != "VIEWPOINT") {
+      throw Error(where + "unknown PCD header keyword");
+    }
+  }
+  if (kind.empty()) {
+    throw Error(path + ": not a PCD file (no DATA line in the header)");
+  }
+  if (kind == "binary_compressed") {
+    throw Error(path + ": PCD DATA binary_compressed is not supported; convert it to binary or ascii (pcl_convert_pcd_ascii_binary)");
+  }
+  if (kind != "ascii" && kind != "binary") throw Error(path + ": PCD DATA '" + kind + "' is not ascii or binary");
+  if (counts.empty()) counts.assign(fields.size(), 1);
+  if (sizes.size() != fields.size() || types.size() != fields.size() || counts.size() != fields.size()) {
+    throw Error(path + ": PCD header FIELDS, SIZE, TYPE and COUNT have different lengths");
+  }
+  if (points < 0) points = width * height;
+  if (points < 0) throw Error(path + ": PCD header has no POINTS (nor WIDTH and HEIGHT)");
+  int ix = -1, iy = -1, iz = -1;
+  std::vector<size_t> offsets;
+  size_t record = 0, columns = 0;
+  std::vector<size_t> column;
+  for (size_t i = 0; i < fields.size(); ++i) {
+    if (fields[i] == "x") ix = static_cast<int>(i);
+    if (fields[i] == "y") iy = static_cast<int>(i);
+    if (fields[i] == "z") iz = static_cast<int>(i);
+    if (types[i] == 'F' && sizes[i] != 4 && sizes[i] != 8) throw Error(path + ": PCD field '" + fields[i] + "' of type F must have SIZE 4 or 8");
+    if (types[i] != 'F' && sizes[i] != 1 && sizes[i] != 2 && sizes[i] != 4) {
+      throw Error(path + ": PCD field '" + fields[i] + "' of type " + types[i] + " must have SIZE 1, 2 or 4");
+    }
+    offsets.push_back(record);
+    column.push_back(columns);
+    record += static_cast<size_t>(sizes[i]) * counts[i];
+    columns += counts[i];
+  }
+  if (ix < 0 || iy < 0 || iz < 0) throw Error(path + ": PCD FIELDS has no x, y and z");
+  const auto typeOf = [&](int i) {
+    if (types[i] == 'F') return sizes[i] == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
+    const bool u = types[i] == 'U';
+    return sizes[i] == 1 ? (u ? ScalarType::kUint8 : ScalarType::kInt8)
+                         : sizes[i] == 2 ? (u ? ScalarType::kUint16 : ScalarType::kInt16)
+                                         : (u ? ScalarType::kUint32 : ScalarType::kInt32);
+  };
+  Cloud cloud;
+  cloud.points.reserve(static_cast<size_t>(points));
+  if (kind == "binary") {
+    const size_t bytes = record * static_cast<size_t>(points);
+    if (pos > data.size() || data.size() - pos < bytes) {
+      throw Error(path + ": PCD binary data is truncated (" + std::to_string(points) + " points of " +
+                  std::to_string(record) + " bytes announced)");
+    }
+    for (long i = 0; i < points; ++i) {
+      const char* r = data.data() + pos + record * i;
+      addPoint(cloud, decode(r + offsets[ix], typeOf(ix), false), decode(r + offsets[iy], typeOf(iy), false),
+               decode(r + offsets[iz], typeOf(iz), false));
+    }
+    return cloud;
+  }
+  // ASCII: one point per line; PCL writes "nan" for missing values, which strtod reads.
+  long read = 0;
+  std::vector<double> values(columns);
+  while (read < points && pos < data.size()) {
+    size_t end = data.find('\n', pos);
+    if (end == std::string::npos) end = data.size();
+    const std::string line = data.substr(pos, end - pos);
+    pos = end + 1;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    TokenReader tokens(line, 0);
+    for (size_t c = 0; c < columns; ++c) {
+      if (!tokens.next(values[c])) {
+        throw Error(path + ": PCD point " + std::to_string(read) + ": " +
+                    (tokens.bad().empty() ? "expected " + std::to_string(columns) + " values"
+                                          : "'" + tokens.bad() + "' is not a number"));
+      }
+    }
+    addPoint(cloud, values[column[ix]], values[column[iy]], values[column[iz]]);
+    ++read;
+  }
+  if (read < points) {
+    throw Error(path + ": PCD file is truncated (" + std::to_string(points) + " points announced, " +
+                std::to_string(read) + " found)");
+  }
+  return cloud;
+}
+
+Cloud readCloud(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".ply") return readPlyCloud(path);
+  if (ext == ".pcd") return readPcdCloud(path);
+  std::ifstream in = openOrThrow(path);
+  std::string first;
+  std::getline(in, first);
+  if (first.rfind("ply", 0) == 0) return readPlyCloud(path);
+  if (first.rfind("#", 0) == 0 || first.rfind("VERSION", 0) == 0 || first.rfind("FIELDS", 0) == 0) return readPcdCloud(path);
+  throw Error(path + ": neither a PLY nor a PCD file (by extension and first line)");
+}
+
+void writePcdAscii(const std::string& path, const std::vector<Eigen::Vector3f>& points) {
+  std::ofstream out(path, std::ios::trunc);
+  if (!out) throw Error("cannot write " + path + ": cannot create file");
+  out << "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+      << "COUNT 1 1 1\nWIDTH " << points.size() << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << points.size()
+      << "\nDATA ascii\n";
+  out.precision(9);
+  for (const Eigen::Vector3f& p : points) out << p.x() << " " << p.y() << " " << p.z() << "\n";
+  out.close();
+  if (!out) throw Error("cannot write " + path + ": write failed (disk full?)");
+}
+
+}  // namespace cenote::eval
