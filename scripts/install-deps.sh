@@ -13,6 +13,8 @@ PACKAGES=(
   libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   # mapping: volumetric map (OpenVDB, TBB), OctoMap as peer, reference and file format
   libopenvdb-dev libtbb-dev liboctomap-dev octomap-tools
+  # eval: nearest neighbours for cloud metrics; plots (cenote eval --plot runs /usr/bin/python3)
+  libnanoflann-dev python3-matplotlib
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # test data scripts
