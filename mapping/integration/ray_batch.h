@@ -1,0 +1,70 @@
+// ray_batch.h: the voxel updates of one PointBatch, computed without reading or locking the map.
+//
+// Scheme (the one OctoMap's insertPointCloud uses with discretize on, made fast):
+//  1. Endpoints are deduplicated per voxel; each ray then goes from the origin to the centre of its
+//     endpoint voxel. 270k stereo points at 5 cm fall into a few tens of thousands of voxels, so
+//     this removes most of the work and changes nothing a 5 cm map can represent. The colour of an
+//     endpoint voxel is the mean of its points' colours.
+//  2. Rays are marched with a 3D DDA (voxel_ray.h) into per-block bit masks (8x8x8 voxels = 512
+//     bits per mask, a free mask and a hit mask), found through an open-addressing table with a
+//     one-block cache: consecutive voxels of a ray are almost always in the same block. The masks
+//     are the per-batch visited set, so each voxel is updated at most once per batch; a voxel both
+//     crossed and hit is a hit (occupied wins: free &= ~hit).
+//  3. Threads march disjoint sets of rays into private tables that are OR-ed together: the
+//     result is a set union, the same for any thread count.
+// Range rule: an endpoint centre farther than max_range_m carves free space to max_range_m along
+// its ray and records no hit (OctoMap's rule). Rays end at the endpoint voxel, exclusive.
+// Units: metres, world frame. Threads: one RayBatch per writer; build() uses OpenMP internally.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "common/point_batch.h"
+#include "mapping/detail/block_table.h"
+#include "mapping/voxel_types.h"
+
+namespace cenote::mapping {
+
+struct BlockMasks {
+  std::array<uint64_t, 8> free{};  // bit offsetInBlock(ijk): crossed by a ray (not hit)
+  std::array<uint64_t, 8> hit{};   // bit offsetInBlock(ijk): holds an endpoint within range
+};
+
+struct EndpointColor {
+  VoxelIndex ijk;
+  std::array<uint8_t, 3> rgb;
+};
+
+class RayBatch {
+ public:
+  // Computes the updates of `batch`. The batch must already be checked (finite, in range).
+  void build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads);
+
+  // Touched blocks in ascending packed order, with their masks.
+  size_t numBlocks() const { return blocks_.size(); }
+  const BlockIndex& block(size_t i) const { return blocks_[i]; }
+  const BlockMasks& masks(size_t i) const { return masks_[order_[i]]; }
+  // Mean colour of every hit voxel (empty for an uncoloured batch).
+  const std::vector<EndpointColor>& colors() const { return colors_; }
+  size_t numRays() const { return num_rays_; }
+
+ private:
+  struct Marker {
+    detail::BlockTable table;
+    std::vector<BlockMasks> masks;
+  };
+
+  detail::BlockTable endpoint_table_;
+  std::vector<VoxelIndex> endpoints_;
+  std::vector<std::array<uint32_t, 4>> color_sums_;  // r, g, b, count per endpoint
+  std::vector<Marker> markers_;                       // one per thread
+  std::vector<BlockIndex> blocks_;
+  std::vector<uint32_t> order_;
+  std::vector<BlockMasks> masks_;
+  std::vector<EndpointColor> colors_;
+  size_t num_rays_ = 0;
+};
+
+}  // namespace cenote::mapping

@@ -1,0 +1,368 @@
+#include "mapping/occupancy_map.h"
+
+#include <openvdb/tools/Prune.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "common/error.h"
+#include "mapping/detail/map_impl.h"
+#include "mapping/integration/voxel_ray.h"
+
+namespace cenote::mapping {
+
+namespace detail {
+
+struct AccessorImpl {
+  explicit AccessorImpl(const MapImpl& impl) : log_odds(impl.log_odds->constTree()), color(impl.color->constTree()) {}
+  openvdb::tree::ValueAccessor<const openvdb::FloatTree, false> log_odds;
+  openvdb::tree::ValueAccessor<const openvdb::Int32Tree, false> color;
+};
+
+openvdb::math::Transform::Ptr makeTransform(double voxel_size_m) {
+  auto transform = openvdb::math::Transform::createLinearTransform(voxel_size_m);
+  transform->postTranslate(openvdb::Vec3d(0.5 * voxel_size_m));
+  return transform;
+}
+
+}  // namespace detail
+
+namespace {
+
+using openvdb::Coord;
+
+// Points and origins beyond this many voxels from 0 are rejected (packed block keys, int32 safety).
+constexpr double kMaxVoxelIndex = 1 << 23;
+
+Coord coordOf(const VoxelIndex& ijk) { return Coord(ijk.x(), ijk.y(), ijk.z()); }
+
+std::string formatPoint(const Eigen::Vector3d& p) {
+  std::ostringstream text;
+  text << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return text.str();
+}
+
+void initialiseOpenVdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+// Adds a changed block to a delta under construction (blocks arrive in any order; sorted later).
+void noteChanged(MapDelta& delta, const BlockIndex& block, const VoxelBox& voxels, double s) {
+  delta.changed_blocks.push_back(block);
+  delta.changed_voxels.extend(voxels);
+}
+
+void finishDelta(MapDelta& delta, double s) {
+  auto less = [](const BlockIndex& a, const BlockIndex& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::sort(delta.changed_blocks.begin(), delta.changed_blocks.end(), less);
+  delta.changed_blocks.erase(std::unique(delta.changed_blocks.begin(), delta.changed_blocks.end()),
+                             delta.changed_blocks.end());
+  if (!delta.changed_voxels.isEmpty()) {
+    delta.changed_m.min_m = delta.changed_voxels.min.cast<double>() * s;
+    delta.changed_m.max_m = (delta.changed_voxels.max.cast<double>().array() + 1.0).matrix() * s;
+  }
+}
+
+}  // namespace
+
+const char* toString(VoxelState state) {
+  switch (state) {
+    case VoxelState::kUnknown: return "unknown";
+    case VoxelState::kFree: return "free";
+    case VoxelState::kOccupied: return "occupied";
+  }
+  return "?";
+}
+
+void MapDelta::merge(const MapDelta& other) {
+  changed_blocks.insert(changed_blocks.end(), other.changed_blocks.begin(), other.changed_blocks.end());
+  changed_voxels.extend(other.changed_voxels);
+  changed_m.extend(other.changed_m);
+  voxels_updated += other.voxels_updated;
+  points_used += other.points_used;
+  auto less = [](const BlockIndex& a, const BlockIndex& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::sort(changed_blocks.begin(), changed_blocks.end(), less);
+  changed_blocks.erase(std::unique(changed_blocks.begin(), changed_blocks.end()), changed_blocks.end());
+}
+
+OccupancyMap::OccupancyMap(const MapConfig& config) : config_(config) {
+  throwIfInvalid(config.validate(), "map configuration");
+  model_ = config.logOddsModel();
+  initialiseOpenVdb();
+  impl_ = std::make_unique<detail::MapImpl>();
+  impl_->log_odds = openvdb::FloatGrid::create(0.0f);
+  impl_->log_odds->setTransform(detail::makeTransform(config.voxel_size_m));
+  impl_->log_odds->setName("log_odds");
+  impl_->log_odds->setGridClass(openvdb::GRID_UNKNOWN);
+  impl_->color = openvdb::Int32Grid::create(0);
+  impl_->color->setTransform(detail::makeTransform(config.voxel_size_m));
+  impl_->color->setName("color");
+}
+
+OccupancyMap::~OccupancyMap() = default;
+
+VoxelIndex OccupancyMap::toIndex(const Eigen::Vector3d& p_world) const { return toVoxel(p_world, voxelSize()); }
+
+Eigen::Vector3d OccupancyMap::toPoint(const VoxelIndex& ijk) const { return voxelCentre(ijk, voxelSize()); }
+
+uint64_t OccupancyMap::version() const { return impl_->version.load(); }
+
+void OccupancyMap::checkBatch(const PointBatch& batch) const {
+  if (batch.empty()) throw Error("map: empty point batch (t = " + std::to_string(batch.t_s) + " s): nothing to integrate");
+  const double limit_m = kMaxVoxelIndex * voxelSize();
+  if (!batch.origin.allFinite() || (batch.origin.array().abs() >= limit_m).any()) {
+    throw Error("map: batch origin " + formatPoint(batch.origin) + " must be finite and within " +
+                std::to_string(limit_m) + " m of 0 (t = " + std::to_string(batch.t_s) + " s)");
+  }
+  if (batch.hasColor() && batch.colors.size() != batch.points.size()) {
+    throw Error("map: batch has " + std::to_string(batch.colors.size()) + " colours for " +
+                std::to_string(batch.points.size()) + " points (must be equal, or no colours)");
+  }
+  const float limit_f = static_cast<float>(limit_m);
+  for (size_t i = 0; i < batch.points.size(); ++i) {
+    const Eigen::Vector3f& p = batch.points[i];
+    if (!p.allFinite() || (p.array().abs() >= limit_f).any()) {
+      throw Error("map: point " + std::to_string(i) + " of the batch is " + formatPoint(p.cast<double>()) +
+                  ": must be finite and within " + std::to_string(limit_m) + " m of 0 (t = " +
+                  std::to_string(batch.t_s) + " s)");
+    }
+  }
+}
+
+MapDelta OccupancyMap::integrate(const PointBatch& batch) {
+  checkBatch(batch);
+  std::lock_guard<std::mutex> writer(impl_->writer_mutex);
+  RayBatch& rays = impl_->scratch;
+  rays.build(batch, voxelSize(), config_.max_range_m, config_.num_threads);
+
+  MapDelta delta;
+  delta.points_used = rays.numRays();
+  const double s = voxelSize();
+  auto& tree = impl_->log_odds->tree();
+  openvdb::tree::ValueAccessor<openvdb::FloatTree, false> acc(tree);
+  const size_t group = static_cast<size_t>(config_.publish_blocks);
+  for (size_t begin = 0; begin < rays.numBlocks(); begin += group) {
+    const size_t end = std::min(rays.numBlocks(), begin + group);
+    std::unique_lock<std::shared_mutex> lock(impl_->grid_mutex);
+    for (size_t b = begin; b < end; ++b) {
+      const BlockIndex& block = rays.block(b);
+      const BlockMasks& masks = rays.masks(b);
+      auto* leaf = acc.touchLeaf(coordOf(block * kBlockSide));
+      bool changed = false;
+      VoxelBox box;
+      for (int w = 0; w < 8; ++w) {
+        uint64_t bits = masks.free[w] | masks.hit[w];
+        while (bits != 0) {
+          const int bit = __builtin_ctzll(bits);
+          bits &= bits - 1;
+          const openvdb::Index offset = static_cast<openvdb::Index>(w * 64 + bit);
+          const bool hit = (masks.hit[w] >> bit) & 1;
+          const bool known = leaf->isValueOn(offset);
+          const float before = known ? leaf->getValue(offset) : 0.0f;
+          const float after = hit ? model_.applyHit(before) : model_.applyMiss(before);
+          ++delta.voxels_updated;
+          if (known && after == before) continue;
+          leaf->setValueOn(offset, after);
+          changed = true;
+          box.extend(voxelOfOffset(block, static_cast<int>(offset)));
+        }
+      }
+      if (changed) noteChanged(delta, block, box, s);
+    }
+  }
+  // Colours of the hit voxels: a running mean per voxel.
+  if (!rays.colors().empty()) {
+    auto& color_tree = impl_->color->tree();
+    openvdb::tree::ValueAccessor<openvdb::Int32Tree, false> color_acc(color_tree);
+    const size_t n = rays.colors().size();
+    for (size_t begin = 0; begin < n; begin += group * 64) {
+      const size_t end = std::min(n, begin + group * 64);
+      std::unique_lock<std::shared_mutex> lock(impl_->grid_mutex);
+      for (size_t i = begin; i < end; ++i) {
+        const EndpointColor& c = rays.colors()[i];
+        const Coord xyz = coordOf(c.ijk);
+        int32_t packed;
+        if (!color_acc.probeValue(xyz, packed)) {
+          color_acc.setValueOn(xyz, detail::packColor(c.rgb, 1));
+          continue;
+        }
+        const int count = detail::colorCount(packed);
+        const auto old = detail::unpackColor(packed);
+        std::array<uint8_t, 3> mean;
+        for (int k = 0; k < 3; ++k) {
+          mean[k] = static_cast<uint8_t>((old[k] * count + c.rgb[k] + (count + 1) / 2) / (count + 1));
+        }
+        color_acc.setValueOn(xyz, detail::packColor(mean, std::min(count + 1, 127)));
+      }
+    }
+  }
+  finishDelta(delta, s);
+  impl_->version.fetch_add(1);
+  return delta;
+}
+
+template <typename Predicate>
+MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere, Predicate&& remove) {
+  std::lock_guard<std::mutex> writer(impl_->writer_mutex);
+  std::unique_lock<std::shared_mutex> lock(impl_->grid_mutex);
+  MapDelta delta;
+  const double s = voxelSize();
+  const openvdb::CoordBBox region(coordOf(candidates.min), coordOf(candidates.max));
+  auto sweep = [&](auto& tree, bool record) {
+    for (auto leaf = tree.beginLeaf(); leaf; ++leaf) {
+      if (!everywhere && !region.hasOverlap(leaf->getNodeBoundingBox())) continue;
+      const Coord origin = leaf->origin();
+      const BlockIndex block(origin.x() >> kBlockShift, origin.y() >> kBlockShift, origin.z() >> kBlockShift);
+      VoxelBox box;
+      for (auto it = leaf->beginValueOn(); it; ++it) {
+        const Coord xyz = it.getCoord();
+        const VoxelIndex ijk(xyz.x(), xyz.y(), xyz.z());
+        if (!everywhere && !candidates.contains(ijk)) continue;
+        if (!remove(voxelCentre(ijk, s))) continue;
+        it.setValueOff();
+        it.setValue(0);
+        box.extend(ijk);
+      }
+      if (record && !box.isEmpty()) {
+        noteChanged(delta, block, box, s);
+        delta.voxels_updated += 0;
+      }
+    }
+    openvdb::tools::pruneInactive(tree);
+  };
+  sweep(impl_->log_odds->tree(), true);
+  sweep(impl_->color->tree(), false);
+  finishDelta(delta, s);
+  impl_->version.fetch_add(1);
+  return delta;
+}
+
+MapDelta OccupancyMap::clearBox(const Aabb& box_m) {
+  if (!box_m.min_m.allFinite() || !box_m.max_m.allFinite() || box_m.isEmpty()) {
+    throw Error("map: clear box " + formatPoint(box_m.min_m) + " - " + formatPoint(box_m.max_m) +
+                " must be finite with min <= max");
+  }
+  VoxelBox candidates;
+  candidates.extend(toIndex(box_m.min_m));
+  candidates.extend(toIndex(box_m.max_m));
+  return removeVoxels(candidates, false, [&](const Eigen::Vector3d& c) { return box_m.contains(c); });
+}
+
+MapDelta OccupancyMap::clearSphere(const Eigen::Vector3d& centre_m, double radius_m) {
+  if (!centre_m.allFinite() || !(radius_m >= 0.0) || !std::isfinite(radius_m)) {
+    throw Error("map: clear sphere at " + formatPoint(centre_m) + " radius " + std::to_string(radius_m) +
+                " m: centre must be finite and radius finite and >= 0");
+  }
+  VoxelBox candidates;
+  candidates.extend(toIndex(centre_m - Eigen::Vector3d::Constant(radius_m)));
+  candidates.extend(toIndex(centre_m + Eigen::Vector3d::Constant(radius_m)));
+  const double r2 = radius_m * radius_m;
+  return removeVoxels(candidates, false, [&](const Eigen::Vector3d& c) { return (c - centre_m).squaredNorm() <= r2; });
+}
+
+MapDelta OccupancyMap::cropToRadius(const Eigen::Vector3d& centre_m, double radius_m) {
+  if (!centre_m.allFinite() || !(radius_m >= 0.0) || !std::isfinite(radius_m)) {
+    throw Error("map: crop at " + formatPoint(centre_m) + " radius " + std::to_string(radius_m) +
+                " m: centre must be finite and radius finite and >= 0");
+  }
+  const double r2 = radius_m * radius_m;
+  return removeVoxels(VoxelBox{}, true, [&](const Eigen::Vector3d& c) { return (c - centre_m).squaredNorm() > r2; });
+}
+
+MapDelta OccupancyMap::reset() {
+  return removeVoxels(VoxelBox{}, true, [](const Eigen::Vector3d&) { return true; });
+}
+
+MapStats OccupancyMap::stats() const {
+  std::shared_lock<std::shared_mutex> lock(impl_->grid_mutex);
+  MapStats out;
+  out.voxel_size_m = voxelSize();
+  const auto& tree = impl_->log_odds->constTree();
+  for (auto it = tree.cbeginValueOn(); it; ++it) {
+    // Tiles never occur (integration writes voxels), but count them right if a loaded file has them.
+    const uint64_t count = it.getVoxelCount();
+    if (model_.isOccupied(*it)) {
+      out.occupied += count;
+    } else {
+      out.free += count;
+    }
+    openvdb::CoordBBox bbox;
+    it.getBoundingBox(bbox);
+    out.bounds.extend(VoxelIndex(bbox.min().x(), bbox.min().y(), bbox.min().z()));
+    out.bounds.extend(VoxelIndex(bbox.max().x(), bbox.max().y(), bbox.max().z()));
+  }
+  if (!out.bounds.isEmpty()) {
+    const Eigen::Vector3d extent = (out.bounds.max - out.bounds.min).cast<double>().array() + 1.0;
+    out.unknown_in_bounds = static_cast<uint64_t>(extent.prod()) - out.occupied - out.free;
+    out.bounds_m.min_m = out.bounds.min.cast<double>() * voxelSize();
+    out.bounds_m.max_m = (out.bounds.max.cast<double>().array() + 1.0).matrix() * voxelSize();
+  }
+  out.memory_bytes = impl_->log_odds->memUsage() + impl_->color->memUsage();
+  return out;
+}
+
+OccupancyMap::ConstAccessor::ConstAccessor(const OccupancyMap& map)
+    : map_(&map), lock_(map.impl_->grid_mutex), impl_(std::make_unique<detail::AccessorImpl>(*map.impl_)) {}
+
+OccupancyMap::ConstAccessor::~ConstAccessor() = default;
+OccupancyMap::ConstAccessor::ConstAccessor(ConstAccessor&&) noexcept = default;
+
+bool OccupancyMap::ConstAccessor::logOdds(const VoxelIndex& ijk, float& l) const {
+  return impl_->log_odds.probeValue(coordOf(ijk), l);
+}
+
+VoxelState OccupancyMap::ConstAccessor::state(const VoxelIndex& ijk) const {
+  float l;
+  if (!impl_->log_odds.probeValue(coordOf(ijk), l)) return VoxelState::kUnknown;
+  return map_->model_.isOccupied(l) ? VoxelState::kOccupied : VoxelState::kFree;
+}
+
+double OccupancyMap::ConstAccessor::probability(const VoxelIndex& ijk) const {
+  float l;
+  if (!impl_->log_odds.probeValue(coordOf(ijk), l)) return 0.5;
+  return mapping::probability(l);
+}
+
+bool OccupancyMap::ConstAccessor::color(const VoxelIndex& ijk, std::array<uint8_t, 3>& rgb) const {
+  int32_t packed;
+  if (!impl_->color.probeValue(coordOf(ijk), packed)) return false;
+  rgb = detail::unpackColor(packed);
+  return true;
+}
+
+std::vector<BlockIndex> OccupancyMap::ConstAccessor::knownBlocks() const {
+  std::vector<BlockIndex> blocks;
+  const auto& tree = map_->impl_->log_odds->constTree();
+  blocks.reserve(tree.leafCount());
+  for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
+    if (leaf->isEmpty()) continue;
+    const Coord o = leaf->origin();
+    blocks.emplace_back(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift);
+  }
+  return blocks;
+}
+
+bool OccupancyMap::ConstAccessor::readBlock(const BlockIndex& block, BlockView& view) const {
+  view.known.fill(0);
+  const auto* leaf = impl_->log_odds.probeConstLeaf(coordOf(block * kBlockSide));
+  if (leaf == nullptr) {
+    // A tile (only from loaded files) covers the whole block with one value.
+    float l;
+    if (!impl_->log_odds.probeValue(coordOf(block * kBlockSide), l)) return false;
+    view.known.fill(~0ull);
+    view.log_odds.fill(l);
+    return true;
+  }
+  const auto& mask = leaf->getValueMask();
+  for (openvdb::Index w = 0; w < 8; ++w) view.known[w] = mask.template getWord<uint64_t>(w);
+  std::copy(leaf->buffer().data(), leaf->buffer().data() + kBlockVoxels, view.log_odds.begin());
+  return !mask.isOff();
+}
+
+}  // namespace cenote::mapping

@@ -1,0 +1,129 @@
+// occupancy_map.h: probabilistic occupancy of the world, log-odds on a sparse voxel grid (OpenVDB),
+// with a colour per occupied voxel.
+// Units: metres (voxel_size_m fixed at construction). Frame: world. Grid convention: voxel_types.h.
+// Unknown is never free: a voxel never observed (or cleared) reports VoxelState::kUnknown.
+//
+// Threads: one writer at a time (integrate / clear / crop / reset / load serialise on a writer
+// mutex), any number of readers, each with its own ConstAccessor, at the same time. No data race:
+//  - integrate() first computes the whole batch's updates into private scratch (RayBatch) without
+//    any lock on the grid; this is most of the work.
+//  - It then publishes them block by block, taking the grid's exclusive lock for at most
+//    MapConfig::publish_blocks blocks at a time (256 blocks: well under a millisecond). Between
+//    two such groups readers get in, so a query never waits for a whole frame's integration.
+//  - A ConstAccessor holds the grid's shared lock for its lifetime.
+// Chosen over copy-on-write snapshots of the tree because it costs no copy per frame, keeps memory
+// at one map, and makes readers wait for at most one short group; the price is that a reader can
+// see a frame half-published (each block is consistent, the frame as a whole is not).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <shared_mutex>
+#include <vector>
+
+#include "common/point_batch.h"
+#include "mapping/log_odds.h"
+#include "mapping/map_config.h"
+#include "mapping/voxel_types.h"
+
+namespace cenote::mapping {
+
+namespace detail {
+struct MapImpl;
+struct AccessorImpl;
+class MapAccess;
+}  // namespace detail
+
+// The 512 voxels of one block, copied out of the map (read with ConstAccessor::readBlock).
+struct BlockView {
+  std::array<uint64_t, 8> known{};      // bit offsetInBlock(ijk): observed
+  std::array<float, kBlockVoxels> log_odds{};  // meaningful where known
+};
+
+struct MapStats {
+  double voxel_size_m = 0.0;
+  uint64_t occupied = 0;
+  uint64_t free = 0;
+  uint64_t unknown_in_bounds = 0;  // never-observed voxels inside the bounding box of known ones
+  VoxelBox bounds;                 // of the known voxels
+  Aabb bounds_m;
+  uint64_t memory_bytes = 0;       // of the grids (OpenVDB memUsage)
+};
+
+class OccupancyMap {
+ public:
+  // @throws Error listing every failed rule of the config.
+  explicit OccupancyMap(const MapConfig& config);
+  ~OccupancyMap();
+  OccupancyMap(const OccupancyMap&) = delete;
+  OccupancyMap& operator=(const OccupancyMap&) = delete;
+
+  const MapConfig& config() const { return config_; }
+  const LogOddsModel& model() const { return model_; }
+  double voxelSize() const { return config_.voxel_size_m; }
+  VoxelIndex toIndex(const Eigen::Vector3d& p_world) const;
+  Eigen::Vector3d toPoint(const VoxelIndex& ijk) const;  // voxel centre
+
+  // Casts a ray from batch.origin to every point: free space along it, a hit at its end; see
+  // integration/ray_batch.h for the exact rules (dedup per voxel, max range, occupied wins).
+  // @return the changed blocks and their bounding box.
+  // @throws Error, leaving the map unchanged, for: an empty batch, a non-finite origin or point,
+  //   colours given for some points only, a point or origin farther than 2^23 voxels from 0.
+  MapDelta integrate(const PointBatch& batch);
+
+  // Forget (make unknown) the voxels whose centre lies in the box / sphere, or outside the sphere.
+  // @throws Error for a non-finite or negative size. @return what changed.
+  MapDelta clearBox(const Aabb& box_m);
+  MapDelta clearSphere(const Eigen::Vector3d& centre_m, double radius_m);
+  MapDelta cropToRadius(const Eigen::Vector3d& centre_m, double radius_m);
+  MapDelta reset();
+
+  MapStats stats() const;
+  // Incremented by every change; lets a reader tell whether the map moved under it.
+  uint64_t version() const;
+
+  // Read access for one thread; holds the map's shared lock while it lives.
+  // @warning hold it for one batch of queries, not across frames: writers wait while any accessor
+  //   lives. Never share one between threads.
+  class ConstAccessor {
+   public:
+    ~ConstAccessor();
+    ConstAccessor(ConstAccessor&&) noexcept;
+    ConstAccessor& operator=(ConstAccessor&&) = delete;
+
+    // Log-odds of a voxel; false (and l untouched) when unknown.
+    bool logOdds(const VoxelIndex& ijk, float& l) const;
+    VoxelState state(const VoxelIndex& ijk) const;
+    // Occupancy probability; 0.5 for unknown (check state() first).
+    double probability(const VoxelIndex& ijk) const;
+    // Mean colour of the points that hit the voxel; false when it has none.
+    bool color(const VoxelIndex& ijk, std::array<uint8_t, 3>& rgb) const;
+    // Every block holding a known voxel, in the grid's order.
+    std::vector<BlockIndex> knownBlocks() const;
+    // Copies one block; false (view all unknown) when the block holds no known voxel.
+    bool readBlock(const BlockIndex& block, BlockView& view) const;
+    const OccupancyMap& map() const { return *map_; }
+
+   private:
+    friend class OccupancyMap;
+    explicit ConstAccessor(const OccupancyMap& map);
+    const OccupancyMap* map_;
+    std::shared_lock<std::shared_mutex> lock_;
+    std::unique_ptr<detail::AccessorImpl> impl_;
+  };
+  ConstAccessor constAccessor() const { return ConstAccessor(*this); }
+
+ private:
+  friend class detail::MapAccess;
+  void checkBatch(const PointBatch& batch) const;
+  template <typename Predicate>
+  MapDelta removeVoxels(const VoxelBox& candidates, bool everywhere, Predicate&& remove);
+
+  MapConfig config_;
+  LogOddsModel model_;
+  std::unique_ptr<detail::MapImpl> impl_;
+};
+
+}  // namespace cenote::mapping

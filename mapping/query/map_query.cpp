@@ -1,0 +1,212 @@
+#include "mapping/query/map_query.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/error.h"
+#include "mapping/integration/voxel_ray.h"
+
+namespace cenote::mapping {
+namespace {
+
+constexpr double kMaxBoxVoxels = 2147483648.0;
+
+void checkSegment(const SegmentQuery& q, size_t i) {
+  if (!q.start_m.allFinite() || !q.end_m.allFinite() || !std::isfinite(q.radius_m) || q.radius_m < 0.0) {
+    throw Error("map query: segment " + std::to_string(i) + " must have finite ends and a finite radius >= 0");
+  }
+}
+
+// Segment: the voxels it passes through, in order.
+CollisionResult walkSegment(const OccupancyMap::ConstAccessor& acc, const SegmentQuery& q, bool stop_at_unknown) {
+  CollisionResult r;
+  const double s = acc.map().voxelSize();
+  const Eigen::Vector3d dir = q.end_m - q.start_m;
+  const double length = dir.norm();
+  auto along = [&](const VoxelIndex& ijk) {
+    if (length == 0.0) return 0.0;
+    return std::clamp((voxelCentre(ijk, s) - q.start_m).dot(dir) / length, 0.0, length);
+  };
+  walkVoxels(q.start_m, q.end_m, s, true, [&](const VoxelIndex& ijk) {
+    const VoxelState state = acc.state(ijk);
+    if (state == VoxelState::kOccupied) {
+      r.hit = true;
+      r.hit_voxel = ijk;
+      r.hit_distance_m = along(ijk);
+      return false;
+    }
+    if (state == VoxelState::kUnknown && !r.crossed_unknown) {
+      r.crossed_unknown = true;
+      r.unknown_distance_m = along(ijk);
+      if (stop_at_unknown) {
+        r.stopped_at_unknown = true;
+        return false;
+      }
+    }
+    return true;
+  });
+  return r;
+}
+
+// Capsule: every voxel whose centre is within radius of the segment, slab by slab along the
+// segment's dominant axis; the first occupied / unknown by projection onto the segment.
+CollisionResult sweepCapsule(const OccupancyMap::ConstAccessor& acc, const SegmentQuery& q, bool stop_at_unknown) {
+  const double s = acc.map().voxelSize();
+  const Eigen::Vector3d a = q.start_m, b = q.end_m, d = b - a;
+  const double len2 = d.squaredNorm();
+  const double length = std::sqrt(len2);
+  const double r = q.radius_m, r2 = r * r;
+  int axis;
+  d.cwiseAbs().maxCoeff(&axis);
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const Eigen::Vector3d lo = a.cwiseMin(b).array() - r, hi = a.cwiseMax(b).array() + r;
+  const VoxelIndex vlo = toVoxel(lo, s), vhi = toVoxel(hi, s);
+  double best_occ = std::numeric_limits<double>::infinity(), best_unk = best_occ;
+  VoxelIndex occ_voxel = VoxelIndex::Zero();
+  for (int i = vlo[axis]; i <= vhi[axis]; ++i) {
+    // Segment parameters whose point lies within r of this slab's centre plane bound the slab's
+    // cross-section.
+    const double x = (i + 0.5) * s;
+    double t0 = 0.0, t1 = 1.0;
+    if (std::fabs(d[axis]) > 1e-12) {
+      const double ta = (x - r - a[axis]) / d[axis], tb = (x + r - a[axis]) / d[axis];
+      t0 = std::max(0.0, std::min(ta, tb));
+      t1 = std::min(1.0, std::max(ta, tb));
+      if (t0 > t1) continue;
+    }
+    const Eigen::Vector3d p0 = a + t0 * d, p1 = a + t1 * d;
+    const int ju0 = static_cast<int>(std::floor((std::min(p0[u], p1[u]) - r) / s));
+    const int ju1 = static_cast<int>(std::floor((std::max(p0[u], p1[u]) + r) / s));
+    const int jv0 = static_cast<int>(std::floor((std::min(p0[v], p1[v]) - r) / s));
+    const int jv1 = static_cast<int>(std::floor((std::max(p0[v], p1[v]) + r) / s));
+    for (int ju = ju0; ju <= ju1; ++ju) {
+      for (int jv = jv0; jv <= jv1; ++jv) {
+        VoxelIndex ijk;
+        ijk[axis] = i;
+        ijk[u] = ju;
+        ijk[v] = jv;
+        const Eigen::Vector3d c = voxelCentre(ijk, s);
+        const double t = len2 > 0.0 ? std::clamp((c - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+        if ((a + t * d - c).squaredNorm() > r2) continue;
+        const double dist = t * length;
+        if (dist >= best_occ && dist >= best_unk) continue;
+        const VoxelState state = acc.state(ijk);
+        if (state == VoxelState::kOccupied && dist < best_occ) {
+          best_occ = dist;
+          occ_voxel = ijk;
+        } else if (state == VoxelState::kUnknown && dist < best_unk) {
+          best_unk = dist;
+        }
+      }
+    }
+  }
+  CollisionResult result;
+  result.crossed_unknown = best_unk < std::numeric_limits<double>::infinity() && best_unk <= best_occ;
+  if (result.crossed_unknown) result.unknown_distance_m = best_unk;
+  result.stopped_at_unknown = stop_at_unknown && result.crossed_unknown;
+  if (best_occ < std::numeric_limits<double>::infinity() && !result.stopped_at_unknown) {
+    result.hit = true;
+    result.hit_distance_m = best_occ;
+    result.hit_voxel = occ_voxel;
+  }
+  return result;
+}
+
+}  // namespace
+
+std::vector<VoxelQuery> queryVoxels(const OccupancyMap& map, const std::vector<Eigen::Vector3d>& points_m) {
+  std::vector<VoxelQuery> out(points_m.size());
+  const auto acc = map.constAccessor();
+  const double limit = 1e9 * map.voxelSize();
+  for (size_t i = 0; i < points_m.size(); ++i) {
+    if (!points_m[i].allFinite() || (points_m[i].array().abs() > limit).any()) continue;
+    float l;
+    if (!acc.logOdds(map.toIndex(points_m[i]), l)) continue;
+    out[i].state = map.model().isOccupied(l) ? VoxelState::kOccupied : VoxelState::kFree;
+    out[i].probability = probability(l);
+  }
+  return out;
+}
+
+std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aabb>& boxes_m) {
+  const double s = map.voxelSize();
+  for (size_t i = 0; i < boxes_m.size(); ++i) {
+    const Aabb& box = boxes_m[i];
+    if (!box.min_m.allFinite() || !box.max_m.allFinite()) {
+      throw Error("map query: box " + std::to_string(i) + " must be finite");
+    }
+    if (!box.isEmpty() && ((box.max_m - box.min_m) / s).array().ceil().prod() > kMaxBoxVoxels) {
+      throw Error("map query: box " + std::to_string(i) + " holds more than 2^31 voxels");
+    }
+  }
+  std::vector<BoxCounts> out(boxes_m.size());
+  const auto acc = map.constAccessor();
+  BlockView view;
+  for (size_t i = 0; i < boxes_m.size(); ++i) {
+    const Aabb& box = boxes_m[i];
+    if (box.isEmpty()) continue;
+    // Voxels whose centre is inside: ceil(min / s - 0.5) .. floor(max / s - 0.5).
+    const VoxelIndex lo = (box.min_m / s).array().unaryExpr([](double x) { return std::ceil(x - 0.5); }).cast<int>();
+    const VoxelIndex hi = (box.max_m / s).array().unaryExpr([](double x) { return std::floor(x - 0.5); }).cast<int>();
+    if ((lo.array() > hi.array()).any()) continue;
+    const uint64_t total = static_cast<uint64_t>(hi.x() - lo.x() + 1) * (hi.y() - lo.y() + 1) * (hi.z() - lo.z() + 1);
+    BoxCounts& c = out[i];
+    const BlockIndex blo = blockOf(lo), bhi = blockOf(hi);
+    for (int bx = blo.x(); bx <= bhi.x(); ++bx) {
+      for (int by = blo.y(); by <= bhi.y(); ++by) {
+        for (int bz = blo.z(); bz <= bhi.z(); ++bz) {
+          const BlockIndex block(bx, by, bz);
+          if (!acc.readBlock(block, view)) continue;
+          for (int w = 0; w < 8; ++w) {
+            uint64_t bits = view.known[w];
+            while (bits != 0) {
+              const int o = w * 64 + __builtin_ctzll(bits);
+              bits &= bits - 1;
+              const VoxelIndex ijk = voxelOfOffset(block, o);
+              if ((ijk.array() < lo.array()).any() || (ijk.array() > hi.array()).any()) continue;
+              if (map.model().isOccupied(view.log_odds[o])) {
+                ++c.occupied;
+              } else {
+                ++c.free;
+              }
+            }
+          }
+        }
+      }
+    }
+    c.unknown = total - c.free - c.occupied;
+  }
+  return out;
+}
+
+std::vector<CollisionResult> checkSegments(const OccupancyMap& map, const std::vector<SegmentQuery>& segments,
+                                           bool stop_at_unknown) {
+  for (size_t i = 0; i < segments.size(); ++i) checkSegment(segments[i], i);
+  std::vector<CollisionResult> out(segments.size());
+  const auto acc = map.constAccessor();
+  for (size_t i = 0; i < segments.size(); ++i) {
+    out[i] = segments[i].radius_m > 0.0 ? sweepCapsule(acc, segments[i], stop_at_unknown)
+                                        : walkSegment(acc, segments[i], stop_at_unknown);
+  }
+  return out;
+}
+
+std::vector<CollisionResult> raycast(const OccupancyMap& map, const std::vector<Ray>& rays, double max_range_m,
+                                     bool stop_at_unknown) {
+  if (!(max_range_m > 0.0) || !std::isfinite(max_range_m)) {
+    throw Error("map raycast: max_range_m = " + std::to_string(max_range_m) + ": must be finite and > 0");
+  }
+  std::vector<SegmentQuery> segments(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const double n = rays[i].direction.norm();
+    if (!rays[i].origin_m.allFinite() || !std::isfinite(n) || n == 0.0) {
+      throw Error("map raycast: ray " + std::to_string(i) + " needs a finite origin and a finite non-zero direction");
+    }
+    segments[i].start_m = rays[i].origin_m;
+    segments[i].end_m = rays[i].origin_m + rays[i].direction * (max_range_m / n);
+  }
+  return checkSegments(map, segments, stop_at_unknown);
+}
+
+}  // namespace cenote::mapping

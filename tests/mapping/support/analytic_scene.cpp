@@ -1,0 +1,121 @@
+#include "tests/mapping/support/analytic_scene.h"
+
+#include <cmath>
+#include <limits>
+
+namespace cenote::mapping::test {
+namespace {
+
+std::optional<double> hitPlane(const Plane& plane, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+  const double denom = plane.normal.dot(d);
+  if (std::fabs(denom) < 1e-12) return std::nullopt;
+  const double t = plane.normal.dot(plane.point - o) / denom;
+  if (t <= 0.0) return std::nullopt;
+  return t;
+}
+
+std::optional<double> hitSphere(const Sphere& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+  const Eigen::Vector3d oc = o - s.centre;
+  const double b = oc.dot(d);
+  const double c = oc.squaredNorm() - s.radius * s.radius;
+  const double disc = b * b - c;
+  if (disc < 0.0) return std::nullopt;
+  const double sq = std::sqrt(disc);
+  if (-b - sq > 0.0) return -b - sq;
+  if (-b + sq > 0.0) return -b + sq;
+  return std::nullopt;
+}
+
+bool inDoor(const Box& box, const Eigen::Vector3d& p) {
+  if (!box.has_door) return false;
+  const double eps = 1e-9;
+  return (p.array() >= box.door_min.array() - eps).all() && (p.array() <= box.door_max.array() + eps).all();
+}
+
+// Nearest crossing of any of the six wall planes that lies on the wall (and not in the door).
+std::optional<double> hitBox(const Box& box, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+  std::optional<double> best;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (std::fabs(d[axis]) < 1e-12) continue;
+    for (double wall : {box.min[axis], box.max[axis]}) {
+      const double t = (wall - o[axis]) / d[axis];
+      if (t <= 1e-9) continue;
+      const Eigen::Vector3d p = o + t * d;
+      bool on = true;
+      for (int k = 0; k < 3; ++k) {
+        if (k != axis && (p[k] < box.min[k] || p[k] > box.max[k])) on = false;
+      }
+      if (!on || inDoor(box, p)) continue;
+      if (!best || t < *best) best = t;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+std::optional<double> Scene::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t) const {
+  std::optional<double> best;
+  auto take = [&](std::optional<double> t) {
+    if (t && *t <= max_t && (!best || *t < *best)) best = t;
+  };
+  for (const auto& p : planes) take(hitPlane(p, o, d));
+  for (const auto& s : spheres) take(hitSphere(s, o, d));
+  for (const auto& b : boxes) take(hitBox(b, o, d));
+  return best;
+}
+
+double Scene::distanceToSurface(const Eigen::Vector3d& p) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& plane : planes) best = std::min(best, std::fabs(plane.normal.dot(p - plane.point)));
+  for (const auto& s : spheres) best = std::min(best, std::fabs((p - s.centre).norm() - s.radius));
+  for (const auto& b : boxes) {
+    // Distance to the box surface (walls), ignoring doors (tests keep away from them).
+    const Eigen::Vector3d q = p.cwiseMax(b.min).cwiseMin(b.max);
+    if ((q - p).squaredNorm() > 0.0) {
+      best = std::min(best, (q - p).norm());
+    } else {
+      const Eigen::Vector3d a = p - b.min;
+      const Eigen::Vector3d c = b.max - p;
+      best = std::min(best, std::min(a.minCoeff(), c.minCoeff()));
+    }
+  }
+  return best;
+}
+
+PointBatch renderBatch(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_world_cam,
+                       double max_depth_m, double noise_m, uint32_t seed) {
+  PointBatch batch;
+  batch.origin = T_world_cam.translation();
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, noise_m > 0.0 ? noise_m : 1.0);
+  batch.points.reserve(static_cast<size_t>(camera.width) * camera.height);
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      const Eigen::Vector3d d_cam((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+      const Eigen::Vector3d d = (T_world_cam.linear() * d_cam).normalized();
+      const auto t = scene.intersect(batch.origin, d, max_depth_m);
+      if (!t) continue;
+      const double range = *t + (noise_m > 0.0 ? noise(rng) : 0.0);
+      batch.points.push_back((batch.origin + range * d).cast<float>());
+      batch.colors.push_back({static_cast<uint8_t>(u % 256), static_cast<uint8_t>(v % 256), 128});
+    }
+  }
+  return batch;
+}
+
+Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - position).normalized();
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  if (std::fabs(z.dot(up)) > 0.99) up = Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d x = z.cross(up).normalized();  // image x to the right, image y down
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear().col(0) = x;
+  T.linear().col(1) = y;
+  T.linear().col(2) = z;
+  T.translation() = position;
+  return T;
+}
+
+}  // namespace cenote::mapping::test

@@ -1,0 +1,64 @@
+// analytic_scene.h: exact depth of analytic scenes (planes, spheres, boxes) seen by a pinhole
+// camera, turned into the PointBatch the map integrates. Used by the mapping tests and
+// bench/map_bench.cpp. Units: metres, world frame; T_world_cam maps camera to world points, the
+// camera looks along its +z axis, x right, y down.
+// Threads: plain values and pure functions.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include "common/point_batch.h"
+
+namespace cenote::mapping::test {
+
+struct Plane {
+  Eigen::Vector3d point;
+  Eigen::Vector3d normal;  // unit
+};
+struct Sphere {
+  Eigen::Vector3d centre;
+  double radius;
+};
+// Axis-aligned box; `inside` true makes its walls visible from within (a room), optionally with
+// one rectangular opening in a wall (doorway: the axis-aligned rectangle door_min..door_max on the
+// wall plane, where no wall is).
+struct Box {
+  Eigen::Vector3d min;
+  Eigen::Vector3d max;
+  bool has_door = false;
+  Eigen::Vector3d door_min = Eigen::Vector3d::Zero();
+  Eigen::Vector3d door_max = Eigen::Vector3d::Zero();
+};
+
+struct Scene {
+  std::vector<Plane> planes;
+  std::vector<Sphere> spheres;
+  std::vector<Box> boxes;
+  // Distance along a unit ray to the first surface, if any within max_t.
+  std::optional<double> intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_t) const;
+  // Distance from a point to the nearest surface.
+  double distanceToSurface(const Eigen::Vector3d& p) const;
+};
+
+struct PinholeCamera {
+  int width = 160;
+  int height = 120;
+  double fx = 120.0;
+  double fy = 120.0;
+  double cx = 79.5;
+  double cy = 59.5;
+};
+
+// One point per pixel whose ray hits a surface within max_depth_m (others give none: a hole).
+// Colours encode the pixel (r = u % 256, g = v % 256, b = 128). noise_m adds Gaussian noise along
+// the ray (0: exact).
+PointBatch renderBatch(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_world_cam,
+                       double max_depth_m, double noise_m = 0.0, uint32_t seed = 1);
+
+// A camera at `position` looking at `target` (world up: +z unless looking along it).
+Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
+
+}  // namespace cenote::mapping::test
