@@ -1,0 +1,349 @@
+#include "mapping/io/map_io.h"
+
+#include <octomap/ColorOcTree.h>
+#include <octomap/OcTree.h>
+#include <openvdb/io/File.h>
+#include <openvdb/tools/VolumeToMesh.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "common/error.h"
+#include "mapping/detail/map_impl.h"
+
+namespace cenote::mapping {
+namespace {
+
+using openvdb::Coord;
+
+std::string extensionOf(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+// Writes through `write(temp_path)`, then renames over `path`.
+template <typename Write>
+void writeAtomically(const std::string& path, Write&& write) {
+  const std::string temp = path + ".tmp." + std::to_string(::getpid());
+  try {
+    write(temp);
+  } catch (const Error&) {
+    std::remove(temp.c_str());
+    throw;
+  } catch (const std::exception& e) {
+    std::remove(temp.c_str());
+    throw Error("cannot write " + path + ": " + e.what());
+  }
+  std::error_code ec;
+  std::filesystem::rename(temp, path, ec);
+  if (ec) {
+    std::remove(temp.c_str());
+    throw Error("cannot write " + path + ": " + ec.message());
+  }
+}
+
+void checkStream(const std::ostream& out, const std::string& path) {
+  if (!out) throw Error("cannot write " + path + ": " + std::strerror(errno));
+}
+
+// Known voxels with their log-odds, under the map's shared lock.
+template <typename Visit>
+void forEachKnown(const OccupancyMap& map, Visit&& visit) {
+  const auto acc = map.constAccessor();
+  BlockView view;
+  for (const BlockIndex& block : acc.knownBlocks()) {
+    if (!acc.readBlock(block, view)) continue;
+    for (int w = 0; w < 8; ++w) {
+      uint64_t bits = view.known[w];
+      while (bits != 0) {
+        const int o = w * 64 + __builtin_ctzll(bits);
+        bits &= bits - 1;
+        visit(voxelOfOffset(block, o), view.log_odds[o], acc);
+      }
+    }
+  }
+}
+
+octomap::OcTreeKey keyOf(const VoxelIndex& ijk) {
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(ijk.x() + 32768), static_cast<octomap::key_type>(ijk.y() + 32768),
+                            static_cast<octomap::key_type>(ijk.z() + 32768));
+}
+
+void checkOctomapRange(const VoxelIndex& ijk) {
+  if ((ijk.array() < -32768).any() || (ijk.array() > 32767).any()) {
+    throw Error("map: voxel (" + std::to_string(ijk.x()) + ", " + std::to_string(ijk.y()) + ", " +
+                std::to_string(ijk.z()) + ") lies outside OctoMap's 2^16 voxels per axis");
+  }
+}
+
+template <typename Tree>
+void setSensorModel(Tree& tree, const MapConfig& c) {
+  tree.setProbHit(c.prob_hit);
+  tree.setProbMiss(c.prob_miss);
+  tree.setClampingThresMin(c.clamp_min);
+  tree.setClampingThresMax(c.clamp_max);
+  tree.setOccupancyThres(c.occupied_threshold);
+}
+
+void saveOctomap(const OccupancyMap& map, const std::string& path, bool full) {
+  writeAtomically(path, [&](const std::string& temp) {
+    if (full) {
+      octomap::ColorOcTree tree(map.voxelSize());
+      setSensorModel(tree, map.config());
+      forEachKnown(map, [&](const VoxelIndex& ijk, float l, const OccupancyMap::ConstAccessor& acc) {
+        checkOctomapRange(ijk);
+        auto* node = tree.setNodeValue(keyOf(ijk), l, true);
+        std::array<uint8_t, 3> rgb;
+        if (acc.color(ijk, rgb)) node->setColor(rgb[0], rgb[1], rgb[2]);
+      });
+      tree.updateInnerOccupancy();
+      if (!tree.write(temp)) throw Error("cannot write " + path);
+    } else {
+      octomap::OcTree tree(map.voxelSize());
+      setSensorModel(tree, map.config());
+      forEachKnown(map, [&](const VoxelIndex& ijk, float l, const OccupancyMap::ConstAccessor&) {
+        checkOctomapRange(ijk);
+        tree.setNodeValue(keyOf(ijk), l, true);
+      });
+      tree.updateInnerOccupancy();
+      if (!tree.writeBinary(temp)) throw Error("cannot write " + path);
+    }
+  });
+}
+
+void saveVdb(const OccupancyMap& map, const std::string& path, const std::string& frame_id) {
+  const detail::MapImpl& impl = detail::MapAccess::of(map);
+  openvdb::GridPtrVec grids;
+  {
+    std::shared_lock<std::shared_mutex> lock(impl.grid_mutex);
+    grids.push_back(impl.log_odds->deepCopy());
+    grids.push_back(impl.color->deepCopy());
+  }
+  const MapConfig& c = map.config();
+  openvdb::MetaMap meta;
+  meta.insertMeta("cenote:voxel_size_m", openvdb::DoubleMetadata(c.voxel_size_m));
+  meta.insertMeta("cenote:prob_hit", openvdb::DoubleMetadata(c.prob_hit));
+  meta.insertMeta("cenote:prob_miss", openvdb::DoubleMetadata(c.prob_miss));
+  meta.insertMeta("cenote:clamp_min", openvdb::DoubleMetadata(c.clamp_min));
+  meta.insertMeta("cenote:clamp_max", openvdb::DoubleMetadata(c.clamp_max));
+  meta.insertMeta("cenote:occupied_threshold", openvdb::DoubleMetadata(c.occupied_threshold));
+  meta.insertMeta("cenote:max_range_m", openvdb::DoubleMetadata(c.max_range_m));
+  meta.insertMeta("cenote:frame_id", openvdb::StringMetadata(frame_id));
+  writeAtomically(path, [&](const std::string& temp) {
+    openvdb::io::File file(temp);
+    file.write(grids, meta);
+    file.close();
+  });
+}
+
+double metaDouble(const openvdb::MetaMap& meta, const std::string& key, const std::string& path) {
+  auto value = meta.getMetadata<openvdb::DoubleMetadata>(key);
+  if (!value) throw Error(path + ": not a cenote map (no " + key + " metadata)");
+  return value->value();
+}
+
+std::unique_ptr<OccupancyMap> loadVdb(const std::string& path, const MapConfig& defaults) {
+  openvdb::io::File file(path);
+  try {
+    file.open();
+  } catch (const openvdb::Exception& e) {
+    throw Error("cannot read " + path + ": " + e.what());
+  }
+  const openvdb::MetaMap::Ptr meta = file.getMetadata();
+  MapConfig c = defaults;
+  c.voxel_size_m = metaDouble(*meta, "cenote:voxel_size_m", path);
+  c.prob_hit = metaDouble(*meta, "cenote:prob_hit", path);
+  c.prob_miss = metaDouble(*meta, "cenote:prob_miss", path);
+  c.clamp_min = metaDouble(*meta, "cenote:clamp_min", path);
+  c.clamp_max = metaDouble(*meta, "cenote:clamp_max", path);
+  c.occupied_threshold = metaDouble(*meta, "cenote:occupied_threshold", path);
+  c.max_range_m = metaDouble(*meta, "cenote:max_range_m", path);
+  auto log_odds = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("log_odds"));
+  auto color = openvdb::gridPtrCast<openvdb::Int32Grid>(file.readGrid("color"));
+  file.close();
+  if (!log_odds || !color) throw Error(path + ": grids log_odds (float) and color (int32) expected");
+  auto map = std::make_unique<OccupancyMap>(c);
+  detail::MapImpl& impl = detail::MapAccess::of(*map);
+  std::unique_lock<std::shared_mutex> lock(impl.grid_mutex);
+  impl.log_odds = log_odds;
+  impl.color = color;
+  return map;
+}
+
+template <typename Tree>
+std::unique_ptr<OccupancyMap> fromOctree(const Tree& tree, const MapConfig& defaults) {
+  MapConfig c = defaults;
+  c.voxel_size_m = tree.getResolution();
+  auto map = std::make_unique<OccupancyMap>(c);
+  detail::MapImpl& impl = detail::MapAccess::of(*map);
+  std::unique_lock<std::shared_mutex> lock(impl.grid_mutex);
+  auto acc = impl.log_odds->getAccessor();
+  auto color_acc = impl.color->getAccessor();
+  const double s = c.voxel_size_m;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    const double size = it.getSize();
+    const int n = static_cast<int>(std::lround(size / s));
+    const octomap::point3d centre = it.getCoordinate();
+    const VoxelIndex first(static_cast<int>(std::floor((centre.x() - size / 2 + s / 2) / s)),
+                           static_cast<int>(std::floor((centre.y() - size / 2 + s / 2) / s)),
+                           static_cast<int>(std::floor((centre.z() - size / 2 + s / 2) / s)));
+    const float l = it->getLogOdds();
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        for (int k = 0; k < n; ++k) {
+          const Coord xyz(first.x() + i, first.y() + j, first.z() + k);
+          acc.setValueOn(xyz, l);
+          if constexpr (std::is_same_v<Tree, octomap::ColorOcTree>) {
+            const auto col = it->getColor();
+            if (tree.isNodeOccupied(*it)) color_acc.setValueOn(xyz, detail::packColor({col.r, col.g, col.b}, 1));
+          }
+        }
+      }
+    }
+  }
+  return map;
+}
+
+std::unique_ptr<OccupancyMap> loadOctomap(const std::string& path, const MapConfig& defaults, bool binary) {
+  if (!std::filesystem::exists(path)) throw Error("cannot read " + path + ": no such file");
+  if (binary) {
+    octomap::OcTree tree(0.1);
+    if (!tree.readBinary(path)) throw Error("cannot read " + path + ": not an OctoMap binary tree (.bt)");
+    return fromOctree(tree, defaults);
+  }
+  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(path));
+  if (!tree) throw Error("cannot read " + path + ": not an OctoMap tree file (.ot)");
+  if (auto* color = dynamic_cast<octomap::ColorOcTree*>(tree.get())) return fromOctree(*color, defaults);
+  if (auto* plain = dynamic_cast<octomap::OcTree*>(tree.get())) return fromOctree(*plain, defaults);
+  throw Error(path + ": holds an OctoMap " + tree->getTreeType() + ", expected OcTree or ColorOcTree");
+}
+
+struct PlyVertex {
+  float x, y, z;
+  uint8_t r, g, b;
+};
+
+void writePly(const std::string& path, const std::vector<PlyVertex>& vertices,
+              const std::vector<std::array<uint32_t, 3>>& triangles) {
+  writeAtomically(path, [&](const std::string& temp) {
+    std::ofstream out(temp, std::ios::binary);
+    checkStream(out, path);
+    out << "ply\nformat binary_little_endian 1.0\ncomment cenote occupancy map\n"
+        << "element vertex " << vertices.size()
+        << "\nproperty float x\nproperty float y\nproperty float z\n"
+           "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    if (!triangles.empty()) out << "element face " << triangles.size() << "\nproperty list uchar int vertex_indices\n";
+    out << "end_header\n";
+    for (const PlyVertex& v : vertices) {
+      out.write(reinterpret_cast<const char*>(&v.x), 12);
+      out.write(reinterpret_cast<const char*>(&v.r), 3);
+    }
+    for (const auto& t : triangles) {
+      const uint8_t three = 3;
+      out.write(reinterpret_cast<const char*>(&three), 1);
+      out.write(reinterpret_cast<const char*>(t.data()), 12);
+    }
+    out.flush();
+    checkStream(out, path);
+  });
+}
+
+}  // namespace
+
+MapFormat mapFormatOf(const std::string& path) {
+  const std::string ext = extensionOf(path);
+  if (ext == ".vdb") return MapFormat::kVdb;
+  if (ext == ".bt") return MapFormat::kBt;
+  if (ext == ".ot") return MapFormat::kOt;
+  throw Error("map file " + path + ": extension must be .vdb, .bt or .ot");
+}
+
+void saveMap(const OccupancyMap& map, const std::string& path, const std::string& frame_id) {
+  switch (mapFormatOf(path)) {
+    case MapFormat::kVdb: return saveVdb(map, path, frame_id);
+    case MapFormat::kBt: return saveOctomap(map, path, false);
+    case MapFormat::kOt: return saveOctomap(map, path, true);
+  }
+}
+
+std::unique_ptr<OccupancyMap> loadMap(const std::string& path, const MapConfig& defaults) {
+  const MapFormat format = mapFormatOf(path);
+  if (!std::filesystem::exists(path)) throw Error("cannot read " + path + ": no such file");
+  openvdb::initialize();
+  switch (format) {
+    case MapFormat::kVdb: return loadVdb(path, defaults);
+    case MapFormat::kBt: return loadOctomap(path, defaults, true);
+    case MapFormat::kOt: return loadOctomap(path, defaults, false);
+  }
+  return nullptr;
+}
+
+size_t exportOccupiedPointsPly(const OccupancyMap& map, const std::string& path) {
+  std::vector<PlyVertex> vertices;
+  forEachKnown(map, [&](const VoxelIndex& ijk, float l, const OccupancyMap::ConstAccessor& acc) {
+    if (!map.model().isOccupied(l)) return;
+    const Eigen::Vector3d c = map.toPoint(ijk);
+    std::array<uint8_t, 3> rgb{200, 200, 200};
+    acc.color(ijk, rgb);
+    vertices.push_back({static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z()), rgb[0], rgb[1], rgb[2]});
+  });
+  writePly(path, vertices, {});
+  return vertices.size();
+}
+
+MeshStats exportMeshPly(const OccupancyMap& map, const std::string& path) {
+  auto occupancy = openvdb::FloatGrid::create(0.0f);
+  occupancy->setTransform(detail::makeTransform(map.voxelSize()));
+  {
+    auto acc = occupancy->getAccessor();
+    forEachKnown(map, [&](const VoxelIndex& ijk, float l, const OccupancyMap::ConstAccessor&) {
+      if (map.model().isOccupied(l)) acc.setValueOn(Coord(ijk.x(), ijk.y(), ijk.z()), 1.0f);
+    });
+  }
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec4I> quads;
+  openvdb::tools::volumeToMesh(*occupancy, points, triangles, quads, 0.5, 0.0);
+  std::vector<PlyVertex> vertices(points.size());
+  {
+    const auto acc = map.constAccessor();
+    const double s = map.voxelSize();
+    for (size_t i = 0; i < points.size(); ++i) {
+      const Eigen::Vector3d p(points[i].x(), points[i].y(), points[i].z());
+      // Colour of the nearest coloured voxel in the 3x3x3 around the vertex.
+      const VoxelIndex base = map.toIndex(p);
+      std::array<uint8_t, 3> best{200, 200, 200};
+      double best_d2 = 1e30;
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const VoxelIndex ijk = base + VoxelIndex(dx, dy, dz);
+            std::array<uint8_t, 3> rgb;
+            if (!acc.color(ijk, rgb)) continue;
+            const double d2 = (map.toPoint(ijk) - p).squaredNorm();
+            if (d2 < best_d2) {
+              best_d2 = d2;
+              best = rgb;
+            }
+          }
+      (void)s;
+      vertices[i] = {points[i].x(), points[i].y(), points[i].z(), best[0], best[1], best[2]};
+    }
+  }
+  std::vector<std::array<uint32_t, 3>> faces;
+  faces.reserve(triangles.size() + 2 * quads.size());
+  for (const auto& t : triangles) faces.push_back({t[0], t[1], t[2]});
+  for (const auto& q : quads) {
+    faces.push_back({q[0], q[1], q[2]});
+    faces.push_back({q[0], q[2], q[3]});
+  }
+  writePly(path, vertices, faces);
+  return {vertices.size(), faces.size()};
+}
+
+}  // namespace cenote::mapping

@@ -1,0 +1,44 @@
+// map_io.h: saving, loading and exporting occupancy maps.
+//  .vdb  OpenVDB file: grids "log_odds" (active = known) and "color" (packed RGB), file metadata
+//        cenote:voxel_size_m, cenote:prob_hit, cenote:prob_miss, cenote:clamp_min, cenote:clamp_max,
+//        cenote:occupied_threshold, cenote:max_range_m, cenote:frame_id. Loads back exactly.
+//  .bt   OctoMap binary OcTree (read by octovis, octomap_server): maximum-likelihood states only, so a
+//        round trip keeps every state but moves probabilities to the clamping bounds.
+//  .ot   OctoMap full ColorOcTree: log-odds and colours (octovis shows the colours).
+//  mesh  PLY triangle mesh of the occupied voxels' outer surface (OpenVDB volumeToMesh on a 0/1
+//        occupancy grid at iso 0.5), vertex colours from the nearest coloured occupied voxel.
+//  points PLY of occupied voxel centres with their colours.
+// Every write goes to a temporary file beside the target that is renamed over it at the end: a crash
+// never leaves a half-written map. Units: metres, world frame.
+// Threads: saving and exporting read the map through a ConstAccessor-like shared lock (integration
+// waits); loading builds a new map.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "mapping/occupancy_map.h"
+
+namespace cenote::mapping {
+
+enum class MapFormat { kVdb, kBt, kOt };
+
+// From the file extension (.vdb, .bt, .ot). @throws Error for anything else.
+MapFormat mapFormatOf(const std::string& path);
+
+// @throws Error when the file cannot be written (the message names the path and the reason).
+void saveMap(const OccupancyMap& map, const std::string& path, const std::string& frame_id = "world");
+
+// Loads .vdb, .bt or .ot. The sensor model comes from the file (.vdb) or from `defaults` (OctoMap
+// files keep only the resolution). @throws Error for a missing, unreadable or foreign file.
+std::unique_ptr<OccupancyMap> loadMap(const std::string& path, const MapConfig& defaults = MapConfig{});
+
+struct MeshStats {
+  size_t vertices = 0;
+  size_t triangles = 0;
+};
+MeshStats exportMeshPly(const OccupancyMap& map, const std::string& path);
+// @return the number of points written.
+size_t exportOccupiedPointsPly(const OccupancyMap& map, const std::string& path);
+
+}  // namespace cenote::mapping

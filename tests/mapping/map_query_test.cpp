@@ -1,0 +1,97 @@
+#include "mapping/query/map_query.h"
+
+#include <gtest/gtest.h>
+
+#include "common/error.h"
+
+namespace cenote::mapping {
+namespace {
+
+// A 0.1 m map: free corridor x in [0, 2) along y = z = 0.05, a wall voxel at x = 1.05, and one
+// more ray along y = 0.35 ending at x = 2.05.
+std::unique_ptr<OccupancyMap> corridor() {
+  MapConfig c;
+  c.voxel_size_m = 0.1;
+  auto map = std::make_unique<OccupancyMap>(c);
+  PointBatch b;
+  b.origin = Eigen::Vector3d(0.05, 0.05, 0.05);
+  b.points = {Eigen::Vector3f(1.05f, 0.05f, 0.05f)};
+  map->integrate(b);
+  PointBatch c2;
+  c2.origin = Eigen::Vector3d(0.05, 0.35, 0.05);
+  c2.points = {Eigen::Vector3f(2.05f, 0.35f, 0.05f)};
+  map->integrate(c2);
+  return map;
+}
+
+TEST(MapQuery, VoxelStatesAndProbabilitiesInOneBatch) {
+  const auto map = corridor();
+  const auto r = queryVoxels(*map, {Eigen::Vector3d(0.5, 0.05, 0.05), Eigen::Vector3d(1.05, 0.05, 0.05),
+                                    Eigen::Vector3d(5, 5, 5), Eigen::Vector3d(std::nan(""), 0, 0)});
+  ASSERT_EQ(r.size(), 4u);
+  EXPECT_EQ(r[0].state, VoxelState::kFree);
+  EXPECT_NEAR(r[0].probability, 0.4, 1e-6);
+  EXPECT_EQ(r[1].state, VoxelState::kOccupied);
+  EXPECT_EQ(r[2].state, VoxelState::kUnknown);
+  EXPECT_EQ(r[3].state, VoxelState::kUnknown);
+}
+
+TEST(MapQuery, BoxCountsVoxelsByCentre) {
+  const auto map = corridor();
+  Aabb box;
+  box.min_m = Eigen::Vector3d(0.0, 0.0, 0.0);
+  box.max_m = Eigen::Vector3d(1.2, 0.1, 0.1);  // voxels x 0..11 along y = z = 0
+  const auto counts = queryBoxes(*map, {box, Aabb{}});
+  EXPECT_EQ(counts[0].free, 10u);
+  EXPECT_EQ(counts[0].occupied, 1u);
+  EXPECT_EQ(counts[0].unknown, 1u);
+  EXPECT_TRUE(counts[0].anyOccupied());
+  EXPECT_EQ(counts[1].total(), 0u);
+}
+
+TEST(MapQuery, SegmentFindsFirstOccupiedAndStopsAtUnknown) {
+  const auto map = corridor();
+  SegmentQuery into_wall{Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3d(1.9, 0.05, 0.05), 0.0};
+  SegmentQuery clear{Eigen::Vector3d(0.05, 0.35, 0.05), Eigen::Vector3d(1.9, 0.35, 0.05), 0.0};
+  SegmentQuery into_unknown{Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3d(0.05, 0.05, 1.0), 0.0};
+  const auto r = checkSegments(*map, {into_wall, clear, into_unknown}, true);
+  EXPECT_TRUE(r[0].hit);
+  EXPECT_EQ(r[0].hit_voxel, VoxelIndex(10, 0, 0));
+  EXPECT_NEAR(r[0].hit_distance_m, 1.0, 1e-9);
+  EXPECT_TRUE(r[1].isClear());
+  EXPECT_FALSE(r[1].crossed_unknown);
+  EXPECT_TRUE(r[2].stopped_at_unknown);
+  EXPECT_NEAR(r[2].unknown_distance_m, 0.1, 1e-9);
+  const auto go_on = checkSegments(*map, {into_unknown}, false);
+  EXPECT_TRUE(go_on[0].crossed_unknown);
+  EXPECT_FALSE(go_on[0].stopped_at_unknown);
+  EXPECT_FALSE(go_on[0].hit);
+}
+
+TEST(MapQuery, CapsuleHitsWallBesideItsAxis) {
+  const auto map = corridor();
+  // Along y = 0.25, between the two corridors: the wall voxel at (1.05, 0.05) is 0.2 m away.
+  SegmentQuery thin{Eigen::Vector3d(0.05, 0.25, 0.05), Eigen::Vector3d(1.9, 0.25, 0.05), 0.15};
+  SegmentQuery wide{Eigen::Vector3d(0.05, 0.25, 0.05), Eigen::Vector3d(1.9, 0.25, 0.05), 0.25};
+  const auto r = checkSegments(*map, {thin, wide}, false);
+  EXPECT_FALSE(r[0].hit);
+  EXPECT_TRUE(r[1].hit);
+  EXPECT_EQ(r[1].hit_voxel, VoxelIndex(10, 0, 0));
+  EXPECT_TRUE(r[1].crossed_unknown);  // y = 0.15 and 0.25 were never observed
+  const auto stop = checkSegments(*map, {wide}, true);
+  EXPECT_TRUE(stop[0].stopped_at_unknown);
+  EXPECT_FALSE(stop[0].hit);
+}
+
+TEST(MapQuery, RaycastWithinRange) {
+  const auto map = corridor();
+  const auto r = raycast(*map, {Ray{Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3d(3, 0, 0)}}, 0.5, false);
+  EXPECT_FALSE(r[0].hit);
+  const auto far = raycast(*map, {Ray{Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3d(3, 0, 0)}}, 5.0, false);
+  EXPECT_TRUE(far[0].hit);
+  EXPECT_THROW(raycast(*map, {Ray{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}}, 1.0, false), Error);
+  EXPECT_THROW(checkSegments(*map, {SegmentQuery{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), -1.0}}, false), Error);
+}
+
+}  // namespace
+}  // namespace cenote::mapping
