@@ -204,6 +204,10 @@ void fuseViews(std::span<const DepthFrame* const> views, const FusionConfig& con
   const DepthFrame& ref = *views[r];
   checkFusionInput(ref, {});
   const cv::Size size = ref.depth.size();
+  if (static_cast<int64_t>(size.width) * size.height >= std::numeric_limits<int32_t>::max()) {
+    throw Error(describe(ref) + ": image of " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                " pixels is too large (pixel indices are 32-bit)");
+  }
   for (const DepthFrame* view : views) checkFusionInput(*view, size);
 
   FusionRowInput s;
