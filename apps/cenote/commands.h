@@ -10,5 +10,6 @@ void registerStereoCommand(CLI::App& app);
 void registerFuseCommand(CLI::App& app);
 void registerRunCommand(CLI::App& app);
 void registerCalibrateCommand(CLI::App& app);
+void registerEvalCommand(CLI::App& app);
 
 }  // namespace cenote::apps

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   cenote::apps::registerFuseCommand(app);
   cenote::apps::registerRunCommand(app);
   cenote::apps::registerCalibrateCommand(app);
+  cenote::apps::registerEvalCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
