@@ -392,7 +392,7 @@ HWY_INLINE int selectWinner(const SgmParams& p, const StripBuffers& b, int x, ui
   const int N = b.lanes, D = p.num_disparities, Dp = b.padded;
   // Disparities k with a right pixel: k <= x - min_d.
   const int valid = std::min(D, x - p.min_disparity + 1);
-  if (valid <= 0) {
+  if (valid <= 0 || (p.invalidate_truncated && valid < D)) {
     *disparity = std::numeric_limits<float>::infinity();
     *confidence = 0.0f;
     return -1;

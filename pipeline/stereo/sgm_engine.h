@@ -35,6 +35,7 @@ struct SgmParams {
   bool subpixel = true;
   bool pkrn_exclude_neighbours = true;
   bool lr_check = false;
+  bool invalidate_truncated = false;
   int lr_max_diff = 1;
   float min_confidence = 0.0f;
 };

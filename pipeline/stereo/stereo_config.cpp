@@ -96,6 +96,7 @@ void StereoConfig::read(YamlSection& section) {
   section.read("pkrn_exclude_neighbours", pkrn_exclude_neighbours);
   section.read("min_confidence", min_confidence);
   section.read("lr_check", lr_check);
+  section.read("invalidate_truncated", invalidate_truncated);
   section.read("lr_max_diff_px", lr_max_diff_px);
   section.read("num_strips", num_strips);
   section.read("strip_overlap_px", strip_overlap_px);

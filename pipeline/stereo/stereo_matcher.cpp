@@ -59,6 +59,7 @@ StereoMatcher::StereoMatcher(const StereoConfig& config) : config_(config), impl
   p.subpixel = config_.subpixel;
   p.pkrn_exclude_neighbours = config_.pkrn_exclude_neighbours;
   p.lr_check = config_.lr_check;
+  p.invalidate_truncated = config_.invalidate_truncated;
   p.lr_max_diff = config_.lr_max_diff_px;
   p.min_confidence = static_cast<float>(config_.min_confidence);
 }

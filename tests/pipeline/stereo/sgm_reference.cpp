@@ -138,7 +138,7 @@ pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const St
       disparity = inf;
       confidence = 0.0f;
       const int valid = std::min(D, x - c.min_disparity_px + 1);
-      if (valid <= 0) continue;
+      if (valid <= 0 || (c.invalidate_truncated && valid < D)) continue;
       int winner = 0;
       for (int k = 1; k < valid; ++k) {
         if (sums.at(x, y, k) < sums.at(x, y, winner)) winner = k;

@@ -113,6 +113,7 @@ TEST_P(MatchesScalarReference, BitForBitWithOneStrip) {
   config.lr_check = rc.lr;
   config.pkrn_exclude_neighbours = !rc.naive_pkrn;
   config.prefilter = rc.prefilter;
+  config.invalidate_truncated = rc.lr;  // exercised together with the LR check
   config.num_strips = 1;
   StereoMatcher matcher(config);
   expectBitIdentical(matcher.match(left, right), test::referenceSgm(left, right, config), rc.name);
@@ -208,6 +209,19 @@ TEST(StereoMatcher, PixelsWithoutRightMatchAreInvalidNotZero) {
       EXPECT_EQ(map.confidence.at<float>(y, x), 0.0f);
     }
     EXPECT_TRUE(std::isfinite(map.disparity.at<float>(y, 8)));
+  }
+}
+
+TEST(StereoMatcher, TruncatedSearchColumnsAreInvalidOnRequest) {
+  const SyntheticPair pair = slantedPlane(100, 40, 10.0, 0.0, 0.0, 2);
+  StereoConfig config;
+  config.num_disparities = 16;
+  config.min_disparity_px = 4;
+  config.invalidate_truncated = true;
+  const DisparityMap map = StereoMatcher(config).match(pair.left, pair.right);
+  for (int y = 0; y < 40; ++y) {
+    for (int x = 0; x < 4 + 16 - 1; ++x) EXPECT_TRUE(std::isinf(map.disparity.at<float>(y, x))) << x;
+    EXPECT_TRUE(std::isfinite(map.disparity.at<float>(y, 4 + 16 - 1)));
   }
 }
 
