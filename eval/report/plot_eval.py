@@ -130,7 +130,7 @@ def cloud_plots(doc, out_dir):
     ax.axvline(doc["threshold"], color="black", ls=":",
                label=f"{doc['threshold']:g} m: P {100 * doc['precision']:.1f} %, R {100 * doc['recall']:.1f} %")
     ax.set_xlabel("distance threshold [m]")
-    ax.set_ylabel("[%]")
+    ax.set_ylabel("points within the threshold [%]")
     ax.set_ylim(0, 101)
     ax.set_xlim(0, t[-1])
     ax.grid(True, alpha=0.3)
