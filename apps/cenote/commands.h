@@ -11,5 +11,7 @@ void registerFuseCommand(CLI::App& app);
 void registerRunCommand(CLI::App& app);
 void registerCalibrateCommand(CLI::App& app);
 void registerEvalCommand(CLI::App& app);
+// Adds `eval map` (needs mapping/) to the `eval` subcommand; called by registerEvalCommand.
+void registerEvalMapCommand(CLI::App& eval_cmd);
 
 }  // namespace cenote::apps

@@ -2,6 +2,7 @@
 //   cenote eval depth  --estimate DIR --reference DIR       depth maps matched by image name
 //   cenote eval cloud  --source S.ply --target T.ply        point clouds (PLY or PCD)
 //   cenote eval traj   --estimate E --reference R           trajectories (TUM, EuRoC, KITTI, COLMAP)
+//   cenote eval map    --estimate A.vdb --reference B.bt    occupancy agreement (eval_map_command.cpp)
 //   cenote eval report DIR                                  one self-contained HTML page
 // Each metric command prints a table; --json FILE writes the numbers (eval/report/metrics_json.h),
 // --plot DIR writes PNG plots (matplotlib, eval/report/plots.h).
@@ -315,6 +316,8 @@ void registerEvalCommand(CLI::App& app) {
       ->capture_default_str();
   addOutputOptions(traj, t->out);
   traj->callback([t] { runTraj(*t); });
+
+  registerEvalMapCommand(*eval_cmd);
 
   auto r = std::make_shared<ReportOptions>();
   CLI::App* report = eval_cmd->add_subcommand("report", "One self-contained HTML page for a run folder");

@@ -136,6 +136,11 @@ std::string metricsTable(const Json& j, const std::string& file) {
     html += row("ATE RMSE", fmt(v("ate_rmse"), " m")) + row("ATE mean", fmt(v("ate_mean"), " m")) +
             row("ATE median", fmt(v("ate_median"), " m")) + row("ATE max", fmt(v("ate_max"), " m")) +
             row("alignment", fmt(v("alignment"))) + row("scale", fmt(v("scale"))) + row("poses", fmt(v("pairs")));
+  } else if (kind == "map") {
+    html += row("agreement (voxels known in either)", percent(v("agreement"))) +
+            row("agreement (voxels known in both)", percent(v("known_agreement"))) +
+            row("occupied IoU", percent(v("occupied_iou"))) + row("occupied precision", percent(v("occupied_precision"))) +
+            row("occupied recall", percent(v("occupied_recall"))) + row("voxel size", fmt(v("voxel_size"), " m"));
   }
   return html + "</table>\n";
 }

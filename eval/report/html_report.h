@@ -4,7 +4,7 @@
 //   timing       DIR/report.json written by `cenote run` (frames_in, frames_processed, fps,
 //                stages{name: {median_ms, p95_ms, ...}}, ...)
 //   metrics      every *.json in DIR or DIR/eval written by `cenote eval ... --json` (kind depth,
-//                cloud or trajectory)
+//                cloud, trajectory or map)
 //   plots        every *.png in DIR/plots (recursively), as `cenote eval ... --plot DIR/plots` writes
 //   samples      up to `max_samples` frames: the input image (<stem>.png/.jpg in any folder) beside
 //                each depth map (<stem>.depth.pfm; a folder named *fused* or *raw* labels it) and

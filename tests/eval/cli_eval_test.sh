@@ -123,6 +123,9 @@ awk '{ $1 = $1 + 1000; print }' "$work/in/ref_traj.txt" >"$work/late_traj.txt"
 expect_error 1 "only 0 poses associated within 0.02 s" eval traj --estimate "$work/in/est_traj.csv" \
   --reference "$work/late_traj.txt" --reference-format tum
 expect_error 1 "no such directory" eval report "$work/absent"
+expect_error 1 "absent.vdb" eval map --estimate "$work/absent.vdb" --reference "$work/absent.bt"
+printf 'not a map' >"$work/fake.ply"
+expect_error 1 "fake.ply" eval map --estimate "$work/fake.ply" --reference "$work/absent.bt"
 # Usage errors come from the command-line parser (its own exit code, not 0 or 1).
 status=0
 "$cenote" eval cloud --source "$work/in/source.pcd" >/dev/null 2>&1 || status=$?
