@@ -13,5 +13,6 @@ void registerCalibrateCommand(CLI::App& app);
 void registerEvalCommand(CLI::App& app);
 // Adds `eval map` (needs mapping/) to the `eval` subcommand; called by registerEvalCommand.
 void registerEvalMapCommand(CLI::App& eval_cmd);
+void registerSimCommand(CLI::App& app);
 
 }  // namespace cenote::apps

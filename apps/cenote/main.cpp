@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   cenote::apps::registerRunCommand(app);
   cenote::apps::registerCalibrateCommand(app);
   cenote::apps::registerEvalCommand(app);
+  cenote::apps::registerSimCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

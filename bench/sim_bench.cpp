@@ -1,0 +1,84 @@
+// sim_bench: speed of the simulator (pipeline/sim/) per scene, stage by stage, at 800x600.
+// Prints a Markdown table for docs/PERFORMANCE.md ("## Simulator").
+//   sim_bench [--threads 2] [--frames 20] [--scene cave|reef|wreck|all]
+// Stages of one frame (both cameras): rasterise (visibility + exact depth), radiance (texture,
+// light, water), expose (gain, gamma, noise, 8-bit); "frame" is renderFrame() as a whole, measured
+// with the threads inside the frame. "dataset" is ms per frame of writeSimDataset (render + PNG +
+// PFM on all threads, frames in parallel), the figure that says how long `cenote sim` takes.
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "pipeline/sim/image_formation.h"
+#include "pipeline/sim/rasterizer.h"
+#include "pipeline/sim/sim_dataset.h"
+#include "pipeline/sim/simulator.h"
+
+using namespace cenote;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int threads = 2, frames = 20;
+  std::string which = "all";
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--frames")) frames = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--scene")) which = argv[i + 1];
+  }
+  omp_set_num_threads(threads);
+  std::printf("| scene | triangles | scene build ms | rasterise ms | radiance ms | expose ms | frame ms | dataset ms/frame |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  for (const char* name : {"cave", "reef", "wreck"}) {
+    if (which != "all" && which != name) continue;
+    pipeline::SimConfig config;
+    config.scene = pipeline::parseSimScene(name);
+    config.num_frames = frames;
+    const auto t0 = Clock::now();
+    const pipeline::Simulator sim(config);
+    const double build_ms = ms(t0, Clock::now());
+    std::vector<double> raster, radiance, expose, frame;
+    for (int i = 0; i < frames; ++i) {
+      const Eigen::Isometry3d T = sim.T_world_cam0(sim.frameTimeS(i));
+      const auto a = Clock::now();
+      const pipeline::VisibilityBuffer vis = pipeline::rasterize(sim.scene().mesh, sim.rig().camera, T);
+      const auto b = Clock::now();
+      const cv::Mat r = pipeline::renderRadiance(sim.scene(), sim.texture(), sim.rig().camera, T, vis, T);
+      const auto c = Clock::now();
+      const cv::Mat img = pipeline::exposeImage(r, sim.gain(), 2.0f, 1);
+      const auto d = Clock::now();
+      const pipeline::SimFrame f = sim.renderFrame(i);
+      const auto e = Clock::now();
+      raster.push_back(2 * ms(a, b));
+      radiance.push_back(2 * ms(b, c));
+      expose.push_back(2 * ms(c, d));
+      frame.push_back(ms(d, e));
+    }
+    const std::string dir = (std::filesystem::temp_directory_path() / ("cenote_sim_bench_" + std::string(name))).string();
+    const pipeline::SimDatasetSummary summary = pipeline::writeSimDataset(sim, dir);
+    std::filesystem::remove_all(dir);
+    std::printf("| %s | %zu | %.0f | %.1f | %.1f | %.1f | %.1f | %.1f |\n", name, sim.scene().mesh.numTriangles(),
+                build_ms, median(raster), median(radiance), median(expose), median(frame),
+                1000.0 * summary.wall_s / frames);
+    std::fflush(stdout);
+  }
+  std::printf("\n%d threads, %d frames per scene, 800x600, both cameras; stage figures are medians over frames.\n",
+              threads, frames);
+  return 0;
+}

@@ -1,0 +1,159 @@
+#include "pipeline/sim/procedural_noise.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "common/error.h"
+
+namespace cenote::pipeline {
+namespace {
+
+// log2 of x > 0 to ~1e-3: exponent plus a quadratic in the mantissa.
+inline float fastLog2(float x) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof(bits));
+  const float exponent = static_cast<float>(static_cast<int>(bits >> 23) - 127);
+  bits = (bits & 0x007FFFFF) | 0x3F800000;
+  float m;
+  std::memcpy(&m, &bits, sizeof(m));
+  return exponent + (-0.34484843f * m + 2.02466578f) * m - 0.67487759f;
+}
+
+inline double quintic(double t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
+
+inline double lattice(int64_t x, int64_t y, int64_t z, uint64_t seed) {
+  return hashToUnit(hash64(static_cast<uint64_t>(x), static_cast<uint64_t>(y), static_cast<uint64_t>(z), seed)) * 2.0 - 1.0;
+}
+
+// Tileable 2D value noise of period `period` lattice cells.
+double tiledNoise2(double x, double y, int period, uint64_t seed) {
+  const double fx = std::floor(x), fy = std::floor(y);
+  const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+  const double tx = quintic(x - fx), ty = quintic(y - fy);
+  auto at = [&](int i, int j) {
+    const int wi = ((i % period) + period) % period, wj = ((j % period) + period) % period;
+    return lattice(wi, wj, period, seed);
+  };
+  const double a = at(ix, iy) + (at(ix + 1, iy) - at(ix, iy)) * tx;
+  const double b = at(ix, iy + 1) + (at(ix + 1, iy + 1) - at(ix, iy + 1)) * tx;
+  return a + (b - a) * ty;
+}
+
+}  // namespace
+
+double valueNoise3(double x, double y, double z, uint64_t seed) {
+  const double fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
+  const auto ix = static_cast<int64_t>(fx), iy = static_cast<int64_t>(fy), iz = static_cast<int64_t>(fz);
+  const double tx = quintic(x - fx), ty = quintic(y - fy), tz = quintic(z - fz);
+  double c[2][2];
+  for (int j = 0; j < 2; ++j) {
+    for (int k = 0; k < 2; ++k) {
+      const double a = lattice(ix, iy + j, iz + k, seed);
+      const double b = lattice(ix + 1, iy + j, iz + k, seed);
+      c[j][k] = a + (b - a) * tx;
+    }
+  }
+  const double lo = c[0][0] + (c[1][0] - c[0][0]) * ty;
+  const double hi = c[0][1] + (c[1][1] - c[0][1]) * ty;
+  return lo + (hi - lo) * tz;
+}
+
+double fbm3(double x, double y, double z, uint64_t seed, int octaves, double gain) {
+  double sum = 0.0, amplitude = 1.0, total = 0.0, frequency = 1.0;
+  for (int o = 0; o < octaves; ++o) {
+    // Each octave has its own lattice (seed) and an offset so that lattice points do not line up.
+    sum += amplitude * valueNoise3(x * frequency + 17.31 * o, y * frequency - 9.17 * o, z * frequency + 3.71 * o,
+                                   seed + 0x1000 * static_cast<uint64_t>(o + 1));
+    total += amplitude;
+    amplitude *= gain;
+    frequency *= 2.0;
+  }
+  return total > 0.0 ? sum / total : 0.0;
+}
+
+NoiseTexture::NoiseTexture(int size, uint64_t seed) : size_(size) {
+  if (size < 8 || (size & (size - 1)) != 0) {
+    throw Error("NoiseTexture: size " + std::to_string(size) + " must be a power of two >= 8");
+  }
+  // Level 0: octaves of period size, size/2, ..., 4 texels, amplitude falling slower than 1/f so
+  // that fine detail (what stereo matches on) stays strong.
+  std::vector<float> base(static_cast<size_t>(size) * size);
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      double sum = 0.0, amplitude = 1.0;
+      for (int cells = 1, o = 0; size / cells >= 4; cells *= 2, ++o) {
+        const double scale = static_cast<double>(cells) / size;
+        sum += amplitude * tiledNoise2(x * scale, y * scale, cells, seed + 31 * o);
+        amplitude *= 0.72;
+      }
+      base[static_cast<size_t>(y) * size + x] = static_cast<float>(sum);
+    }
+  }
+  // Normalise to mean 0.5 and standard deviation kContrast, clipped to [0, 1]: a fixed contrast
+  // whatever the number of octaves. Mips are box-filtered in float, then stored as 8-bit texels.
+  constexpr double kContrast = 0.2;
+  double mean = 0.0, square = 0.0;
+  for (float v : base) {
+    mean += v;
+    square += static_cast<double>(v) * v;
+  }
+  mean /= static_cast<double>(base.size());
+  const double sigma = std::sqrt(std::max(1e-12, square / static_cast<double>(base.size()) - mean * mean));
+  for (float& v : base) v = static_cast<float>(std::clamp(0.5 + kContrast * (v - mean) / sigma, 0.0, 1.0));
+  auto store = [this](const std::vector<float>& level, int n) {
+    std::vector<uint8_t> texels(level.size());
+    for (int y = 0; y < n; ++y) {
+      for (int x = 0; x < n; ++x) {
+        texels[offset(x, y, n)] = static_cast<uint8_t>(std::lround(255.0f * level[static_cast<size_t>(y) * n + x]));
+      }
+    }
+    levels_.push_back(std::move(texels));
+  };
+  store(base, size);
+  std::vector<float> up = std::move(base);
+  for (int n = size / 2; n >= 1; n /= 2) {
+    std::vector<float> down(static_cast<size_t>(n) * n);
+    for (int y = 0; y < n; ++y) {
+      for (int x = 0; x < n; ++x) {
+        const size_t i = static_cast<size_t>(2 * y) * (2 * n) + 2 * x;
+        down[static_cast<size_t>(y) * n + x] = 0.25f * (up[i] + up[i + 1] + up[i + 2 * n] + up[i + 2 * n + 1]);
+      }
+    }
+    store(down, n);
+    up = std::move(down);
+  }
+}
+
+float NoiseTexture::bilinear(int level, float u, float v) const {
+  const int n = size_ >> level;
+  const float scale = 1.0f / static_cast<float>(1 << level);
+  // Texel centres of level k sit at (i + 0.5) * 2^k - 0.5 in level-0 coordinates.
+  const float x = (u + 0.5f) * scale - 0.5f, y = (v + 0.5f) * scale - 0.5f;
+  const float fx = std::floor(x), fy = std::floor(y);
+  const float tx = x - fx, ty = y - fy;
+  const int mask = n - 1;
+  const int x0 = static_cast<int>(fx) & mask, y0 = static_cast<int>(fy) & mask;
+  const int x1 = (x0 + 1) & mask, y1 = (y0 + 1) & mask;
+  const uint8_t* t = levels_[level].data();
+  const float t00 = t[offset(x0, y0, n)], t10 = t[offset(x1, y0, n)];
+  const float t01 = t[offset(x0, y1, n)], t11 = t[offset(x1, y1, n)];
+  const float a = t00 + (t10 - t00) * tx;
+  const float b = t01 + (t11 - t01) * tx;
+  return (a + (b - a) * ty) * (1.0f / 255.0f);
+}
+
+float NoiseTexture::sample(float u, float v, float footprint_texels) const {
+  // Keep texture coordinates small so that float keeps sub-texel precision far from the origin.
+  const float period = static_cast<float>(size_);
+  u -= period * std::floor(u / period);
+  v -= period * std::floor(v / period);
+  if (footprint_texels <= 1.0f) return bilinear(0, u, v);
+  const float lod = std::min(fastLog2(footprint_texels), static_cast<float>(levels() - 1) - 1e-3f);
+  const int level = static_cast<int>(lod);
+  const float t = lod - static_cast<float>(level);
+  const float a = bilinear(level, u, v);
+  return a + (bilinear(level + 1, u, v) - a) * t;
+}
+
+}  // namespace cenote::pipeline

@@ -1,0 +1,71 @@
+// procedural_noise.h: seeded, deterministic noise for the simulator's geometry and texture.
+//   hash64()          counter-based hash: the same inputs give the same bits on every machine
+//   valueNoise3()     smooth value noise in [-1, 1], unit lattice spacing
+//   fbm3()            fractal sum of octaves of valueNoise3, roughly in [-1, 1]
+//   approxGaussian()  unit-variance noise from one hash (sum of four uniforms, |x| <= 3.46)
+//   NoiseTexture      a tileable square fBm texture (mean 0.5, sd 0.2, in [0, 1]) with mips, sampled trilinearly
+// Units: the caller's (noise is defined on a unit lattice; scale the input).
+// Threads: pure functions; a NoiseTexture is immutable after construction and may be shared.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace cenote::pipeline {
+
+// SplitMix64-style finaliser over the combined inputs.
+inline uint64_t hash64(uint64_t a, uint64_t b = 0, uint64_t c = 0, uint64_t d = 0) {
+  uint64_t x = a * 0x9E3779B97F4A7C15ULL ^ (b + 0x632BE59BD9B4E019ULL) * 0xBF58476D1CE4E5B9ULL;
+  x ^= (c + 0x8CB92BA72F3D8DD7ULL) * 0x94D049BB133111EBULL;
+  x ^= (d + 0xD6E8FEB86659FD93ULL) * 0x9E3779B97F4A7C15ULL;
+  x ^= x >> 30;
+  x *= 0xBF58476D1CE4E5B9ULL;
+  x ^= x >> 27;
+  x *= 0x94D049BB133111EBULL;
+  x ^= x >> 31;
+  return x;
+}
+
+// Uniform in [0, 1) from a hash.
+inline double hashToUnit(uint64_t h) { return static_cast<double>(h >> 11) * (1.0 / 9007199254740992.0); }
+
+// Approximately standard normal: (sum of four 16-bit uniforms - 2) * sqrt(3).
+inline float approxGaussian(uint64_t h) {
+  const float s = static_cast<float>((h & 0xFFFF) + ((h >> 16) & 0xFFFF) + ((h >> 32) & 0xFFFF) + (h >> 48));
+  return (s * (1.0f / 65536.0f) - 2.0f) * 1.7320508f;
+}
+
+// Smooth (quintic-interpolated) value noise in [-1, 1].
+double valueNoise3(double x, double y, double z, uint64_t seed);
+
+// Sum over `octaves` of valueNoise3 at doubling frequency and `gain`-decaying amplitude,
+// normalised by the total amplitude.
+double fbm3(double x, double y, double z, uint64_t seed, int octaves, double gain = 0.5);
+
+class NoiseTexture {
+ public:
+  // size: a power of two >= 8 (texels per side); periods of the octaves are size, size/2, ... 4 texels.
+  NoiseTexture(int size, uint64_t seed);
+
+  int size() const { return size_; }
+  int levels() const { return static_cast<int>(levels_.size()); }
+
+  // Trilinear sample at texel coordinates (u, v) of level 0 (wrapping), footprint_texels the pixel's
+  // size in level-0 texels (chooses and blends the mip levels; <= 1 samples level 0).
+  float sample(float u, float v, float footprint_texels) const;
+
+ private:
+  float bilinear(int level, float u, float v) const;
+  // Offset of texel (x, y) of a level n texels wide: 8 x 8 tiles of one cache line each.
+  // (Levels under 8 texels wide are row-major.)
+  static size_t offset(int x, int y, int n) {
+    if (n < 8) return static_cast<size_t>(y * n + x);
+    return static_cast<size_t>(((((y >> 3) * (n >> 3) + (x >> 3)) << 6) | ((y & 7) << 3) | (x & 7)));
+  }
+
+  int size_;
+  std::vector<std::vector<uint8_t>> levels_;  // level k: (size >> k)^2 texels of value / 255, tiled
+};
+
+}  // namespace cenote::pipeline

@@ -1,0 +1,238 @@
+#include "pipeline/sim/rasterizer.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "common/error.h"
+
+namespace cenote::pipeline {
+namespace {
+
+constexpr int kBands = 24;  // fixed work split of the image rows (not the thread count)
+
+// One screen-space triangle to draw, with the inverse-depth plane of its mesh triangle.
+struct RasterTriangle {
+  double x[3], y[3];
+  double a, b, c;     // 1 / Z = a x + b y + c
+  int32_t triangle;   // mesh index
+};
+
+struct Plane {
+  Eigen::Vector3d n;
+  double d;
+};
+
+// Clips polygon `in` (camera frame) to z >= near; returns the vertex count (<= 4 for a triangle).
+int clipNear(const std::array<Eigen::Vector3d, 3>& in, double near, std::array<Eigen::Vector3d, 4>& out) {
+  int count = 0;
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d& a = in[i];
+    const Eigen::Vector3d& b = in[(i + 1) % 3];
+    const bool a_in = a.z() >= near, b_in = b.z() >= near;
+    if (a_in) out[count++] = a;
+    if (a_in != b_in) {
+      const double t = (near - a.z()) / (b.z() - a.z());
+      out[count++] = a + t * (b - a);
+    }
+  }
+  return count;
+}
+
+void setupTriangle(const SceneMesh& mesh, uint32_t t, const std::vector<Eigen::Vector3d>& cam_vertices,
+                   uint32_t first_vertex, const PinholeCamera& cam, double near, std::vector<RasterTriangle>& out) {
+  const auto& tri = mesh.triangles[t];
+  const std::array<Eigen::Vector3d, 3> v = {cam_vertices[tri[0] - first_vertex], cam_vertices[tri[1] - first_vertex],
+                                            cam_vertices[tri[2] - first_vertex]};
+  if (v[0].z() < near && v[1].z() < near && v[2].z() < near) return;
+  Plane plane{(v[1] - v[0]).cross(v[2] - v[0]), 0.0};
+  plane.d = plane.n.dot(v[0]);
+  // Seen edge-on (the plane passes through the optical centre): covers no pixel.
+  if (!(std::abs(plane.d) > 1e-12 * plane.n.norm())) return;
+  if (plane.d < 0) {
+    plane.n = -plane.n;
+    plane.d = -plane.d;
+  }
+  std::array<Eigen::Vector3d, 4> poly;
+  int count = 3;
+  if (v[0].z() >= near && v[1].z() >= near && v[2].z() >= near) {
+    poly = {v[0], v[1], v[2], Eigen::Vector3d::Zero()};
+  } else {
+    count = clipNear(v, near, poly);
+    if (count < 3) return;
+  }
+  double px[4], py[4];
+  double min_x = 1e300, max_x = -1e300, min_y = 1e300, max_y = -1e300;
+  for (int i = 0; i < count; ++i) {
+    px[i] = cam.fx * poly[i].x() / poly[i].z() + cam.cx;
+    py[i] = cam.fy * poly[i].y() / poly[i].z() + cam.cy;
+    min_x = std::min(min_x, px[i]);
+    max_x = std::max(max_x, px[i]);
+    min_y = std::min(min_y, py[i]);
+    max_y = std::max(max_y, py[i]);
+  }
+  if (max_x < 0 || max_y < 0 || min_x > cam.width - 1 || min_y > cam.height - 1) return;
+  RasterTriangle r;
+  r.a = plane.n.x() / (cam.fx * plane.d);
+  r.b = plane.n.y() / (cam.fy * plane.d);
+  r.c = (plane.n.z() - plane.n.x() * cam.cx / cam.fx - plane.n.y() * cam.cy / cam.fy) / plane.d;
+  r.triangle = static_cast<int32_t>(t);
+  for (int k = 1; k + 1 < count; ++k) {  // fan
+    const int idx[3] = {0, k, k + 1};
+    for (int i = 0; i < 3; ++i) {
+      r.x[i] = px[idx[i]];
+      r.y[i] = py[idx[i]];
+    }
+    out.push_back(r);
+  }
+}
+
+// Draws `tri` into rows [row0, row1) of the band buffers (row-major, `width` wide, row0 first).
+void drawTriangle(const RasterTriangle& tri, int32_t id, int row0, int row1, int width, float* inv_depth, int32_t* ids) {
+  double x[3] = {tri.x[0], tri.x[1], tri.x[2]}, y[3] = {tri.y[0], tri.y[1], tri.y[2]};
+  const double area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+  if (area == 0.0 || !std::isfinite(area)) return;
+  if (area < 0) {
+    std::swap(x[1], x[2]);
+    std::swap(y[1], y[2]);
+  }
+  const int y_begin = std::max(row0, static_cast<int>(std::ceil(std::min({y[0], y[1], y[2]}))));
+  const int y_end = std::min(row1 - 1, static_cast<int>(std::floor(std::max({y[0], y[1], y[2]}))));
+  const int x_begin = std::max(0, static_cast<int>(std::ceil(std::min({x[0], x[1], x[2]}))));
+  const int x_end = std::min(width - 1, static_cast<int>(std::floor(std::max({x[0], x[1], x[2]}))));
+  if (y_begin > y_end || x_begin > x_end) return;
+  // Edge i runs from vertex i to vertex i + 1; inside is e >= -tolerance (a hair outside the edge, so
+  // that rounding never opens a crack between neighbours; the z-test settles the overlap).
+  double ex[3], ey[3], e0[3], tol[3];
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    ex[i] = -(y[j] - y[i]);  // de/dx
+    ey[i] = x[j] - x[i];     // de/dy
+    e0[i] = -(ex[i] * x[i] + ey[i] * y[i]);
+    tol[i] = 1e-7 * (std::abs(ex[i]) + std::abs(ey[i]));
+  }
+  for (int py = y_begin; py <= y_end; ++py) {
+    float* depth_row = inv_depth + static_cast<size_t>(py - row0) * width;
+    int32_t* id_row = ids + static_cast<size_t>(py - row0) * width;
+    double e[3];
+    for (int i = 0; i < 3; ++i) e[i] = e0[i] + ey[i] * py + ex[i] * x_begin;
+    const double z_row = tri.b * py + tri.c;
+    for (int px = x_begin; px <= x_end; ++px) {
+      if (e[0] >= -tol[0] && e[1] >= -tol[1] && e[2] >= -tol[2]) {
+        const auto inv_z = static_cast<float>(tri.a * px + z_row);
+        if (inv_z > depth_row[px]) {
+          depth_row[px] = inv_z;
+          id_row[px] = id;
+        }
+      }
+      e[0] += ex[0];
+      e[1] += ex[1];
+      e[2] += ex[2];
+    }
+  }
+}
+
+}  // namespace
+
+VisibilityBuffer rasterize(const SceneMesh& mesh, const PinholeCamera& cam, const Eigen::Isometry3d& T_world_cam,
+                           double near_m) {
+  if (cam.width <= 0 || cam.height <= 0) throw Error("rasterize: empty image size");
+  if (!(cam.fx > 0 && cam.fy > 0)) throw Error("rasterize: focal length must be positive");
+  const Eigen::Isometry3d T_cam_world = T_world_cam.inverse();
+  const Eigen::Matrix3d R = T_cam_world.linear();
+  const Eigen::Vector3d t = T_cam_world.translation();
+
+  // View-frustum culling of chunks by their bounding spheres (side planes through the optical centre).
+  const std::array<Eigen::Vector3d, 4> sides = {
+      Eigen::Vector3d(cam.fx, 0, cam.cx + 1).normalized(), Eigen::Vector3d(-cam.fx, 0, cam.width - cam.cx).normalized(),
+      Eigen::Vector3d(0, cam.fy, cam.cy + 1).normalized(), Eigen::Vector3d(0, -cam.fy, cam.height - cam.cy).normalized()};
+  std::vector<int> visible;
+  for (size_t k = 0; k < mesh.chunks.size(); ++k) {
+    const MeshChunk& chunk = mesh.chunks[k];
+    const Eigen::Vector3d c = R * chunk.center.cast<double>() + t;
+    const double r = chunk.radius_m;
+    if (c.z() + r < near_m) continue;
+    bool outside = false;
+    for (const auto& n : sides) outside = outside || n.dot(c) < -r;
+    if (!outside) visible.push_back(static_cast<int>(k));
+  }
+
+  // Triangle setup per visible chunk (in parallel), concatenated in chunk order.
+  std::vector<std::vector<RasterTriangle>> per_chunk(visible.size());
+#pragma omp parallel
+  {
+    std::vector<Eigen::Vector3d> cam_vertices;
+#pragma omp for schedule(dynamic, 4)
+    for (int k = 0; k < static_cast<int>(visible.size()); ++k) {
+      const MeshChunk& chunk = mesh.chunks[visible[k]];
+      cam_vertices.resize(chunk.num_vertices);
+      for (uint32_t v = 0; v < chunk.num_vertices; ++v) {
+        cam_vertices[v] = R * mesh.vertices[chunk.first_vertex + v].cast<double>() + t;
+      }
+      per_chunk[k].reserve(chunk.num_triangles);
+      for (uint32_t tri = chunk.first_triangle; tri < chunk.first_triangle + chunk.num_triangles; ++tri) {
+        setupTriangle(mesh, tri, cam_vertices, chunk.first_vertex, cam, near_m, per_chunk[k]);
+      }
+    }
+  }
+
+  // Flatten in chunk order, then bin into fixed bands of rows, keeping mesh order within each band.
+  std::vector<RasterTriangle> triangles;
+  size_t total = 0;
+  for (const auto& list : per_chunk) total += list.size();
+  triangles.reserve(total);
+  for (auto& list : per_chunk) {
+    triangles.insert(triangles.end(), list.begin(), list.end());
+    std::vector<RasterTriangle>().swap(list);
+  }
+  const int band_rows = (cam.height + kBands - 1) / kBands;
+  std::vector<std::vector<int32_t>> bands(kBands);
+  for (size_t k = 0; k < triangles.size(); ++k) {
+    const RasterTriangle& tri = triangles[k];
+    const double lo = std::min({tri.y[0], tri.y[1], tri.y[2]}), hi = std::max({tri.y[0], tri.y[1], tri.y[2]});
+    const int y0 = std::max(0, static_cast<int>(std::ceil(lo)));
+    const int y1 = std::min(cam.height - 1, static_cast<int>(std::floor(hi)));
+    if (y0 > y1) continue;
+    for (int b = y0 / band_rows; b <= y1 / band_rows; ++b) bands[b].push_back(static_cast<int32_t>(k));
+  }
+
+  VisibilityBuffer out;
+  out.triangle.create(cam.height, cam.width, CV_32S);
+  out.depth.create(cam.height, cam.width, CV_32F);
+  const float inf = std::numeric_limits<float>::infinity();
+#pragma omp parallel
+  {
+    std::vector<float> inv_depth;
+    std::vector<int32_t> ids;
+#pragma omp for schedule(dynamic, 1)
+    for (int b = 0; b < kBands; ++b) {
+      const int row0 = b * band_rows, row1 = std::min(cam.height, row0 + band_rows);
+      if (row0 >= row1) continue;
+      inv_depth.assign(static_cast<size_t>(row1 - row0) * cam.width, 0.0f);
+      ids.assign(inv_depth.size(), -1);
+      for (const int32_t k : bands[b]) drawTriangle(triangles[k], k, row0, row1, cam.width, inv_depth.data(), ids.data());
+      for (int y = row0; y < row1; ++y) {
+        const int32_t* id_row = ids.data() + static_cast<size_t>(y - row0) * cam.width;
+        int32_t* out_ids = out.triangle.ptr<int32_t>(y);
+        float* out_depth = out.depth.ptr<float>(y);
+        for (int x = 0; x < cam.width; ++x) {
+          if (id_row[x] < 0) {
+            out_ids[x] = -1;
+            out_depth[x] = inf;
+            continue;
+          }
+          // Depth in double from the exact inverse-depth plane of the winning triangle.
+          const RasterTriangle& tri = triangles[id_row[x]];
+          out_ids[x] = tri.triangle;
+          const double z = 1.0 / (tri.a * x + tri.b * y + tri.c);
+          out_depth[x] = z > 0 && std::isfinite(z) ? static_cast<float>(z) : inf;
+        }
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace cenote::pipeline
