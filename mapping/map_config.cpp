@@ -27,6 +27,7 @@ std::vector<ConfigError> MapConfig::validate() const {
                occupied_threshold, "must be in (clamp_min, clamp_max)");
   errors.check(max_range_m <= 1e4 && !(max_range_m != max_range_m), "max_range_m", max_range_m,
                "must be <= 10000 (<= 0: unlimited)");
+  errors.check(ray_stop_run >= 0 && ray_stop_run <= 1000, "ray_stop_run", ray_stop_run, "must be in [0, 1000]");
   errors.check(publish_blocks >= 1 && publish_blocks <= 1 << 20, "publish_blocks", publish_blocks,
                "must be in [1, 1048576]");
   errors.check(num_threads >= 0 && num_threads <= 256, "num_threads", num_threads, "must be in [0, 256]");
@@ -45,6 +46,7 @@ void MapConfig::read(YamlSection& section) {
   section.read("clamp_max", clamp_max);
   section.read("occupied_threshold", occupied_threshold);
   section.read("max_range_m", max_range_m);
+  section.read("ray_stop_run", ray_stop_run);
   section.read("publish_blocks", publish_blocks);
   section.read("num_threads", num_threads);
   section.read("max_distance_m", max_distance_m);

@@ -139,7 +139,7 @@ MapDelta OccupancyMap::integrate(const PointBatch& batch) {
   checkBatch(batch);
   std::lock_guard<std::mutex> writer(impl_->writer_mutex);
   RayBatch& rays = impl_->scratch;
-  rays.build(batch, voxelSize(), config_.max_range_m, config_.num_threads);
+  rays.build(batch, voxelSize(), config_.max_range_m, config_.num_threads, config_.ray_stop_run);
 
   MapDelta delta;
   delta.points_used = rays.numRays();

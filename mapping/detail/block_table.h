@@ -69,9 +69,12 @@ class BlockTable {
 
  private:
   static size_t hash(uint64_t key) {
-    key ^= key >> 31;
-    key *= 0x7fb5d329728ea185ull;
-    key ^= key >> 27;
+    // MurmurHash3's fmix64: every input bit moves the low bits used as the bucket.
+    key ^= key >> 33;
+    key *= 0xff51afd7ed558ccdull;
+    key ^= key >> 33;
+    key *= 0xc4ceb9fe1a85ec53ull;
+    key ^= key >> 33;
     return static_cast<size_t>(key);
   }
   void rehash(size_t capacity) {

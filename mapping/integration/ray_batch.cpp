@@ -30,6 +30,15 @@ class MaskWriter {
     const int o = offsetInBlock(ijk);
     blockOf(ijk).free[o >> 6] |= 1ull << (o & 63);
   }
+  // Marks ijk free; false when it already was.
+  bool setFreeIfNew(const VoxelIndex& ijk) {
+    const int o = offsetInBlock(ijk);
+    uint64_t& word = blockOf(ijk).free[o >> 6];
+    const uint64_t bit = 1ull << (o & 63);
+    if (word & bit) return false;
+    word |= bit;
+    return true;
+  }
   void setHit(const VoxelIndex& ijk) {
     const int o = offsetInBlock(ijk);
     blockOf(ijk).hit[o >> 6] |= 1ull << (o & 63);
@@ -45,7 +54,8 @@ class MaskWriter {
 
 }  // namespace
 
-void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads) {
+void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads, int stop_run) {
+  const bool exact = stop_run <= 0;
   // 1. Unique endpoint voxels, with colour sums.
   endpoint_table_.clear();
   endpoints_.clear();
@@ -69,38 +79,52 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
   }
   num_rays_ = endpoints_.size();
 
-  // 2. March the rays, each thread into its own masks.
+  // 2. March the rays: a fixed number of chunks of consecutive endpoints (image bands), each into
+  // its own masks, so that the result does not depend on the thread count.
   const int threads = std::max(1, num_threads > 0 ? num_threads : omp_get_max_threads());
-  if (markers_.size() < static_cast<size_t>(threads)) markers_.resize(threads);
-  for (int t = 0; t < threads; ++t) {
+  const int chunks = exact ? threads : kRayChunks;
+  if (markers_.size() < static_cast<size_t>(chunks)) markers_.resize(chunks);
+  for (int t = 0; t < chunks; ++t) {
     markers_[t].table.clear();
     markers_[t].masks.clear();
   }
   const Eigen::Vector3d origin = batch.origin;
   const bool limited = max_range_m > 0.0;
   const long n = static_cast<long>(endpoints_.size());
-#pragma omp parallel num_threads(threads)
-  {
-    Marker& marker = markers_[omp_get_thread_num()];
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+  for (int chunk = 0; chunk < chunks; ++chunk) {
+    Marker& marker = markers_[chunk];
     MaskWriter writer(marker.table, marker.masks);
-#pragma omp for schedule(static)
-    for (long i = 0; i < n; ++i) {
+    const long begin = n * chunk / chunks, end_i = n * (chunk + 1) / chunks;
+    for (long i = begin; i < end_i; ++i) {
       const Eigen::Vector3d end = voxelCentre(endpoints_[i], voxel_size_m);
       const Eigen::Vector3d ray = end - origin;
       const double range = ray.norm();
       const bool in_range = !limited || range <= max_range_m;
       const Eigen::Vector3d stop = in_range ? end : Eigen::Vector3d(origin + ray * (max_range_m / range));
-      walkVoxels(origin, stop, voxel_size_m, false, [&](const VoxelIndex& ijk) {
-        writer.setFree(ijk);
-        return true;
-      });
+      if (exact) {
+        walkVoxels(origin, stop, voxel_size_m, false, [&](const VoxelIndex& ijk) {
+          writer.setFree(ijk);
+          return true;
+        });
+      } else {
+        // From the end back to the origin, until stop_run voxels in a row were already carved by
+        // earlier rays of the chunk: from there on they have carved (nearly) the same path.
+        const VoxelIndex end_voxel = toVoxel(stop, voxel_size_m);
+        int run = 0;
+        walkVoxels(stop, origin, voxel_size_m, true, [&](const VoxelIndex& ijk) {
+          if (ijk == end_voxel) return true;
+          run = writer.setFreeIfNew(ijk) ? 0 : run + 1;
+          return run < stop_run;
+        });
+      }
       if (in_range) writer.setHit(endpoints_[i]);
     }
   }
 
-  // 3. Union of the threads' masks into thread 0's table.
+  // 3. Union of the chunks' masks into chunk 0's table.
   Marker& first = markers_[0];
-  for (int t = 1; t < threads; ++t) {
+  for (int t = 1; t < chunks; ++t) {
     Marker& other = markers_[t];
     for (uint32_t s = 0; s < other.table.size(); ++s) {
       bool inserted;

@@ -10,8 +10,17 @@
 //     one-block cache: consecutive voxels of a ray are almost always in the same block. The masks
 //     are the per-batch visited set, so each voxel is updated at most once per batch; a voxel both
 //     crossed and hit is a hit (occupied wins: free &= ~hit).
-//  3. Threads march disjoint sets of rays into private tables that are OR-ed together: the
-//     result is a set union, the same for any thread count.
+//  3. Early stop (stop_run > 0): rays from one origin overlap heavily (a 400k-point frame at 5 cm
+//     makes ~9M DDA steps for ~0.45M distinct voxels), so each ray is marched from its end back
+//     towards the origin and stops after stop_run consecutive voxels already carved by earlier
+//     rays: from there those rays have carved (nearly) the same path to the origin. Rays that cross
+//     at one voxel and part again make a single carved voxel a poor signal (stop_run 1 loses 13 %
+//     of the free voxels), a run of 4 a good one (0.8 % lost, 99.99 % same states where both know;
+//     tests/mapping/octomap_equivalence_test.cpp) at a quarter of the work. stop_run 0 marches
+//     every ray whole from the origin, like OctoMap's computeRayKeys: OctoMap's voxel sets.
+//  4. Endpoints are split into a fixed number of chunks (consecutive endpoints: image bands), each
+//     marched into private masks by any thread and then OR-ed: the map is the same for any thread
+//     count (early stopping depends only on the chunk's own rays).
 // Range rule: an endpoint centre farther than max_range_m carves free space to max_range_m along
 // its ray and records no hit (OctoMap's rule). Rays end at the endpoint voxel, exclusive.
 // Units: metres, world frame. Threads: one RayBatch per writer; build() uses OpenMP internally.
@@ -39,8 +48,11 @@ struct EndpointColor {
 
 class RayBatch {
  public:
+  static constexpr int kRayChunks = 16;  // fast mode; fixed so that results ignore the thread count
+
   // Computes the updates of `batch`. The batch must already be checked (finite, in range).
-  void build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads);
+  // stop_run: see 3. above; 0 marches every ray whole (OctoMap's voxel sets).
+  void build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads, int stop_run);
 
   // Touched blocks in ascending packed order, with their masks.
   size_t numBlocks() const { return blocks_.size(); }
