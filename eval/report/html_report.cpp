@@ -22,7 +22,7 @@ namespace cenote::eval {
 namespace {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::json;
+using Json = nlohmann::ordered_json;  // keeps the files' order (stages in pipeline order)
 
 std::string escape(const std::string& text) {
   std::string out;
@@ -194,7 +194,7 @@ std::string plotsSection(const fs::path& dir) {
 
 struct SampleFiles {
   std::string image;
-  std::map<std::string, std::string> maps;  // label -> path, in display order by label
+  std::map<std::string, std::pair<std::string, std::string>> maps;  // folder + rank -> (label, path)
 };
 
 bool endsWith(const std::string& s, const std::string& suffix) {
@@ -215,9 +215,9 @@ std::string samplesSection(const fs::path& dir, const HtmlReportOptions& options
     std::string folder = fs::relative(it->path().parent_path(), dir).string();
     std::string label = folder == "." ? "" : folder + ": ";
     if (endsWith(name, ".depth.pfm")) {
-      by_stem[name.substr(0, name.size() - 10)].maps[label + "depth"] = it->path().string();
+      by_stem[name.substr(0, name.size() - 10)].maps[folder + "\x01"] = {label + "depth", it->path().string()};
     } else if (endsWith(name, ".conf.pfm")) {
-      by_stem[name.substr(0, name.size() - 9)].maps[label + "confidence"] = it->path().string();
+      by_stem[name.substr(0, name.size() - 9)].maps[folder + "\x02"] = {label + "confidence", it->path().string()};
     } else if (endsWith(name, ".png") || endsWith(name, ".jpg") || endsWith(name, ".jpeg")) {
       if (name.find(".preview.") != std::string::npos || name.find(".depth.") != std::string::npos) continue;
       images[it->path().stem().string()] = it->path().string();
@@ -241,7 +241,8 @@ std::string samplesSection(const fs::path& dir, const HtmlReportOptions& options
         html += missing(e.what());
       }
     }
-    for (const auto& [label, path] : files.maps) {
+    for (const auto& [key, entry] : files.maps) {
+      const auto& [label, path] = entry;
       try {
         const cv::Mat map = pipeline::readPfm(path);
         if (map.type() != CV_32FC1) continue;
@@ -277,7 +278,8 @@ td { font-variant-numeric: tabular-nums; } th { background: #f3f3f3; font-weight
 .missing { color: #888; font-style: italic; } .file { color: #888; font-size: 70%; font-weight: normal; }
 figure { display: inline-block; margin: 0.4em; vertical-align: top; }
 figcaption { font-size: 85%; color: #555; text-align: center; }
-.plots img { max-width: 640px; } .samples img { image-rendering: auto; }
+.plots figure { width: 47%; min-width: 420px; } .plots img { width: 100%; }
+.samples img { width: 360px; }
 </style>
 )";
 

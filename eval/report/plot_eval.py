@@ -14,6 +14,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 
 DPI = 110
@@ -81,8 +82,8 @@ def depth_plots(doc, out_dir):
     if frames:
         fig, ax = plt.subplots(figsize=(8, 4.2))
         x = np.arange(len(frames))
-        mean = [f["mean_abs_m"] if f["mean_abs_m"] is not None else np.nan for f in frames]
-        median = [f["median_abs_m"] if f["median_abs_m"] is not None else np.nan for f in frames]
+        mean = np.array([f["mean_abs_m"] if f["mean_abs_m"] is not None else np.nan for f in frames], dtype=float)
+        median = np.array([f["median_abs_m"] if f["median_abs_m"] is not None else np.nan for f in frames], dtype=float)
         ax.plot(x, mean, "o-" if len(frames) < 60 else "-", label="per-frame mean", color="tab:blue")
         ax.plot(x, median, "s-" if len(frames) < 60 else "-", label="per-frame median", color="tab:orange")
         ax2 = ax.twinx()
@@ -91,6 +92,10 @@ def depth_plots(doc, out_dir):
         ax2.set_ylim(0, 105)
         ax.set_xlabel("frame (sorted by name)")
         ax.set_ylabel("absolute depth error [m]")
+        top = np.nanmax(np.concatenate([mean, median])) if np.isfinite(np.concatenate([mean, median])).any() else 1.0
+        ax.set_ylim(0, 1.15 * top if top > 0 else 1.0)
+        ax.ticklabel_format(axis="y", useOffset=False)
+        ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
         ax.set_title("Depth error per frame")
         ax.grid(True, alpha=0.3)
         lines = ax.get_legend_handles_labels()
