@@ -14,5 +14,7 @@ void registerEvalCommand(CLI::App& app);
 // Adds `eval map` (needs mapping/) to the `eval` subcommand; called by registerEvalCommand.
 void registerEvalMapCommand(CLI::App& eval_cmd);
 void registerSimCommand(CLI::App& app);
+// `cenote map`: integrate, info, export, query (mapping/).
+void registerMapCommand(CLI::App& app);
 
 }  // namespace cenote::apps

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   cenote::apps::registerCalibrateCommand(app);
   cenote::apps::registerEvalCommand(app);
   cenote::apps::registerSimCommand(app);
+  cenote::apps::registerMapCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

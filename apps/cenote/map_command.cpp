@@ -1,0 +1,228 @@
+// `cenote map`: build, inspect, convert and query occupancy maps (mapping/).
+//   map integrate --graph scans.graph | --cloud points.ply --origin X,Y,Z  --out map.bt|.ot|.vdb
+//       the job of OctoMap's graph2tree, with its options' meanings: --resolution (-res),
+//       --max-range (-m; <= 0 unlimited), --sensor-model HIT MISS (-sensor), --clamping MIN MAX
+//       (-clamping), --max-scans (-n). Defaults come from --config's `map:` section (5 cm, 10 m).
+//   map info MAP                  resolution, bounds, voxel counts by state, memory
+//   map export MAP --mesh|--points out.ply, --bt|--ot|--vdb out
+//   map query MAP --state X,Y,Z | --segment X,Y,Z,X,Y,Z[,RADIUS] [--stop-at-unknown]
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+#include "apps/cenote/commands.h"
+#include "common/error.h"
+#include "common/yaml_section.h"
+#include "mapping/io/map_io.h"
+#include "mapping/io/scan_graph.h"
+#include "mapping/query/map_query.h"
+#include "pipeline/image/ply_io.h"
+
+namespace cenote::apps {
+namespace {
+
+using namespace cenote::mapping;
+
+std::vector<double> parseNumbers(const std::string& text, const std::string& option) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      size_t used = 0;
+      values.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw Error(option + " " + text + ": '" + item + "' is not a number");
+    }
+  }
+  return values;
+}
+
+Eigen::Vector3d parsePoint(const std::string& text, const std::string& option) {
+  const auto v = parseNumbers(text, option);
+  if (v.size() != 3) throw Error(option + " " + text + ": expected X,Y,Z");
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+struct IntegrateOptions {
+  std::string graph, cloud, origin, out, config, frame_id = "world";
+  double resolution = NAN, max_range = NAN;
+  std::vector<double> sensor_model, clamping;
+  int max_scans = -1;
+};
+
+void runIntegrate(const IntegrateOptions& o) {
+  MapConfig config;
+  if (!o.config.empty()) {
+    YamlSection root(loadYamlFile(o.config), "", o.config);
+    YamlSection section = root.section("map");
+    config.read(section);
+    section.finish();
+  }
+  if (!std::isnan(o.resolution)) config.voxel_size_m = o.resolution;
+  if (!std::isnan(o.max_range)) config.max_range_m = o.max_range;
+  if (!o.sensor_model.empty()) {
+    config.prob_hit = o.sensor_model[0];
+    config.prob_miss = o.sensor_model[1];
+  }
+  if (!o.clamping.empty()) {
+    config.clamp_min = o.clamping[0];
+    config.clamp_max = o.clamping[1];
+  }
+  if (o.graph.empty() == o.cloud.empty()) throw Error("map integrate: give exactly one of --graph and --cloud");
+  mapFormatOf(o.out);  // fail before the work on a bad extension
+  OccupancyMap map(config);
+  const auto t0 = std::chrono::steady_clock::now();
+  size_t scans = 0, points = 0;
+  double integrate_s = 0.0;
+  auto add = [&](const PointBatch& batch) {
+    const auto t = std::chrono::steady_clock::now();
+    map.integrate(batch);
+    integrate_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    ++scans;
+    points += batch.size();
+  };
+  if (!o.graph.empty()) {
+    readScanGraph(o.graph, o.max_scans, add);
+  } else {
+    if (o.origin.empty()) throw Error("map integrate: --cloud needs --origin X,Y,Z (the sensor position)");
+    const pipeline::PlyPoints cloud = pipeline::readPly(o.cloud);
+    PointBatch batch;
+    batch.origin = parsePoint(o.origin, "--origin");
+    batch.points = cloud.points;
+    batch.colors = cloud.colors;
+    add(batch);
+  }
+  saveMap(map, o.out, o.frame_id);
+  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const MapStats s = map.stats();
+  std::printf("integrated %zu scans, %zu points in %.3f s (%.1f ms/scan integrating); %llu occupied, %llu free voxels; wrote %s (%.3f s in all)\n",
+              scans, points, integrate_s, scans ? 1000.0 * integrate_s / scans : 0.0,
+              static_cast<unsigned long long>(s.occupied), static_cast<unsigned long long>(s.free), o.out.c_str(), total_s);
+}
+
+void printInfo(const std::string& path) {
+  const auto map = loadMap(path);
+  const MapStats s = map->stats();
+  const MapConfig& c = map->config();
+  std::printf("map %s\n  resolution: %g m\n  sensor model: hit %g, miss %g, clamping [%g, %g], occupied >= %g\n", path.c_str(),
+              s.voxel_size_m, c.prob_hit, c.prob_miss, c.clamp_min, c.clamp_max, c.occupied_threshold);
+  if (s.bounds.isEmpty()) {
+    std::printf("  empty\n");
+  } else {
+    std::printf("  bounds: [%.3f, %.3f] x [%.3f, %.3f] x [%.3f, %.3f] m\n", s.bounds_m.min_m.x(), s.bounds_m.max_m.x(),
+                s.bounds_m.min_m.y(), s.bounds_m.max_m.y(), s.bounds_m.min_m.z(), s.bounds_m.max_m.z());
+  }
+  std::printf("  voxels: %llu occupied, %llu free, %llu unknown within the bounds\n  memory: %.2f MB\n",
+              static_cast<unsigned long long>(s.occupied), static_cast<unsigned long long>(s.free),
+              static_cast<unsigned long long>(s.unknown_in_bounds), s.memory_bytes / 1048576.0);
+}
+
+struct ExportOptions {
+  std::string map, mesh, points, bt, ot, vdb;
+};
+
+void runExport(const ExportOptions& o) {
+  const auto map = loadMap(o.map);
+  int outputs = 0;
+  if (!o.mesh.empty()) {
+    const MeshStats m = exportMeshPly(*map, o.mesh);
+    std::printf("wrote %s: %zu vertices, %zu triangles\n", o.mesh.c_str(), m.vertices, m.triangles);
+    ++outputs;
+  }
+  if (!o.points.empty()) {
+    std::printf("wrote %s: %zu occupied voxel centres\n", o.points.c_str(), exportOccupiedPointsPly(*map, o.points));
+    ++outputs;
+  }
+  for (const std::string* out : {&o.bt, &o.ot, &o.vdb}) {
+    if (out->empty()) continue;
+    saveMap(*map, *out);
+    std::printf("wrote %s\n", out->c_str());
+    ++outputs;
+  }
+  if (outputs == 0) throw Error("map export: give at least one of --mesh, --points, --bt, --ot, --vdb");
+}
+
+struct QueryOptions {
+  std::string map;
+  std::vector<std::string> states, segments;
+  bool stop_at_unknown = false;
+};
+
+void runQuery(const QueryOptions& o) {
+  const auto map = loadMap(o.map);
+  if (o.states.empty() && o.segments.empty()) throw Error("map query: give --state or --segment");
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& s : o.states) points.push_back(parsePoint(s, "--state"));
+  const auto states = queryVoxels(*map, points);
+  for (size_t i = 0; i < points.size(); ++i) {
+    std::printf("state %s: %s (p = %.4f)\n", o.states[i].c_str(), toString(states[i].state), states[i].probability);
+  }
+  std::vector<SegmentQuery> segments;
+  for (const auto& s : o.segments) {
+    const auto v = parseNumbers(s, "--segment");
+    if (v.size() != 6 && v.size() != 7) throw Error("--segment " + s + ": expected X,Y,Z,X,Y,Z[,RADIUS]");
+    segments.push_back({Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector3d(v[3], v[4], v[5]), v.size() == 7 ? v[6] : 0.0});
+  }
+  const auto results = checkSegments(*map, segments, o.stop_at_unknown);
+  for (size_t i = 0; i < segments.size(); ++i) {
+    const CollisionResult& r = results[i];
+    std::printf("segment %s: %s", o.segments[i].c_str(),
+                r.hit ? "hit" : (r.stopped_at_unknown ? "stopped at unknown" : "clear"));
+    if (r.hit) {
+      const Eigen::Vector3d c = map->toPoint(r.hit_voxel);
+      std::printf(" at %.3f m (voxel centre %.3f,%.3f,%.3f)", r.hit_distance_m, c.x(), c.y(), c.z());
+    }
+    if (r.crossed_unknown) std::printf("; unknown from %.3f m", r.unknown_distance_m);
+    std::printf("\n");
+  }
+}
+
+}  // namespace
+
+void registerMapCommand(CLI::App& app) {
+  CLI::App* map = app.add_subcommand("map", "Build, inspect, convert and query occupancy maps");
+  map->require_subcommand(1);
+
+  auto integrate = std::make_shared<IntegrateOptions>();
+  CLI::App* in = map->add_subcommand("integrate", "Integrate OctoMap scan graphs or a point cloud (as graph2tree)");
+  in->add_option("--graph", integrate->graph, "OctoMap ScanGraph (.graph): scans with poses");
+  in->add_option("--cloud", integrate->cloud, "one point cloud in world coordinates (binary PLY, x y z r g b)");
+  in->add_option("--origin", integrate->origin, "sensor position X,Y,Z of --cloud");
+  in->add_option("--resolution,--res", integrate->resolution, "voxel size in metres (graph2tree -res)");
+  in->add_option("--max-range,-m", integrate->max_range, "maximum range in metres, <= 0: unlimited (graph2tree -m)");
+  in->add_option("--sensor-model", integrate->sensor_model, "HIT MISS probabilities (graph2tree -sensor)")->expected(2);
+  in->add_option("--clamping", integrate->clamping, "MIN MAX probabilities (graph2tree -clamping)")->expected(2);
+  in->add_option("--max-scans,-n", integrate->max_scans, "integrate at most this many scans (graph2tree -n)");
+  in->add_option("--config", integrate->config, "YAML file with a map: section (defaults: config/default.yaml's values)");
+  in->add_option("--frame-id", integrate->frame_id, "frame name stored in .vdb metadata");
+  in->add_option("--out,-o", integrate->out, "output map: .bt, .ot or .vdb")->required();
+  in->callback([integrate] { runIntegrate(*integrate); });
+
+  auto info_path = std::make_shared<std::string>();
+  CLI::App* info = map->add_subcommand("info", "Resolution, bounds, voxel counts and memory of a map");
+  info->add_option("map", *info_path, "map file (.vdb, .bt, .ot)")->required();
+  info->callback([info_path] { printInfo(*info_path); });
+
+  auto ex = std::make_shared<ExportOptions>();
+  CLI::App* exp = map->add_subcommand("export", "Convert a map: mesh or voxel PLY, .bt, .ot, .vdb");
+  exp->add_option("map", ex->map, "map file (.vdb, .bt, .ot)")->required();
+  exp->add_option("--mesh", ex->mesh, "triangle mesh of occupied space, PLY with vertex colours");
+  exp->add_option("--points", ex->points, "occupied voxel centres, coloured PLY");
+  exp->add_option("--bt", ex->bt, "OctoMap binary tree");
+  exp->add_option("--ot", ex->ot, "OctoMap colour tree");
+  exp->add_option("--vdb", ex->vdb, "OpenVDB file");
+  exp->callback([ex] { runExport(*ex); });
+
+  auto q = std::make_shared<QueryOptions>();
+  CLI::App* query = map->add_subcommand("query", "Voxel states and segment collisions");
+  query->add_option("map", q->map, "map file (.vdb, .bt, .ot)")->required();
+  query->add_option("--state", q->states, "X,Y,Z: state and probability of the voxel (repeatable)");
+  query->add_option("--segment", q->segments, "X,Y,Z,X,Y,Z[,RADIUS]: first occupied voxel (repeatable)");
+  query->add_flag("--stop-at-unknown", q->stop_at_unknown, "segments end at the first unknown voxel");
+  query->callback([q] { runQuery(*q); });
+}
+
+}  // namespace cenote::apps

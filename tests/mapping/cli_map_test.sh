@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# cli_map_test.sh CENOTE MAKE_SCAN_GRAPH: `cenote map` end to end, and against OctoMap's graph2tree
+# on the same ScanGraph when octomap-tools is installed.
+set -euo pipefail
+cenote=$1
+make_graph=$2
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+
+"$make_graph" "$dir/scans.graph" 4
+"$cenote" map integrate --graph "$dir/scans.graph" --resolution 0.05 --max-range 8 --out "$dir/ours.vdb"
+"$cenote" map export "$dir/ours.vdb" --bt "$dir/ours.bt" --mesh "$dir/mesh.ply" --points "$dir/points.ply" --ot "$dir/ours.ot"
+for f in ours.bt ours.ot mesh.ply points.ply; do test -s "$dir/$f" || { echo "missing $f"; exit 1; }; done
+info=$("$cenote" map info "$dir/ours.vdb")
+echo "$info"
+grep -q "resolution: 0.05 m" <<<"$info"
+occupied=$(sed -n 's/.*voxels: \([0-9]*\) occupied.*/\1/p' <<<"$info")
+test "$occupied" -gt 1000
+
+# .bt written and read back: the same number of occupied voxels.
+bt_occupied=$("$cenote" map info "$dir/ours.bt" | sed -n 's/.*voxels: \([0-9]*\) occupied.*/\1/p')
+test "$bt_occupied" -eq "$occupied" || { echo ".bt has $bt_occupied occupied voxels, .vdb $occupied"; exit 1; }
+
+# Queries: on the first camera's central ray (direction 3,0.2,-1.5) 1.1 m out is free, far away
+# is unknown, the ray continued hits the floor.
+q=$("$cenote" map query "$dir/ours.vdb" --state 1.0,0.07,-0.5 --state 50,50,50 --segment 1.0,0.07,-0.5,6.0,0.4,-3.0)
+echo "$q"
+grep -q "state 1.0,0.07,-0.5: free" <<<"$q"
+grep -q "state 50,50,50: unknown" <<<"$q"
+grep -q "segment 1.0,0.07,-0.5,6.0,0.4,-3.0: hit" <<<"$q"
+
+# Bad input: a clear error, non-zero exit.
+if "$cenote" map integrate --graph "$dir/missing.graph" --out "$dir/x.bt" 2>"$dir/err"; then exit 1; fi
+grep -q "missing.graph" "$dir/err"
+if "$cenote" map integrate --graph "$dir/scans.graph" --resolution 0 --out "$dir/x.bt" 2>"$dir/err"; then exit 1; fi
+grep -q "map.voxel_size_m" "$dir/err"
+
+# The same job as graph2tree, same options: occupied voxel counts within 1 %.
+if command -v graph2tree >/dev/null; then
+  graph2tree -i "$dir/scans.graph" -o "$dir/octomap.bt" -res 0.05 -m 8 -discretize -sensor 0.4 0.7 -clamping 0.12 0.97 >/dev/null
+  "$cenote" map integrate --graph "$dir/scans.graph" --resolution 0.05 --max-range 8 --sensor-model 0.7 0.4 \
+    --clamping 0.12 0.97 --out "$dir/ours2.bt"
+  theirs=$("$cenote" map info "$dir/octomap.bt" | sed -n 's/.*voxels: \([0-9]*\) occupied.*/\1/p')
+  ours=$("$cenote" map info "$dir/ours2.bt" | sed -n 's/.*voxels: \([0-9]*\) occupied.*/\1/p')
+  echo "occupied voxels: graph2tree $theirs, cenote $ours"
+  awk -v a="$theirs" -v b="$ours" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= 0.01 * a) }'
+fi
+echo "cli_map_test: ok"
