@@ -1,0 +1,114 @@
+#include "mapping/frontier/frontier_map.h"
+
+#include <gtest/gtest.h>
+
+#include "tests/mapping/support/analytic_scene.h"
+
+namespace cenote::mapping {
+namespace {
+
+// Six 90-degree views from one position (a cube map): everything visible from there.
+std::vector<PointBatch> cubeViews(const test::Scene& scene, const Eigen::Vector3d& position) {
+  test::PinholeCamera camera;
+  camera.width = camera.height = 160;
+  camera.fx = camera.fy = 80.0;
+  camera.cx = camera.cy = 79.5;
+  std::vector<PointBatch> views;
+  const Eigen::Vector3d dirs[6] = {Eigen::Vector3d::UnitX(),  -Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
+                                   -Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(),  -Eigen::Vector3d::UnitZ()};
+  for (const auto& d : dirs) views.push_back(test::renderBatch(scene, camera, test::lookAt(position, position + d), 12.0));
+  return views;
+}
+
+// Two 4 x 4 x 3 m rooms side by side, joined by a 1 x 2 m doorway in the wall x = 4.
+test::Scene twoRooms() {
+  test::Scene scene;
+  const Eigen::Vector3d door_min(4.0, 1.5, 0.0), door_max(4.0, 2.5, 2.0);
+  test::Box a;
+  a.min = Eigen::Vector3d(0, 0, 0);
+  a.max = Eigen::Vector3d(4, 4, 3);
+  a.has_door = true;
+  a.door_min = door_min;
+  a.door_max = door_max;
+  test::Box b = a;
+  b.min = Eigen::Vector3d(4, 0, 0);
+  b.max = Eigen::Vector3d(8, 4, 3);
+  scene.boxes = {a, b};
+  return scene;
+}
+
+MapConfig roomConfig() {
+  MapConfig c;
+  c.voxel_size_m = 0.1;
+  c.frontier_min_voxels = 20;
+  c.frontier_max_extent_m = 20.0;  // no splitting here: the doorway's frontier is one cluster
+  return c;
+}
+
+TEST(FrontierMap, EmptyMapHasNoFrontier) {
+  OccupancyMap map(roomConfig());
+  FrontierMap frontiers(map);
+  frontiers.rebuild();
+  EXPECT_TRUE(frontiers.clusters(Eigen::Vector3d::Zero()).empty());
+}
+
+// With ray_stop_run 4 this test finds 11 more clusters of 22-287 voxels inside room 1: voxels that
+// early-stopped rays left unknown. 16 (the default) leaves none, as whole rays (0).
+TEST(FrontierMap, OneClusterAtTheDoorwayGoneOnceTheRoomBehindIsSeen) {
+  const test::Scene scene = twoRooms();
+  OccupancyMap map(roomConfig());
+  FrontierMap frontiers(map);
+  for (const auto& view : cubeViews(scene, Eigen::Vector3d(2.03, 2.01, 1.02))) frontiers.update(map.integrate(view));
+  const auto clusters = frontiers.clusters(Eigen::Vector3d(2, 2, 1));
+  ASSERT_EQ(clusters.size(), 1u) << "largest has " << (clusters.empty() ? 0 : clusters[0].num_voxels) << " voxels";
+  const FrontierCluster& door = clusters[0];
+  // The frontier is the rim of the cone of room 2 seen through the doorway: it starts at the
+  // doorway (x = 4) and lies in room 2.
+  EXPECT_GE(door.bounds_m.min_m.x(), 3.8);
+  EXPECT_LE(door.bounds_m.min_m.x(), 4.3);
+  EXPECT_GT(door.centroid_m.x(), 4.0);
+  EXPECT_GT(door.num_voxels, 100u);
+  EXPECT_NEAR(door.distance_m, (door.centroid_m - Eigen::Vector3d(2, 2, 1)).norm(), 1e-9);
+
+  // Incremental result equals a rebuild.
+  FrontierMap fresh(map);
+  fresh.rebuild();
+  EXPECT_EQ(fresh.numFrontierVoxels(), frontiers.numFrontierVoxels());
+  ASSERT_EQ(fresh.clusters(Eigen::Vector3d::Zero()).size(), 1u);
+  EXPECT_EQ(fresh.clusters(Eigen::Vector3d::Zero())[0].num_voxels, door.num_voxels);
+
+  // Observe room 2 from its middle: the doorway frontier disappears.
+  for (const auto& view : cubeViews(scene, Eigen::Vector3d(6.02, 2.03, 1.01))) frontiers.update(map.integrate(view));
+  const auto after = frontiers.clusters(Eigen::Vector3d(2, 2, 1));
+  for (const auto& c : after) {
+    ADD_FAILURE() << "cluster of " << c.num_voxels << " voxels at (" << c.centroid_m.transpose() << ")";
+  }
+}
+
+TEST(FrontierMap, LargeClustersAreSplitAndRegionOfInterestLimits) {
+  const test::Scene scene = twoRooms();
+  MapConfig c = roomConfig();
+  c.frontier_max_extent_m = 1.0;
+  OccupancyMap map(c);
+  FrontierMap frontiers(map);
+  Aabb roi;
+  roi.min_m = Eigen::Vector3d(0, 0, 0);
+  roi.max_m = Eigen::Vector3d(4.5, 4, 3);
+  FrontierMap limited(map, roi);
+  for (const auto& view : cubeViews(scene, Eigen::Vector3d(2.03, 2.01, 1.02))) {
+    const MapDelta delta = map.integrate(view);
+    frontiers.update(delta);
+    limited.update(delta);
+  }
+  const auto clusters = frontiers.clusters(Eigen::Vector3d::Zero());
+  EXPECT_GT(clusters.size(), 1u);
+  for (const auto& cl : clusters) {
+    const Eigen::Vector3d extent = cl.bounds_m.max_m - cl.bounds_m.min_m;
+    EXPECT_LE(extent.maxCoeff(), 1.0 + 1e-9) << "cluster " << cl.id;
+  }
+  EXPECT_LT(limited.numFrontierVoxels(), frontiers.numFrontierVoxels());
+  for (const auto& cl : limited.clusters(Eigen::Vector3d::Zero())) EXPECT_LE(cl.bounds_m.max_m.x(), 4.5 + 1e-9);
+}
+
+}  // namespace
+}  // namespace cenote::mapping
