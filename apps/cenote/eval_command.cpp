@@ -107,7 +107,7 @@ void checkOutputs(const OutputOptions& o) {
 struct DepthOptions {
   std::string estimate, reference;
   bool photometric = false;
-  double reference_scale = 1.0, max_depth_m = 0.0;
+  double reference_scale = 1.0, max_depth_m = 0.0, name_tolerance = 0.0;
   int heatmaps = 3;
   OutputOptions out;
 };
@@ -136,6 +136,7 @@ void runDepth(const DepthOptions& o) {
   options.prefer_photometric = o.photometric;
   options.reference_scale = o.reference_scale;
   options.max_depth_m = o.max_depth_m;
+  options.name_tolerance = o.name_tolerance;
   const eval::DepthEvaluation e = eval::evaluateDepthFolders(o.estimate, o.reference, options);
   printTable("depth maps: " + o.estimate + " against " + o.reference,
              {{"frames matched", std::to_string(e.frames.size())},
@@ -281,6 +282,9 @@ void registerEvalCommand(CLI::App& app) {
   depth->add_option("--reference-scale", d->reference_scale, "Multiply reference depths by this (COLMAP scale)")
       ->capture_default_str();
   depth->add_option("--max-depth", d->max_depth_m, "Compare only depths up to this, metres (0 = all)")
+      ->capture_default_str();
+  depth->add_option("--name-tolerance", d->name_tolerance,
+                    "Pair numeric names (timestamps) this close when no name matches exactly (0 = exact)")
       ->capture_default_str();
   depth->add_option("--heatmaps", d->heatmaps, "With --plot: error maps of this many frames (best..worst)")
       ->capture_default_str()

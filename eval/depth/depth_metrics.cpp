@@ -1,7 +1,10 @@
 #include "eval/depth/depth_metrics.h"
 
 #include <cmath>
+#include <algorithm>
 #include <limits>
+#include <map>
+#include <set>
 #include <sstream>
 
 #include "common/error.h"
@@ -18,6 +21,11 @@ void checkOptions(const DepthEvaluationOptions& o) {
   if (!(o.reference_scale > 0.0) || !std::isfinite(o.reference_scale)) {
     std::ostringstream text;
     text << "reference scale " << o.reference_scale << ": must be a finite number > 0";
+    throw Error(text.str());
+  }
+  if (!(o.name_tolerance >= 0.0) || !std::isfinite(o.name_tolerance)) {
+    std::ostringstream text;
+    text << "name tolerance " << o.name_tolerance << ": must be finite and >= 0 (0 = exact names)";
     throw Error(text.str());
   }
   if (!(o.max_depth_m >= 0.0) || !std::isfinite(o.max_depth_m)) {
@@ -64,6 +72,41 @@ std::string examples(const std::map<std::string, DepthFile>& files) {
     text += (text.empty() ? "" : ", ") + ("'" + key + "'");
   }
   return text;
+}
+
+bool numericName(const std::string& name, long double& value) {
+  char* end = nullptr;
+  value = std::strtold(name.c_str(), &end);
+  return !name.empty() && end != name.c_str() && *end == '\0';
+}
+
+// Pairs estimate names without an exact reference with the nearest numeric reference name.
+std::map<std::string, std::string> numericPairs(const std::map<std::string, DepthFile>& estimates,
+                                                const std::map<std::string, DepthFile>& references, double tolerance) {
+  std::map<std::string, std::string> pairs;
+  if (tolerance <= 0.0) return pairs;
+  std::vector<std::pair<long double, std::string>> numeric;
+  for (const auto& [key, file] : references) {
+    long double v = 0;
+    if (!estimates.count(key) && numericName(key, v)) numeric.emplace_back(v, key);
+  }
+  std::sort(numeric.begin(), numeric.end());
+  std::set<std::string> used;
+  for (const auto& [key, file] : estimates) {
+    long double v = 0;
+    if (references.count(key) || !numericName(key, v) || numeric.empty()) continue;
+    auto it = std::lower_bound(numeric.begin(), numeric.end(), std::make_pair(v, std::string()));
+    const std::pair<long double, std::string>* best = nullptr;
+    for (auto c : {it, it == numeric.begin() ? it : std::prev(it)}) {
+      if (c == numeric.end()) continue;
+      if (!best || std::abs(c->first - v) < std::abs(best->first - v)) best = &*c;
+    }
+    if (best && std::abs(best->first - v) <= tolerance && !used.count(best->second)) {
+      pairs[key] = best->second;
+      used.insert(best->second);
+    }
+  }
+  return pairs;
 }
 
 }  // namespace
@@ -132,16 +175,20 @@ DepthEvaluation evaluateDepthFolders(const std::string& estimate_dir, const std:
   if (estimates.empty()) throw Error("estimate folder " + estimate_dir + " holds no depth map" + kinds);
   if (references.empty()) throw Error("reference folder " + reference_dir + " holds no depth map" + kinds);
   DepthEvaluation evaluation;
+  const std::map<std::string, std::string> numeric = numericPairs(estimates, references, options.name_tolerance);
+  std::set<std::string> matched_references;
   for (const auto& [key, file] : estimates) {
-    const auto ref = references.find(key);
+    auto ref = references.find(key);
+    if (ref == references.end() && numeric.count(key)) ref = references.find(numeric.at(key));
     if (ref == references.end()) {
       evaluation.only_in_estimate.push_back(key);
       continue;
     }
+    matched_references.insert(ref->first);
     evaluation.frames.push_back(compareFiles(file, ref->second, key, options, nullptr, &evaluation.histogram));
   }
   for (const auto& [key, file] : references) {
-    if (!estimates.count(key)) evaluation.only_in_reference.push_back(key);
+    if (!matched_references.count(key)) evaluation.only_in_reference.push_back(key);
   }
   if (evaluation.frames.empty()) {
     throw Error("no image name is in both " + estimate_dir + " (e.g. " + examples(estimates) + ") and " +

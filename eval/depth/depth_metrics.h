@@ -40,6 +40,10 @@ struct DepthEvaluationOptions {
   bool prefer_photometric = false;  // COLMAP: *.photometric.bin over *.geometric.bin
   double reference_scale = 1.0;     // multiplies reference depths (COLMAP models have arbitrary scale)
   double max_depth_m = 0.0;         // > 0: pixels beyond this in either map are not compared
+  // > 0: an estimate whose name is a number and has no reference of the same name is paired with
+  // the reference whose numeric name is nearest, when within this (in the names' unit, e.g. ns);
+  // for writers that round timestamps differently. Each reference is used once at most.
+  double name_tolerance = 0.0;
 };
 
 struct DepthEvaluation {

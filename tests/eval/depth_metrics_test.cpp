@@ -136,6 +136,27 @@ TEST(DepthMetrics, ReferenceScaleAndMaxDepthApply) {
   EXPECT_THROW(evaluateDepthFolders(dir / "est", dir / "ref", o), Error);
 }
 
+TEST(DepthMetrics, NumericNamesPairWithinToleranceOnly) {
+  test::TempDir dir;
+  std::filesystem::create_directories(dir / "est");
+  std::filesystem::create_directories(dir / "ref");
+  const cv::Mat d = ramp(4, 4, 1.0f);
+  // Nanosecond names one writer rounded through a double: 85 ns apart.
+  pipeline::writePfm(dir / "est/1700000000066666752.depth.pfm", d);
+  pipeline::writePfm(dir / "ref/1700000000066666667.pfm", d);
+  pipeline::writePfm(dir / "ref/1700000000133333333.pfm", d);
+  EXPECT_THROW(evaluateDepthFolders(dir / "est", dir / "ref"), Error);
+  DepthEvaluationOptions o;
+  o.name_tolerance = 1000.0;
+  const DepthEvaluation e = evaluateDepthFolders(dir / "est", dir / "ref", o);
+  ASSERT_EQ(e.frames.size(), 1u);
+  EXPECT_EQ(e.frames[0].reference_file.path, dir / "ref/1700000000066666667.pfm");
+  ASSERT_EQ(e.only_in_reference.size(), 1u);
+  EXPECT_EQ(e.only_in_reference[0], "1700000000133333333");
+  o.name_tolerance = 10.0;
+  EXPECT_THROW(evaluateDepthFolders(dir / "est", dir / "ref", o), Error);
+}
+
 TEST(DepthMetrics, SizeMismatchNamesBothFiles) {
   test::TempDir dir;
   std::filesystem::create_directories(dir / "est");
