@@ -3,8 +3,13 @@
 # The tables go into docs/PERFORMANCE.md by hand, with this command.
 set -euo pipefail
 build=${1:-build}
+here=$(cd "$(dirname "$0")/.." && pwd)
 for bench in "$build"/bench/*_bench; do
   echo "== $(basename "$bench")"
   "$bench"
   echo
 done
+echo "== run_throughput (cenote run on a simulated 800x600 cave, 112 disparities)"
+echo "| run | fps | read+rectify ms | stereo ms | fusion ms | output ms | peak MiB | / paper's best |"
+echo "|---|---|---|---|---|---|---|---|"
+bash "$here/bench/run_throughput.sh" "$build/apps/cenote" "$here"

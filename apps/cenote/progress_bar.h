@@ -16,6 +16,8 @@ class ProgressBar {
   explicit ProgressBar(std::string label) : label_(std::move(label)), tty_(isatty(STDERR_FILENO) != 0) {}
 
   void update(size_t done, size_t total) {
+    if (finished_) return;
+    finished_ = done == total;
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     const double rate = elapsed > 0.0 ? done / elapsed : 0.0;
     const double eta = rate > 0.0 ? (total - done) / rate : 0.0;
@@ -38,6 +40,7 @@ class ProgressBar {
   std::string label_;
   bool tty_;
   size_t last_printed_ = 0;
+  bool finished_ = false;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 

@@ -11,6 +11,9 @@
 #include "apps/cenote/progress_bar.h"
 #include "common/error.h"
 #include "pipeline/dataset/stereo_dataset.h"
+#include "common/yaml_section.h"
+#include "mapping/io/map_io.h"
+#include "mapping/occupancy_map.h"
 #include "pipeline/runner/runner.h"
 
 namespace cenote::apps {
@@ -21,7 +24,7 @@ std::atomic<bool> g_stop{false};
 extern "C" void onInterrupt(int) { g_stop = true; }
 
 struct RunOptions {
-  std::string dataset, format = "auto", trajectory, trajectory_format, pose_frame, config, out;
+  std::string dataset, format = "auto", trajectory, trajectory_format, pose_frame, config, out, map;
   int fusion_views = 0, max_frames = -1;
   bool write_depth = false;
   double voxel_m = -1.0, keyframe_translation_m = -1.0, keyframe_rotation_deg = -1.0;
@@ -45,8 +48,29 @@ pipeline::PipelineConfig makeConfig(const RunOptions& o) {
   return config;
 }
 
+// The `map:` section of the configuration file (defaults without one).
+mapping::MapConfig mapConfig(const RunOptions& o) {
+  mapping::MapConfig config;
+  if (o.config.empty()) return config;
+  YamlSection root(loadYamlFile(o.config), "", o.config);
+  YamlSection section = root.section("map");
+  config.read(section);
+  section.finish();
+  return config;
+}
+
 void run(const RunOptions& o) {
   pipeline::Runner runner(makeConfig(o));
+  // The map stage: every fused batch is integrated (free space along each ray, a hit at its end).
+  std::unique_ptr<mapping::OccupancyMap> map;
+  pipeline::PointSink sink;
+  if (!o.map.empty()) {
+    mapping::mapFormatOf(o.map);  // an unknown extension fails now, not after the run
+    map = std::make_unique<mapping::OccupancyMap>(mapConfig(o));
+    sink = [&map](const PointBatch& batch) {
+      if (!batch.empty()) map->integrate(batch);
+    };
+  }
   const std::unique_ptr<pipeline::StereoDataset> dataset =
       pipeline::openDataset(o.dataset, pipeline::parseDatasetFormat(o.format));
   const pipeline::Trajectory trajectory =
@@ -58,7 +82,7 @@ void run(const RunOptions& o) {
   std::signal(SIGTERM, onInterrupt);
   ProgressBar bar("cenote run");
   const pipeline::RunReport report =
-      runner.run(*dataset, trajectory, o.out, g_stop, {}, [&bar](size_t done, size_t total) { bar.update(done, total); });
+      runner.run(*dataset, trajectory, o.out, g_stop, sink, [&bar](size_t done, size_t total) { bar.update(done, total); });
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
 
@@ -67,6 +91,10 @@ void run(const RunOptions& o) {
   std::cout << report.toTable();
   std::cout << "outputs: " << o.out << "/points.ply, " << report_path;
   if (runner.config().run.write_depth) std::cout << ", " << o.out << "/depth/";
+  if (map) {
+    mapping::saveMap(*map, o.map);
+    std::cout << ", " << o.map;
+  }
   std::cout << "\n";
 }
 
@@ -94,6 +122,7 @@ void registerRunCommand(CLI::App& app) {
   cmd->add_option("--keyframe-rotation", o->keyframe_rotation_deg, "Keyframe threshold (degrees)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--out", o->out, "Output folder")->required();
+  cmd->add_option("--map", o->map, "Integrate the fused points into an occupancy map saved here (.vdb, .bt, .ot)");
   cmd->callback([o] { run(*o); });
 }
 

@@ -114,7 +114,7 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
   report.frames_in = total;
   std::atomic<size_t> no_pose{0}, not_keyframe{0}, unreadable{0}, processed{0}, fused{0}, read_done{0};
   std::atomic<bool> interrupted{false};
-  StageTimer read_timer, stereo_timer, fusion_timer, output_timer;
+  StageTimer read_timer, stereo_timer, fusion_timer, output_timer, sink_timer;
   BoundedQueue<RectifiedItem> rectified(rc.queue_depth);
   BoundedQueue<DepthFrame> depths(rc.queue_depth);
   BoundedQueue<OutputItem> outputs(rc.queue_depth);
@@ -229,8 +229,12 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
         writePfm(base + ".conf.pfm", item->frame.confidence);
       }
       points.append(item->points);
-      if (sink) sink(item->points);
       output_timer.add(msSince(t0));
+      if (sink) {
+        const auto t1 = Clock::now();
+        sink(item->points);
+        sink_timer.add(msSince(t1));
+      }
       if (progress) progress(read_done.load(), total);
     }
   } catch (...) {
@@ -264,6 +268,7 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
   report.stages["stereo"] = stereo_timer.summary();
   report.stages["fusion"] = fusion_timer.summary();
   report.stages["output"] = output_timer.summary();
+  if (sink) report.stages["map"] = sink_timer.summary();
   return report;
 }
 
@@ -294,7 +299,7 @@ std::string RunReport::toTable() const {
     << skipped_no_pose << " without pose, " << skipped_not_keyframe << " not keyframes, " << skipped_unreadable
     << " unreadable" << (interrupted ? " (interrupted)" : "") << "\n";
   t << "stage           median ms    p95 ms   frames\n";
-  for (const char* name : {"read_rectify", "stereo", "fusion", "output"}) {
+  for (const char* name : {"read_rectify", "stereo", "fusion", "output", "map"}) {
     const auto it = stages.find(name);
     if (it == stages.end()) continue;
     char line[128];

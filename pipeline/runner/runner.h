@@ -39,7 +39,7 @@ struct RunReport {
   double wall_s = 0.0;
   double fps = 0.0;              // frames processed per second of wall time
   double peak_memory_mb = 0.0;   // resident set, high-water mark of the process
-  std::map<std::string, StageSummary> stages;  // read_rectify, stereo, fusion, output
+  std::map<std::string, StageSummary> stages;  // read_rectify, stereo, fusion, output (+ map: the sink)
 
   // JSON object with the keys above ("stages": {name: {median_ms, p95_ms, mean_ms, frames}}).
   std::string toJson() const;
