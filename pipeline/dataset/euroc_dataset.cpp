@@ -74,7 +74,7 @@ EurocDataset::EurocDataset(const std::string& root) {
       ++unpaired_;
     }
     if (j < right.size() && right[j].t_ns == l.t_ns) {
-      frames_.push_back({static_cast<double>(l.t_ns) * 1e-9, l.file, right[j].file});
+      frames_.push_back({l.t_ns, static_cast<double>(l.t_ns) * 1e-9, l.file, right[j].file});
       ++j;
     } else {
       ++unpaired_;

@@ -23,6 +23,7 @@ class EurocDataset final : public StereoDataset {
 
   size_t size() const override { return frames_.size(); }
   double timestamp(size_t index) const override { return frames_.at(index).t_s; }
+  std::string frameName(size_t index) const override { return std::to_string(frames_.at(index).t_ns); }
   StereoFrame load(size_t index) const override;
   const StereoCalibration& calibration() const override { return calibration_; }
   Eigen::Isometry3d T_body_cam() const override { return T_body_cam_; }
@@ -33,6 +34,7 @@ class EurocDataset final : public StereoDataset {
 
  private:
   struct Frame {
+    int64_t t_ns;
     double t_s;
     std::string left, right;
   };

@@ -13,9 +13,9 @@ namespace cenote::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
-std::string frameName(size_t index) {
+std::string frameStem(size_t index) {
   char name[32];
-  std::snprintf(name, sizeof(name), "%06zu.png", index);
+  std::snprintf(name, sizeof(name), "%06zu", index);
   return name;
 }
 
@@ -58,7 +58,7 @@ KittiDataset::KittiDataset(const std::string& sequence_dir) : dir_(sequence_dir)
   }
   const std::string calib = (dir / "calib.txt").string();
   if (!fs::exists(calib)) throw Error("KITTI " + sequence_dir + ": missing calib.txt");
-  const cv::Mat first = readImage((fs::path(left_dir_) / frameName(0)).string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat first = readImage((fs::path(left_dir_) / (frameStem(0) + ".png")).string(), cv::IMREAD_UNCHANGED);
   const std::string left_key = colour ? "P2" : "P0", right_key = colour ? "P3" : "P1";
   calibration_ = readKittiCalibration(calib, first.size(), left_key, right_key);
   // P_i = K [I | t_i] maps camera-0 points into camera i: the camera sits at -t_i in camera 0.
@@ -69,11 +69,13 @@ KittiDataset::KittiDataset(const std::string& sequence_dir) : dir_(sequence_dir)
   T_body_cam_.translation() = -(K.inverse() * t);
 }
 
+std::string KittiDataset::frameName(size_t index) const { return frameStem(index); }
+
 StereoFrame KittiDataset::load(size_t index) const {
   StereoFrame frame;
   frame.t_s = times_.at(index);
-  frame.left = readImage((fs::path(left_dir_) / frameName(index)).string(), cv::IMREAD_UNCHANGED);
-  frame.right = readImage((fs::path(right_dir_) / frameName(index)).string(), cv::IMREAD_UNCHANGED);
+  frame.left = readImage((fs::path(left_dir_) / (frameStem(index) + ".png")).string(), cv::IMREAD_UNCHANGED);
+  frame.right = readImage((fs::path(right_dir_) / (frameStem(index) + ".png")).string(), cv::IMREAD_UNCHANGED);
   return frame;
 }
 

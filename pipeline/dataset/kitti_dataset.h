@@ -22,6 +22,7 @@ class KittiDataset final : public StereoDataset {
 
   size_t size() const override { return times_.size(); }
   double timestamp(size_t index) const override { return times_.at(index); }
+  std::string frameName(size_t index) const override;
   StereoFrame load(size_t index) const override;
   const StereoCalibration& calibration() const override { return calibration_; }
   Eigen::Isometry3d T_body_cam() const override { return T_body_cam_; }

@@ -32,6 +32,9 @@ class StereoDataset {
 
   virtual size_t size() const = 0;
   virtual double timestamp(size_t index) const = 0;
+  // The frame's name as recorded (EuRoC: its timestamp in nanoseconds; KITTI: "000123"), for
+  // output files that line up with the dataset's own.
+  virtual std::string frameName(size_t index) const = 0;
   // Reads frame `index` (raw images, as recorded).
   // @throws cenote::Error naming the file when an image is missing or unreadable.
   virtual StereoFrame load(size_t index) const = 0;

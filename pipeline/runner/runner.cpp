@@ -55,7 +55,27 @@ class Failure {
   std::atomic<bool> failed_{false};
 };
 
-std::string timestampName(double t_s) { return std::to_string(static_cast<long long>(std::llround(t_s * 1e9))); }
+// Dataset names of the frames in flight, by timestamp (a double copied unchanged through the
+// stages, so equality holds). Entries leave as frames come out (or are passed by), so the table
+// holds at most the frames between the reader and the output.
+class FrameNames {
+ public:
+  void add(double t_s, std::string name) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    names_.emplace(t_s, std::move(name));
+  }
+  std::string take(double t_s) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = names_.find(t_s);
+    std::string name = it != names_.end() ? it->second : std::to_string(std::llround(t_s * 1e9));
+    names_.erase(names_.begin(), names_.upper_bound(t_s));
+    return name;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::map<double, std::string> names_;
+};
 
 cv::Mat toBgr(const cv::Mat& image) {
   if (image.channels() == 3) return image;
@@ -119,6 +139,7 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
   BoundedQueue<DepthFrame> depths(rc.queue_depth);
   BoundedQueue<OutputItem> outputs(rc.queue_depth);
   Failure failure;
+  FrameNames names;
   auto closeAll = [&] {
     rectified.close();
     depths.close();
@@ -154,6 +175,7 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
           continue;
         }
         item.T_world_cam = *pose * T_raw_rect;
+        if (rc.write_depth) names.add(item.pair.t_s, dataset.frameName(i));
         read_timer.add(msSince(t0));
         if (!rectified.push(std::move(item))) break;
       }
@@ -224,7 +246,7 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
     while (std::optional<OutputItem> item = outputs.pop()) {
       const auto t0 = Clock::now();
       if (rc.write_depth) {
-        const std::string base = (fs::path(out_dir) / "depth" / timestampName(item->frame.t_s)).string();
+        const std::string base = (fs::path(out_dir) / "depth" / names.take(item->frame.t_s)).string();
         writePfm(base + ".depth.pfm", item->frame.depth);
         writePfm(base + ".conf.pfm", item->frame.confidence);
       }

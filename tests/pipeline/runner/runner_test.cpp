@@ -118,6 +118,10 @@ TEST(Runner, WithoutFusionEveryFrameGivesRawPointsAndDepthMapsAreWritten) {
   size_t maps = 0;
   for (const auto& e : fs::directory_iterator(f.out_dir + "/depth")) maps += e.path().string().ends_with(".depth.pfm");
   EXPECT_EQ(maps, 9u);
+  // Named as the dataset's images, nanoseconds exactly.
+  for (size_t i = 0; i < f.dataset->size(); ++i) {
+    EXPECT_TRUE(fs::exists(f.out_dir + "/depth/" + f.dataset->frameName(i) + ".depth.pfm")) << f.dataset->frameName(i);
+  }
 }
 
 TEST(Runner, VoxelDownsamplingKeepsExactlyOnePointPerOccupiedVoxel) {
