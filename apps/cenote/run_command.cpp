@@ -12,6 +12,7 @@
 #include "common/error.h"
 #include "pipeline/dataset/stereo_dataset.h"
 #include "common/yaml_section.h"
+#include "eval/report/html_report.h"
 #include "mapping/io/map_io.h"
 #include "mapping/occupancy_map.h"
 #include "pipeline/runner/runner.h"
@@ -26,7 +27,7 @@ extern "C" void onInterrupt(int) { g_stop = true; }
 struct RunOptions {
   std::string dataset, format = "auto", trajectory, trajectory_format, pose_frame, config, out, map;
   int fusion_views = 0, max_frames = -1;
-  bool write_depth = false;
+  bool write_depth = false, report = false;
   double voxel_m = -1.0, keyframe_translation_m = -1.0, keyframe_rotation_deg = -1.0;
 };
 
@@ -40,7 +41,7 @@ pipeline::PipelineConfig makeConfig(const RunOptions& o) {
     config.fusion.num_views = o.fusion_views;
   }
   if (o.max_frames >= 0) config.run.max_frames = o.max_frames;
-  if (o.write_depth) config.run.write_depth = true;
+  if (o.write_depth || o.report) config.run.write_depth = true;  // the report shows sample frames
   if (o.voxel_m >= 0.0) config.run.points_voxel_m = o.voxel_m;
   if (o.keyframe_translation_m >= 0.0) config.run.keyframe_translation_m = o.keyframe_translation_m;
   if (o.keyframe_rotation_deg >= 0.0) config.run.keyframe_rotation_deg = o.keyframe_rotation_deg;
@@ -95,6 +96,7 @@ void run(const RunOptions& o) {
     mapping::saveMap(*map, o.map);
     std::cout << ", " << o.map;
   }
+  if (o.report) std::cout << ", " << eval::writeHtmlReport(o.out);
   std::cout << "\n";
 }
 
@@ -115,6 +117,7 @@ void registerRunCommand(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--max-frames", o->max_frames, "Process at most N frames (0 = all)")->check(CLI::NonNegativeNumber);
   cmd->add_flag("--write-depth", o->write_depth, "Write per-frame fused depth and confidence PFM maps");
+  cmd->add_flag("--report", o->report, "Write OUT/report.html: timings, sample frames (implies --write-depth)");
   cmd->add_option("--voxel", o->voxel_m, "Keep one point per voxel of this size in points.ply (metres)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--keyframe-translation", o->keyframe_translation_m, "Keyframe threshold (metres)")

@@ -249,6 +249,8 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
         const std::string base = (fs::path(out_dir) / "depth" / names.take(item->frame.t_s)).string();
         writePfm(base + ".depth.pfm", item->frame.depth);
         writePfm(base + ".conf.pfm", item->frame.confidence);
+        // The rectified left image beside its maps (JPEG: a tenth of a PNG's encoding time).
+        if (!item->frame.color.empty()) writeImage(base + ".jpg", item->frame.color);
       }
       points.append(item->points);
       output_timer.add(msSince(t0));

@@ -10,7 +10,8 @@
 // the frames already read are finished and everything is written.
 //
 // Outputs in the output folder: points.ply (fused coloured points, world frame), and with
-// run.write_depth, depth/<name>.depth.pfm and .conf.pfm of every fused (or raw) frame, <name>
+// run.write_depth, depth/<name>.depth.pfm, .conf.pfm and .jpg (the rectified left image) of every
+// fused (or raw) frame, <name>
 // being the dataset's own (StereoDataset::frameName: EuRoC nanoseconds, KITTI 000123).
 // Threads: run() blocks; it uses four threads plus OpenMP inside stereo and fusion.
 #pragma once
