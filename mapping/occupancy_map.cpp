@@ -149,7 +149,7 @@ MapDelta OccupancyMap::integrate(const PointBatch& batch) {
   const size_t group = static_cast<size_t>(config_.publish_blocks);
   for (size_t begin = 0; begin < rays.numBlocks(); begin += group) {
     const size_t end = std::min(rays.numBlocks(), begin + group);
-    std::unique_lock<std::shared_mutex> lock(impl_->grid_mutex);
+    std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
     for (size_t b = begin; b < end; ++b) {
       const BlockIndex& block = rays.block(b);
       const BlockMasks& masks = rays.masks(b);
@@ -183,7 +183,7 @@ MapDelta OccupancyMap::integrate(const PointBatch& batch) {
     const size_t n = rays.colors().size();
     for (size_t begin = 0; begin < n; begin += group * 64) {
       const size_t end = std::min(n, begin + group * 64);
-      std::unique_lock<std::shared_mutex> lock(impl_->grid_mutex);
+      std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
       for (size_t i = begin; i < end; ++i) {
         const EndpointColor& c = rays.colors()[i];
         const Coord xyz = coordOf(c.ijk);
@@ -210,7 +210,7 @@ MapDelta OccupancyMap::integrate(const PointBatch& batch) {
 template <typename Predicate>
 MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere, Predicate&& remove) {
   std::lock_guard<std::mutex> writer(impl_->writer_mutex);
-  std::unique_lock<std::shared_mutex> lock(impl_->grid_mutex);
+  std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
   MapDelta delta;
   const double s = voxelSize();
   const openvdb::CoordBBox region(coordOf(candidates.min), coordOf(candidates.max));
@@ -280,7 +280,7 @@ MapDelta OccupancyMap::reset() {
 }
 
 MapStats OccupancyMap::stats() const {
-  std::shared_lock<std::shared_mutex> lock(impl_->grid_mutex);
+  std::shared_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
   MapStats out;
   out.voxel_size_m = voxelSize();
   const auto& tree = impl_->log_odds->constTree();

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "common/point_batch.h"
+#include "mapping/detail/fair_shared_mutex.h"
 #include "mapping/log_odds.h"
 #include "mapping/map_config.h"
 #include "mapping/voxel_types.h"
@@ -110,7 +111,7 @@ class OccupancyMap {
     friend class OccupancyMap;
     explicit ConstAccessor(const OccupancyMap& map);
     const OccupancyMap* map_;
-    std::shared_lock<std::shared_mutex> lock_;
+    std::shared_lock<detail::FairSharedMutex> lock_;
     std::unique_ptr<detail::AccessorImpl> impl_;
   };
   ConstAccessor constAccessor() const { return ConstAccessor(*this); }

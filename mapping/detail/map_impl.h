@@ -29,7 +29,7 @@ inline int colorCount(int32_t packed) { return (packed >> 24) & 127; }
 struct MapImpl {
   openvdb::FloatGrid::Ptr log_odds;  // active voxel = known; value = log-odds
   openvdb::Int32Grid::Ptr color;     // active where some point hit
-  mutable std::shared_mutex grid_mutex;
+  mutable detail::FairSharedMutex grid_mutex;
   std::mutex writer_mutex;
   std::atomic<uint64_t> version{0};
   RayBatch scratch;

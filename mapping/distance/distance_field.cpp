@@ -130,7 +130,7 @@ DistanceField::DistanceField(const OccupancyMap& map)
 DistanceField::~DistanceField() = default;
 
 void DistanceField::update(const MapDelta& delta) {
-  std::unique_lock<std::shared_mutex> lock(mutex_);
+  std::unique_lock<detail::FairSharedMutex> lock(mutex_);
   {
     const auto acc = map_.constAccessor();
     BlockView view;
@@ -152,7 +152,7 @@ void DistanceField::update(const MapDelta& delta) {
 
 void DistanceField::rebuild() {
   {
-    std::unique_lock<std::shared_mutex> lock(mutex_);
+    std::unique_lock<detail::FairSharedMutex> lock(mutex_);
     impl_->blocks.clear();
   }
   MapDelta all;
@@ -161,14 +161,14 @@ void DistanceField::rebuild() {
 }
 
 double DistanceField::voxelDistance(const VoxelIndex& ijk) const {
-  std::shared_lock<std::shared_mutex> lock(mutex_);
+  std::shared_lock<detail::FairSharedMutex> lock(mutex_);
   const Cell* c = impl_->find(ijk);
   if (c == nullptr || !c->hasObstacle()) return max_distance_m_;
   return std::min(max_distance_m_, std::sqrt(static_cast<double>(c->dist2)) * map_.voxelSize());
 }
 
 std::vector<DistanceQuery> DistanceField::query(const std::vector<Eigen::Vector3d>& points_m) const {
-  std::shared_lock<std::shared_mutex> lock(mutex_);
+  std::shared_lock<detail::FairSharedMutex> lock(mutex_);
   std::vector<DistanceQuery> out(points_m.size());
   const double s = map_.voxelSize();
   for (size_t i = 0; i < points_m.size(); ++i) {
@@ -189,7 +189,7 @@ std::vector<DistanceQuery> DistanceField::query(const std::vector<Eigen::Vector3
 }
 
 size_t DistanceField::numBlocks() const {
-  std::shared_lock<std::shared_mutex> lock(mutex_);
+  std::shared_lock<detail::FairSharedMutex> lock(mutex_);
   return impl_->blocks.size();
 }
 

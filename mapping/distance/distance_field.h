@@ -20,6 +20,7 @@
 #include <shared_mutex>
 #include <vector>
 
+#include "mapping/detail/fair_shared_mutex.h"
 #include "mapping/occupancy_map.h"
 
 namespace cenote::mapping {
@@ -57,7 +58,7 @@ class DistanceField {
   const OccupancyMap& map_;
   double max_distance_m_;
   std::unique_ptr<Impl> impl_;
-  mutable std::shared_mutex mutex_;
+  mutable detail::FairSharedMutex mutex_;
 };
 
 }  // namespace cenote::mapping

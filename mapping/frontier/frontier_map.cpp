@@ -175,19 +175,19 @@ FrontierMap::FrontierMap(const OccupancyMap& map, std::optional<Aabb> region_of_
 FrontierMap::~FrontierMap() = default;
 
 void FrontierMap::update(const MapDelta& delta) {
-  std::unique_lock<std::shared_mutex> lock(mutex_);
+  std::unique_lock<detail::FairSharedMutex> lock(mutex_);
   impl_->apply(map_, delta.changed_blocks);
 }
 
 void FrontierMap::rebuild() {
-  std::unique_lock<std::shared_mutex> lock(mutex_);
+  std::unique_lock<detail::FairSharedMutex> lock(mutex_);
   impl_->frontier.clear();
   impl_->components.clear();
   impl_->apply(map_, map_.constAccessor().knownBlocks());
 }
 
 std::vector<FrontierCluster> FrontierMap::clusters(const Eigen::Vector3d& position_m) const {
-  std::shared_lock<std::shared_mutex> lock(mutex_);
+  std::shared_lock<detail::FairSharedMutex> lock(mutex_);
   std::vector<FrontierCluster> out;
   for (const auto& [id, comp] : impl_->components) {
     for (FrontierCluster c : comp.clusters) {
@@ -202,7 +202,7 @@ std::vector<FrontierCluster> FrontierMap::clusters(const Eigen::Vector3d& positi
 }
 
 size_t FrontierMap::numFrontierVoxels() const {
-  std::shared_lock<std::shared_mutex> lock(mutex_);
+  std::shared_lock<detail::FairSharedMutex> lock(mutex_);
   return impl_->frontier.size();
 }
 

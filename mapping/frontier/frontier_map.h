@@ -14,6 +14,7 @@
 #include <shared_mutex>
 #include <vector>
 
+#include "mapping/detail/fair_shared_mutex.h"
 #include "mapping/occupancy_map.h"
 
 namespace cenote::mapping {
@@ -49,7 +50,7 @@ class FrontierMap {
   struct Impl;
   const OccupancyMap& map_;
   std::unique_ptr<Impl> impl_;
-  mutable std::shared_mutex mutex_;
+  mutable detail::FairSharedMutex mutex_;
 };
 
 }  // namespace cenote::mapping

@@ -120,7 +120,7 @@ void saveVdb(const OccupancyMap& map, const std::string& path, const std::string
   const detail::MapImpl& impl = detail::MapAccess::of(map);
   openvdb::GridPtrVec grids;
   {
-    std::shared_lock<std::shared_mutex> lock(impl.grid_mutex);
+    std::shared_lock<detail::FairSharedMutex> lock(impl.grid_mutex);
     grids.push_back(impl.log_odds->deepCopy());
     grids.push_back(impl.color->deepCopy());
   }
@@ -169,7 +169,7 @@ std::unique_ptr<OccupancyMap> loadVdb(const std::string& path, const MapConfig& 
   if (!log_odds || !color) throw Error(path + ": grids log_odds (float) and color (int32) expected");
   auto map = std::make_unique<OccupancyMap>(c);
   detail::MapImpl& impl = detail::MapAccess::of(*map);
-  std::unique_lock<std::shared_mutex> lock(impl.grid_mutex);
+  std::unique_lock<detail::FairSharedMutex> lock(impl.grid_mutex);
   impl.log_odds = log_odds;
   impl.color = color;
   return map;
@@ -181,7 +181,7 @@ std::unique_ptr<OccupancyMap> fromOctree(const Tree& tree, const MapConfig& defa
   c.voxel_size_m = tree.getResolution();
   auto map = std::make_unique<OccupancyMap>(c);
   detail::MapImpl& impl = detail::MapAccess::of(*map);
-  std::unique_lock<std::shared_mutex> lock(impl.grid_mutex);
+  std::unique_lock<detail::FairSharedMutex> lock(impl.grid_mutex);
   auto acc = impl.log_odds->getAccessor();
   auto color_acc = impl.color->getAccessor();
   const double s = c.voxel_size_m;
