@@ -4,20 +4,7 @@
 set -euo pipefail
 cenote=$1
 make_folder=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-
-fail() { echo "FAIL: $*" >&2; exit 1; }
-
-# expect_error PATTERN ARGS...: cenote must exit 1 and print PATTERN on standard error.
-expect_error() {
-  local pattern=$1
-  shift
-  local status=0
-  "$cenote" "$@" >"$work/stdout" 2>"$work/stderr" || status=$?
-  [[ $status -eq 1 ]] || fail "expected exit 1, got $status for: $* ($(cat "$work/stderr"))"
-  grep -qF -- "$pattern" "$work/stderr" || fail "expected '$pattern' in: $(cat "$work/stderr")"
-}
+source "$(dirname "${BASH_SOURCE[0]}")/../support/cli_test_lib.sh"
 
 intrinsics=$("$make_folder" "$work/in")
 [[ -n $intrinsics ]] || fail "no intrinsics printed"
@@ -44,21 +31,21 @@ grep -q "fused 1 of 5 frames" "$work/stdout" || fail "5 views: $(cat "$work/stdo
 
 # Bad poses and inputs.
 sed '3s/^\([^ ]*\) [^ ]*/\1 nan/' "$work/in/traj.txt" >"$work/traj_nan.txt"
-expect_error "traj_nan.txt:3: non-finite value" "${common[@]}" --trajectory "$work/traj_nan.txt" --out "$work/o1"
+expect_error 1 "traj_nan.txt:3: non-finite value" "${common[@]}" --trajectory "$work/traj_nan.txt" --out "$work/o1"
 awk 'NR == 4 { $8 = 0.5 } { print }' "$work/in/traj.txt" >"$work/traj_scaled.txt"
-expect_error "traj_scaled.txt:4: quaternion (qx qy qz qw) has norm" "${common[@]}" \
+expect_error 1 "traj_scaled.txt:4: quaternion (qx qy qz qw) has norm" "${common[@]}" \
   --trajectory "$work/traj_scaled.txt" --out "$work/o2"
 grep -v '^101.000000' "$work/in/traj.txt" >"$work/traj_gap.txt"
-expect_error "no pose in $work/traj_gap.txt within 0.001 s of t = 101.000000" "${common[@]}" \
+expect_error 1 "no pose in $work/traj_gap.txt within 0.001 s of t = 101.000000" "${common[@]}" \
   --trajectory "$work/traj_gap.txt" --out "$work/o3"
-expect_error "fusion.num_views = 4" "${common[@]}" --trajectory "$work/in/traj.txt" --out "$work/o4" --views 4
-expect_error "--intrinsics" fuse --depth-dir "$work/in/depth" --intrinsics 1,2,3 --trajectory "$work/in/traj.txt" \
+expect_error 1 "fusion.num_views = 4" "${common[@]}" --trajectory "$work/in/traj.txt" --out "$work/o4" --views 4
+expect_error 1 "--intrinsics" fuse --depth-dir "$work/in/depth" --intrinsics 1,2,3 --trajectory "$work/in/traj.txt" \
   --out "$work/o5"
 cp -r "$work/in" "$work/small"
 { printf 'Pf\n2 2\n-1\n'; printf '\x00\x00\x80\x3f%.0s' 1 2 3 4; } >"$work/small/depth/101.500000.conf.pfm"
-expect_error "101.500000.conf.pfm is 2x2 (or not single-channel) but" fuse --depth-dir "$work/small/depth" \
+expect_error 1 "101.500000.conf.pfm is 2x2 (or not single-channel) but" fuse --depth-dir "$work/small/depth" \
   --intrinsics "$intrinsics" --trajectory "$work/in/traj.txt" --out "$work/o6" --max-depth 20
 rm "$work/small/color/101.000000.png"
-expect_error "101.000000.png: no such file" fuse --depth-dir "$work/in/depth" --color-dir "$work/small/color" \
+expect_error 1 "101.000000.png: no such file" fuse --depth-dir "$work/in/depth" --color-dir "$work/small/color" \
   --intrinsics "$intrinsics" --trajectory "$work/in/traj.txt" --out "$work/o7"
 echo "cli_fuse_test: all checks passed"

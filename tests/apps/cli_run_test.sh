@@ -5,10 +5,7 @@
 set -u
 cenote=$1
 source_dir=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+source "$(dirname "${BASH_SOURCE[0]}")/../support/cli_test_lib.sh"
 json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2], {}, {'d': d}))" "$@"; }
 
 # Small frames keep the test short; the memory claim does not depend on the image size.
@@ -40,22 +37,13 @@ fi
 grep -q "stereo" "$work/long.txt" || fail "no timing table printed"
 
 # Bad input: a clear message and a non-zero exit, nothing half-written.
-expect_error() {
-  local fragment=$1
-  shift
-  if "$cenote" "$@" >"$work/out.txt" 2>"$work/err.txt"; then
-    fail "expected failure: cenote $*"
-  elif ! grep -qF -- "$fragment" "$work/err.txt"; then
-    fail "cenote $*: message lacks '$fragment': $(cat "$work/err.txt")"
-  fi
-}
-expect_error "no such folder" run --dataset "$work/absent" --out "$work/x"
+expect_error 1 "no such folder" run --dataset "$work/absent" --out "$work/x"
 mkdir -p "$work/empty"
-expect_error "unknown layout" run --dataset "$work/empty" --out "$work/x"
+expect_error 1 "unknown layout" run --dataset "$work/empty" --out "$work/x"
 printf '0 0 0 0 0 0 0 1\nbroken line\n' >"$work/bad.tum"
-expect_error "bad.tum:2:" run --dataset "$work/short" --trajectory "$work/bad.tum" --out "$work/x"
+expect_error 1 "bad.tum:2:" run --dataset "$work/short" --trajectory "$work/bad.tum" --out "$work/x"
 printf 'run:\n  queue_dept: 2\n' >"$work/typo.yaml"
-expect_error "run.queue_dept" run --dataset "$work/short" --config "$work/typo.yaml" --out "$work/x"
+expect_error 1 "run.queue_dept" run --dataset "$work/short" --config "$work/typo.yaml" --out "$work/x"
 # Poses that miss every frame: all skipped and counted, none guessed.
 printf '1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n' >"$work/elsewhere.tum"
 if "$cenote" run --dataset "$work/short" --trajectory "$work/elsewhere.tum" --out "$work/none" >/dev/null 2>&1; then
@@ -64,8 +52,4 @@ else
   fail "a run whose poses miss every frame should still finish"
 fi
 
-if [ $failures -gt 0 ]; then
-  echo "$failures check(s) failed"
-  exit 1
-fi
 echo "cli_run_test: all checks passed"

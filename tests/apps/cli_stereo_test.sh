@@ -4,21 +4,7 @@
 set -u
 cenote=$1
 source_dir=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-
-# expect_error <expected message fragment> <cenote args...>: non-zero exit and the message.
-expect_error() {
-  local fragment=$1
-  shift
-  if "$cenote" "$@" >"$work/out.txt" 2>"$work/err.txt"; then
-    fail "expected failure: cenote $*"
-  elif ! grep -qF -- "$fragment" "$work/err.txt"; then
-    fail "cenote $*: message lacks '$fragment': $(cat "$work/err.txt")"
-  fi
-}
+source "$(dirname "${BASH_SOURCE[0]}")/../support/cli_test_lib.sh"
 
 # A textured pair written by the test itself: disparity 7 px everywhere.
 python_png() {
@@ -64,19 +50,15 @@ else
 fi
 
 # 2. Bad input: clear messages, non-zero exit.
-expect_error "no such file" stereo --left "$work/missing.png" --right "$work/right.png" --out-disparity "$work/x.pfm"
-expect_error "is 120x79 but left image" stereo --left "$work/left.png" --right "$work/short.png" --out-disparity "$work/x.pfm"
+expect_error 1 "no such file" stereo --left "$work/missing.png" --right "$work/right.png" --out-disparity "$work/x.pfm"
+expect_error 1 "is 120x79 but left image" stereo --left "$work/left.png" --right "$work/short.png" --out-disparity "$work/x.pfm"
 echo "not an image" >"$work/text.png"
-expect_error "not a readable image" stereo --left "$work/text.png" --right "$work/right.png" --out-disparity "$work/x.pfm"
-expect_error "stereo.num_disparities = 100" stereo --left "$work/left.png" --right "$work/right.png" --disparities 100 --out-disparity "$work/x.pfm"
-expect_error "--out-depth needs --calib" stereo --left "$work/left.png" --right "$work/right.png" --out-disparity "$work/x.pfm" --out-depth "$work/z.pfm"
+expect_error 1 "not a readable image" stereo --left "$work/text.png" --right "$work/right.png" --out-disparity "$work/x.pfm"
+expect_error 1 "stereo.num_disparities = 100" stereo --left "$work/left.png" --right "$work/right.png" --disparities 100 --out-disparity "$work/x.pfm"
+expect_error 1 "--out-depth needs --calib" stereo --left "$work/left.png" --right "$work/right.png" --out-disparity "$work/x.pfm" --out-depth "$work/z.pfm"
 echo "image_width: 10" >"$work/calib.yaml"
-expect_error "calib.yaml" stereo --left "$work/left.png" --right "$work/right.png" --calib "$work/calib.yaml" --out-disparity "$work/x.pfm"
+expect_error 1 "calib.yaml" stereo --left "$work/left.png" --right "$work/right.png" --calib "$work/calib.yaml" --out-disparity "$work/x.pfm"
 printf 'stereo:\n  window_sise: 3\n' >"$work/config.yaml"
-expect_error "unknown configuration key(s): stereo.window_sise" stereo --left "$work/left.png" --right "$work/right.png" --config "$work/config.yaml" --out-disparity "$work/x.pfm"
+expect_error 1 "unknown configuration key(s): stereo.window_sise" stereo --left "$work/left.png" --right "$work/right.png" --config "$work/config.yaml" --out-disparity "$work/x.pfm"
 
-if [ $failures -gt 0 ]; then
-  echo "$failures check(s) failed"
-  exit 1
-fi
 echo "cli_stereo_test: all checks passed"

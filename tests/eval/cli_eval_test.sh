@@ -5,20 +5,7 @@
 set -euo pipefail
 cenote=$1
 source_dir=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-
-fail() { echo "FAIL: $*" >&2; exit 1; }
-
-# expect_error CODE PATTERN ARGS...: cenote must exit CODE and print PATTERN on standard error.
-expect_error() {
-  local code=$1 pattern=$2
-  shift 2
-  local status=0
-  "$cenote" "$@" >"$work/stdout" 2>"$work/stderr" || status=$?
-  [[ $status -eq $code ]] || fail "expected exit $code, got $status for: $* ($(cat "$work/stderr"))"
-  grep -qF -- "$pattern" "$work/stderr" || fail "expected '$pattern' in: $(cat "$work/stderr")"
-}
+source "$(dirname "${BASH_SOURCE[0]}")/../support/cli_test_lib.sh"
 
 # json_value FILE KEY: a top-level number of a JSON file.
 json_value() { /usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }

@@ -4,20 +4,7 @@
 #   cli_sim_test.sh CENOTE
 set -euo pipefail
 cenote=$1
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-
-fail() { echo "FAIL: $*" >&2; exit 1; }
-
-# expect_error STATUS PATTERN ARGS...: cenote must exit STATUS and print PATTERN on standard error.
-expect_error() {
-  local want=$1 pattern=$2
-  shift 2
-  local status=0
-  "$cenote" "$@" >"$work/stdout" 2>"$work/stderr" || status=$?
-  [[ $status -eq $want ]] || fail "expected exit $want, got $status for: $* ($(cat "$work/stderr"))"
-  grep -qF -- "$pattern" "$work/stderr" || fail "expected '$pattern' in: $(cat "$work/stderr")"
-}
+source "$(dirname "${BASH_SOURCE[0]}")/../../support/cli_test_lib.sh"
 
 for scene in cave reef wreck; do
   out=$work/$scene
