@@ -30,6 +30,9 @@ TEST(MapConcurrency, QueriesWhileIntegratingSeeValidStatesAndChangeNothing) {
   MapConfig config;
   config.voxel_size_m = 0.05;
   config.publish_blocks = 8;  // many short exclusive sections: readers interleave often
+  // libgomp and TBB are not built for ThreadSanitizer: their barriers look like races to it. One
+  // ray-marching thread keeps OpenMP out, and readers skip stats() (OpenVDB's memUsage uses TBB).
+  config.num_threads = 1;
   OccupancyMap map(config), reference(config);
   FrontierMap frontiers(map);
   DistanceField field(map);
@@ -49,7 +52,6 @@ TEST(MapConcurrency, QueriesWhileIntegratingSeeValidStatesAndChangeNothing) {
         invalid += seg[0].hit && seg[0].hit_distance_m > 3.2;
         field.query(points);
         frontiers.clusters(Eigen::Vector3d::Zero());
-        map.stats();
         answers += points.size();
       }
     });
