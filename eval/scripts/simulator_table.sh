@@ -14,6 +14,7 @@ scenes=("$@")
 [[ ${#scenes[@]} -gt 0 ]] || scenes=(cave reef wreck)
 num() { /usr/bin/python3 -c "import json,sys; v=json.load(open(sys.argv[1]))[sys.argv[2]]; print('n/a' if v is None else ('%.1f' % (100*v) if len(sys.argv) > 3 and sys.argv[3] == '%' else '%.3f' % v))" "$@"; }
 stage() { /usr/bin/python3 -c "import json,sys; s=json.load(open(sys.argv[1]))['stages'].get(sys.argv[2]); print('n/a' if s is None else '%.0f' % s['median_ms'])" "$@"; }
+config=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)/config/default.yaml
 fps() { /usr/bin/python3 -c "import json,sys; print('%.1f' % json.load(open(sys.argv[1]))['fps'])" "$1"; }
 
 rows=()
@@ -24,7 +25,7 @@ for scene in "${scenes[@]}"; do
     run=$out/$scene/$mode
     views=()
     [[ $mode == raw ]] && views=(--fusion-views 1)
-    "$cenote" run --dataset "$data" --write-depth "${views[@]}" --out "$run" >/dev/null 2>&1
+    "$cenote" run --dataset "$data" --config "$config" --write-depth "${views[@]}" --out "$run" >/dev/null 2>&1
     # Our depth maps are named by the runner's nanosecond timestamps, the ground truth by the
     # simulator's: the same instants, rounded differently (hence --name-tolerance, in ns).
     "$cenote" eval depth --estimate "$run/depth" --reference "$data/groundtruth/depth" --name-tolerance 1000 \
