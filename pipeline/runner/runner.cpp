@@ -221,10 +221,14 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
         if (window) {
           const FusedFrame* result = window->push(*frame);
           if (!result) continue;
-          out.frame = result->frame;
-          out.frame.depth = result->frame.depth.clone();
-          out.frame.confidence = result->frame.confidence.clone();
-          out.frame.color = result->frame.color.clone();
+          out.frame.t_s = result->frame.t_s;
+          // The window reuses its buffers at the next push: copy the maps only when they are
+          // written out.
+          if (rc.write_depth) {
+            out.frame.depth = result->frame.depth.clone();
+            out.frame.confidence = result->frame.confidence.clone();
+            out.frame.color = result->frame.color.clone();
+          }
           out.points = result->points;
         } else {
           backProject(*frame, out.points);

@@ -272,17 +272,30 @@ struct CostSource {
   const uint32_t* census_left = nullptr;
 };
 
-// New differences of the entering row at column c, vector k: swaps them into the ring slot and
-// returns the updated column sum.
-HWY_INLINE VU16 updateColumn(const SgmParams& p, const StripBuffers& b, const CostSource& src, int c, int k) {
+// Column c of the entering row: where its differences come from and go to (resolved once per
+// column, outside the loop over disparity vectors).
+struct EnteringColumn {
+  uint8_t left = 0;                 // left image value at c
+  const uint8_t* right = nullptr;   // reversed right row at c
+  uint8_t* slot = nullptr;          // ring slot of the entering row, at c
+  uint16_t* sum = nullptr;          // column sums, at c
+};
+
+EnteringColumn enteringColumn(const SgmParams& p, const StripBuffers& b, const CostSource& src, int c) {
+  const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(c) * b.padded;
+  return {src.entering_left[c], reversedAt(p, b.right_reversed, c), src.entering_slot + at, b.column_sum + at};
+}
+
+// The entering row's differences for vector k of a column: swapped into the ring slot in place of
+// the leaving row's; returns the updated column sum.
+HWY_INLINE VU16 updateColumn(const EnteringColumn& col, int k) {
   const DU16 d;
   const D8 d8;
-  const std::size_t at = static_cast<std::size_t>(c) * b.padded + k;
-  const auto ad = absDiffBytes(src.entering_left[c], reversedAt(p, b.right_reversed, c), k);
-  const VU16 old = hn::PromoteTo(d, hn::Load(d8, src.entering_slot + at));
-  hn::Store(ad, d8, src.entering_slot + at);
-  const VU16 sum = hn::Sub(hn::Add(hn::Load(d, b.column_sum + at), hn::PromoteTo(d, ad)), old);
-  hn::Store(sum, d, b.column_sum + at);
+  const auto ad = absDiffBytes(col.left, col.right, k);
+  const VU16 old = hn::PromoteTo(d, hn::Load(d8, col.slot + k));
+  hn::Store(ad, d8, col.slot + k);
+  const VU16 sum = hn::Sub(hn::Add(hn::Load(d, col.sum + k), hn::PromoteTo(d, ad)), old);
+  hn::Store(sum, d, col.sum + k);
   return sum;
 }
 
@@ -322,7 +335,7 @@ CostSource beginCostRow(const SgmParams& p, const SgmImages& im, const StripBuff
     if (src.update_columns) {
       for (int i = 0; i <= r; ++i) {
         const int c = x0 + dx * i;
-        if (c >= 0 && c < W) updateColumn(p, b, src, c, k);
+        if (c >= 0 && c < W) updateColumn(enteringColumn(p, b, src, c), k);
       }
     }
     VU16 acc = hn::Zero(d);
@@ -564,11 +577,8 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
     VU16 along_before = hn::Load(d, along_prev - N);
     VU16 along_here = hn::Load(d, along_prev);
     VU16 vertical_pending = sentinel_v;
-    // SAD column entering the window ahead of x: its new differences, hoisted out of the loop.
-    const uint8_t ahead_left = update_ahead ? src.entering_left[ahead] : 0;
-    const uint8_t* const ahead_right = update_ahead ? reversedAt(p, b.right_reversed, ahead) : nullptr;
-    uint8_t* const ahead_slot = update_ahead ? src.entering_slot + static_cast<std::ptrdiff_t>(ahead) * Dp : nullptr;
-    uint16_t* const ahead_sum = update_ahead ? b.column_sum + static_cast<std::ptrdiff_t>(ahead) * Dp : nullptr;
+    // SAD column entering the window ahead of x.
+    const EnteringColumn ahead_column = update_ahead ? enteringColumn(p, b, src, ahead) : EnteringColumn{};
 
     // One vector of disparities; `is_last` (a compile-time constant) keeps the lanes past D at
     // the sentinel.
@@ -581,17 +591,7 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
       } else {
         VU16 acc = hn::Load(d, running + k);
         if (has_running) {
-          VU16 add;
-          if (update_ahead) {
-            const D8 d8;
-            const auto ad = absDiffBytes(ahead_left, ahead_right, k);
-            const VU16 old = hn::PromoteTo(d, hn::Load(d8, ahead_slot + k));
-            hn::Store(ad, d8, ahead_slot + k);
-            add = hn::Sub(hn::Add(hn::Load(d, ahead_sum + k), hn::PromoteTo(d, ad)), old);
-            hn::Store(add, d, ahead_sum + k);
-          } else {
-            add = hn::Load(d, add_column + k);
-          }
+          const VU16 add = update_ahead ? updateColumn(ahead_column, k) : hn::Load(d, add_column + k);
           acc = hn::Sub(hn::Add(acc, add), hn::Load(d, leave_column + k));
           hn::Store(acc, d, running + k);
         }

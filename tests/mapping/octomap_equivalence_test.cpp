@@ -92,6 +92,20 @@ std::vector<PointBatch> surveyFrames(uint32_t seed) {
   return frames;
 }
 
+// The same survey into our map and into OctoMap's insertPointCloud (same origins, endpoints,
+// resolution, sensor model and range), then the voxel-by-voxel comparison.
+Agreement integrateBothAndCompare(const MapConfig& config, uint32_t seed, bool discretize) {
+  OccupancyMap map(config);
+  octomap::OcTree tree(config.voxel_size_m);
+  configureOctree(tree, config);
+  for (const PointBatch& frame : surveyFrames(seed)) {
+    map.integrate(frame);
+    tree.insertPointCloud(toOctomap(frame), octomap::point3d(frame.origin.x(), frame.origin.y(), frame.origin.z()),
+                          config.max_range_m, false, discretize);
+  }
+  return compare(map, tree);
+}
+
 // Discretize on: OctoMap dedups endpoints per voxel and casts each ray to the voxel centre, as we
 // do. Differences come only from rounding: OctoMap marches in float (point3d), we in double, so a
 // ray passing within ~1e-7 m of a voxel edge may step into a different neighbour; a voxel that one
@@ -102,15 +116,7 @@ TEST(OctomapEquivalence, ExactRaysGiveSameStatesAsInsertPointCloudWithDiscretize
   config.ray_stop_run = 0;
   config.voxel_size_m = 0.05;
   config.max_range_m = 8.0;
-  OccupancyMap map(config);
-  octomap::OcTree tree(config.voxel_size_m);
-  configureOctree(tree, config);
-  for (const PointBatch& frame : surveyFrames(7)) {
-    map.integrate(frame);
-    tree.insertPointCloud(toOctomap(frame), octomap::point3d(frame.origin.x(), frame.origin.y(), frame.origin.z()),
-                          config.max_range_m, false, true);
-  }
-  const Agreement a = compare(map, tree);
+  const Agreement a = integrateBothAndCompare(config, 7, true);
   const double known = static_cast<double>(a.both_known);
   ASSERT_GT(a.both_known, 100000u);
   EXPECT_GE(a.same_state / known, 0.999) << a.same_state << " of " << a.both_known;
@@ -131,15 +137,7 @@ TEST(OctomapEquivalence, ExactRaysAtLeast99PercentSameStatesAsInsertPointCloudPe
   config.ray_stop_run = 0;
   config.voxel_size_m = 0.05;
   config.max_range_m = 8.0;
-  OccupancyMap map(config);
-  octomap::OcTree tree(config.voxel_size_m);
-  configureOctree(tree, config);
-  for (const PointBatch& frame : surveyFrames(11)) {
-    map.integrate(frame);
-    tree.insertPointCloud(toOctomap(frame), octomap::point3d(frame.origin.x(), frame.origin.y(), frame.origin.z()),
-                          config.max_range_m, false, false);
-  }
-  const Agreement a = compare(map, tree);
+  const Agreement a = integrateBothAndCompare(config, 11, false);
   const double known = static_cast<double>(a.both_known);
   ASSERT_GT(a.both_known, 100000u);
   EXPECT_GE(a.same_state / known, 0.99) << a.same_state << " of " << a.both_known;
@@ -156,15 +154,7 @@ TEST(OctomapEquivalence, FastRaysAtLeast99PercentSameStatesAsInsertPointCloudWit
   MapConfig config;
   config.voxel_size_m = 0.05;
   config.max_range_m = 8.0;
-  OccupancyMap map(config);
-  octomap::OcTree tree(config.voxel_size_m);
-  configureOctree(tree, config);
-  for (const PointBatch& frame : surveyFrames(7)) {
-    map.integrate(frame);
-    tree.insertPointCloud(toOctomap(frame), octomap::point3d(frame.origin.x(), frame.origin.y(), frame.origin.z()),
-                          config.max_range_m, false, true);
-  }
-  const Agreement a = compare(map, tree);
+  const Agreement a = integrateBothAndCompare(config, 7, true);
   const double known = static_cast<double>(a.both_known);
   ASSERT_GT(a.both_known, 100000u);
   EXPECT_GE(a.same_state / known, 0.99) << a.same_state << " of " << a.both_known;
