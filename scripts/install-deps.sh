@@ -15,6 +15,10 @@ PACKAGES=(
   libopenvdb-dev libtbb-dev liboctomap-dev octomap-tools
   # eval: nearest neighbours for cloud metrics; plots (cenote eval --plot runs /usr/bin/python3)
   libnanoflann-dev python3-matplotlib
+  # server and clients: gRPC (C++ server, C++ and command-line clients), Python client with
+  # stubs generated at build time
+  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc python3-grpcio python3-grpc-tools
+  python3-protobuf
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # test data scripts
