@@ -7,53 +7,20 @@
 #include <filesystem>
 #include <mutex>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <thread>
 
 #include "common/error.h"
 #include "pipeline/calibration/rectifier.h"
-#include "pipeline/fusion/back_projection.h"
-#include "pipeline/fusion/fusion_window.h"
 #include "pipeline/image/image_io.h"
-#include "pipeline/runner/bounded_queue.h"
+#include "pipeline/runner/frame_pipeline.h"
 #include "pipeline/runner/point_output.h"
-#include "pipeline/stereo/stereo_matcher.h"
 
 namespace cenote::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-struct RectifiedItem {
-  RectifiedPair pair;
-  Eigen::Isometry3d T_world_cam;  // rectified left camera
-};
-
-struct OutputItem {
-  DepthFrame frame;   // fused (or raw) depth of the reference view
-  PointBatch points;
-};
-
-// First failure of any stage; the others stop when it is set.
-class Failure {
- public:
-  void set(std::exception_ptr e) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!error_) error_ = e;
-    failed_ = true;
-  }
-  bool failed() const { return failed_; }
-  void rethrow() const {
-    if (error_) std::rethrow_exception(error_);
-  }
-
- private:
-  std::mutex mutex_;
-  std::exception_ptr error_;
-  std::atomic<bool> failed_{false};
-};
 
 // Dataset names of the frames in flight, by timestamp (a double copied unchanged through the
 // stages, so equality holds). Entries leave as frames come out (or are passed by), so the table
@@ -76,13 +43,6 @@ class FrameNames {
   std::mutex mutex_;
   std::map<double, std::string> names_;
 };
-
-cv::Mat toBgr(const cv::Mat& image) {
-  if (image.channels() == 3) return image;
-  cv::Mat bgr;
-  cv::cvtColor(image, bgr, image.channels() == 4 ? cv::COLOR_BGRA2BGR : cv::COLOR_GRAY2BGR);
-  return bgr;
-}
 
 double rotationDeg(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * 180.0 / M_PI;
@@ -124,27 +84,17 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
   PointOutput points((fs::path(out_dir) / "points.ply").string(), rc.points_voxel_m);
 
   const Rectifier rectifier(dataset.calibration());
-  // p_rect = R1 p_raw: the rectified camera is the raw one rotated by R1^T.
-  Eigen::Isometry3d T_raw_rect = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) T_raw_rect.linear()(r, c) = rectifier.R_rect_left()(c, r);
+  const Eigen::Isometry3d T_raw_rect = rectifiedFromRaw(rectifier);
 
   const size_t total = rc.max_frames > 0 ? std::min<size_t>(dataset.size(), rc.max_frames) : dataset.size();
   RunReport report;
   report.frames_in = total;
-  std::atomic<size_t> no_pose{0}, not_keyframe{0}, unreadable{0}, processed{0}, fused{0}, read_done{0};
+  std::atomic<size_t> no_pose{0}, not_keyframe{0}, unreadable{0}, read_done{0};
   std::atomic<bool> interrupted{false};
-  StageTimer read_timer, stereo_timer, fusion_timer, output_timer, sink_timer;
-  BoundedQueue<RectifiedItem> rectified(rc.queue_depth);
-  BoundedQueue<DepthFrame> depths(rc.queue_depth);
-  BoundedQueue<OutputItem> outputs(rc.queue_depth);
-  Failure failure;
+  StageTimer read_timer, output_timer, sink_timer;
+  FramePipeline stages(config_, rc.write_depth);
+  StageFailure failure;
   FrameNames names;
-  auto closeAll = [&] {
-    rectified.close();
-    depths.close();
-    outputs.close();
-  };
   const auto start = Clock::now();
 
   std::thread reader([&] {
@@ -166,7 +116,7 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
           ++not_keyframe;
           continue;
         }
-        RectifiedItem item;
+        PosedPair item;
         try {
           item.pair = rectifier.rectify(dataset.load(i));
         } catch (const Error& e) {
@@ -177,77 +127,18 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
         item.T_world_cam = *pose * T_raw_rect;
         if (rc.write_depth) names.add(item.pair.t_s, dataset.frameName(i));
         read_timer.add(msSince(t0));
-        if (!rectified.push(std::move(item))) break;
+        if (!stages.push(std::move(item))) break;
       }
     } catch (...) {
       failure.set(std::current_exception());
-      closeAll();
+      stages.abort();
     }
-    rectified.close();
-  });
-
-  std::thread stereo([&] {
-    try {
-      StereoMatcher matcher(config_.stereo);
-      while (std::optional<RectifiedItem> item = rectified.pop()) {
-        const auto t0 = Clock::now();
-        const StereoGeometry& g = item->pair.geometry;
-        const DisparityMap map = matcher.match(item->pair.left, item->pair.right);
-        DepthFrame frame;
-        frame.t_s = item->pair.t_s;
-        frame.depth = disparityToDepth(map.disparity, g.fx, g.baseline_m);
-        frame.confidence = map.confidence;
-        frame.color = toBgr(item->pair.left);
-        frame.K = g.K();
-        frame.T_world_cam = item->T_world_cam;
-        ++processed;
-        stereo_timer.add(msSince(t0));
-        if (!depths.push(std::move(frame))) break;
-      }
-    } catch (...) {
-      failure.set(std::current_exception());
-      closeAll();
-    }
-    depths.close();
-  });
-
-  std::thread fusion([&] {
-    try {
-      std::optional<FusionWindow> window;
-      if (rc.fuse) window.emplace(config_.fusion);
-      while (std::optional<DepthFrame> frame = depths.pop()) {
-        const auto t0 = Clock::now();
-        OutputItem out;
-        if (window) {
-          const FusedFrame* result = window->push(*frame);
-          if (!result) continue;
-          out.frame.t_s = result->frame.t_s;
-          // The window reuses its buffers at the next push: copy the maps only when they are
-          // written out.
-          if (rc.write_depth) {
-            out.frame.depth = result->frame.depth.clone();
-            out.frame.confidence = result->frame.confidence.clone();
-            out.frame.color = result->frame.color.clone();
-          }
-          out.points = result->points;
-        } else {
-          backProject(*frame, out.points);
-          out.frame = std::move(*frame);
-        }
-        ++fused;
-        fusion_timer.add(msSince(t0));
-        if (!outputs.push(std::move(out))) break;
-      }
-    } catch (...) {
-      failure.set(std::current_exception());
-      closeAll();
-    }
-    outputs.close();
+    stages.close();
   });
 
   // Output on this thread.
   try {
-    while (std::optional<OutputItem> item = outputs.pop()) {
+    while (std::optional<FusedOutput> item = stages.pop()) {
       const auto t0 = Clock::now();
       if (rc.write_depth) {
         const std::string base = (fs::path(out_dir) / "depth" / names.take(item->frame.t_s)).string();
@@ -267,24 +158,25 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
     }
   } catch (...) {
     failure.set(std::current_exception());
-    closeAll();
+    stages.abort();
   }
   reader.join();
-  stereo.join();
-  fusion.join();
-  if (failure.failed()) {
+  while (stages.pop()) {
+  }  // drains (and joins) after an output failure
+  if (failure.failed() || stages.failed()) {
     try {
       points.close();  // keep what was written
     } catch (const Error&) {
     }
     failure.rethrow();
+    stages.rethrowIfFailed();
   }
   points.close();
   if (progress) progress(read_done.load(), total);
 
   report.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
-  report.frames_processed = processed;
-  report.frames_fused = fused;
+  report.frames_processed = stages.framesProcessed();
+  report.frames_fused = stages.framesFused();
   report.skipped_no_pose = no_pose;
   report.skipped_not_keyframe = not_keyframe;
   report.skipped_unreadable = unreadable;
@@ -293,8 +185,8 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
   report.fps = report.wall_s > 0.0 ? static_cast<double>(report.frames_processed) / report.wall_s : 0.0;
   report.peak_memory_mb = peakMemoryMb();
   report.stages["read_rectify"] = read_timer.summary();
-  report.stages["stereo"] = stereo_timer.summary();
-  report.stages["fusion"] = fusion_timer.summary();
+  report.stages["stereo"] = stages.stereoTiming();
+  report.stages["fusion"] = stages.fusionTiming();
   report.stages["output"] = output_timer.summary();
   if (sink) report.stages["map"] = sink_timer.summary();
   return report;

@@ -1,0 +1,125 @@
+#include "pipeline/runner/frame_pipeline.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include "pipeline/fusion/back_projection.h"
+#include "pipeline/fusion/fusion_window.h"
+#include "pipeline/stereo/stereo_matcher.h"
+
+namespace cenote::pipeline {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+cv::Mat toBgr(const cv::Mat& image) {
+  if (image.channels() == 3) return image;
+  cv::Mat bgr;
+  cv::cvtColor(image, bgr, image.channels() == 4 ? cv::COLOR_BGRA2BGR : cv::COLOR_GRAY2BGR);
+  return bgr;
+}
+
+}  // namespace
+
+Eigen::Isometry3d rectifiedFromRaw(const Rectifier& rectifier) {
+  Eigen::Isometry3d T_raw_rect = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) T_raw_rect.linear()(r, c) = rectifier.R_rect_left()(c, r);
+  return T_raw_rect;
+}
+
+FramePipeline::FramePipeline(const PipelineConfig& config, bool keep_maps)
+    : config_(config),
+      keep_maps_(keep_maps),
+      rectified_(config.run.queue_depth),
+      depths_(config.run.queue_depth),
+      outputs_(config.run.queue_depth) {
+  throwIfInvalid(config_.validate(), "pipeline configuration");
+  stereo_thread_ = std::thread([this] { stereoStage(); });
+  fusion_thread_ = std::thread([this] { fusionStage(); });
+}
+
+FramePipeline::~FramePipeline() {
+  abort();
+  join();
+}
+
+bool FramePipeline::push(PosedPair frame) { return !failure_.failed() && rectified_.push(std::move(frame)); }
+
+void FramePipeline::close() { rectified_.close(); }
+
+std::optional<FusedOutput> FramePipeline::pop() {
+  std::optional<FusedOutput> out = outputs_.pop();
+  if (!out) join();
+  return out;
+}
+
+void FramePipeline::abort() {
+  rectified_.close();
+  depths_.close();
+  outputs_.close();
+}
+
+void FramePipeline::join() {
+  if (stereo_thread_.joinable()) stereo_thread_.join();
+  if (fusion_thread_.joinable()) fusion_thread_.join();
+}
+
+void FramePipeline::stereoStage() {
+  try {
+    StereoMatcher matcher(config_.stereo);
+    while (std::optional<PosedPair> item = rectified_.pop()) {
+      const auto t0 = Clock::now();
+      const StereoGeometry& g = item->pair.geometry;
+      const DisparityMap map = matcher.match(item->pair.left, item->pair.right);
+      DepthFrame frame;
+      frame.t_s = item->pair.t_s;
+      frame.depth = disparityToDepth(map.disparity, g.fx, g.baseline_m);
+      frame.confidence = map.confidence;
+      frame.color = toBgr(item->pair.left);
+      frame.K = g.K();
+      frame.T_world_cam = item->T_world_cam;
+      ++processed_;
+      stereo_timer_.add(msSince(t0));
+      if (!depths_.push(std::move(frame))) break;
+    }
+  } catch (...) {
+    failure_.set(std::current_exception());
+    abort();
+  }
+  depths_.close();
+}
+
+void FramePipeline::fusionStage() {
+  try {
+    std::optional<FusionWindow> window;
+    if (config_.run.fuse) window.emplace(config_.fusion);
+    while (std::optional<DepthFrame> frame = depths_.pop()) {
+      const auto t0 = Clock::now();
+      FusedOutput out;
+      if (window) {
+        const FusedFrame* result = window->push(*frame);
+        if (!result) continue;
+        out.frame.t_s = result->frame.t_s;
+        // The window reuses its buffers at the next push: copy the maps only when they are kept.
+        if (keep_maps_) {
+          out.frame.depth = result->frame.depth.clone();
+          out.frame.confidence = result->frame.confidence.clone();
+          out.frame.color = result->frame.color.clone();
+        }
+        out.points = result->points;
+      } else {
+        backProject(*frame, out.points);
+        out.frame = std::move(*frame);
+      }
+      ++fused_;
+      fusion_timer_.add(msSince(t0));
+      if (!outputs_.push(std::move(out))) break;
+    }
+  } catch (...) {
+    failure_.set(std::current_exception());
+    abort();
+  }
+  outputs_.close();
+}
+
+}  // namespace cenote::pipeline

@@ -1,0 +1,89 @@
+// frame_pipeline.h: the stereo and fusion stages for rectified, posed frames pushed one at a time.
+//
+//   push() ──► stereo ──► fusion ──► pop()
+//
+// Each stage runs on its own thread with bounded queues between them (run.queue_depth frames), so
+// push() blocks while the stages are behind: back-pressure instead of unbounded memory. Both the
+// Runner (frames read from a recorded dataset) and the gRPC server (frames received from a
+// vehicle) feed it, so the same frames in the same order give the same points, bit for bit.
+// Units and frames: those of DepthFrame and PointBatch (metres, seconds, world frame).
+// Threads: push()/close() from one producer thread, pop() from one consumer thread; stereo and
+// fusion use OpenMP inside and are deterministic for any thread count.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <optional>
+#include <thread>
+
+#include "common/point_batch.h"
+#include "pipeline/calibration/rectifier.h"
+#include "pipeline/frame/frames.h"
+#include "pipeline/runner/bounded_queue.h"
+#include "pipeline/runner/run_config.h"
+#include "pipeline/runner/stage_failure.h"
+#include "pipeline/runner/stage_timer.h"
+
+namespace cenote::pipeline {
+
+// A rectified pair with the pose of its rectified left camera.
+struct PosedPair {
+  RectifiedPair pair;
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
+};
+
+// What comes out for every fused reference frame (or every frame, without fusion).
+struct FusedOutput {
+  DepthFrame frame;   // t_s always; depth, confidence and colour only with keep_maps
+  PointBatch points;  // world frame, origin = the reference camera's centre
+};
+
+// The rectified left camera in the raw left camera's frame: p_rect = R1 p_raw, so the rectified
+// camera is the raw one rotated by R1^T. T_world_rect = T_world_raw * rectifiedFromRaw(r).
+Eigen::Isometry3d rectifiedFromRaw(const Rectifier& rectifier);
+
+class FramePipeline {
+ public:
+  // Starts the stage threads. keep_maps: outputs carry the fused depth maps (to write them out).
+  // @throws cenote::Error for an invalid stereo or fusion setting.
+  FramePipeline(const PipelineConfig& config, bool keep_maps);
+  // Closes the input and joins the threads (frames in flight are finished and dropped).
+  ~FramePipeline();
+  FramePipeline(const FramePipeline&) = delete;
+  FramePipeline& operator=(const FramePipeline&) = delete;
+
+  // Blocks while the stereo queue is full. @return false once the pipeline failed or was closed.
+  bool push(PosedPair frame);
+  // No more input: pop() drains the frames in flight, then reports the end.
+  void close();
+  // Blocks until the next output. @return nullopt once closed and drained, or after a failure.
+  std::optional<FusedOutput> pop();
+  // Stops every stage now (after a failure elsewhere); pending frames are dropped.
+  void abort();
+  // Rethrows the first exception of a stage thread, if any (call after pop() returned nullopt).
+  void rethrowIfFailed() const { failure_.rethrow(); }
+  bool failed() const { return failure_.failed(); }
+
+  size_t framesProcessed() const { return processed_; }  // through stereo
+  size_t framesFused() const { return fused_; }          // outputs produced
+  // Per-frame durations; read once the pipeline has drained.
+  StageSummary stereoTiming() const { return stereo_timer_.summary(); }
+  StageSummary fusionTiming() const { return fusion_timer_.summary(); }
+
+ private:
+  void stereoStage();
+  void fusionStage();
+  void join();
+
+  const PipelineConfig config_;
+  const bool keep_maps_;
+  BoundedQueue<PosedPair> rectified_;
+  BoundedQueue<DepthFrame> depths_;
+  BoundedQueue<FusedOutput> outputs_;
+  StageFailure failure_;
+  StageTimer stereo_timer_, fusion_timer_;
+  std::atomic<size_t> processed_{0}, fused_{0};
+  std::thread stereo_thread_, fusion_thread_;
+};
+
+}  // namespace cenote::pipeline
