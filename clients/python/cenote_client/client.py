@@ -1,0 +1,382 @@
+"""client.py: MapClient, typed access to a running cenote-server from Python.
+
+Every method is one gRPC call (queries larger than max_batch items are split into several calls,
+each its own consistent read of the map) and returns numpy arrays or the dataclasses of types.py.
+Units: metres, seconds; frame: the map's world frame. Points go in as anything numpy reads as
+(N, 3) (a single point (3,) is a batch of one).
+Errors: a failed call raises CenoteError (code = the gRPC status name, message = the server's
+text); an argument of the wrong shape raises ValueError before any call.
+Threads: one MapClient may be used from several threads at once (gRPC channels are thread-safe);
+a subscription generator belongs to the thread iterating it.
+"""
+
+import os
+
+import grpc
+import numpy as np
+
+from . import _stubs
+from .errors import CenoteError, from_rpc_error, status_name
+from .types import (Block, BoxCounts, Change, Collisions, Extract, Frontier, IntegrateResult, MapInfo, MapUpdate,
+                    MethodStats, SnapshotResult, StageTiming, Stats)
+
+SNAPSHOT_FORMATS = {"vdb": 1, "bt": 2, "ot": 3, "mesh_ply": 4, "points_ply": 5}
+_MAX_MESSAGE_BYTES = 64 * 1024 * 1024
+
+
+def _points(value, name):
+    """(N, 3) float64 array from anything array-like; a single point becomes a batch of one."""
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.shape == (3,):
+        arr = arr.reshape(1, 3)
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"{name}: expected an (N, 3) array of points, got shape {arr.shape}")
+    return arr
+
+
+def _vec3(msg, value):
+    x, y, z = (float(v) for v in np.asarray(value, dtype=np.float64).reshape(3))
+    msg.x, msg.y, msg.z = x, y, z
+    return msg
+
+
+def _np3(v):
+    return np.array([v.x, v.y, v.z], dtype=np.float64)
+
+
+def _snapshot_format(fmt, path=""):
+    if fmt is None:
+        ext = os.path.splitext(path)[1].lower()
+        return {".vdb": 1, ".bt": 2, ".ot": 3}.get(ext, 0)
+    if isinstance(fmt, str):
+        key = fmt.lower().replace(".", "").replace("-", "_")
+        if key not in SNAPSHOT_FORMATS:
+            raise ValueError(f"format: {fmt!r} is not one of {sorted(SNAPSHOT_FORMATS)}")
+        return SNAPSHOT_FORMATS[key]
+    return int(fmt)
+
+
+def _read_bytes(value):
+    if value is None or isinstance(value, bytes):
+        return value
+    with open(value, "rb") as f:
+        return f.read()
+
+
+class MapClient:
+    """A connection to one cenote-server.
+
+    target: "host:port". token: the bearer token (sent as `authorization: Bearer <token>` on every
+    call). root_cert: PEM bytes or a file path; given, the channel uses TLS (client_cert and
+    client_key add mutual TLS; server_name overrides the name checked in the server's certificate).
+    timeout_s: deadline of every unary call. max_batch: queries with more items are split.
+    """
+
+    def __init__(self, target, token=None, root_cert=None, timeout_s=10.0, client_cert=None, client_key=None,
+                 server_name=None, max_batch=100000):
+        self.pb = _stubs.load()
+        self.target = target
+        self.timeout_s = timeout_s
+        self.max_batch = int(max_batch)
+        self._metadata = (("authorization", f"Bearer {token}"),) if token else ()
+        options = [("grpc.max_receive_message_length", _MAX_MESSAGE_BYTES),
+                   ("grpc.max_send_message_length", _MAX_MESSAGE_BYTES)]
+        if root_cert is not None:
+            creds = grpc.ssl_channel_credentials(root_certificates=_read_bytes(root_cert),
+                                                 private_key=_read_bytes(client_key),
+                                                 certificate_chain=_read_bytes(client_cert))
+            if server_name:
+                options.append(("grpc.ssl_target_name_override", server_name))
+            self._channel = grpc.secure_channel(target, creds, options=options)
+        else:
+            self._channel = grpc.insecure_channel(target, options=options)
+        self._query = self.pb.query_grpc.QueryStub(self._channel)
+        self._ingest = self.pb.ingest_grpc.IngestStub(self._channel)
+        self._admin = self.pb.admin_grpc.AdminStub(self._channel)
+        self._updates = self.pb.updates_grpc.UpdatesStub(self._channel)
+
+    # -- connection -------------------------------------------------------------------------------
+    def close(self):
+        self._channel.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def wait_ready(self, timeout_s=10.0):
+        """Blocks until the channel is connected; CenoteError UNAVAILABLE after timeout_s."""
+        try:
+            grpc.channel_ready_future(self._channel).result(timeout=timeout_s)
+        except grpc.FutureTimeoutError:
+            raise CenoteError("UNAVAILABLE", f"no server at {self.target} after {timeout_s} s") from None
+
+    def _call(self, method, stub_method, request, timeout_s=None):
+        try:
+            return stub_method(request, timeout=timeout_s or self.timeout_s, metadata=self._metadata)
+        except grpc.RpcError as e:
+            raise from_rpc_error(e, method) from None
+
+    def _chunks(self, n):
+        step = max(1, self.max_batch)
+        return [(i, min(n, i + step)) for i in range(0, max(n, 1), step)]
+
+    # -- queries ----------------------------------------------------------------------------------
+    def voxels(self, points):
+        """States (uint8, VoxelState) and occupancy probabilities (float32, 0.5 where unknown) of
+        the voxels holding each point."""
+        pts = _points(points, "points")
+        states, probs = [], []
+        for a, b in self._chunks(len(pts)):
+            req = self.pb.query.VoxelsRequest(xyz=pts[a:b].ravel().tolist())
+            reply = self._call("Query/GetVoxels", self._query.GetVoxels, req)
+            states.append(np.array(reply.states, dtype=np.uint8))
+            probs.append(np.array(reply.probabilities, dtype=np.float32))
+        return np.concatenate(states), np.concatenate(probs)
+
+    def boxes(self, mins, maxs):
+        """Unknown / free / occupied voxel counts of each box [mins[i], maxs[i]]."""
+        lo, hi = _points(mins, "mins"), _points(maxs, "maxs")
+        if lo.shape != hi.shape:
+            raise ValueError(f"boxes: {len(lo)} mins but {len(hi)} maxs")
+        rows, version = [], 0
+        for a, b in self._chunks(len(lo)):
+            req = self.pb.query.BoxesRequest()
+            for mn, mx in zip(lo[a:b], hi[a:b]):
+                box = req.boxes.add()
+                _vec3(box.min, mn)
+                _vec3(box.max, mx)
+            reply = self._call("Query/GetBoxes", self._query.GetBoxes, req)
+            rows.extend((c.unknown, c.free, c.occupied, c.any_occupied) for c in reply.counts)
+            version = reply.map_version
+        arr = np.array(rows, dtype=np.uint64).reshape(-1, 4)
+        return BoxCounts(arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3].astype(bool), version)
+
+    def segments(self, starts, ends, radius_m=0.0, stop_at_unknown=False):
+        """First occupied voxel along each segment starts[i] -> ends[i]; radius_m (a scalar or one
+        per segment) > 0 makes capsules. stop_at_unknown: unknown is not free to pass."""
+        p0, p1 = _points(starts, "starts"), _points(ends, "ends")
+        if p0.shape != p1.shape:
+            raise ValueError(f"segments: {len(p0)} starts but {len(p1)} ends")
+        radii = np.broadcast_to(np.asarray(radius_m, dtype=np.float64), (len(p0),))
+        replies = []
+        for a, b in self._chunks(len(p0)):
+            req = self.pb.query.SegmentsRequest(stop_at_unknown=bool(stop_at_unknown))
+            for s, e, r in zip(p0[a:b], p1[a:b], radii[a:b]):
+                seg = req.segments.add(radius_m=float(r))
+                _vec3(seg.start, s)
+                _vec3(seg.end, e)
+            replies.append(self._call("Query/CheckSegments", self._query.CheckSegments, req))
+        return self._collisions(replies)
+
+    def capsules(self, starts, ends, radius_m, stop_at_unknown=False):
+        """segments() with a radius: does a body of radius_m fit along each straight path?"""
+        return self.segments(starts, ends, radius_m, stop_at_unknown)
+
+    def raycast(self, origins, directions, max_range_m, stop_at_unknown=False):
+        """First occupied voxel along each ray within max_range_m (directions of any non-zero length)."""
+        o, d = _points(origins, "origins"), _points(directions, "directions")
+        if len(o) == 1 and len(d) > 1:
+            o = np.repeat(o, len(d), axis=0)
+        if o.shape != d.shape:
+            raise ValueError(f"raycast: {len(o)} origins but {len(d)} directions")
+        replies = []
+        for a, b in self._chunks(len(o)):
+            req = self.pb.query.RaycastRequest(max_range_m=float(max_range_m), stop_at_unknown=bool(stop_at_unknown))
+            for oo, dd in zip(o[a:b], d[a:b]):
+                ray = req.rays.add()
+                _vec3(ray.origin, oo)
+                _vec3(ray.direction, dd)
+            replies.append(self._call("Query/Raycast", self._query.Raycast, req))
+        return self._collisions(replies)
+
+    def _collisions(self, replies):
+        results = [r for reply in replies for r in reply.results]
+        n = len(results)
+        get = lambda f, dt: np.fromiter((f(r) for r in results), dtype=dt, count=n)  # noqa: E731
+        return Collisions(
+            hit=get(lambda r: r.hit, bool),
+            hit_distance_m=get(lambda r: r.hit_distance_m, np.float64),
+            hit_voxel=np.array([(r.hit_voxel.x, r.hit_voxel.y, r.hit_voxel.z) for r in results],
+                               dtype=np.int32).reshape(n, 3),
+            hit_point=np.array([(r.hit_point.x, r.hit_point.y, r.hit_point.z) for r in results],
+                               dtype=np.float64).reshape(n, 3),
+            crossed_unknown=get(lambda r: r.crossed_unknown, bool),
+            unknown_distance_m=get(lambda r: r.unknown_distance_m, np.float64),
+            stopped_at_unknown=get(lambda r: r.stopped_at_unknown, bool),
+            clear=get(lambda r: r.clear, bool),
+            map_version=replies[-1].map_version if replies else 0)
+
+    def distances(self, points):
+        """Distance to the nearest occupied voxel (float32, max_distance_m where none is nearer) and
+        its gradient ((N, 3) float32, unit, away from the obstacle; zero at max) at each point.
+        Unknown voxels are not obstacles: check voxels() too."""
+        pts = _points(points, "points")
+        dist, grad = [], []
+        for a, b in self._chunks(len(pts)):
+            req = self.pb.query.DistancesRequest(xyz=pts[a:b].ravel().tolist())
+            reply = self._call("Query/GetDistances", self._query.GetDistances, req)
+            dist.append(np.array(reply.distances_m, dtype=np.float32))
+            grad.append(np.array(reply.gradients, dtype=np.float32).reshape(-1, 3))
+        return np.concatenate(dist), np.concatenate(grad)
+
+    def frontiers(self, position, region=None, max_clusters=0):
+        """Frontier clusters sorted by distance of their centroid from position; region: only
+        clusters whose centroid lies in the box (min, max); max_clusters 0: all."""
+        req = self.pb.query.FrontiersRequest(max_clusters=int(max_clusters))
+        _vec3(req.position, position)
+        if region is not None:
+            _vec3(req.region.min, region[0])
+            _vec3(req.region.max, region[1])
+        reply = self._call("Query/GetFrontiers", self._query.GetFrontiers, req)
+        return [Frontier(id=f.id, num_voxels=f.num_voxels, centroid=_np3(f.centroid), bounds_min=_np3(f.bounds.min),
+                         bounds_max=_np3(f.bounds.max), direction=_np3(f.direction), distance_m=f.distance_m)
+                for f in reply.frontiers]
+
+    def extract(self, box_min, box_max, include_unknown=False):
+        """Every known voxel (and the unknown ones too with include_unknown) whose centre lies in
+        the box."""
+        req = self.pb.query.ExtractRequest(include_unknown=bool(include_unknown))
+        _vec3(req.box.min, box_min)
+        _vec3(req.box.max, box_max)
+        reply = self._call("Query/ExtractVoxels", self._query.ExtractVoxels, req)
+        n = len(reply.states)
+        rgb = np.frombuffer(reply.rgb, dtype=np.uint8)
+        return Extract(voxel_size_m=reply.voxel_size_m,
+                       ijk=np.array(reply.ijk, dtype=np.int32).reshape(n, 3),
+                       states=np.array(reply.states, dtype=np.uint8),
+                       probabilities=np.array(reply.probabilities, dtype=np.float32),
+                       rgb=rgb.reshape(n, 3) if rgb.size == 3 * n else np.zeros((n, 3), np.uint8),
+                       map_version=reply.map_version)
+
+    def info(self):
+        """The map's metadata: voxel size, frame, bounds of the known voxels, sensor model."""
+        r = self._call("Query/GetMapInfo", self._query.GetMapInfo, self.pb.query.MapInfoRequest())
+        return MapInfo(voxel_size_m=r.voxel_size_m, frame_id=r.frame_id, bounds_min=_np3(r.bounds.min),
+                       bounds_max=_np3(r.bounds.max), occupied=r.occupied, free=r.free, prob_hit=r.prob_hit,
+                       prob_miss=r.prob_miss, clamp_min=r.clamp_min, clamp_max=r.clamp_max,
+                       occupied_threshold=r.occupied_threshold, max_range_m=r.max_range_m,
+                       max_distance_m=r.max_distance_m, map_version=r.map_version)
+
+    # -- ingest -----------------------------------------------------------------------------------
+    def integrate_points(self, origin, points, rgb=None, timestamp_s=0.0):
+        """Integrates world-frame points seen from the sensor origin (free space along each ray, a
+        hit at its end). rgb: None or (N, 3) uint8."""
+        pts = _points(points, "points")
+        req = self.pb.ingest.PointBatch(timestamp_s=float(timestamp_s), xyz=pts.ravel().tolist())
+        _vec3(req.origin, origin)
+        if rgb is not None:
+            colours = np.asarray(rgb, dtype=np.uint8)
+            if colours.shape != pts.shape:
+                raise ValueError(f"rgb: expected shape {pts.shape} (one colour per point), got {colours.shape}")
+            req.rgb = colours.tobytes()
+        ack = self._call("Ingest/IntegratePoints", self._ingest.IntegratePoints, req)
+        if ack.status_code != 0:
+            raise CenoteError(status_name(ack.status_code), ack.message, "Ingest/IntegratePoints")
+        return IntegrateResult(ack.voxels_updated, ack.changed_blocks, ack.map_version)
+
+    # -- updates ----------------------------------------------------------------------------------
+    def subscribe(self, region=None, include_probabilities=False, timeout_s=None):
+        """Generator of MapUpdate: first the whole map (snapshot updates, the last with
+        snapshot_complete), then every change. region: only blocks touching the box (min, max).
+        Runs until closed (close() the generator or leave its loop), timeout_s, or the server ends."""
+        req = self.pb.updates.SubscribeRequest(include_probabilities=bool(include_probabilities))
+        if region is not None:
+            _vec3(req.region.min, region[0])
+            _vec3(req.region.max, region[1])
+        call = self._updates.Subscribe(req, timeout=timeout_s, metadata=self._metadata)
+        return self._updates_of(call)
+
+    def _updates_of(self, call):
+        try:
+            for msg in call:
+                yield self._to_update(msg)
+        except grpc.RpcError as e:
+            if e.code() == grpc.StatusCode.DEADLINE_EXCEEDED and call.time_remaining() is not None:
+                return  # the subscription's own timeout: a normal end
+            raise from_rpc_error(e, "Updates/Subscribe") from None
+        finally:
+            call.cancel()
+
+    @staticmethod
+    def _to_update(msg):
+        blocks = []
+        for b in msg.blocks:
+            states = np.frombuffer(b.states, dtype=np.uint8)
+            probs = np.array(b.probabilities, dtype=np.float32).reshape(8, 8, 8) if len(b.probabilities) else None
+            blocks.append(Block(index=np.array([b.index.x, b.index.y, b.index.z], dtype=np.int32),
+                                states=states.reshape(8, 8, 8) if states.size == 512 else states,
+                                probabilities=probs))
+        return MapUpdate(sequence=msg.sequence, snapshot=msg.snapshot, snapshot_complete=msg.snapshot_complete,
+                         resync=msg.resync, bounds_min=_np3(msg.changed_bounds.min),
+                         bounds_max=_np3(msg.changed_bounds.max), voxel_size_m=msg.voxel_size_m, blocks=blocks)
+
+    # -- admin ------------------------------------------------------------------------------------
+    def snapshot(self, path, format=None):
+        """Writes the map on the server under its snapshot directory (path relative to it);
+        format: "vdb", "bt", "ot", "mesh_ply", "points_ply" or None (from the extension)."""
+        req = self.pb.admin.SnapshotRequest(path=path, format=_snapshot_format(format, path))
+        r = self._call("Admin/Snapshot", self._admin.Snapshot, req)
+        return SnapshotResult(r.path, r.bytes, r.map_version)
+
+    def download_snapshot(self, dest=None, format=None, timeout_s=None):
+        """Streams the map file from the server. dest given: written there (atomically, through
+        dest + ".part") and its path returned; else the file's bytes. format as in snapshot(),
+        from dest's extension when None, else VDB."""
+        fmt = _snapshot_format(format, dest or "") or SNAPSHOT_FORMATS["vdb"]
+        req = self.pb.admin.SnapshotRequest(format=fmt)
+        data, total = bytearray(), None
+        try:
+            for chunk in self._admin.DownloadSnapshot(req, timeout=timeout_s or max(self.timeout_s, 60.0),
+                                                      metadata=self._metadata):
+                if chunk.offset != len(data):
+                    raise CenoteError("DATA_LOSS", f"chunk at offset {chunk.offset} but {len(data)} bytes received",
+                                      "Admin/DownloadSnapshot")
+                total = chunk.total_bytes
+                data += chunk.data
+        except grpc.RpcError as e:
+            raise from_rpc_error(e, "Admin/DownloadSnapshot") from None
+        if total is not None and total != len(data):
+            raise CenoteError("DATA_LOSS", f"received {len(data)} of {total} bytes", "Admin/DownloadSnapshot")
+        if dest is None:
+            return bytes(data)
+        with open(dest + ".part", "wb") as f:
+            f.write(data)
+        os.replace(dest + ".part", dest)
+        return dest
+
+    def clear_box(self, box_min, box_max):
+        """Forgets (makes unknown) the voxels whose centre lies in the box."""
+        req = self.pb.admin.ClearBoxRequest()
+        _vec3(req.box.min, box_min)
+        _vec3(req.box.max, box_max)
+        return self._change(self._call("Admin/ClearBox", self._admin.ClearBox, req))
+
+    def clear_sphere(self, centre, radius_m):
+        req = self.pb.admin.ClearSphereRequest(radius_m=float(radius_m))
+        _vec3(req.centre, centre)
+        return self._change(self._call("Admin/ClearSphere", self._admin.ClearSphere, req))
+
+    def crop(self, centre, radius_m):
+        """Forgets everything outside the sphere."""
+        req = self.pb.admin.CropRequest(radius_m=float(radius_m))
+        _vec3(req.centre, centre)
+        return self._change(self._call("Admin/Crop", self._admin.Crop, req))
+
+    def reset(self):
+        return self._change(self._call("Admin/Reset", self._admin.Reset, self.pb.admin.ResetRequest()))
+
+    @staticmethod
+    def _change(r):
+        return Change(r.changed_blocks, _np3(r.changed_bounds.min), _np3(r.changed_bounds.max), r.map_version)
+
+    def stats(self):
+        r = self._call("Admin/GetStats", self._admin.GetStats, self.pb.admin.StatsRequest())
+        return Stats(uptime_s=r.uptime_s, frames_received=r.frames_received, frames_processed=r.frames_processed,
+                     frames_skipped=r.frames_skipped, frames_rejected=r.frames_rejected,
+                     batches_integrated=r.batches_integrated, poses_received=r.poses_received, occupied=r.occupied,
+                     free=r.free, map_memory_bytes=r.map_memory_bytes, process_memory_bytes=r.process_memory_bytes,
+                     map_version=r.map_version, subscribers=r.subscribers, last_snapshot_age_s=r.last_snapshot_age_s,
+                     stages=[StageTiming(s.name, s.median_ms, s.p95_ms, s.count) for s in r.stages],
+                     methods=[MethodStats(m.method, m.calls, m.errors, m.p50_ms, m.p99_ms) for m in r.methods])
