@@ -1,0 +1,502 @@
+// map_client.cpp: MapClient, PointsStream and Subscription over the generated gRPC stubs.
+#include "clients/cpp/map_client.h"
+
+#include <grpcpp/grpcpp.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "cenote/v1/admin.grpc.pb.h"
+#include "cenote/v1/ingest.grpc.pb.h"
+#include "cenote/v1/query.grpc.pb.h"
+#include "cenote/v1/updates.grpc.pb.h"
+#include "clients/cpp/batching.h"
+#include "clients/cpp/detail/wire.h"
+
+namespace cenote::client {
+
+namespace {
+
+std::shared_ptr<grpc::Channel> makeChannel(const std::string& target, const ClientOptions& options) {
+  if (options.tls_client_cert_pem.empty() != options.tls_client_key_pem.empty()) {
+    throw std::invalid_argument("client TLS: give both a client certificate and its key, or neither");
+  }
+  grpc::ChannelArguments args;
+  args.SetMaxReceiveMessageSize(options.max_message_bytes);
+  args.SetMaxSendMessageSize(options.max_message_bytes);
+  if (options.own_connection) args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+  std::shared_ptr<grpc::ChannelCredentials> credentials;
+  if (options.use_tls) {
+    grpc::SslCredentialsOptions ssl;
+    ssl.pem_root_certs = options.tls_root_cert_pem;
+    ssl.pem_cert_chain = options.tls_client_cert_pem;
+    ssl.pem_private_key = options.tls_client_key_pem;
+    credentials = grpc::SslCredentials(ssl);
+  } else {
+    credentials = grpc::InsecureChannelCredentials();
+  }
+  return grpc::CreateCustomChannel(target, credentials, args);
+}
+
+void throwIfFailed(const grpc::Status& status) {
+  if (!status.ok()) throw RpcError(status.error_code(), status.error_message());
+}
+
+// A reply that does not match its request is the server's fault, reported like a failed call.
+void checkCount(const char* what, size_t got, size_t want) {
+  if (got != want) {
+    throw RpcError(grpc::StatusCode::INTERNAL, std::string("server replied with ") + std::to_string(got) + " " + what +
+                                                   " for " + std::to_string(want) + " items");
+  }
+}
+
+}  // namespace
+
+struct MapClient::Impl {
+  ClientOptions options;
+  std::shared_ptr<grpc::Channel> channel;
+  std::shared_ptr<v1::Query::Stub> query;
+  std::shared_ptr<v1::Ingest::Stub> ingest;
+  std::shared_ptr<v1::Updates::Stub> updates;
+  std::shared_ptr<v1::Admin::Stub> admin;
+
+  Impl(std::shared_ptr<grpc::Channel> ch, const ClientOptions& opts)
+      : options(opts),
+        channel(std::move(ch)),
+        query(v1::Query::NewStub(channel)),
+        ingest(v1::Ingest::NewStub(channel)),
+        updates(v1::Updates::NewStub(channel)),
+        admin(v1::Admin::NewStub(channel)) {}
+
+  // Authorization and (for unary calls) the deadline.
+  void prepare(grpc::ClientContext& context, double deadline_s) const {
+    if (!options.token.empty()) context.AddMetadata("authorization", "Bearer " + options.token);
+    if (deadline_s > 0.0) {
+      context.set_deadline(std::chrono::system_clock::now() +
+                           std::chrono::microseconds(static_cast<int64_t>(deadline_s * 1e6)));
+    }
+  }
+
+  template <typename Stub, typename Request, typename Reply>
+  void unary(Stub& stub, grpc::Status (Stub::*method)(grpc::ClientContext*, const Request&, Reply*),
+             const Request& request, Reply& reply) const {
+    grpc::ClientContext context;
+    prepare(context, options.deadline_s);
+    throwIfFailed((stub.*method)(&context, request, &reply));
+  }
+};
+
+MapClient::MapClient(const std::string& target, const ClientOptions& options)
+    : impl_(std::make_unique<Impl>(makeChannel(target, options), options)) {}
+
+MapClient::MapClient(std::shared_ptr<grpc::Channel> channel, const ClientOptions& options)
+    : impl_(std::make_unique<Impl>(std::move(channel), options)) {}
+
+MapClient::~MapClient() = default;
+MapClient::MapClient(MapClient&&) noexcept = default;
+MapClient& MapClient::operator=(MapClient&&) noexcept = default;
+
+const ClientOptions& MapClient::options() const { return impl_->options; }
+std::shared_ptr<grpc::Channel> MapClient::channel() const { return impl_->channel; }
+
+bool MapClient::waitForConnected(double timeout_s) {
+  return impl_->channel->WaitForConnected(std::chrono::system_clock::now() +
+                                          std::chrono::microseconds(static_cast<int64_t>(timeout_s * 1e6)));
+}
+
+// ---- Queries ----
+
+std::vector<VoxelResult> MapClient::voxels(const std::vector<Eigen::Vector3d>& points_m) {
+  std::vector<VoxelResult> out;
+  out.reserve(points_m.size());
+  v1::VoxelsRequest request;
+  v1::VoxelsReply reply;
+  for (const auto& [begin, end] : batchRanges(points_m.size(), impl_->options.max_batch_items)) {
+    request.clear_xyz();
+    detail::appendFlat(points_m, begin, end, request.mutable_xyz());
+    impl_->unary(*impl_->query, &v1::Query::Stub::GetVoxels, request, reply);
+    checkCount("states", static_cast<size_t>(reply.states_size()), end - begin);
+    checkCount("probabilities", static_cast<size_t>(reply.probabilities_size()), end - begin);
+    for (int i = 0; i < reply.states_size(); ++i) {
+      out.push_back({static_cast<VoxelState>(reply.states(i)), reply.probabilities(i)});
+    }
+  }
+  return out;
+}
+
+std::vector<BoxCounts> MapClient::boxes(const std::vector<Box>& boxes) {
+  std::vector<BoxCounts> out;
+  out.reserve(boxes.size());
+  for (const auto& [begin, end] : batchRanges(boxes.size(), impl_->options.max_batch_items)) {
+    v1::BoxesRequest request;
+    v1::BoxesReply reply;
+    for (size_t i = begin; i < end; ++i) detail::toWire(boxes[i], request.add_boxes());
+    impl_->unary(*impl_->query, &v1::Query::Stub::GetBoxes, request, reply);
+    checkCount("box counts", static_cast<size_t>(reply.counts_size()), end - begin);
+    for (const auto& counts : reply.counts()) out.push_back(detail::fromWire(counts));
+  }
+  return out;
+}
+
+std::vector<Collision> MapClient::segments(const std::vector<Segment>& segments, bool stop_at_unknown) {
+  std::vector<Collision> out;
+  out.reserve(segments.size());
+  v1::SegmentsRequest request;
+  v1::CollisionsReply reply;
+  request.set_stop_at_unknown(stop_at_unknown);
+  for (const auto& [begin, end] : batchRanges(segments.size(), impl_->options.max_batch_items)) {
+    request.clear_segments();
+    for (size_t i = begin; i < end; ++i) detail::toWire(segments[i], request.add_segments());
+    impl_->unary(*impl_->query, &v1::Query::Stub::CheckSegments, request, reply);
+    checkCount("collisions", static_cast<size_t>(reply.results_size()), end - begin);
+    for (const auto& result : reply.results()) out.push_back(detail::fromWire(result));
+  }
+  return out;
+}
+
+std::vector<Collision> MapClient::raycast(const std::vector<Ray>& rays, double max_range_m, bool stop_at_unknown) {
+  std::vector<Collision> out;
+  out.reserve(rays.size());
+  v1::RaycastRequest request;
+  v1::CollisionsReply reply;
+  request.set_max_range_m(max_range_m);
+  request.set_stop_at_unknown(stop_at_unknown);
+  for (const auto& [begin, end] : batchRanges(rays.size(), impl_->options.max_batch_items)) {
+    request.clear_rays();
+    for (size_t i = begin; i < end; ++i) detail::toWire(rays[i], request.add_rays());
+    impl_->unary(*impl_->query, &v1::Query::Stub::Raycast, request, reply);
+    checkCount("collisions", static_cast<size_t>(reply.results_size()), end - begin);
+    for (const auto& result : reply.results()) out.push_back(detail::fromWire(result));
+  }
+  return out;
+}
+
+std::vector<DistanceResult> MapClient::distances(const std::vector<Eigen::Vector3d>& points_m) {
+  std::vector<DistanceResult> out;
+  out.reserve(points_m.size());
+  v1::DistancesRequest request;
+  v1::DistancesReply reply;
+  for (const auto& [begin, end] : batchRanges(points_m.size(), impl_->options.max_batch_items)) {
+    request.clear_xyz();
+    detail::appendFlat(points_m, begin, end, request.mutable_xyz());
+    impl_->unary(*impl_->query, &v1::Query::Stub::GetDistances, request, reply);
+    const size_t n = end - begin;
+    checkCount("distances", static_cast<size_t>(reply.distances_m_size()), n);
+    checkCount("gradient components", static_cast<size_t>(reply.gradients_size()), 3 * n);
+    checkCount("within_max flags", static_cast<size_t>(reply.within_max_size()), n);
+    for (int i = 0; i < reply.distances_m_size(); ++i) {
+      out.push_back({reply.distances_m(i),
+                     Eigen::Vector3d(reply.gradients(3 * i), reply.gradients(3 * i + 1), reply.gradients(3 * i + 2)),
+                     reply.within_max(i)});
+    }
+  }
+  return out;
+}
+
+std::vector<Frontier> MapClient::frontiers(const FrontierQuery& query) {
+  v1::FrontiersRequest request;
+  v1::FrontiersReply reply;
+  detail::toWire(query.position_m, request.mutable_position());
+  if (!query.region.isEmpty()) detail::toWire(query.region, request.mutable_region());
+  request.set_max_clusters(query.max_clusters);
+  impl_->unary(*impl_->query, &v1::Query::Stub::GetFrontiers, request, reply);
+  std::vector<Frontier> out;
+  out.reserve(static_cast<size_t>(reply.frontiers_size()));
+  for (const auto& f : reply.frontiers()) out.push_back(detail::fromWire(f));
+  return out;
+}
+
+ExtractedVoxels MapClient::extract(const Box& box, bool include_unknown) {
+  v1::ExtractRequest request;
+  v1::ExtractReply reply;
+  detail::toWire(box, request.mutable_box());
+  request.set_include_unknown(include_unknown);
+  impl_->unary(*impl_->query, &v1::Query::Stub::ExtractVoxels, request, reply);
+  const size_t n = static_cast<size_t>(reply.states_size());
+  checkCount("voxel indices", static_cast<size_t>(reply.ijk_size()), 3 * n);
+  checkCount("probabilities", static_cast<size_t>(reply.probabilities_size()), n);
+  ExtractedVoxels out;
+  out.voxel_size_m = reply.voxel_size_m();
+  out.map_version = reply.map_version();
+  out.ijk.resize(n);
+  out.states.resize(n);
+  out.probabilities.assign(reply.probabilities().begin(), reply.probabilities().end());
+  out.rgb.assign(n, {0, 0, 0});
+  const std::string& rgb = reply.rgb();
+  for (size_t i = 0; i < n; ++i) {
+    const int k = static_cast<int>(3 * i);
+    out.ijk[i] = Eigen::Vector3i(reply.ijk(k), reply.ijk(k + 1), reply.ijk(k + 2));
+    out.states[i] = static_cast<VoxelState>(reply.states(static_cast<int>(i)));
+    if (rgb.size() >= 3 * (i + 1)) {
+      for (size_t c = 0; c < 3; ++c) out.rgb[i][c] = static_cast<uint8_t>(rgb[3 * i + c]);
+    }
+  }
+  return out;
+}
+
+MapInfo MapClient::info() {
+  v1::MapInfo reply;
+  impl_->unary(*impl_->query, &v1::Query::Stub::GetMapInfo, v1::MapInfoRequest(), reply);
+  return detail::fromWire(reply);
+}
+
+// ---- Ingest ----
+
+BatchAck MapClient::integratePoints(const PointBatch& batch) {
+  if (!batch.rgb.empty() && batch.rgb.size() != batch.points_m.size()) {
+    throw std::invalid_argument("integratePoints: " + std::to_string(batch.rgb.size()) + " colours for " +
+                                std::to_string(batch.points_m.size()) + " points");
+  }
+  v1::PointBatch request;
+  v1::BatchAck reply;
+  detail::toWire(batch, &request);
+  impl_->unary(*impl_->ingest, &v1::Ingest::Stub::IntegratePoints, request, reply);
+  return detail::fromWire(reply);
+}
+
+struct PointsStream::Impl {
+  std::shared_ptr<v1::Ingest::Stub> stub;
+  grpc::ClientContext context;
+  std::unique_ptr<grpc::ClientReaderWriter<v1::PointBatch, v1::BatchAck>> stream;
+  std::mutex write_mutex;  // writes_done and write may come from different threads
+  bool writes_done = false;
+  bool finished = false;
+};
+
+std::unique_ptr<PointsStream> MapClient::openPointsStream() {
+  auto impl = std::make_unique<PointsStream::Impl>();
+  impl->stub = impl_->ingest;
+  impl_->prepare(impl->context, 0.0);
+  impl->stream = impl->stub->StreamPoints(&impl->context);
+  return std::unique_ptr<PointsStream>(new PointsStream(std::move(impl)));
+}
+
+PointsStream::PointsStream(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+PointsStream::~PointsStream() {
+  if (!impl_->finished) {
+    impl_->context.TryCancel();
+    impl_->stream->Finish();
+  }
+}
+
+bool PointsStream::write(const PointBatch& batch) {
+  v1::PointBatch message;
+  detail::toWire(batch, &message);
+  std::lock_guard lock(impl_->write_mutex);
+  return !impl_->writes_done && impl_->stream->Write(message);
+}
+
+bool PointsStream::read(BatchAck& ack) {
+  v1::BatchAck message;
+  if (!impl_->stream->Read(&message)) return false;
+  ack = detail::fromWire(message);
+  return true;
+}
+
+void PointsStream::finish(std::vector<BatchAck>* remaining) {
+  {
+    std::lock_guard lock(impl_->write_mutex);
+    if (!impl_->writes_done) impl_->stream->WritesDone();
+    impl_->writes_done = true;
+  }
+  BatchAck ack;
+  while (read(ack)) {
+    if (remaining) remaining->push_back(ack);
+  }
+  impl_->finished = true;
+  throwIfFailed(impl_->stream->Finish());
+}
+
+std::vector<BatchAck> MapClient::streamPoints(const std::vector<PointBatch>& batches) {
+  std::unique_ptr<PointsStream> stream = openPointsStream();
+  std::thread writer([&] {
+    for (const PointBatch& batch : batches) {
+      if (!stream->write(batch)) break;
+    }
+  });
+  std::vector<BatchAck> acks;
+  BatchAck ack;
+  while (acks.size() < batches.size() && stream->read(ack)) acks.push_back(ack);
+  writer.join();
+  stream->finish(&acks);
+  return acks;
+}
+
+// ---- Updates ----
+
+struct Subscription::Impl {
+  std::shared_ptr<v1::Updates::Stub> stub;
+  grpc::ClientContext context;
+  std::thread thread;
+  std::atomic<bool> active{true};
+  std::atomic<bool> cancelled{false};
+  std::atomic<uint64_t> received{0};
+  grpc::Status status;
+};
+
+namespace {
+v1::SubscribeRequest subscribeRequest(const SubscribeOptions& options) {
+  v1::SubscribeRequest request;
+  if (!options.region.isEmpty()) detail::toWire(options.region, request.mutable_region());
+  request.set_include_probabilities(options.include_probabilities);
+  return request;
+}
+}  // namespace
+
+std::unique_ptr<Subscription> MapClient::subscribe(const SubscribeOptions& options,
+                                                   std::function<void(const MapUpdate&)> on_update) {
+  auto impl = std::make_unique<Subscription::Impl>();
+  impl->stub = impl_->updates;
+  impl_->prepare(impl->context, 0.0);
+  Subscription::Impl* raw = impl.get();
+  raw->thread = std::thread([raw, request = subscribeRequest(options), on_update = std::move(on_update)] {
+    std::unique_ptr<grpc::ClientReader<v1::MapUpdate>> reader = raw->stub->Subscribe(&raw->context, request);
+    v1::MapUpdate message;
+    MapUpdate update;
+    while (reader->Read(&message)) {
+      if (raw->cancelled) continue;  // drain: the call ends once the cancellation lands
+      detail::fromWire(message, update);
+      raw->received.fetch_add(1);
+      on_update(update);
+    }
+    raw->status = reader->Finish();
+    raw->active = false;
+  });
+  return std::unique_ptr<Subscription>(new Subscription(std::move(impl)));
+}
+
+Subscription::Subscription(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+Subscription::~Subscription() { cancel(); }
+
+void Subscription::cancel() {
+  impl_->cancelled = true;
+  impl_->context.TryCancel();
+  if (impl_->thread.joinable()) impl_->thread.join();
+}
+
+bool Subscription::isActive() const { return impl_->active; }
+uint64_t Subscription::updatesReceived() const { return impl_->received; }
+
+void Subscription::wait() {
+  if (impl_->thread.joinable()) impl_->thread.join();
+  if (!impl_->cancelled) throwIfFailed(impl_->status);
+}
+
+void MapClient::watch(const SubscribeOptions& options, const std::function<bool(const MapUpdate&)>& on_update) {
+  grpc::ClientContext context;
+  impl_->prepare(context, 0.0);
+  std::unique_ptr<grpc::ClientReader<v1::MapUpdate>> reader = impl_->updates->Subscribe(&context, subscribeRequest(options));
+  v1::MapUpdate message;
+  MapUpdate update;
+  bool stopped = false;
+  while (reader->Read(&message)) {
+    detail::fromWire(message, update);
+    if (!on_update(update)) {
+      stopped = true;
+      context.TryCancel();
+      break;
+    }
+  }
+  const grpc::Status status = reader->Finish();
+  if (!stopped) throwIfFailed(status);
+}
+
+// ---- Admin ----
+
+SnapshotResult MapClient::snapshot(const std::string& path, SnapshotFormat format) {
+  v1::SnapshotRequest request;
+  v1::SnapshotReply reply;
+  request.set_path(path);
+  request.set_format(static_cast<v1::SnapshotFormat>(format));
+  impl_->unary(*impl_->admin, &v1::Admin::Stub::Snapshot, request, reply);
+  return {reply.path(), reply.bytes(), reply.map_version()};
+}
+
+uint64_t MapClient::downloadSnapshot(const std::string& local_path, SnapshotFormat format) {
+  v1::SnapshotRequest request;
+  request.set_format(static_cast<v1::SnapshotFormat>(format));
+  grpc::ClientContext context;
+  // A whole map can take far longer than one query: ten deadlines.
+  impl_->prepare(context, 10.0 * impl_->options.deadline_s);
+  std::unique_ptr<grpc::ClientReader<v1::FileChunk>> reader = impl_->admin->DownloadSnapshot(&context, request);
+  const std::string part = local_path + ".part";
+  std::ofstream file(part, std::ios::binary | std::ios::trunc);
+  if (!file) throw std::runtime_error("downloadSnapshot: cannot write " + part);
+  v1::FileChunk chunk;
+  uint64_t written = 0;
+  uint64_t total = 0;
+  while (reader->Read(&chunk)) {
+    if (chunk.offset() != written) {
+      context.TryCancel();
+      reader->Finish();
+      std::filesystem::remove(part);
+      throw RpcError(grpc::StatusCode::DATA_LOSS, "snapshot chunk at offset " + std::to_string(chunk.offset()) +
+                                                      ", expected " + std::to_string(written));
+    }
+    file.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
+    written += chunk.data().size();
+    total = chunk.total_bytes();
+  }
+  const grpc::Status status = reader->Finish();
+  file.close();
+  if (!status.ok()) {
+    std::filesystem::remove(part);
+    throwIfFailed(status);
+  }
+  if (!file) throw std::runtime_error("downloadSnapshot: writing " + part + " failed (disk full?)");
+  if (total != 0 && written != total) {
+    std::filesystem::remove(part);
+    throw RpcError(grpc::StatusCode::DATA_LOSS,
+                   "snapshot ended after " + std::to_string(written) + " of " + std::to_string(total) + " bytes");
+  }
+  std::filesystem::rename(part, local_path);
+  return written;
+}
+
+ChangeResult MapClient::clearBox(const Box& box) {
+  v1::ClearBoxRequest request;
+  v1::ChangeReply reply;
+  detail::toWire(box, request.mutable_box());
+  impl_->unary(*impl_->admin, &v1::Admin::Stub::ClearBox, request, reply);
+  return detail::fromWire(reply);
+}
+
+ChangeResult MapClient::clearSphere(const Eigen::Vector3d& centre_m, double radius_m) {
+  v1::ClearSphereRequest request;
+  v1::ChangeReply reply;
+  detail::toWire(centre_m, request.mutable_centre());
+  request.set_radius_m(radius_m);
+  impl_->unary(*impl_->admin, &v1::Admin::Stub::ClearSphere, request, reply);
+  return detail::fromWire(reply);
+}
+
+ChangeResult MapClient::crop(const Eigen::Vector3d& centre_m, double radius_m) {
+  v1::CropRequest request;
+  v1::ChangeReply reply;
+  detail::toWire(centre_m, request.mutable_centre());
+  request.set_radius_m(radius_m);
+  impl_->unary(*impl_->admin, &v1::Admin::Stub::Crop, request, reply);
+  return detail::fromWire(reply);
+}
+
+ChangeResult MapClient::reset() {
+  v1::ChangeReply reply;
+  impl_->unary(*impl_->admin, &v1::Admin::Stub::Reset, v1::ResetRequest(), reply);
+  return detail::fromWire(reply);
+}
+
+ServerStats MapClient::stats() {
+  v1::Stats reply;
+  impl_->unary(*impl_->admin, &v1::Admin::Stub::GetStats, v1::StatsRequest(), reply);
+  return detail::fromWire(reply);
+}
+
+}  // namespace cenote::client
