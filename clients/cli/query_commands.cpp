@@ -1,0 +1,197 @@
+// query_commands.cpp: cenote-cli's map queries.
+//   state X,Y,Z [X,Y,Z ...] | --points-file F   "x y z unknown|free|occupied probability" per point
+//   box MIN MAX                                  voxel counts by state in the box
+//   segment START END [--radius R] [--stop-at-unknown]
+//   raycast ORIGIN DIRECTION [--max-range M] [--stop-at-unknown]
+//   distance X,Y,Z ... | --points-file F         "x y z distance gx gy gz" per point
+//   frontiers [--from X,Y,Z] [--max N] [--region MIN MAX]
+//   info                                         resolution, frame, bounds, counts, sensor model
+#include <cstdio>
+
+#include "clients/cli/cli_input.h"
+#include "clients/cli/commands.h"
+
+namespace cenote::cli {
+
+namespace {
+
+std::vector<Eigen::Vector3d> gatherPoints(const std::vector<std::string>& texts, const std::string& points_file,
+                                          const char* command) {
+  std::vector<Eigen::Vector3d> points;
+  for (const std::string& text : texts) points.push_back(parsePoint(text, command));
+  if (!points_file.empty()) {
+    const auto more = readPointsFile(points_file);
+    points.insert(points.end(), more.begin(), more.end());
+  }
+  if (points.empty()) throw CliError(std::string(command) + ": give points X,Y,Z or --points-file F");
+  return points;
+}
+
+client::Box parseBox(const std::string& min_text, const std::string& max_text, const char* what) {
+  const client::Box box{parsePoint(min_text, std::string(what) + " MIN"), parsePoint(max_text, std::string(what) + " MAX")};
+  if (box.isEmpty()) throw CliError(std::string(what) + ": MIN must not exceed MAX on any axis");
+  return box;
+}
+
+void printCollision(const client::Collision& c) {
+  if (c.hit) {
+    std::printf("hit at %.3f m, voxel %d,%d,%d (centre %s)", c.hit_distance_m, c.hit_voxel.x(), c.hit_voxel.y(),
+                c.hit_voxel.z(), formatPoint(c.hit_point_m).c_str());
+  } else if (c.stopped_at_unknown) {
+    std::printf("stopped at unknown at %.3f m", c.unknown_distance_m);
+  } else {
+    std::printf("clear");
+  }
+  if (c.crossed_unknown && !c.stopped_at_unknown) std::printf("; unknown from %.3f m", c.unknown_distance_m);
+  std::printf("\n");
+}
+
+void registerState(CLI::App& app, Connection& connection) {
+  struct Options {
+    std::vector<std::string> points;
+    std::string points_file;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("state", "State and occupancy probability of the voxel at each point");
+  cmd->add_option("points", o->points, "X,Y,Z points (metres, world frame)");
+  cmd->add_option("--points-file", o->points_file, "File of points, one 'x y z' a line");
+  cmd->callback([o, &connection] {
+    const auto points = gatherPoints(o->points, o->points_file, "state");
+    const auto results = connection.client().voxels(points);
+    for (size_t i = 0; i < points.size(); ++i) {
+      std::printf("%g %g %g %s %.4f\n", points[i].x(), points[i].y(), points[i].z(), client::toString(results[i].state),
+                  results[i].probability);
+    }
+  });
+}
+
+void registerBox(CLI::App& app, Connection& connection) {
+  struct Options {
+    std::string min, max;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("box", "Voxel counts by state in an axis-aligned box (voxel centres inside)");
+  cmd->add_option("min", o->min, "X,Y,Z lower corner")->required();
+  cmd->add_option("max", o->max, "X,Y,Z upper corner")->required();
+  cmd->callback([o, &connection] {
+    const auto counts = connection.client().boxes({parseBox(o->min, o->max, "box")}).front();
+    std::printf("occupied %llu free %llu unknown %llu\n", static_cast<unsigned long long>(counts.occupied),
+                static_cast<unsigned long long>(counts.free), static_cast<unsigned long long>(counts.unknown));
+  });
+}
+
+void registerSegment(CLI::App& app, Connection& connection) {
+  struct Options {
+    std::string start, end;
+    double radius_m = 0.0;
+    bool stop_at_unknown = false;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("segment", "First occupied voxel along a segment (or a capsule with --radius)");
+  cmd->add_option("start", o->start, "X,Y,Z")->required();
+  cmd->add_option("end", o->end, "X,Y,Z")->required();
+  cmd->add_option("--radius", o->radius_m, "Capsule radius, metres (0: the voxels the segment passes through)");
+  cmd->add_flag("--stop-at-unknown", o->stop_at_unknown, "Unknown voxels are not free to pass");
+  cmd->callback([o, &connection] {
+    const client::Segment segment{parsePoint(o->start, "segment START"), parsePoint(o->end, "segment END"), o->radius_m};
+    printCollision(connection.client().segment(segment, o->stop_at_unknown));
+  });
+}
+
+void registerRaycast(CLI::App& app, Connection& connection) {
+  struct Options {
+    std::string origin, direction;
+    double max_range_m = 10.0;
+    bool stop_at_unknown = false;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("raycast", "First occupied voxel along a ray");
+  cmd->add_option("origin", o->origin, "X,Y,Z")->required();
+  cmd->add_option("direction", o->direction, "DX,DY,DZ (any non-zero length)")->required();
+  cmd->add_option("--max-range", o->max_range_m, "Metres")->capture_default_str();
+  cmd->add_flag("--stop-at-unknown", o->stop_at_unknown, "Unknown voxels are not free to pass");
+  cmd->callback([o, &connection] {
+    const client::Ray ray{parsePoint(o->origin, "raycast ORIGIN"), parsePoint(o->direction, "raycast DIRECTION")};
+    printCollision(connection.client().raycast({ray}, o->max_range_m, o->stop_at_unknown).front());
+  });
+}
+
+void registerDistance(CLI::App& app, Connection& connection) {
+  struct Options {
+    std::vector<std::string> points;
+    std::string points_file;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "distance", "Distance to the nearest occupied voxel and its gradient: 'x y z distance gx gy gz' per point");
+  cmd->add_option("points", o->points, "X,Y,Z points");
+  cmd->add_option("--points-file", o->points_file, "File of points, one 'x y z' a line");
+  cmd->callback([o, &connection] {
+    const auto points = gatherPoints(o->points, o->points_file, "distance");
+    const auto results = connection.client().distances(points);
+    for (size_t i = 0; i < points.size(); ++i) {
+      const auto& r = results[i];
+      std::printf("%g %g %g %.4f %.4f %.4f %.4f%s\n", points[i].x(), points[i].y(), points[i].z(), r.distance_m,
+                  r.gradient.x(), r.gradient.y(), r.gradient.z(), r.within_max ? "" : " beyond-max");
+    }
+  });
+}
+
+void registerFrontiers(CLI::App& app, Connection& connection) {
+  struct Options {
+    std::string from = "0,0,0";
+    unsigned max_clusters = 0;
+    std::vector<std::string> region;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("frontiers", "Frontier clusters (free next to unknown), nearest first");
+  cmd->add_option("--from", o->from, "X,Y,Z: sort by distance from here")->capture_default_str();
+  cmd->add_option("--max", o->max_clusters, "At most this many clusters (0: all)");
+  cmd->add_option("--region", o->region, "MIN MAX: only clusters whose centroid lies in this box")->expected(2);
+  cmd->callback([o, &connection] {
+    client::FrontierQuery query;
+    query.position_m = parsePoint(o->from, "--from");
+    query.max_clusters = o->max_clusters;
+    if (!o->region.empty()) query.region = parseBox(o->region[0], o->region[1], "--region");
+    const auto frontiers = connection.client().frontiers(query);
+    for (const auto& f : frontiers) {
+      std::printf("frontier %llu: %llu voxels, centroid %s, distance %.3f m, direction %s\n",
+                  static_cast<unsigned long long>(f.id), static_cast<unsigned long long>(f.num_voxels),
+                  formatPoint(f.centroid_m).c_str(), f.distance_m, formatPoint(f.direction).c_str());
+    }
+    std::printf("%zu frontier clusters\n", frontiers.size());
+  });
+}
+
+void registerInfo(CLI::App& app, Connection& connection) {
+  CLI::App* cmd = app.add_subcommand("info", "The map's resolution, frame, bounds, voxel counts and sensor model");
+  cmd->callback([&connection] {
+    const client::MapInfo info = connection.client().info();
+    std::printf("voxel_size_m: %g\nframe_id: %s\n", info.voxel_size_m, info.frame_id.c_str());
+    if (info.bounds.isEmpty()) {
+      std::printf("bounds: empty\n");
+    } else {
+      std::printf("bounds: %s .. %s\n", formatPoint(info.bounds.min_m).c_str(), formatPoint(info.bounds.max_m).c_str());
+    }
+    std::printf("occupied: %llu\nfree: %llu\n", static_cast<unsigned long long>(info.occupied),
+                static_cast<unsigned long long>(info.free));
+    std::printf("prob_hit: %g\nprob_miss: %g\nclamp: %g %g\noccupied_threshold: %g\nmax_range_m: %g\n"
+                "max_distance_m: %g\nmap_version: %llu\n",
+                info.prob_hit, info.prob_miss, info.clamp_min, info.clamp_max, info.occupied_threshold,
+                info.max_range_m, info.max_distance_m, static_cast<unsigned long long>(info.map_version));
+  });
+}
+
+}  // namespace
+
+void registerQueryCommands(CLI::App& app, Connection& connection) {
+  registerState(app, connection);
+  registerBox(app, connection);
+  registerSegment(app, connection);
+  registerRaycast(app, connection);
+  registerDistance(app, connection);
+  registerFrontiers(app, connection);
+  registerInfo(app, connection);
+}
+
+}  // namespace cenote::cli
