@@ -14,6 +14,7 @@
 #include "pipeline/calibration/rectifier.h"
 #include "pipeline/image/image_io.h"
 #include "pipeline/runner/frame_pipeline.h"
+#include "pipeline/runner/keyframe_selector.h"
 #include "pipeline/runner/point_output.h"
 
 namespace cenote::pipeline {
@@ -42,30 +43,6 @@ class FrameNames {
  private:
   std::mutex mutex_;
   std::map<double, std::string> names_;
-};
-
-double rotationDeg(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * 180.0 / M_PI;
-}
-
-// Skips frames that moved less than both thresholds since the last keyframe (none set: none skipped).
-class KeyframeSelector {
- public:
-  explicit KeyframeSelector(const RunConfig& c) : translation_m_(c.keyframe_translation_m), rotation_deg_(c.keyframe_rotation_deg) {}
-  bool accept(const Eigen::Isometry3d& pose) {
-    if ((translation_m_ <= 0.0 && rotation_deg_ <= 0.0) || !last_) {
-      last_ = pose;
-      return true;
-    }
-    const bool moved = (translation_m_ > 0.0 && (pose.translation() - last_->translation()).norm() >= translation_m_) ||
-                       (rotation_deg_ > 0.0 && rotationDeg(*last_, pose) >= rotation_deg_);
-    if (moved) last_ = pose;
-    return moved;
-  }
-
- private:
-  double translation_m_, rotation_deg_;
-  std::optional<Eigen::Isometry3d> last_;
 };
 
 }  // namespace

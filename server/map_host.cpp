@@ -1,0 +1,97 @@
+#include "server/map_host.h"
+
+namespace cenote::server {
+
+MapHost::MapHost(std::unique_ptr<mapping::OccupancyMap> map, size_t max_subscriber_lag)
+    : map_(std::move(map)),
+      distance_(std::make_unique<mapping::DistanceField>(*map_)),
+      frontiers_(std::make_unique<mapping::FrontierMap>(*map_)),
+      feed_(max_subscriber_lag) {
+  // A loaded map: derive everything once before serving.
+  if (map_->version() > 0 || map_->stats().occupied + map_->stats().free > 0) {
+    distance_->rebuild();
+    frontiers_->rebuild();
+  }
+  derived_thread_ = std::thread([this] { derivedLoop(); });
+}
+
+MapHost::~MapHost() {
+  {
+    std::lock_guard<std::mutex> lock(derived_mutex_);
+    stop_ = true;
+  }
+  derived_cv_.notify_all();
+  derived_thread_.join();
+  feed_.close();
+}
+
+template <typename Change>
+mapping::MapDelta MapHost::change(Change&& apply) {
+  std::lock_guard<std::mutex> writer(writer_mutex_);
+  mapping::MapDelta delta = apply();
+  const uint64_t version = map_->version();
+  {
+    std::lock_guard<std::mutex> lock(derived_mutex_);
+    pending_.merge(delta);
+    ++published_changes_;
+  }
+  derived_cv_.notify_all();
+  feed_.publish(MapChange{version, delta});
+  return delta;
+}
+
+mapping::MapDelta MapHost::integrate(const PointBatch& batch) {
+  mapping::MapDelta delta = change([&] { return map_->integrate(batch); });
+  std::lock_guard<std::mutex> lock(derived_mutex_);
+  ++batches_;
+  return delta;
+}
+
+mapping::MapDelta MapHost::clearBox(const mapping::Aabb& box_m) {
+  return change([&] { return map_->clearBox(box_m); });
+}
+
+mapping::MapDelta MapHost::clearSphere(const Eigen::Vector3d& centre_m, double radius_m) {
+  return change([&] { return map_->clearSphere(centre_m, radius_m); });
+}
+
+mapping::MapDelta MapHost::cropToRadius(const Eigen::Vector3d& centre_m, double radius_m) {
+  return change([&] { return map_->cropToRadius(centre_m, radius_m); });
+}
+
+mapping::MapDelta MapHost::reset() {
+  return change([&] { return map_->reset(); });
+}
+
+uint64_t MapHost::batchesIntegrated() const {
+  std::lock_guard<std::mutex> lock(derived_mutex_);
+  return batches_;
+}
+
+bool MapHost::waitForDerived(std::chrono::system_clock::time_point deadline) const {
+  std::unique_lock<std::mutex> lock(derived_mutex_);
+  const uint64_t target = published_changes_;
+  return derived_cv_.wait_until(lock, deadline, [&] { return derived_changes_ >= target || stop_; });
+}
+
+void MapHost::derivedLoop() {
+  std::unique_lock<std::mutex> lock(derived_mutex_);
+  while (true) {
+    derived_cv_.wait(lock, [&] { return stop_ || derived_changes_ < published_changes_; });
+    if (stop_) return;
+    mapping::MapDelta delta;
+    std::swap(delta, pending_);
+    const uint64_t changes = published_changes_;
+    lock.unlock();
+    // Deltas merged since the last round are applied at once: one wave over their union.
+    if (!delta.isEmpty()) {
+      distance_->update(delta);
+      frontiers_->update(delta);
+    }
+    lock.lock();
+    derived_changes_ = changes;
+    derived_cv_.notify_all();
+  }
+}
+
+}  // namespace cenote::server

@@ -1,0 +1,73 @@
+// map_host.h: the map the server serves, the structures derived from it (distance field,
+// frontiers) and the feed of its changes. Every change of the map goes through here, so the
+// derived structures and the subscribers see every MapDelta, in order.
+//
+// The distance field and the frontiers are brought up to date by a thread of their own from the
+// accumulated deltas, so ingest never waits for them; a distance or frontier query first waits
+// (up to its deadline) until they include every change made before it arrived: a client reads
+// its own writes.
+// Units: metres, world frame.
+// Threads: changes serialise on a writer mutex; queries from any number of threads (the map's own
+// reader locks; see mapping/occupancy_map.h).
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "common/point_batch.h"
+#include "mapping/distance/distance_field.h"
+#include "mapping/frontier/frontier_map.h"
+#include "mapping/occupancy_map.h"
+#include "server/change_feed.h"
+
+namespace cenote::server {
+
+class MapHost {
+ public:
+  MapHost(std::unique_ptr<mapping::OccupancyMap> map, size_t max_subscriber_lag);
+  ~MapHost();
+  MapHost(const MapHost&) = delete;
+  MapHost& operator=(const MapHost&) = delete;
+
+  const mapping::OccupancyMap& map() const { return *map_; }
+  ChangeFeed& feed() { return feed_; }
+
+  // @throws cenote::Error for a bad batch (the map is then unchanged).
+  mapping::MapDelta integrate(const PointBatch& batch);
+  mapping::MapDelta clearBox(const mapping::Aabb& box_m);
+  mapping::MapDelta clearSphere(const Eigen::Vector3d& centre_m, double radius_m);
+  mapping::MapDelta cropToRadius(const Eigen::Vector3d& centre_m, double radius_m);
+  mapping::MapDelta reset();
+  uint64_t batchesIntegrated() const;
+
+  // Waits until the distance field and frontiers include every change made so far.
+  // @return false when `deadline` came first.
+  bool waitForDerived(std::chrono::system_clock::time_point deadline) const;
+  const mapping::DistanceField& distanceField() const { return *distance_; }
+  const mapping::FrontierMap& frontiers() const { return *frontiers_; }
+
+ private:
+  template <typename Change>
+  mapping::MapDelta change(Change&& apply);
+  void derivedLoop();
+
+  std::unique_ptr<mapping::OccupancyMap> map_;
+  std::unique_ptr<mapping::DistanceField> distance_;
+  std::unique_ptr<mapping::FrontierMap> frontiers_;
+  ChangeFeed feed_;
+
+  std::mutex writer_mutex_;  // one change at a time
+  mutable std::mutex derived_mutex_;
+  mutable std::condition_variable derived_cv_;
+  mapping::MapDelta pending_;        // changes not yet in the derived structures
+  uint64_t published_changes_ = 0;   // changes made
+  uint64_t derived_changes_ = 0;     // changes the derived structures include
+  uint64_t batches_ = 0;
+  bool stop_ = false;
+  std::thread derived_thread_;
+};
+
+}  // namespace cenote::server
