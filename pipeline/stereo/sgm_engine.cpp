@@ -491,6 +491,10 @@ void leftRightCheck(const SgmParams& p, const StripBuffers& b, float* disparity,
 
 enum class RowOutput { kNone, kStoreSums, kWinner };
 
+// What the cost of a pixel needs, known at compile time for the common cases. kGeneral decides
+// at run time (first pixel of a row, left border, SAD window columns outside the image).
+enum class PixelKind { kGeneral, kSadInterior, kCensusInterior };
+
 // Copies one pixel's path costs (aligned vectors).
 void copyPixel(const StripBuffers& b, const uint16_t* from, uint16_t* to) {
   const DU16 d;
@@ -564,7 +568,7 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
                                    : b.sums + slot * Dp;
     const uint16_t* const sums_in = add_stored ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp : nullptr;
     const uint16_t* const iota = b.iota;
-    uint16_t* const running = b.running;
+    uint16_t* const running_sum = b.running;
     const uint16_t* const census_right_lo = b.census_reversed[0] + census_base;
     const uint16_t* const census_right_hi = b.census_reversed[1] + census_base;
     const bool census = p.census, has_running = !census && i > 0;
@@ -583,22 +587,29 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
     // One vector of disparities; `is_last` (a compile-time constant) keeps the lanes past D at
     // the sentinel. Forced inline: GCC otherwise calls it, reloading every capture from memory
     // on each vector (about a fifth of the matching time).
-    auto vector_step = [&](int k, auto is_last) HWY_ATTR __attribute__((always_inline)) {
+    // `kind` (a compile-time constant, see PixelKind) removes the per-vector branches of the
+    // pixels that are neither first in the row nor at the left border: nearly all of them.
+    auto vector_step = [&](int k, auto is_last, auto kind) HWY_ATTR __attribute__((always_inline)) {
+      constexpr PixelKind kKind = decltype(kind)::value;
+      const bool is_census = kKind == PixelKind::kGeneral ? census : kKind == PixelKind::kCensusInterior;
+      const bool running = kKind == PixelKind::kGeneral ? has_running : kKind == PixelKind::kSadInterior;
+      const bool update = kKind == PixelKind::kGeneral ? update_ahead : kKind == PixelKind::kSadInterior;
+      const bool border = kKind == PixelKind::kGeneral && left_border;
       VU16 cost;
-      if (census) {
+      if (is_census) {
         const VU16 lo = hn::Xor(hn::Set(d, census_lo), hn::LoadU(d, census_right_lo + k));
         const VU16 hi = hn::Xor(hn::Set(d, census_hi), hn::LoadU(d, census_right_hi + k));
         cost = hn::Add(hn::PopulationCount(lo), hn::PopulationCount(hi));
       } else {
-        VU16 acc = hn::Load(d, running + k);
-        if (has_running) {
-          const VU16 add = update_ahead ? updateColumn(ahead_column, k) : hn::Load(d, add_column + k);
+        VU16 acc = hn::Load(d, running_sum + k);
+        if (running) {
+          const VU16 add = update ? updateColumn(ahead_column, k) : hn::Load(d, add_column + k);
           acc = hn::Sub(hn::Add(acc, add), hn::Load(d, leave_column + k));
-          hn::Store(acc, d, running + k);
+          hn::Store(acc, d, running_sum + k);
         }
         cost = hn::ShiftRightSame(acc, sad_shift);
       }
-      if (left_border) {
+      if (border) {
         // x - min_d - k < 0: no right pixel, largest cost.
         const auto beyond = no_match ? hn::FirstN(d, N) : hn::Gt(hn::Load(d, iota + k), max_valid_k);
         cost = hn::IfThenElse(beyond, worst_cost, cost);
@@ -640,8 +651,17 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
       along_before = along_here;
       along_here = along_after;
     };
-    for (int k = 0; k + N < Dp; k += N) vector_step(k, std::false_type());
-    vector_step(Dp - N, std::true_type());
+    auto vector_loop = [&](auto kind) HWY_ATTR __attribute__((always_inline)) {
+      for (int k = 0; k + N < Dp; k += N) vector_step(k, std::false_type(), kind);
+      vector_step(Dp - N, std::true_type(), kind);
+    };
+    if (!left_border && !census && has_running && update_ahead) {
+      vector_loop(std::integral_constant<PixelKind, PixelKind::kSadInterior>());
+    } else if (!left_border && census) {
+      vector_loop(std::integral_constant<PixelKind, PixelKind::kCensusInterior>());
+    } else {
+      vector_loop(std::integral_constant<PixelKind, PixelKind::kGeneral>());
+    }
     hn::Store(vertical_pending, d, vertical + Dp - N);
     along_min = minLane(d, mins_along);
     b.path_min[0][x + 1] = minLane(d, mins_vertical);
