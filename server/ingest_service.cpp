@@ -66,12 +66,12 @@ class FrameStream {
                               " is not after the previous frame's (" + std::to_string(last_t_s_) +
                               "): frames must come in time order");
       }
+      last_t_s_ = wire.timestamp_s();  // rejected or not, the next frame must come later
       std::optional<Eigen::Isometry3d> T_world_raw;
       if (wire.has_pose()) T_world_raw = finitePose(wire.pose(), "pose");
       const auto decode_start = Clock::now();
       pipeline::StereoFrame raw = decodeStereoFrame(wire, settings_.server.limits.max_image_pixels);
       const double decode_ms = pipeline::msSince(decode_start);
-      last_t_s_ = wire.timestamp_s();
       if (!T_world_raw) {
         const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                                  std::chrono::duration<double>(settings_.server.pose_wait_s));
