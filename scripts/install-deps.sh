@@ -8,7 +8,7 @@ PACKAGES=(
   # toolchain
   build-essential cmake ninja-build ccache pkg-config git
   # pipeline: images, calibration, SIMD, threads
-  libopencv-dev libeigen3-dev libhwy-dev
+  libopencv-dev libeigen3-dev libhwy-dev libdeflate-dev
   # command line, config, logs
   libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   # mapping: volumetric map (OpenVDB, TBB), OctoMap as peer, reference and file format
@@ -19,6 +19,8 @@ PACKAGES=(
   # stubs generated at build time
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc python3-grpcio python3-grpc-tools
   python3-protobuf
+  # server TLS tests make their certificates
+  openssl
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # test data scripts
