@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "pipeline/image/png_decoder.h"
 
 namespace cenote::pipeline {
 namespace {
@@ -110,7 +111,19 @@ cv::Mat readDepthPng16(const std::string& path) {
 
 cv::Mat readImage(const std::string& path, int flags) {
   if (!std::filesystem::exists(path)) throw Error("cannot read image " + path + ": no such file");
-  cv::Mat image = cv::imread(path, flags);
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  std::vector<uint8_t> bytes(in ? static_cast<std::size_t>(in.tellg()) : 0);
+  in.seekg(0);
+  if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()))) {
+    throw Error("cannot read image " + path + ": read failed");
+  }
+  // 8-bit PNGs (what stereo sequences are made of) through libdeflate; everything else, and any
+  // PNG it does not handle, through OpenCV. Both give the same pixels.
+  if (flags == cv::IMREAD_UNCHANGED || flags == cv::IMREAD_COLOR) {
+    cv::Mat fast = decodePngFast(bytes.data(), bytes.size());
+    if (!fast.empty() && (flags == cv::IMREAD_UNCHANGED || fast.channels() == 3)) return fast;
+  }
+  cv::Mat image = bytes.empty() ? cv::Mat() : cv::imdecode(bytes, flags);
   if (image.empty()) throw Error("cannot read image " + path + ": not a readable image file");
   return image;
 }
