@@ -5,6 +5,8 @@ set -euo pipefail
 build=${1:-build}
 out=${2:-out/demo}
 cenote="$build/apps/cenote"
+server="$build/server/cenote-server"
+cli="$build/clients/cli/cenote-cli"
 here=$(cd "$(dirname "$0")/.." && pwd)
 frames=${CENOTE_DEMO_FRAMES:-60}
 rm -rf "$out"
@@ -33,6 +35,28 @@ else
   echo "(Motorcycle not unpacked: scripts/fetch-test-data.sh)"
 fi
 
+echo "== 5. serve the map over gRPC and ask it what a planner asks (cenote-server, cenote-cli)"
+if [ -x "$server" ] && [ -x "$cli" ]; then
+  rm -f "$out/server.port"
+  "$server" --config "$here/config/default.yaml" --load "$out/run/map.vdb" --listen 127.0.0.1:0 \
+    --port-file "$out/server.port" --snapshot-dir "$out/snapshots" > "$out/server.log" 2>&1 &
+  server_pid=$!
+  for _ in $(seq 1 600); do [ -f "$out/server.port" ] && break; sleep 0.1; done
+  address="127.0.0.1:$(cat "$out/server.port")"
+  echo "server on $address"
+  "$cli" --server "$address" info
+  echo "-- voxel states 1 m and 2 m ahead of the start, and 0.5 m to the side (x y z state probability):"
+  "$cli" --server "$address" state 1,0,0 2,0,0 0,0.5,0 0,2,0
+  echo "-- is the straight path 3 m ahead clear for a 0.2 m-radius vehicle?"
+  "$cli" --server "$address" segment 0,0,0 3,0,0 --radius 0.2 || true
+  echo "-- the three nearest frontiers:"
+  "$cli" --server "$address" frontiers --max 3
+  "$cli" --server "$address" snapshot map_mesh.ply > /dev/null
+  kill -TERM "$server_pid" && wait "$server_pid"
+else
+  echo "(cenote-server or cenote-cli not built)"
+fi
+
 echo
 echo "demo outputs in $out/:"
 echo "  cave/                       simulated EuRoC dataset with groundtruth/ (depth, poses, surface.ply)"
@@ -42,3 +66,4 @@ echo "  run/depth/                  fused depth and confidence maps (PFM)"
 echo "  run/report.json             frames, per-stage ms (median, p95), fps, peak memory"
 echo "  report.html                 one-page report with metrics and plots"
 echo "  motorcycle.preview.png      colour-mapped disparity of a real pair"
+echo "  snapshots/                  written by cenote-server: map_mesh.ply (asked for), map.vdb (on shutdown)"
