@@ -1,16 +1,17 @@
 #include "server/call_guard.h"
 
-#include <algorithm>
 #include <fstream>
 
 namespace cenote::server {
 namespace {
 
-// Compares in time independent of where the strings first differ.
-bool equalConstantTime(const std::string& a, const std::string& b) {
-  unsigned char diff = a.size() == b.size() ? 0 : 1;
-  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i % std::max<size_t>(b.size(), 1)]);
-  return diff == 0 && !b.empty();
+// Compares in a time that does not depend on where the strings first differ (the token's length
+// is not the secret).
+bool equalConstantTime(const std::string& given, const std::string& token) {
+  if (given.size() != token.size()) return false;
+  unsigned char diff = 0;
+  for (size_t i = 0; i < given.size(); ++i) diff |= static_cast<unsigned char>(given[i] ^ token[i]);
+  return diff == 0;
 }
 
 }  // namespace
@@ -43,29 +44,18 @@ grpc::Status Authenticator::check(const grpc::ServerContext& context) const {
 
 void MethodStats::record(double ms, bool ok) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (samples_.size() < kSamples) {
-    samples_.push_back(static_cast<float>(ms));
-  } else {
-    samples_[calls_ % kSamples] = static_cast<float>(ms);
-  }
-  ++calls_;
+  latency_.add(ms);
   if (!ok) ++errors_;
 }
 
 MethodSummary MethodStats::summary(const std::string& method) const {
-  std::vector<float> sorted;
+  std::lock_guard<std::mutex> lock(mutex_);
   MethodSummary s;
   s.method = method;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    sorted = samples_;
-    s.calls = calls_;
-    s.errors = errors_;
-  }
-  if (sorted.empty()) return s;
-  std::sort(sorted.begin(), sorted.end());
-  s.p50_ms = sorted[sorted.size() / 2];
-  s.p99_ms = sorted[std::min(sorted.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(sorted.size())))];
+  s.calls = latency_.count();
+  s.errors = errors_;
+  s.p50_ms = latency_.percentile(0.5);
+  s.p99_ms = latency_.percentile(0.99);
   return s;
 }
 

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "pipeline/runner/stage_timer.h"
 #include "server/status_error.h"
 
 namespace cenote::server {
@@ -44,17 +45,16 @@ struct MethodSummary {
   double p99_ms = 0.0;
 };
 
-// Latencies of one method: counts, and the most recent kSamples durations for percentiles.
+// Latencies of one method (the most recent StageTimer::kMaxSamples, for percentiles) and counts.
 class MethodStats {
  public:
-  static constexpr size_t kSamples = 8192;
   void record(double ms, bool ok);
   MethodSummary summary(const std::string& method) const;
 
  private:
   mutable std::mutex mutex_;
-  std::vector<float> samples_;
-  uint64_t calls_ = 0, errors_ = 0;
+  pipeline::StageTimer latency_;
+  uint64_t errors_ = 0;
 };
 
 class CallGuard {

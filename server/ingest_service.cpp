@@ -29,6 +29,20 @@ class StreamSlot {
   std::atomic<int>& active_;
 };
 
+// Reads every item of a bidirectional stream and writes its acknowledgement, numbered from 0, in
+// order. handle(item, ack) fills the ack; false ends the stream after writing it.
+template <typename Ack, typename Item, typename Handle>
+void acknowledgeEach(grpc::ServerReaderWriter<Ack, Item>* stream, Handle&& handle) {
+  Item item;
+  for (uint64_t sequence = 0; stream->Read(&item); ++sequence) {
+    Ack ack;
+    ack.set_sequence(sequence);
+    const bool go_on = handle(item, ack);
+    stream->Write(ack);
+    if (!go_on) break;
+  }
+}
+
 template <typename Ack>
 void reject(Ack& ack, const StatusError& e) {
   ack.set_status_code(static_cast<int32_t>(e.code()));
@@ -177,15 +191,11 @@ grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
     }
     StreamSlot slot(frame_streams_, settings_.server.max_frame_streams);
     FrameStream frames(host_, settings_, *rectifier_, poses_, counters_, timings_);
-    v1::StereoFrame wire;
-    for (uint64_t sequence = 0; stream->Read(&wire); ++sequence) {
-      v1::FrameAck ack;
-      ack.set_sequence(sequence);
+    acknowledgeEach(stream, [&](const v1::StereoFrame& wire, v1::FrameAck& ack) {
       const bool running = frames.handle(wire, ack);
       ack.set_map_version(host_.map().version());
-      stream->Write(ack);
-      if (!running) break;
-    }
+      return running;
+    });
     return frames.finish();
   });
 }
@@ -193,10 +203,7 @@ grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
 grpc::Status IngestService::StreamPoses(grpc::ServerContext* context,
                                         grpc::ServerReaderWriter<v1::PoseAck, v1::PoseStamped>* stream) {
   return guard_.run(context, "Ingest/StreamPoses", [&] {
-    v1::PoseStamped wire;
-    for (uint64_t sequence = 0; stream->Read(&wire); ++sequence) {
-      v1::PoseAck ack;
-      ack.set_sequence(sequence);
+    acknowledgeEach(stream, [&](const v1::PoseStamped& wire, v1::PoseAck& ack) {
       ack.set_timestamp_s(wire.timestamp_s());
       try {
         if (!std::isfinite(wire.timestamp_s())) throw invalidArgument("timestamp_s is not finite");
@@ -204,8 +211,8 @@ grpc::Status IngestService::StreamPoses(grpc::ServerContext* context,
       } catch (const StatusError& e) {
         reject(ack, e);
       }
-      stream->Write(ack);
-    }
+      return true;
+    });
     return grpc::Status::OK;
   });
 }
@@ -238,10 +245,7 @@ void IngestService::integrateBatch(const v1::PointBatch& wire, v1::BatchAck& ack
 grpc::Status IngestService::StreamPoints(grpc::ServerContext* context,
                                          grpc::ServerReaderWriter<v1::BatchAck, v1::PointBatch>* stream) {
   return guard_.run(context, "Ingest/StreamPoints", [&] {
-    v1::PointBatch wire;
-    for (uint64_t sequence = 0; stream->Read(&wire); ++sequence) {
-      v1::BatchAck ack;
-      ack.set_sequence(sequence);
+    acknowledgeEach(stream, [&](const v1::PointBatch& wire, v1::BatchAck& ack) {
       try {
         integrateBatch(wire, ack);
       } catch (const StatusError& e) {
@@ -251,8 +255,8 @@ grpc::Status IngestService::StreamPoints(grpc::ServerContext* context,
         reject(ack, invalidArgument(e.what()));
         ++counters_.points_batches_rejected;
       }
-      stream->Write(ack);
-    }
+      return true;
+    });
     return grpc::Status::OK;
   });
 }

@@ -28,7 +28,4 @@ inline StatusError resourceExhausted(const std::string& message) {
   return StatusError(grpc::StatusCode::RESOURCE_EXHAUSTED, message);
 }
 
-// "INVALID_ARGUMENT", "UNAUTHENTICATED", ...
-const char* statusCodeName(grpc::StatusCode code);
-
 }  // namespace cenote::server

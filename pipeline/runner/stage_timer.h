@@ -35,13 +35,21 @@ class StageTimer {
     StageSummary s;
     s.frames = count_;
     if (samples_.empty()) return s;
-    std::vector<double> sorted = samples_;
-    std::sort(sorted.begin(), sorted.end());
-    s.median_ms = sorted[sorted.size() / 2];
-    s.p95_ms = sorted[std::min(sorted.size() - 1, static_cast<size_t>(0.95 * sorted.size()))];
+    s.median_ms = percentile(0.5);
+    s.p95_ms = percentile(0.95);
     s.mean_ms = total_ms_ / static_cast<double>(count_);
     return s;
   }
+
+  // The q-quantile (q in [0, 1]) of the recent samples, in ms; 0 without any.
+  double percentile(double q) const {
+    if (samples_.empty()) return 0.0;
+    std::vector<double> sorted = samples_;
+    const size_t k = std::min(sorted.size() - 1, static_cast<size_t>(q * static_cast<double>(sorted.size())));
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
+    return sorted[k];
+  }
+  size_t count() const { return count_; }
 
  private:
   std::vector<double> samples_;

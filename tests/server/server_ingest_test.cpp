@@ -1,0 +1,268 @@
+// End-to-end: a real cenote-server on loopback fed a simulated dive over gRPC (poses streamed at
+// the ground-truth rate, PNG frames without poses), compared voxel by voxel with `cenote run` on
+// the same files; and every kind of bad ingest input rejected with its status code, the map
+// unchanged.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "mapping/io/map_io.h"
+#include "pipeline/dataset/stereo_dataset.h"
+#include "pipeline/runner/runner.h"
+#include "tests/clients/cpp/server_process.h"
+#include "tests/server/server_test_util.h"
+
+namespace cenote::server::test {
+namespace {
+
+namespace fs = std::filesystem;
+using client::test::ServerProcess;
+using client::test::ServerProcessOptions;
+
+std::string readBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
+void run(const std::string& command) {
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+}
+
+void toWire(const Eigen::Isometry3d& T, v1::Pose* pose) {
+  const Eigen::Quaterniond q(T.linear());
+  pose->mutable_position()->set_x(T.translation().x());
+  pose->mutable_position()->set_y(T.translation().y());
+  pose->mutable_position()->set_z(T.translation().z());
+  pose->mutable_orientation()->set_x(q.x());
+  pose->mutable_orientation()->set_y(q.y());
+  pose->mutable_orientation()->set_z(q.z());
+  pose->mutable_orientation()->set_w(q.w());
+}
+
+// A short simulated cave dive and `cenote run`'s map of it, made once for the suite.
+class SimulatedDive : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = (fs::temp_directory_path() / ("cenote-server-dive-" + std::to_string(getpid()))).string();
+    fs::create_directories(dir_);
+    config_ = std::string(CENOTE_SOURCE_DIR) + "/config/default.yaml";
+    run(std::string(CENOTE_BINARY) + " sim --scene cave --frames 12 --width 400 --height 300 --quiet --out " +
+        dir_ + "/dive > /dev/null");
+    run(std::string(CENOTE_BINARY) + " run --dataset " + dir_ + "/dive --config " + config_ + " --out " + dir_ +
+        "/run --map " + dir_ + "/run.vdb > /dev/null 2>&1");
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+
+  static std::string dir_, config_;
+};
+std::string SimulatedDive::dir_, SimulatedDive::config_;
+
+TEST_F(SimulatedDive, StreamedFramesAndPosesGiveTheSameMapAsCenoteRun) {
+  ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", config_, "--calibration", dir_ + "/dive"}});
+  Stubs stubs(server.target());
+  const auto dataset = pipeline::openDataset(dir_ + "/dive");
+  const pipeline::Trajectory trajectory = pipeline::cameraTrajectory(*dataset, "", "", pipeline::PoseFrame::kAuto);
+
+  {  // Poses first, at the ground-truth rate, as a VIO would send them.
+    auto context = contextWithDeadline();
+    auto poses = stubs.ingest->StreamPoses(context.get());
+    for (const pipeline::StampedPose& p : trajectory.poses()) {
+      v1::PoseStamped pose;
+      pose.set_timestamp_s(p.t_s);
+      toWire(p.T_world_cam, pose.mutable_pose());
+      ASSERT_TRUE(poses->Write(pose));
+      v1::PoseAck ack;
+      ASSERT_TRUE(poses->Read(&ack));
+      ASSERT_EQ(ack.status_code(), 0) << ack.message();
+    }
+    poses->WritesDone();
+    ASSERT_TRUE(poses->Finish().ok());
+  }
+  auto context = contextWithDeadline(300.0);
+  auto frames = stubs.ingest->StreamFrames(context.get());
+  size_t processed = 0;
+  for (size_t i = 0; i < dataset->size(); ++i) {
+    v1::StereoFrame frame;
+    frame.set_timestamp_s(dataset->timestamp(i));
+    const std::string name = dataset->frameName(i) + ".png";
+    frame.mutable_left()->set_encoded(readBytes(fs::path(dir_) / "dive/mav0/cam0/data" / name));
+    frame.mutable_right()->set_encoded(readBytes(fs::path(dir_) / "dive/mav0/cam1/data" / name));
+    ASSERT_TRUE(frames->Write(frame));
+    v1::FrameAck ack;
+    ASSERT_TRUE(frames->Read(&ack));
+    EXPECT_EQ(ack.sequence(), i);
+    EXPECT_EQ(ack.outcome(), v1::FRAME_OUTCOME_PROCESSED) << ack.message();
+    processed += ack.outcome() == v1::FRAME_OUTCOME_PROCESSED;
+  }
+  frames->WritesDone();
+  const grpc::Status status = frames->Finish();
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(processed, dataset->size());
+
+  const auto served = downloadMap(*stubs.admin, server.directory());
+  const auto offline = mapping::loadMap(dir_ + "/run.vdb");
+  const MapDifference diff = compareMaps(*served, *offline);
+  std::printf("server vs cenote run: %llu known voxels, %llu with another state, %llu with other log-odds\n",
+              static_cast<unsigned long long>(diff.known), static_cast<unsigned long long>(diff.different_state),
+              static_cast<unsigned long long>(diff.different_log_odds));
+  EXPECT_GT(diff.known, 10000u);
+  EXPECT_EQ(diff.different_state, 0u);
+  EXPECT_EQ(diff.different_log_odds, 0u);
+}
+
+// One frame of the dive as the wire carries it.
+v1::StereoFrame diveFrame(const std::string& dir, const pipeline::StereoDataset& dataset, size_t i) {
+  v1::StereoFrame frame;
+  frame.set_timestamp_s(dataset.timestamp(i));
+  const std::string name = dataset.frameName(i) + ".png";
+  frame.mutable_left()->set_encoded(readBytes(fs::path(dir) / "dive/mav0/cam0/data" / name));
+  frame.mutable_right()->set_encoded(readBytes(fs::path(dir) / "dive/mav0/cam1/data" / name));
+  toWire(Eigen::Isometry3d::Identity(), frame.mutable_pose());
+  return frame;
+}
+
+TEST_F(SimulatedDive, BadFramesAreRejectedWithTheirStatusAndTheMapIsUnchanged) {
+  ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", config_, "--calibration", dir_ + "/dive"}});
+  Stubs stubs(server.target());
+  const auto dataset = pipeline::openDataset(dir_ + "/dive");
+  const v1::StereoFrame good = diveFrame(dir_, *dataset, 0);
+
+  std::vector<std::pair<std::string, v1::StereoFrame>> cases;
+  v1::StereoFrame corrupt = good;
+  corrupt.mutable_left()->set_encoded(good.left().encoded().substr(0, 100));  // a truncated PNG
+  cases.push_back({"left", corrupt});
+  v1::StereoFrame nan_pose = good;
+  nan_pose.mutable_pose()->mutable_position()->set_y(std::nan(""));
+  cases.push_back({"pose.position has a non-finite coordinate", nan_pose});
+  v1::StereoFrame bad_rotation = good;
+  bad_rotation.mutable_pose()->mutable_orientation()->set_w(2.0);
+  cases.push_back({"not a unit quaternion", bad_rotation});
+  v1::StereoFrame raw_short = good;
+  raw_short.mutable_right()->mutable_raw()->set_width(400);
+  raw_short.mutable_right()->mutable_raw()->set_height(300);
+  raw_short.mutable_right()->mutable_raw()->set_encoding(v1::IMAGE_ENCODING_MONO8);
+  raw_short.mutable_right()->mutable_raw()->set_data(std::string(1000, '\0'));
+  cases.push_back({"expected 120000", raw_short});
+  v1::StereoFrame small = good;
+  small.mutable_right()->mutable_raw()->set_width(20);
+  small.mutable_right()->mutable_raw()->set_height(10);
+  small.mutable_right()->mutable_raw()->set_encoding(v1::IMAGE_ENCODING_MONO8);
+  small.mutable_right()->mutable_raw()->set_data(std::string(200, '\0'));
+  cases.push_back({"but right is 20x10", small});
+  v1::StereoFrame no_image = good;
+  no_image.clear_right();
+  cases.push_back({"right: no image data", no_image});
+
+  auto context = contextWithDeadline();
+  auto frames = stubs.ingest->StreamFrames(context.get());
+  double t = 1.0;
+  for (auto& [expected_message, frame] : cases) {
+    frame.set_timestamp_s(t += 0.1);
+    ASSERT_TRUE(frames->Write(frame));
+    v1::FrameAck ack;
+    ASSERT_TRUE(frames->Read(&ack));
+    EXPECT_EQ(ack.outcome(), v1::FRAME_OUTCOME_REJECTED) << expected_message;
+    EXPECT_EQ(ack.status_code(), grpc::StatusCode::INVALID_ARGUMENT) << expected_message;
+    EXPECT_NE(ack.message().find(expected_message), std::string::npos) << ack.message();
+    EXPECT_EQ(ack.map_version(), 0u);
+  }
+  // Out of order: a frame no later than the last good-or-bad frame's time.
+  v1::StereoFrame late = good;
+  late.set_timestamp_s(0.5);
+  ASSERT_TRUE(frames->Write(late));
+  v1::FrameAck ack;
+  ASSERT_TRUE(frames->Read(&ack));
+  EXPECT_EQ(ack.status_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(ack.message().find("time order"), std::string::npos) << ack.message();
+  // Without a pose of its own and with no poses streamed: skipped, never guessed.
+  v1::StereoFrame unposed = good;
+  unposed.clear_pose();
+  unposed.set_timestamp_s(t += 0.1);
+  ASSERT_TRUE(frames->Write(unposed));
+  ASSERT_TRUE(frames->Read(&ack));
+  EXPECT_EQ(ack.outcome(), v1::FRAME_OUTCOME_SKIPPED_NO_POSE);
+  frames->WritesDone();
+  EXPECT_TRUE(frames->Finish().ok());
+
+  auto info_context = contextWithDeadline();
+  v1::MapInfo info;
+  ASSERT_TRUE(stubs.query->GetMapInfo(info_context.get(), v1::MapInfoRequest(), &info).ok());
+  EXPECT_EQ(info.map_version(), 0u);
+  EXPECT_EQ(info.occupied() + info.free(), 0u);
+}
+
+TEST(ServerWithoutCalibration, StreamFramesFailsWithFailedPrecondition) {
+  ServerProcess server(CENOTE_SERVER_BINARY);
+  Stubs stubs(server.target());
+  auto context = contextWithDeadline();
+  auto frames = stubs.ingest->StreamFrames(context.get());
+  frames->WritesDone();
+  const grpc::Status status = frames->Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(status.error_message().find("--calibration"), std::string::npos) << status.error_message();
+}
+
+TEST(ServerPointIngest, OversizedAndBrokenBatchesAreRefusedAndTheMapIsUnchanged) {
+  const std::string config = (fs::temp_directory_path() / ("cenote-limits-" + std::to_string(getpid()) + ".yaml")).string();
+  std::ofstream(config) << "server:\n  limits:\n    max_points_per_batch: 1000\n";
+  ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", config}});
+  Stubs stubs(server.target());
+
+  auto call = [&](const v1::PointBatch& batch) {
+    auto context = contextWithDeadline();
+    v1::BatchAck ack;
+    return stubs.ingest->IntegratePoints(context.get(), batch, &ack);
+  };
+  const v1::PointBatch big = wallBatch(2.0, 1.0, 0.02, 1.0);  // 101 x 101 points
+  grpc::Status status = call(big);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_NE(status.error_message().find("server.limits.max_points_per_batch = 1000"), std::string::npos)
+      << status.error_message();
+
+  v1::PointBatch nan_point = wallBatch(2.0, 0.2, 0.05, 1.0);
+  nan_point.set_xyz(7, std::nan(""));
+  status = call(nan_point);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("point 2 has a non-finite coordinate"), std::string::npos) << status.error_message();
+
+  v1::PointBatch ragged = wallBatch(2.0, 0.2, 0.05, 1.0);
+  ragged.add_xyz(1.0);
+  EXPECT_EQ(call(ragged).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  v1::PointBatch bad_colours = wallBatch(2.0, 0.2, 0.05, 1.0);
+  bad_colours.set_rgb("abc");
+  EXPECT_EQ(call(bad_colours).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  v1::PointBatch nan_origin = wallBatch(2.0, 0.2, 0.05, 1.0);
+  nan_origin.mutable_origin()->set_z(INFINITY);
+  EXPECT_EQ(call(nan_origin).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+
+  auto info_context = contextWithDeadline();
+  v1::MapInfo info;
+  ASSERT_TRUE(stubs.query->GetMapInfo(info_context.get(), v1::MapInfoRequest(), &info).ok());
+  EXPECT_EQ(info.map_version(), 0u);
+  EXPECT_EQ(info.occupied() + info.free(), 0u);
+
+  // A pose stream: the NaN pose is rejected in its ack, the good ones around it are stored.
+  auto context = contextWithDeadline();
+  auto poses = stubs.ingest->StreamPoses(context.get());
+  for (int i = 0; i < 3; ++i) {
+    v1::PoseStamped pose;
+    pose.set_timestamp_s(i);
+    toWire(Eigen::Isometry3d::Identity(), pose.mutable_pose());
+    if (i == 1) pose.mutable_pose()->mutable_orientation()->set_x(std::nan(""));
+    ASSERT_TRUE(poses->Write(pose));
+    v1::PoseAck ack;
+    ASSERT_TRUE(poses->Read(&ack));
+    EXPECT_EQ(ack.status_code(), i == 1 ? grpc::StatusCode::INVALID_ARGUMENT : grpc::StatusCode::OK) << ack.message();
+  }
+  poses->WritesDone();
+  EXPECT_TRUE(poses->Finish().ok());
+  fs::remove(config);
+}
+
+}  // namespace
+}  // namespace cenote::server::test

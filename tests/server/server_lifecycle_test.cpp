@@ -1,0 +1,126 @@
+// End-to-end: the server's life on a vehicle. SIGTERM drains, writes the snapshot and exits 0; a
+// restart with --load serves the same map. After kill -9 the last periodic snapshot loads and
+// holds the map as it was when written. A configuration with an unknown key is refused at start
+// with a message naming the key.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "mapping/io/map_io.h"
+#include "tests/clients/cpp/server_process.h"
+#include "tests/server/server_test_util.h"
+
+namespace cenote::server::test {
+namespace {
+
+namespace fs = std::filesystem;
+using client::test::ServerProcess;
+using client::test::ServerProcessOptions;
+
+void integrate(Stubs& stubs, const v1::PointBatch& batch) {
+  auto context = contextWithDeadline();
+  v1::BatchAck ack;
+  const grpc::Status status = stubs.ingest->IntegratePoints(context.get(), batch, &ack);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+}
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("cenote-lifecycle-" + std::to_string(getpid())) / name;
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(ServerLifecycle, SigtermWritesASnapshotThatRestoresTheSameMap) {
+  const fs::path dir = scratch("sigterm");
+  std::unique_ptr<mapping::OccupancyMap> before;
+  std::string snapshot;
+  {
+    ServerProcess server(CENOTE_SERVER_BINARY);
+    Stubs stubs(server.target());
+    integrate(stubs, wallBatch(2.0, 1.0, 0.02, 1.0));
+    integrate(stubs, wallBatch(3.0, 1.5, 0.03, 2.0));
+    before = downloadMap(*stubs.admin, dir.string());
+    EXPECT_EQ(server.stop(), 0) << server.log();
+    snapshot = server.snapshotDirectory() + "/map.vdb";
+    ASSERT_TRUE(fs::exists(snapshot)) << server.log();
+    fs::copy_file(snapshot, dir / "map.vdb");
+  }
+  ServerProcess restarted(CENOTE_SERVER_BINARY, {.extra_args = {"--load", (dir / "map.vdb").string()}});
+  Stubs stubs(restarted.target());
+  const auto after = downloadMap(*stubs.admin, dir.string());
+  const MapDifference diff = compareMaps(*before, *after);
+  EXPECT_GT(diff.known, 50000u);
+  EXPECT_EQ(diff.different_state, 0u);
+  EXPECT_EQ(diff.different_log_odds, 0u);
+  fs::remove_all(dir.parent_path());
+}
+
+TEST(ServerLifecycle, AfterKillNineTheLastPeriodicSnapshotLoads) {
+  const fs::path dir = scratch("kill9");
+  std::unique_ptr<mapping::OccupancyMap> before;
+  {
+    ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--snapshot-period", "0.2"}});
+    Stubs stubs(server.target());
+    integrate(stubs, wallBatch(2.0, 1.0, 0.02, 1.0));
+    before = downloadMap(*stubs.admin, dir.string());
+    // Wait for a periodic snapshot of this version.
+    bool saved = false;
+    for (int i = 0; i < 200 && !saved; ++i) {
+      auto context = contextWithDeadline();
+      v1::Stats stats;
+      ASSERT_TRUE(stubs.admin->GetStats(context.get(), v1::StatsRequest(), &stats).ok());
+      saved = stats.last_snapshot_age_s() >= 0.0;
+      if (!saved) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    ASSERT_TRUE(saved) << server.log();
+    ASSERT_EQ(kill(server.pid(), SIGKILL), 0);
+    EXPECT_EQ(server.stop(), 128 + SIGKILL);
+    fs::copy_file(server.snapshotDirectory() + "/map.vdb", dir / "map.vdb");
+  }
+  ServerProcess restarted(CENOTE_SERVER_BINARY, {.extra_args = {"--load", (dir / "map.vdb").string()}});
+  Stubs stubs(restarted.target());
+  const MapDifference diff = compareMaps(*before, *downloadMap(*stubs.admin, dir.string()));
+  EXPECT_GT(diff.known, 20000u);
+  EXPECT_EQ(diff.different_state, 0u);
+  EXPECT_EQ(diff.different_log_odds, 0u);
+  fs::remove_all(dir.parent_path());
+}
+
+// Runs the server to completion; @return exit status and everything it printed.
+std::pair<int, std::string> runToExit(const std::string& args) {
+  const fs::path log = scratch("exit") / "log.txt";
+  const int status = std::system((std::string(CENOTE_SERVER_BINARY) + " " + args + " > " + log.string() + " 2>&1").c_str());
+  std::ifstream in(log);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return {WEXITSTATUS(status), text};
+}
+
+TEST(ServerLifecycle, BadStartupInputIsRefusedWithAMessageNamingIt) {
+  const fs::path dir = scratch("config");
+  std::ofstream(dir / "typo.yaml") << "server:\n  listne: 127.0.0.1:1\n";
+  auto [status, text] = runToExit("--config " + (dir / "typo.yaml").string());
+  EXPECT_EQ(status, 1);
+  EXPECT_NE(text.find("server.listne"), std::string::npos) << text;
+
+  std::ofstream(dir / "range.yaml") << "map:\n  voxel_size_m: -1\nserver:\n  max_frame_streams: 0\n";
+  std::tie(status, text) = runToExit("--config " + (dir / "range.yaml").string());
+  EXPECT_EQ(status, 1);
+  EXPECT_NE(text.find("map.voxel_size_m"), std::string::npos) << text;
+  EXPECT_NE(text.find("server.max_frame_streams"), std::string::npos) << text;
+
+  std::tie(status, text) = runToExit("--listen 127.0.0.1:0 --load " + (dir / "missing.vdb").string());
+  EXPECT_EQ(status, 1);
+  EXPECT_NE(text.find("missing.vdb: no such file"), std::string::npos) << text;
+
+  std::tie(status, text) = runToExit("--listen 127.0.0.1:0 --token-file " + (dir / "no-token").string());
+  EXPECT_EQ(status, 1);
+  EXPECT_NE(text.find("no-token cannot be read"), std::string::npos) << text;
+  fs::remove_all(dir.parent_path());
+}
+
+}  // namespace
+}  // namespace cenote::server::test

@@ -1,0 +1,50 @@
+// server_test_util.h: what the server's end-to-end tests share: a channel to a ServerProcess,
+// wire helpers, and the comparison of two maps voxel by voxel.
+#pragma once
+
+#include <grpcpp/grpcpp.h>
+
+#include <string>
+
+#include "cenote/v1/admin.grpc.pb.h"
+#include "cenote/v1/ingest.grpc.pb.h"
+#include "cenote/v1/query.grpc.pb.h"
+#include "mapping/occupancy_map.h"
+
+namespace cenote::server::test {
+
+struct Stubs {
+  explicit Stubs(const std::string& target)
+      : channel(grpc::CreateChannel(target, grpc::InsecureChannelCredentials())),
+        ingest(v1::Ingest::NewStub(channel)),
+        query(v1::Query::NewStub(channel)),
+        admin(v1::Admin::NewStub(channel)) {}
+  std::shared_ptr<grpc::Channel> channel;
+  std::unique_ptr<v1::Ingest::Stub> ingest;
+  std::unique_ptr<v1::Query::Stub> query;
+  std::unique_ptr<v1::Admin::Stub> admin;
+};
+
+// A context with a deadline, so that a hung server fails the test instead of hanging it.
+inline std::unique_ptr<grpc::ClientContext> contextWithDeadline(double seconds = 60.0) {
+  auto context = std::make_unique<grpc::ClientContext>();
+  context->set_deadline(std::chrono::system_clock::now() +
+                        std::chrono::milliseconds(static_cast<int64_t>(seconds * 1000.0)));
+  return context;
+}
+
+// Voxels known in either map whose state differs, and the number known in either.
+struct MapDifference {
+  uint64_t known = 0;
+  uint64_t different_state = 0;
+  uint64_t different_log_odds = 0;
+};
+MapDifference compareMaps(const mapping::OccupancyMap& a, const mapping::OccupancyMap& b);
+
+// The map on the server, downloaded as .vdb into `dir` and loaded.
+std::unique_ptr<mapping::OccupancyMap> downloadMap(v1::Admin::Stub& admin, const std::string& dir);
+
+// A wall of points at x = wall_x_m, |y|, |z| <= half_m, seen from the origin.
+v1::PointBatch wallBatch(double wall_x_m, double half_m, double spacing_m, double t_s);
+
+}  // namespace cenote::server::test
