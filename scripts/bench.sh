@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# bench.sh <build dir>: runs every benchmark; each prints cenote beside its peer, same run.
+# bench.sh <build dir>: runs every benchmark; each prints cenote beside its peer, same run
+# (server_bench starts its own cenote-server on loopback and compares it with the in-process map).
 # The tables go into docs/PERFORMANCE.md by hand, with this command.
 set -euo pipefail
 build=${1:-build}
