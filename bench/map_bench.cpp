@@ -4,7 +4,8 @@
 // maximum range; ms/frame, ratio and memory of both. Then queries on the resulting maps: single
 // voxel lookups per second (one thread), 10 m segment checks, and OctoMap's search() / castRay()
 // beside them. Prints a Markdown table for docs/PERFORMANCE.md.
-//   map_bench [--frames 10] [--threads 2] [--voxel 0.05]
+//   map_bench [--frames 10] [--threads 2] [--voxel 0.05] [--integrate-only 1]
+// --integrate-only: integrates the frames into our map only (for perf / callgrind), prints ms/frame.
 // Frames: an 800x600 camera (fx 600) flying 2 m above a sloping sea floor with rocks, looking
 // 14 degrees down (so that a frame has ~270k points), ray-cast exactly with 1 cm depth noise
 // (tests/mapping/support/analytic_scene.h);
@@ -18,6 +19,7 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <ctime>
 #include <vector>
 
 #include "mapping/distance/distance_field.h"
@@ -69,7 +71,9 @@ octomap::Pointcloud toOctomap(const PointBatch& batch) {
 int main(int argc, char** argv) {
   int num_frames = 10, threads = 2;
   double voxel_m = 0.05;
+  bool integrate_only = false;
   for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--integrate-only")) integrate_only = std::atoi(argv[i + 1]) != 0;
     if (!std::strcmp(argv[i], "--frames")) num_frames = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--voxel")) voxel_m = std::atof(argv[i + 1]);
@@ -94,6 +98,19 @@ int main(int argc, char** argv) {
     return map;
   };
   double ours_ms = 0.0, ours_1t_ms = 0.0;
+  if (integrate_only) {
+    // CPU time as well: on a machine shared with builds it varies much less than wall time.
+    timespec c0, c1;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
+    const auto map = integrateOurs(threads, ours_ms);
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+    const double cpu_ms = (c1.tv_sec - c0.tv_sec) * 1e3 + (c1.tv_nsec - c0.tv_nsec) / 1e6;
+    const MapStats stats = map->stats();
+    std::printf("integration, %d threads: %.1f ms/frame (CPU of all threads, with warm-up frame and reset: %.1f ms/frame); "
+                "%llu occupied, %llu free voxels\n", threads, ours_ms, cpu_ms / frames.size(),
+                static_cast<unsigned long long>(stats.occupied), static_cast<unsigned long long>(stats.free));
+    return 0;
+  }
   integrateOurs(1, ours_1t_ms);
   const auto map = integrateOurs(threads, ours_ms);
 

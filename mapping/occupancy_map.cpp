@@ -54,6 +54,33 @@ void noteChanged(MapDelta& delta, const BlockIndex& block, const VoxelBox& voxel
   delta.changed_voxels.extend(voxels);
 }
 
+// Bounding box of the set bits of a block's 512-bit mask (word w holds x = w; bit y * 8 + z).
+VoxelBox boxOfBits(const BlockIndex& block, const std::array<uint64_t, 8>& bits) {
+  VoxelBox box;
+  uint64_t any = 0;
+  int x_min = 8, x_max = -1;
+  for (int w = 0; w < 8; ++w) {
+    if (bits[w] == 0) continue;
+    any |= bits[w];
+    x_min = std::min(x_min, w);
+    x_max = w;
+  }
+  if (any == 0) return box;
+  uint8_t z_bits = 0;
+  int y_min = 8, y_max = -1;
+  for (int y = 0; y < 8; ++y) {
+    const uint8_t row = static_cast<uint8_t>(any >> (8 * y));
+    if (row == 0) continue;
+    z_bits |= row;
+    y_min = std::min(y_min, y);
+    y_max = y;
+  }
+  const VoxelIndex base = block * kBlockSide;
+  box.min = base + VoxelIndex(x_min, y_min, __builtin_ctz(z_bits));
+  box.max = base + VoxelIndex(x_max, y_max, 31 - __builtin_clz(z_bits));
+  return box;
+}
+
 void finishDelta(MapDelta& delta, double s) {
   auto less = [](const BlockIndex& a, const BlockIndex& b) {
     return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
@@ -154,26 +181,31 @@ MapDelta OccupancyMap::integrate(const PointBatch& batch) {
       const BlockIndex& block = rays.block(b);
       const BlockMasks& masks = rays.masks(b);
       auto* leaf = acc.touchLeaf(coordOf(block * kBlockSide));
-      bool changed = false;
-      VoxelBox box;
+      // Straight on the leaf's buffer and value mask (one 64-bit word = 64 voxels of one x slice).
+      float* values = leaf->buffer().data();
+      auto& known_mask = leaf->getValueMask();
+      std::array<uint64_t, 8> changed{};
       for (int w = 0; w < 8; ++w) {
-        uint64_t bits = masks.free[w] | masks.hit[w];
+        uint64_t& known = known_mask.template getWord<uint64_t>(w);
+        const uint64_t hits = masks.hit[w];
+        uint64_t bits = masks.free[w] | hits;
+        delta.voxels_updated += static_cast<uint64_t>(__builtin_popcountll(bits));
         while (bits != 0) {
           const int bit = __builtin_ctzll(bits);
           bits &= bits - 1;
-          const openvdb::Index offset = static_cast<openvdb::Index>(w * 64 + bit);
-          const bool hit = (masks.hit[w] >> bit) & 1;
-          const bool known = leaf->isValueOn(offset);
-          const float before = known ? leaf->getValue(offset) : 0.0f;
-          const float after = hit ? model_.applyHit(before) : model_.applyMiss(before);
-          ++delta.voxels_updated;
-          if (known && after == before) continue;
-          leaf->setValueOn(offset, after);
-          changed = true;
-          box.extend(voxelOfOffset(block, static_cast<int>(offset)));
+          const uint64_t one = 1ull << bit;
+          float& value = values[w * 64 + bit];
+          const bool was_known = (known & one) != 0;
+          const float before = was_known ? value : 0.0f;
+          const float after = (hits & one) ? model_.applyHit(before) : model_.applyMiss(before);
+          if (was_known && after == before) continue;
+          value = after;
+          changed[w] |= one;
         }
+        known |= changed[w];
       }
-      if (changed) noteChanged(delta, block, box, s);
+      const VoxelBox box = boxOfBits(block, changed);
+      if (!box.isEmpty()) noteChanged(delta, block, box, s);
     }
   }
   // Colours of the hit voxels: a running mean per voxel.

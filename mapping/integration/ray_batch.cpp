@@ -3,6 +3,8 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "mapping/integration/voxel_ray.h"
@@ -10,129 +12,227 @@
 namespace cenote::mapping {
 namespace {
 
-// Marks voxels into one thread's block masks; caches the last block.
+// One chunk's block masks, found by block index through an open-addressing table.
 class MaskWriter {
  public:
   MaskWriter(detail::BlockTable& table, std::vector<BlockMasks>& masks) : table_(table), masks_(masks) {}
 
-  BlockMasks& blockOf(const VoxelIndex& ijk) {
-    const BlockIndex b = mapping::blockOf(ijk);
-    if (current_ == nullptr || b != current_block_) {
-      bool inserted;
-      const uint32_t slot = table_.findOrInsert(detail::packIndex(b), inserted);
-      if (inserted) masks_.emplace_back();
-      current_ = &masks_[slot];
-      current_block_ = b;
-    }
-    return *current_;
-  }
-  void setFree(const VoxelIndex& ijk) {
-    const int o = offsetInBlock(ijk);
-    blockOf(ijk).free[o >> 6] |= 1ull << (o & 63);
-  }
-  // Marks ijk free; false when it already was.
-  bool setFreeIfNew(const VoxelIndex& ijk) {
-    const int o = offsetInBlock(ijk);
-    uint64_t& word = blockOf(ijk).free[o >> 6];
-    const uint64_t bit = 1ull << (o & 63);
-    if (word & bit) return false;
-    word |= bit;
-    return true;
+  // The masks of a block, created empty when new. The pointer is valid until the next call.
+  BlockMasks* masksOf(const BlockIndex& b) {
+    bool inserted;
+    const uint32_t slot = table_.findOrInsert(detail::packIndex(b), inserted);
+    if (inserted) masks_.emplace_back();
+    return &masks_[slot];
   }
   void setHit(const VoxelIndex& ijk) {
     const int o = offsetInBlock(ijk);
-    blockOf(ijk).hit[o >> 6] |= 1ull << (o & 63);
-    current_ = nullptr;  // masks_ may grow on the next insertion; the reference above is done
+    masksOf(blockOf(ijk))->hit[o >> 6] |= 1ull << (o & 63);
   }
 
  private:
   detail::BlockTable& table_;
   std::vector<BlockMasks>& masks_;
-  BlockMasks* current_ = nullptr;
-  BlockIndex current_block_;
+};
+
+// The voxels of walkVoxels(start_m, end_m, voxel_size_m, include_end) (voxel_ray.h): the same
+// voxels in the same order, with the same tie rules, so that ray_stop_run 0 stays OctoMap's voxel
+// set. Made for the hot loop: the state stays in registers, and the current block's masks are
+// looked up only when the walk crosses into another block (about every 8 steps).
+// Visit: bool operator()(uint64_t& free_word, uint64_t bit), false to stop.
+template <typename Visit>
+void marchFree(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double voxel_size_m, bool include_end,
+               MaskWriter& writer, Visit visit) {
+  const VoxelIndex key_start = toVoxel(start_m, voxel_size_m);
+  const VoxelIndex key_end = toVoxel(end_m, voxel_size_m);
+  auto visitVoxel = [&](const VoxelIndex& ijk) {
+    const int o = offsetInBlock(ijk);
+    return visit(writer.masksOf(blockOf(ijk))->free[o >> 6], 1ull << (o & 63));
+  };
+  if (key_start == key_end) {
+    if (include_end) visitVoxel(key_end);
+    return;
+  }
+  Eigen::Vector3d direction = end_m - start_m;
+  const double length = direction.norm();
+  direction /= length;
+  int step[3];
+  double t_max[3], t_delta[3];
+  for (int i = 0; i < 3; ++i) {
+    step[i] = direction[i] > 0.0 ? 1 : (direction[i] < 0.0 ? -1 : 0);
+    if (step[i] != 0) {
+      const double border = (key_start[i] + 0.5) * voxel_size_m + step[i] * voxel_size_m * 0.5;
+      t_max[i] = (border - start_m[i]) / direction[i];
+      t_delta[i] = voxel_size_m / std::fabs(direction[i]);
+    } else {
+      t_max[i] = std::numeric_limits<double>::max();
+      t_delta[i] = 0.0;  // never stepped: t_max stays at max
+    }
+  }
+  // In-block coordinates (0..7) and the block; a step that wraps an in-block coordinate moves to
+  // the neighbouring block.
+  int lx = key_start.x() & 7, ly = key_start.y() & 7, lz = key_start.z() & 7;
+  BlockIndex block = blockOf(key_start);
+  double tx = t_max[0], ty = t_max[1], tz = t_max[2];
+  const double dx = t_delta[0], dy = t_delta[1], dz = t_delta[2];
+  const int sx = step[0], sy = step[1], sz = step[2];
+  BlockMasks* masks = writer.masksOf(block);
+  uint64_t* words = masks->free.data();
+  if (!visit(words[lx], 1ull << ((ly << 3) | lz))) return;
+  // Each step moves one voxel towards the end voxel on one axis, so the walk can be in the end
+  // voxel only after exactly this many steps (and never, if rounding made an axis overshoot).
+  const long steps_to_end = (key_end - key_start).cwiseAbs().sum();
+  const long max_steps = 3 * static_cast<long>(length / voxel_size_m) + 6;
+  for (long n = 1; n <= max_steps; ++n) {
+    // walkVoxels' choice: x if t_x < t_y and t_x < t_z; else y if t_y < t_z; else z.
+    bool crossed;
+    if (tx < ty && tx < tz) {
+      lx += sx;
+      tx += dx;
+      crossed = (lx & ~7) != 0;
+      if (crossed) {
+        block.x() += sx;
+        lx &= 7;
+      }
+    } else if (ty < tz) {
+      ly += sy;
+      ty += dy;
+      crossed = (ly & ~7) != 0;
+      if (crossed) {
+        block.y() += sy;
+        ly &= 7;
+      }
+    } else {
+      lz += sz;
+      tz += dz;
+      crossed = (lz & ~7) != 0;
+      if (crossed) {
+        block.z() += sz;
+        lz &= 7;
+      }
+    }
+    if (n == steps_to_end &&
+        VoxelIndex(block.x() * kBlockSide + lx, block.y() * kBlockSide + ly, block.z() * kBlockSide + lz) == key_end) {
+      if (include_end) visitVoxel(key_end);
+      return;
+    }
+    if (std::min(std::min(tx, ty), tz) > length) {
+      if (include_end) visitVoxel(key_end);
+      return;
+    }
+    if (crossed) words = writer.masksOf(block)->free.data();
+    if (!visit(words[lx], 1ull << ((ly << 3) | lz))) return;
+  }
+}
+
+// Visitors of marchFree. Whole rays: every voxel is free.
+struct CarveAll {
+  bool operator()(uint64_t& word, uint64_t bit) const {
+    word |= bit;
+    return true;
+  }
+};
+// From the end back to the origin (the end voxel itself is not free), until stop_run voxels in a
+// row were already carved by earlier rays of the chunk: from there on they have carved (nearly)
+// the same path.
+struct CarveUntilRun {
+  int stop_run;
+  int run = 0;
+  bool at_end_voxel = true;
+  bool operator()(uint64_t& word, uint64_t bit) {
+    if (at_end_voxel) {
+      at_end_voxel = false;
+      return true;
+    }
+    if ((word & bit) != 0) return ++run < stop_run;
+    word |= bit;
+    run = 0;
+    return true;
+  }
 };
 
 }  // namespace
 
-void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads, int stop_run) {
-  const bool exact = stop_run <= 0;
-  // 1. Unique endpoint voxels, with colour sums.
-  endpoint_table_.clear();
-  endpoints_.clear();
-  color_sums_.clear();
+namespace {
+
+// Unique endpoint voxels of points [begin, end) with their colour sums, into one chunk's scratch.
+// Neighbouring pixels mostly fall into the same voxel (6 pixels per 5 cm voxel at 5 m): the last
+// voxel's slot is kept, which skips most hash lookups.
+void collectEndpoints(const PointBatch& batch, size_t begin, size_t end, double voxel_size_m, RayBatch::Chunk& chunk) {
   const bool colored = batch.hasColor();
-  for (size_t i = 0; i < batch.points.size(); ++i) {
+  VoxelIndex last_ijk(std::numeric_limits<int>::min(), 0, 0);
+  uint32_t slot = 0;
+  for (size_t i = begin; i < end; ++i) {
     const VoxelIndex ijk = toVoxel(batch.points[i].cast<double>(), voxel_size_m);
-    bool inserted;
-    const uint32_t slot = endpoint_table_.findOrInsert(detail::packIndex(ijk), inserted);
-    if (inserted) {
-      endpoints_.push_back(ijk);
-      if (colored) color_sums_.push_back({0, 0, 0, 0});
+    if (ijk != last_ijk) {
+      bool inserted;
+      slot = chunk.endpoint_table.findOrInsert(detail::packIndex(ijk), inserted);
+      last_ijk = ijk;
+      if (inserted) {
+        chunk.endpoints.push_back(ijk);
+        if (colored) chunk.color_sums.push_back({0, 0, 0, 0});
+      }
     }
     if (colored) {
-      auto& sum = color_sums_[slot];
+      auto& sum = chunk.color_sums[slot];
       sum[0] += batch.colors[i][0];
       sum[1] += batch.colors[i][1];
       sum[2] += batch.colors[i][2];
       sum[3] += 1;
     }
   }
-  num_rays_ = endpoints_.size();
+}
 
-  // 2. March the rays: a fixed number of chunks of consecutive endpoints (image bands), each into
-  // its own masks, so that the result does not depend on the thread count.
+}  // namespace
+
+void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads, int stop_run) {
+  const bool exact = stop_run <= 0;
+  // 1. A fixed number of chunks of consecutive points (image bands), each deduplicated and marched
+  // into its own masks by any thread, so that the result does not depend on the thread count. In
+  // exact mode every ray is marched whole, so any split gives the same union: one chunk per thread.
   const int threads = std::max(1, num_threads > 0 ? num_threads : omp_get_max_threads());
-  const int chunks = exact ? threads : kRayChunks;
-  if (markers_.size() < static_cast<size_t>(chunks)) markers_.resize(chunks);
-  for (int t = 0; t < chunks; ++t) {
-    markers_[t].table.clear();
-    markers_[t].masks.clear();
-  }
+  const int num_chunks = exact ? threads : kRayChunks;
+  if (chunks_.size() < static_cast<size_t>(num_chunks)) chunks_.resize(num_chunks);
   const Eigen::Vector3d origin = batch.origin;
   const bool limited = max_range_m > 0.0;
-  const long n = static_cast<long>(endpoints_.size());
+  const size_t n = batch.points.size();
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
-  for (int chunk = 0; chunk < chunks; ++chunk) {
-    Marker& marker = markers_[chunk];
-    MaskWriter writer(marker.table, marker.masks);
-    const long begin = n * chunk / chunks, end_i = n * (chunk + 1) / chunks;
-    for (long i = begin; i < end_i; ++i) {
-      const Eigen::Vector3d end = voxelCentre(endpoints_[i], voxel_size_m);
+  for (int c = 0; c < num_chunks; ++c) {
+    Chunk& chunk = chunks_[c];
+    chunk.table.clear();
+    chunk.masks.clear();
+    chunk.endpoint_table.clear();
+    chunk.endpoints.clear();
+    chunk.color_sums.clear();
+    collectEndpoints(batch, n * c / num_chunks, n * (c + 1) / num_chunks, voxel_size_m, chunk);
+    MaskWriter writer(chunk.table, chunk.masks);
+    for (const VoxelIndex& endpoint : chunk.endpoints) {
+      const Eigen::Vector3d end = voxelCentre(endpoint, voxel_size_m);
       const Eigen::Vector3d ray = end - origin;
       const double range = ray.norm();
       const bool in_range = !limited || range <= max_range_m;
       const Eigen::Vector3d stop = in_range ? end : Eigen::Vector3d(origin + ray * (max_range_m / range));
       if (exact) {
-        walkVoxels(origin, stop, voxel_size_m, false, [&](const VoxelIndex& ijk) {
-          writer.setFree(ijk);
-          return true;
-        });
+        marchFree(origin, stop, voxel_size_m, false, writer, CarveAll{});
       } else {
-        // From the end back to the origin, until stop_run voxels in a row were already carved by
-        // earlier rays of the chunk: from there on they have carved (nearly) the same path.
-        const VoxelIndex end_voxel = toVoxel(stop, voxel_size_m);
-        int run = 0;
-        walkVoxels(stop, origin, voxel_size_m, true, [&](const VoxelIndex& ijk) {
-          if (ijk == end_voxel) return true;
-          run = writer.setFreeIfNew(ijk) ? 0 : run + 1;
-          return run < stop_run;
-        });
+        marchFree(stop, origin, voxel_size_m, true, writer, CarveUntilRun{stop_run});
       }
-      if (in_range) writer.setHit(endpoints_[i]);
+      if (in_range) writer.setHit(endpoint);
     }
   }
+  num_rays_ = 0;
+  for (int c = 0; c < num_chunks; ++c) num_rays_ += chunks_[c].endpoints.size();
 
-  // 3. Union of the chunks' masks into chunk 0's table.
-  Marker& first = markers_[0];
-  for (int t = 1; t < chunks; ++t) {
-    Marker& other = markers_[t];
-    for (uint32_t s = 0; s < other.table.size(); ++s) {
+  // 2. Union of the chunks' masks into chunk 0's table.
+  Chunk& first = chunks_[0];
+  for (int c = 1; c < num_chunks; ++c) {
+    Chunk& other = chunks_[c];
+    for (uint32_t b = 0; b < other.table.size(); ++b) {
       bool inserted;
-      const uint32_t slot = first.table.findOrInsert(other.table.keyOf(s), inserted);
+      const uint32_t slot = first.table.findOrInsert(other.table.keyOf(b), inserted);
       if (inserted) first.masks.emplace_back();
       for (int w = 0; w < 8; ++w) {
-        first.masks[slot].free[w] |= other.masks[s].free[w];
-        first.masks[slot].hit[w] |= other.masks[s].hit[w];
+        first.masks[slot].free[w] |= other.masks[b].free[w];
+        first.masks[slot].hit[w] |= other.masks[b].hit[w];
       }
     }
   }
@@ -148,18 +248,32 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
   blocks_.resize(order_.size());
   for (size_t i = 0; i < order_.size(); ++i) blocks_[i] = detail::unpackIndex(first.table.keyOf(order_[i]));
 
-  // 4. Mean colours of the hit voxels.
+  // 3. Mean colours of the hit voxels, over all chunks (an endpoint voxel may span two bands).
   colors_.clear();
-  if (colored) {
-    for (size_t i = 0; i < endpoints_.size(); ++i) {
-      const auto& sum = color_sums_[i];
-      const Eigen::Vector3d end = voxelCentre(endpoints_[i], voxel_size_m);
-      if (limited && (end - origin).norm() > max_range_m) continue;
-      const uint32_t c = sum[3];
-      colors_.push_back({endpoints_[i],
-                         {static_cast<uint8_t>((sum[0] + c / 2) / c), static_cast<uint8_t>((sum[1] + c / 2) / c),
-                          static_cast<uint8_t>((sum[2] + c / 2) / c)}});
+  if (!batch.hasColor()) return;
+  endpoint_table_.clear();
+  endpoints_.clear();
+  color_sums_.clear();
+  for (int c = 0; c < num_chunks; ++c) {
+    const Chunk& chunk = chunks_[c];
+    for (size_t e = 0; e < chunk.endpoints.size(); ++e) {
+      bool inserted;
+      const uint32_t slot = endpoint_table_.findOrInsert(detail::packIndex(chunk.endpoints[e]), inserted);
+      if (inserted) {
+        endpoints_.push_back(chunk.endpoints[e]);
+        color_sums_.push_back({0, 0, 0, 0});
+      }
+      for (int k = 0; k < 4; ++k) color_sums_[slot][k] += chunk.color_sums[e][k];
     }
+  }
+  for (size_t i = 0; i < endpoints_.size(); ++i) {
+    const auto& sum = color_sums_[i];
+    const Eigen::Vector3d end = voxelCentre(endpoints_[i], voxel_size_m);
+    if (limited && (end - origin).norm() > max_range_m) continue;
+    const uint32_t c = sum[3];
+    colors_.push_back({endpoints_[i],
+                       {static_cast<uint8_t>((sum[0] + c / 2) / c), static_cast<uint8_t>((sum[1] + c / 2) / c),
+                        static_cast<uint8_t>((sum[2] + c / 2) / c)}});
   }
 }
 

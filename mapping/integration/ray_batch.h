@@ -1,13 +1,15 @@
 // ray_batch.h: the voxel updates of one PointBatch, computed without reading or locking the map.
 //
 // Scheme (the one OctoMap's insertPointCloud uses with discretize on, made fast):
-//  1. Endpoints are deduplicated per voxel; each ray then goes from the origin to the centre of its
+//  1. Endpoints are deduplicated per voxel (within each chunk, see 4.; the last voxel is cached, as
+//     neighbouring pixels mostly share one); each ray then goes from the origin to the centre of its
 //     endpoint voxel. 270k stereo points at 5 cm fall into a few tens of thousands of voxels, so
 //     this removes most of the work and changes nothing a 5 cm map can represent. The colour of an
 //     endpoint voxel is the mean of its points' colours.
-//  2. Rays are marched with a 3D DDA (voxel_ray.h) into per-block bit masks (8x8x8 voxels = 512
-//     bits per mask, a free mask and a hit mask), found through an open-addressing table with a
-//     one-block cache: consecutive voxels of a ray are almost always in the same block. The masks
+//  2. Rays are marched with a 3D DDA (the voxels of voxel_ray.h's walkVoxels, in a loop without
+//     branches on the stepping axis) into per-block bit masks (8x8x8 voxels = 512 bits per mask, a
+//     free mask and a hit mask), found through an open-addressing table only when the ray crosses
+//     into another block (about every 8 steps). The masks
 //     are the per-batch visited set, so each voxel is updated at most once per batch; a voxel both
 //     crossed and hit is a hit (occupied wins: free &= ~hit).
 //  3. Early stop (stop_run > 0): rays from one origin overlap heavily (a 400k-point frame at 5 cm
@@ -20,9 +22,10 @@
 //     where both know (tests/mapping/octomap_equivalence_test.cpp) at about half the work.
 //     stop_run 0 marches every ray whole from the origin, like OctoMap's computeRayKeys:
 //     OctoMap's voxel sets.
-//  4. Endpoints are split into a fixed number of chunks (consecutive endpoints: image bands), each
-//     marched into private masks by any thread and then OR-ed: the map is the same for any thread
-//     count (early stopping depends only on the chunk's own rays).
+//  4. Points are split into a fixed number of chunks (consecutive points: image bands), each
+//     deduplicated and marched into private masks by any thread and then OR-ed: the map is the same
+//     for any thread count (early stopping depends only on the chunk's own rays). An endpoint voxel
+//     spanning two bands is marched by both (the union is unchanged); its colour is merged.
 // Range rule: an endpoint centre farther than max_range_m carves free space to max_range_m along
 // its ray and records no hit (OctoMap's rule). Rays end at the endpoint voxel, exclusive.
 // Units: metres, world frame. Threads: one RayBatch per writer; build() uses OpenMP internally.
@@ -62,18 +65,23 @@ class RayBatch {
   const BlockMasks& masks(size_t i) const { return masks_[order_[i]]; }
   // Mean colour of every hit voxel (empty for an uncoloured batch).
   const std::vector<EndpointColor>& colors() const { return colors_; }
+  // Rays cast: the unique endpoint voxels of each chunk, summed.
   size_t numRays() const { return num_rays_; }
 
- private:
-  struct Marker {
-    detail::BlockTable table;
+  // Scratch of one chunk of points (public for the helpers in ray_batch.cpp).
+  struct Chunk {
+    detail::BlockTable endpoint_table;
+    std::vector<VoxelIndex> endpoints;                 // unique endpoint voxels, in point order
+    std::vector<std::array<uint32_t, 4>> color_sums;  // r, g, b, count per endpoint
+    detail::BlockTable table;                          // block -> slot in masks
     std::vector<BlockMasks> masks;
   };
 
-  detail::BlockTable endpoint_table_;
+ private:
+  detail::BlockTable endpoint_table_;                 // colour merge over the chunks
   std::vector<VoxelIndex> endpoints_;
   std::vector<std::array<uint32_t, 4>> color_sums_;  // r, g, b, count per endpoint
-  std::vector<Marker> markers_;                       // one per thread
+  std::vector<Chunk> chunks_;
   std::vector<BlockIndex> blocks_;
   std::vector<uint32_t> order_;
   std::vector<BlockMasks> masks_;
