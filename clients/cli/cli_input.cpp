@@ -67,6 +67,14 @@ std::string readTokenFile(const std::string& path) {
   return token.substr(first, last - first + 1);
 }
 
+std::string readTextFile(const std::string& path, const std::string& what) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw CliError(what + " " + path + ": cannot open");
+  std::ostringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
 std::string formatPoint(const Eigen::Vector3d& p) {
   char text[96];
   std::snprintf(text, sizeof(text), "%g,%g,%g", p.x(), p.y(), p.z());

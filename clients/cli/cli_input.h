@@ -22,6 +22,8 @@ Eigen::Vector3d parsePoint(const std::string& text, const std::string& what);
 std::vector<Eigen::Vector3d> readPointsFile(const std::string& path);
 // The file's first line without surrounding white space; an empty token is an error.
 std::string readTokenFile(const std::string& path);
+// The whole file (PEM certificates and keys); `what` names the option in the error.
+std::string readTextFile(const std::string& path, const std::string& what);
 // "x,y,z" with %g.
 std::string formatPoint(const Eigen::Vector3d& p);
 

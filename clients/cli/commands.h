@@ -11,12 +11,15 @@
 
 namespace cenote::cli {
 
-// The global options (--server, --token, --token-file, --deadline) and the client made from them.
+// The global options (--server, --token, --token-file, --deadline, --tls...) and the client made from them.
 struct Connection {
   std::string server = "127.0.0.1:50051";
   std::string token;
   std::string token_file;
   double deadline_s = 10.0;
+  bool tls = false;            // TLS with the system's roots
+  std::string tls_ca;          // TLS with this PEM root (implies tls)
+  std::string tls_cert, tls_key;  // client certificate and key for mutual TLS (imply tls)
   // Made at the first call, after parsing. @throws CliError for an unreadable token file.
   client::MapClient& client();
 

@@ -1,5 +1,5 @@
 // cenote-cli: a person at a terminal asking a running cenote-server about its map.
-//   cenote-cli [--server HOST:PORT] [--token T | --token-file F] <command> ...
+//   cenote-cli [--server HOST:PORT] [--token T | --token-file F] [--tls-ca PEM] <command> ...
 // `cenote-cli --help` lists the commands. Exit status: 0 done; 1 bad command line or input file;
 // 2 the server refused or failed the call (stderr: "error: <STATUS NAME>: <message>").
 #include <iostream>
@@ -14,6 +14,11 @@ client::MapClient& Connection::client() {
     client::ClientOptions options;
     options.token = token_file.empty() ? token : readTokenFile(token_file);
     options.deadline_s = deadline_s;
+    options.use_tls = tls || !tls_ca.empty() || !tls_cert.empty();
+    if (!tls_ca.empty()) options.tls_root_cert_pem = readTextFile(tls_ca, "--tls-ca");
+    if (!tls_cert.empty()) options.tls_client_cert_pem = readTextFile(tls_cert, "--tls-cert");
+    if (!tls_key.empty()) options.tls_client_key_pem = readTextFile(tls_key, "--tls-key");
+    if (tls_cert.empty() != tls_key.empty()) throw CliError("--tls-cert and --tls-key go together");
     client_ = std::make_unique<client::MapClient>(server, options);
   }
   return *client_;
@@ -32,6 +37,10 @@ int main(int argc, char** argv) {
   app.add_option("--token-file", connection.token_file, "File whose first line is the bearer token")->excludes(token);
   app.add_option("--deadline", connection.deadline_s, "Seconds before a call fails with DEADLINE_EXCEEDED")
       ->capture_default_str();
+  app.add_flag("--tls", connection.tls, "Connect over TLS, trusting the system's root certificates");
+  app.add_option("--tls-ca", connection.tls_ca, "PEM root certificate the server's must chain to (implies --tls)");
+  app.add_option("--tls-cert", connection.tls_cert, "PEM client certificate for mutual TLS (with --tls-key)");
+  app.add_option("--tls-key", connection.tls_key, "PEM private key of --tls-cert");
   cli::registerQueryCommands(app, connection);
   cli::registerAdminCommands(app, connection);
   try {

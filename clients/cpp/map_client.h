@@ -8,7 +8,8 @@
 //
 // Errors: every failed call throws RpcError (code, code name, the server's message).
 // Batching: queries with more than ClientOptions::max_batch_items items are split into several
-// requests and their answers concatenated in order (each part sees the map at its own version).
+// requests and their answers concatenated in order (each part sees the map at its own version);
+// an empty list returns an empty answer without calling the server.
 // Units: metres, seconds; frame: the map's world frame.
 // Threads: one MapClient may be used from any number of threads at once (gRPC stubs are thread
 // safe); a PointsStream or Subscription belongs to the thread that drives it.

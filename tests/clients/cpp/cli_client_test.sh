@@ -74,6 +74,24 @@ status=0
 cli state nan,0,0 >"$work/stdout" 2>"$work/stderr" || status=$?
 [[ $status -eq 2 ]] && grep -q "^error: INVALID_ARGUMENT: " "$work/stderr" || fail "NaN point: exit $status, $(cat "$work/stderr")"
 expect_output -x "occupied: 1600" -- info  # the map is unchanged after the refused calls
+# TLS: a second server with a self-signed certificate for 127.0.0.1; --tls-ca connects, plaintext does not.
+if command -v openssl >/dev/null; then
+  openssl req -x509 -newkey rsa:2048 -nodes -days 1 -subj /CN=cenote -addext subjectAltName=IP:127.0.0.1 \
+    -keyout "$work/tls.key" -out "$work/tls.pem" >/dev/null 2>&1 || fail "openssl could not make a certificate"
+  "$server_bin" --listen 127.0.0.1:0 --port-file "$work/tls_port" --tls-cert "$work/tls.pem" --tls-key "$work/tls.key" \
+    --snapshot-dir "$work/snapshots" >"$work/tls_server.log" 2>&1 &
+  tls_pid=$!
+  trap 'kill $server_pid $tls_pid 2>/dev/null; wait $server_pid $tls_pid 2>/dev/null; rm -rf "$work"' EXIT
+  for _ in $(seq 600); do [[ -s "$work/tls_port" ]] && break; sleep 0.1; done
+  tls_server="127.0.0.1:$(tr -d '[:space:]' <"$work/tls_port")"
+  "$cenote" --server "$tls_server" --tls-ca "$work/tls.pem" info >"$work/out" 2>"$work/err" \
+    || fail "TLS info failed: $(cat "$work/err")"
+  grep -qx "voxel_size_m: 0.05" "$work/out" || fail "TLS info printed: $(cat "$work/out")"
+  status=0
+  "$cenote" --server "$tls_server" --deadline 3 info >"$work/out" 2>"$work/err" || status=$?
+  [[ $status -eq 2 ]] && grep -q "^error: UNAVAILABLE: " "$work/err" || fail "plaintext to TLS: exit $status, $(cat "$work/err")"
+fi
+
 # Bad command line: exit 1 naming the argument; no server needed.
 expect_error 1 "expected X,Y,Z" state 1,2
 echo "cli_client_test: ok"
