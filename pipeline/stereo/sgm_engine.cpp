@@ -120,19 +120,18 @@ constexpr int kWinnerBatch = 16;
 //
 // Path rows hold the previous row's path costs for the three directions that come from the row
 // before (0: same x, 1: x - dx, 2: x + dx), updated in place as the row is swept: direction 0
-// reads and writes pixel x; direction 2 reads x + dx, which the sweep has not reached yet;
-// direction 1 reads x - dx, which the sweep has just passed, so its new values wait one pixel in
-// `delay` before they overwrite the row. One row per direction keeps the strip's working set in
-// the L2 cache.
+// reads and writes pixel x; direction 2 reads x + dx, which the sweep has not reached yet.
+// Direction 1 reads x - dx, which the sweep has just passed, so its new values go to a second
+// row (index 3) that trades places with row 1 after every image row. Four rows keep the strip's
+// working set in the L2 cache.
 struct StripBuffers {
   int width = 0;
   int lanes = 0;          // N
   int padded = 0;         // Dp: disparities rounded up to N
   int pixel_stride = 0;   // Dp, plus N sentinel lanes when Dp == D
-  uint16_t* path[3] = {};
-  uint16_t* path_min[3] = {};  // W + 2 each, pixel x at x + 1
+  uint16_t* path[4] = {};
+  uint16_t* path_min[4] = {};  // W + 2 each, pixel x at x + 1
   uint16_t* along[2] = {};     // [N sentinels][Dp][N sentinels]: previous and current pixel
-  uint16_t* delay[2] = {};     // Dp each: direction 1's new costs, one pixel late
   uint16_t* column_sum = nullptr;  // SAD: [x][Dp] sums over the window rows
   uint8_t* ring = nullptr;         // SAD: window rows of [x][Dp] absolute differences
   uint16_t* running = nullptr;     // SAD: Dp, running horizontal window sum
@@ -167,7 +166,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws) {
   const std::size_t path_row = (W + 2) * b.pixel_stride + 2 * N;
   const std::size_t sad = p.census ? 0 : W * Dp + (W * Dp * p.window + 1) / 2;
   // Every piece is rounded up to 64 elements by take(); 20 pieces at most.
-  const std::size_t total = 3 * (path_row + W + 2) + 2 * (Dp + 2 * N) + 2 * Dp + sad + 2 * Dp +
+  const std::size_t total = 4 * (path_row + W + 2) + 2 * (Dp + 2 * N) + sad + 2 * Dp +
                             kWinnerBatch * (Dp + 2 * N) + 2 * rev + W +
                             (rev / 2 + 32) + 2 * rev + 20 * 64;
   if (ws.buffer_elements < total) {
@@ -180,14 +179,12 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws) {
     next += alignUp(n, 64);
     return out;
   };
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < 4; ++i) {
     b.path[i] = take(path_row);
     b.path_min[i] = take(W + 2);
   }
   b.along[0] = take(Dp + 2 * N);
   b.along[1] = take(Dp + 2 * N);
-  b.delay[0] = take(Dp);
-  b.delay[1] = take(Dp);
   if (!p.census) {
     b.column_sum = take(W * Dp);
     b.ring = reinterpret_cast<uint8_t*>(take((W * Dp * p.window + 1) / 2));  // window rows of bytes
@@ -355,7 +352,7 @@ CostSource beginCostRow(const SgmParams& p, const SgmImages& im, const StripBuff
 void resetPaths(const SgmParams& p, const StripBuffers& b, uint16_t sentinel) {
   const int N = b.lanes, D = p.num_disparities;
   const std::size_t pixels = static_cast<std::size_t>(b.width) + 2;
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < 4; ++i) {
     uint16_t* row = b.path[i];
     std::fill(row, row + N, sentinel);
     for (std::size_t px = 0; px < pixels; ++px) {
@@ -495,16 +492,11 @@ enum class RowOutput { kNone, kStoreSums, kWinner };
 // at run time (first pixel of a row, left border, SAD window columns outside the image).
 enum class PixelKind { kGeneral, kSadInterior, kCensusInterior };
 
-// Copies one pixel's path costs (aligned vectors).
-void copyPixel(const StripBuffers& b, const uint16_t* from, uint16_t* to) {
-  const DU16 d;
-  for (int k = 0; k < b.padded; k += b.lanes) hn::Store(hn::Load(d, from + k), d, to + k);
-}
-
 // One row of one pass: builds the matching cost on the fly, advances the four paths and sums
 // them (dx = +1: left to right, previous row above; -1: right to left, previous row below).
 // Path directions: 0 along the row (from x - dx, kept in `along`), 1 from (x, y - dx),
-// 2 from (x - dx, y - dx), 3 from (x + dx, y - dx); rows 0..2 of b.path hold directions 1..3.
+// 2 from (x - dx, y - dx), 3 from (x + dx, y - dx); rows 0..2 of b.path hold directions 1..3
+// (row 3: direction 2's new costs).
 // `stored_sums`: first-pass sums to add (8-path second pass) or to write (8-path first pass).
 void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y,
                   int dx, bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored,
@@ -524,8 +516,8 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
     std::fill(b.right_arg, b.right_arg + b.reversed_length, 0);
   }
   resetAlong(p, b, sentinel);
-  uint16_t along_min = 0, delayed_min = 0;
-  int along_cur = 0, delay_cur = 0;
+  uint16_t along_min = 0;
+  int along_cur = 0;
   for (int i = 0; i < W; ++i) {
     const int x = dx > 0 ? i : W - 1 - i;
     // SAD window columns: the one entering ahead of x and the one leaving behind it.
@@ -549,7 +541,7 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
     uint16_t* const along_out = b.along[along_cur] + N;
     uint16_t* const vertical = b.pathPixel(b.path[0], x);
     const uint16_t* const back = b.pathPixel(b.path[1], x - dx);
-    uint16_t* const back_out = b.delay[delay_cur];
+    uint16_t* const back_out = b.pathPixel(b.path[3], x);
     const uint16_t* const fwd = b.pathPixel(b.path[2], x + dx);
     uint16_t* const fwd_out = b.pathPixel(b.path[2], x);
     const uint16_t min_along = along_min, min_vertical = b.path_min[0][x + 1];
@@ -666,13 +658,7 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
     along_min = minLane(d, mins_along);
     b.path_min[0][x + 1] = minLane(d, mins_vertical);
     b.path_min[2][x + 1] = minLane(d, mins_fwd);
-    // Direction 2: the previous pixel's new costs may now replace its old ones in the row.
-    if (i > 0) {
-      copyPixel(b, b.delay[1 - delay_cur], b.pathPixel(b.path[1], x - dx));
-      b.path_min[1][x - dx + 1] = delayed_min;
-    }
-    delayed_min = minLane(d, mins_back);
-    delay_cur = 1 - delay_cur;
+    b.path_min[3][x + 1] = minLane(d, mins_back);
     along_cur = 1 - along_cur;
     if (output == RowOutput::kWinner) {
       hn::Store(best, d, b.batch_best + slot * N);
@@ -691,9 +677,10 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
       }
     }
   }
-  const int last = dx > 0 ? W - 1 : 0;
-  copyPixel(b, b.delay[1 - delay_cur], b.pathPixel(b.path[1], last));
-  b.path_min[1][last + 1] = delayed_min;
+  // Direction 1's new row becomes the one the next image row reads (pixels -1 and W of both
+  // rows are never written: they stay "no predecessor").
+  std::swap(b.path[1], b.path[3]);
+  std::swap(b.path_min[1], b.path_min[3]);
   if (output == RowOutput::kWinner && p.lr_check) leftRightCheck(p, b, disparity, confidence);
 }
 
