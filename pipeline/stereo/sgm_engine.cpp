@@ -56,6 +56,20 @@ HWY_INLINE uint16_t minLane(D d, hn::Vec<D> v) {
 #endif
 }
 
+// minLane() in every lane. On AVX-512 the minimum stays in vector registers (no round trip
+// through a general register): the along-row path waits for it at every pixel.
+template <class D>
+HWY_INLINE hn::Vec<D> minLaneBroadcast(D d, hn::Vec<D> v) {
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+  if constexpr (hn::MaxLanes(D()) == 32) {
+    const __m256i m256 = _mm256_min_epu16(_mm512_castsi512_si256(v.raw), _mm512_extracti64x4_epi64(v.raw, 1));
+    const __m128i m128 = _mm_min_epu16(_mm256_castsi256_si128(m256), _mm256_extracti128_si256(m256, 1));
+    return hn::Vec<D>{_mm512_broadcastw_epi16(_mm_minpos_epu16(m128))};
+  }
+#endif
+  return hn::Set(d, minLane(d, v));
+}
+
 // Lane shifts across a whole vector: [prev[N-1], cur[0..N-2]] (the d-1 neighbours of `cur`) and
 // [cur[1..N-1], next[0]] (the d+1 neighbours). The along-row path needs them in registers: the
 // previous pixel's path costs were stored just before, and an unaligned reload of them would miss
@@ -516,7 +530,7 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
     std::fill(b.right_arg, b.right_arg + b.reversed_length, 0);
   }
   resetAlong(p, b, sentinel);
-  uint16_t along_min = 0;
+  VU16 along_min = hn::Zero(d);
   int along_cur = 0;
   for (int i = 0; i < W; ++i) {
     const int x = dx > 0 ? i : W - 1 - i;
@@ -544,11 +558,11 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
     uint16_t* const back_out = b.pathPixel(b.path[3], x);
     const uint16_t* const fwd = b.pathPixel(b.path[2], x + dx);
     uint16_t* const fwd_out = b.pathPixel(b.path[2], x);
-    const uint16_t min_along = along_min, min_vertical = b.path_min[0][x + 1];
+    const uint16_t min_vertical = b.path_min[0][x + 1];
     const uint16_t min_back = b.path_min[1][x - dx + 1], min_fwd = b.path_min[2][x + dx + 1];
-    const VU16 min_along_v = hn::Set(d, min_along), min_vertical_v = hn::Set(d, min_vertical);
+    const VU16 min_along_v = along_min, min_vertical_v = hn::Set(d, min_vertical);
     const VU16 min_back_v = hn::Set(d, min_back), min_fwd_v = hn::Set(d, min_fwd);
-    const VU16 jump_along = hn::Set(d, static_cast<uint16_t>(min_along + pen.p2[std::abs(row[x] - row[x - dx])]));
+    const VU16 jump_along = hn::Add(along_min, hn::Set(d, pen.p2[std::abs(row[x] - row[x - dx])]));
     const VU16 jump_vertical =
         hn::Set(d, static_cast<uint16_t>(min_vertical + pen.p2[std::abs(row[x] - prev_row[x])]));
     const VU16 jump_back =
@@ -655,7 +669,7 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
       vector_loop(std::integral_constant<PixelKind, PixelKind::kGeneral>());
     }
     hn::Store(vertical_pending, d, vertical + Dp - N);
-    along_min = minLane(d, mins_along);
+    along_min = minLaneBroadcast(d, mins_along);
     b.path_min[0][x + 1] = minLane(d, mins_vertical);
     b.path_min[2][x + 1] = minLane(d, mins_fwd);
     b.path_min[3][x + 1] = minLane(d, mins_back);
