@@ -1,5 +1,7 @@
 // stereo_bench: ms/frame of cenote's matcher beside OpenCV's StereoSGBM on the same images, in
 // the same run, on the same number of threads. Prints a Markdown table for docs/PERFORMANCE.md.
+// Besides the wall-clock median it prints the median CPU time per frame (all threads of the
+// process): on a machine shared with other work it barely moves when the wall clock doubles.
 //   stereo_bench [--threads 2] [--repeat 15]
 // Inputs: Middlebury Cloth3 resized to 800x600 (the paper's image size) with 112 disparities,
 // and the Middlebury pairs at their own size (cones 64, Cloth3 128 disparities).
@@ -7,6 +9,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstring>
 #include <functional>
@@ -28,16 +31,33 @@ struct Input {
   int disparities;
 };
 
-double medianMs(const std::function<void()>& run, int repeat) {
+struct Timing {
+  double wall_ms = 0.0;  // median
+  double cpu_ms = 0.0;   // median CPU time of the process (every thread)
+};
+
+double processCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+Timing medianMs(const std::function<void()>& run, int repeat) {
   run();  // warm-up: allocations, page faults
-  std::vector<double> ms;
+  std::vector<double> wall, cpu;
   for (int i = 0; i < repeat; ++i) {
+    const double c0 = processCpuMs();
     const auto t0 = std::chrono::steady_clock::now();
     run();
-    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    wall.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    cpu.push_back(processCpuMs() - c0);
   }
-  std::sort(ms.begin(), ms.end());
-  return ms[ms.size() / 2];
+  return {median(wall), median(cpu)};
 }
 
 cv::Mat grey(const cv::Mat& bgr) {
@@ -77,13 +97,13 @@ int main(int argc, char** argv) {
   }
 
   std::printf("threads: %d, median of %d runs\n\n", threads, repeat);
-  std::printf("| input | disparities | method | ms/frame | Mcells/s | OpenCV 3WAY / this |\n");
-  std::printf("|---|---|---|---|---|---|\n");
+  std::printf("| input | disparities | method | ms/frame | Mcells/s | OpenCV 3WAY / this | CPU ms/frame | 3WAY / this (CPU) |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const Input& in : inputs) {
     const double cells = static_cast<double>(in.left.total()) * in.disparities;
     struct Row {
       std::string name;
-      double ms;
+      Timing t;
     };
     std::vector<Row> rows;
     auto ours = [&](const char* name, pipeline::MatchingCost cost, int window, int paths) {
@@ -106,10 +126,11 @@ int main(int argc, char** argv) {
     ours("cenote SAD 3x3, 8 paths", pipeline::MatchingCost::kSad, 3, 8);
     opencv("OpenCV StereoSGBM MODE_HH4", cv::StereoSGBM::MODE_HH4);
     opencv("OpenCV StereoSGBM MODE_SGBM_3WAY", cv::StereoSGBM::MODE_SGBM_3WAY);
-    const double three_way = rows.back().ms;
+    const Timing three_way = rows.back().t;
     for (const Row& r : rows) {
-      std::printf("| %s | %d | %s | %.1f | %.0f | %.2fx |\n", in.name.c_str(), in.disparities, r.name.c_str(), r.ms,
-                  cells / (r.ms * 1e3), three_way / r.ms);
+      std::printf("| %s | %d | %s | %.1f | %.0f | %.2fx | %.1f | %.2fx |\n", in.name.c_str(), in.disparities,
+                  r.name.c_str(), r.t.wall_ms, cells / (r.t.wall_ms * 1e3), three_way.wall_ms / r.t.wall_ms, r.t.cpu_ms,
+                  three_way.cpu_ms / r.t.cpu_ms);
     }
   }
   return 0;
