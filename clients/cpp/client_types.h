@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -175,6 +176,55 @@ struct BatchAck {
   uint64_t voxels_updated = 0;
   uint64_t changed_blocks = 0;
   uint64_t map_version = 0;
+  bool ok() const { return status_code == 0; }
+};
+
+// A rigid transform T_world_frame (maps points of the frame into the world).
+struct Pose {
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // unit
+};
+
+enum class ImageEncoding { kUnspecified = 0, kMono8 = 1, kBgr8 = 2, kRgb8 = 3 };
+
+// One camera image: encoded (PNG, JPEG: anything OpenCV's imdecode reads) or raw pixels.
+struct Image {
+  std::string encoded;  // non-empty: an encoded file's bytes; the raw fields are then unused
+  uint32_t width = 0;
+  uint32_t height = 0;
+  ImageEncoding encoding = ImageEncoding::kUnspecified;
+  std::string raw;  // rows top to bottom, no padding: width * height * channels bytes
+};
+
+// Raw (unrectified) images of the server's calibrated rig.
+struct StereoFrame {
+  double timestamp_s = 0.0;  // strictly increasing within a stream
+  Image left, right;
+  bool has_pose = false;  // false: the server matches a streamed pose by timestamp
+  Pose T_world_cam;       // of the raw left camera
+};
+
+enum class FrameOutcome { kUnspecified = 0, kProcessed = 1, kSkippedNoPose = 2, kSkippedNotKeyframe = 3, kRejected = 4 };
+
+struct FrameAck {
+  uint64_t sequence = 0;
+  double timestamp_s = 0.0;
+  FrameOutcome outcome = FrameOutcome::kUnspecified;
+  int status_code = 0;  // grpc::StatusCode; 0 unless rejected
+  std::string message;  // why it was skipped or rejected
+  uint64_t map_version = 0;
+};
+
+struct PoseStamped {
+  double timestamp_s = 0.0;  // strictly increasing within a stream
+  Pose T_world_cam;          // of the raw left camera
+};
+
+struct PoseAck {
+  uint64_t sequence = 0;
+  double timestamp_s = 0.0;
+  int status_code = 0;  // 0: stored; otherwise rejected (NaN, not a rotation, out of order)
+  std::string message;
   bool ok() const { return status_code == 0; }
 };
 

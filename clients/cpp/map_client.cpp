@@ -260,14 +260,82 @@ BatchAck MapClient::integratePoints(const PointBatch& batch) {
   return detail::fromWire(reply);
 }
 
-struct PointsStream::Impl {
+// What each ingest stream sends and receives on the wire.
+template <typename Item>
+struct StreamWire;
+template <>
+struct StreamWire<PointBatch> {
+  using Request = v1::PointBatch;
+  using Reply = v1::BatchAck;
+};
+template <>
+struct StreamWire<StereoFrame> {
+  using Request = v1::StereoFrame;
+  using Reply = v1::FrameAck;
+};
+template <>
+struct StreamWire<PoseStamped> {
+  using Request = v1::PoseStamped;
+  using Reply = v1::PoseAck;
+};
+
+template <typename Item, typename Ack>
+struct IngestStream<Item, Ack>::Impl {
+  using Request = typename StreamWire<Item>::Request;
+  using Reply = typename StreamWire<Item>::Reply;
   std::shared_ptr<v1::Ingest::Stub> stub;
   grpc::ClientContext context;
-  std::unique_ptr<grpc::ClientReaderWriter<v1::PointBatch, v1::BatchAck>> stream;
+  std::unique_ptr<grpc::ClientReaderWriter<Request, Reply>> stream;
   std::mutex write_mutex;  // writes_done and write may come from different threads
   bool writes_done = false;
   bool finished = false;
 };
+
+template <typename Item, typename Ack>
+IngestStream<Item, Ack>::IngestStream(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+template <typename Item, typename Ack>
+IngestStream<Item, Ack>::~IngestStream() {
+  if (!impl_->finished) {
+    impl_->context.TryCancel();
+    impl_->stream->Finish();
+  }
+}
+
+template <typename Item, typename Ack>
+bool IngestStream<Item, Ack>::write(const Item& item) {
+  typename Impl::Request message;
+  detail::toWire(item, &message);
+  std::lock_guard lock(impl_->write_mutex);
+  return !impl_->writes_done && impl_->stream->Write(message);
+}
+
+template <typename Item, typename Ack>
+bool IngestStream<Item, Ack>::read(Ack& ack) {
+  typename Impl::Reply message;
+  if (!impl_->stream->Read(&message)) return false;
+  ack = detail::fromWire(message);
+  return true;
+}
+
+template <typename Item, typename Ack>
+void IngestStream<Item, Ack>::finish(std::vector<Ack>* remaining) {
+  {
+    std::lock_guard lock(impl_->write_mutex);
+    if (!impl_->writes_done) impl_->stream->WritesDone();
+    impl_->writes_done = true;
+  }
+  Ack ack;
+  while (read(ack)) {
+    if (remaining) remaining->push_back(ack);
+  }
+  impl_->finished = true;
+  throwIfFailed(impl_->stream->Finish());
+}
+
+template class IngestStream<PointBatch, BatchAck>;
+template class IngestStream<StereoFrame, FrameAck>;
+template class IngestStream<PoseStamped, PoseAck>;
 
 std::unique_ptr<PointsStream> MapClient::openPointsStream() {
   auto impl = std::make_unique<PointsStream::Impl>();
@@ -277,41 +345,20 @@ std::unique_ptr<PointsStream> MapClient::openPointsStream() {
   return std::unique_ptr<PointsStream>(new PointsStream(std::move(impl)));
 }
 
-PointsStream::PointsStream(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-
-PointsStream::~PointsStream() {
-  if (!impl_->finished) {
-    impl_->context.TryCancel();
-    impl_->stream->Finish();
-  }
+std::unique_ptr<FramesStream> MapClient::openFramesStream() {
+  auto impl = std::make_unique<FramesStream::Impl>();
+  impl->stub = impl_->ingest;
+  impl_->prepare(impl->context, 0.0);
+  impl->stream = impl->stub->StreamFrames(&impl->context);
+  return std::unique_ptr<FramesStream>(new FramesStream(std::move(impl)));
 }
 
-bool PointsStream::write(const PointBatch& batch) {
-  v1::PointBatch message;
-  detail::toWire(batch, &message);
-  std::lock_guard lock(impl_->write_mutex);
-  return !impl_->writes_done && impl_->stream->Write(message);
-}
-
-bool PointsStream::read(BatchAck& ack) {
-  v1::BatchAck message;
-  if (!impl_->stream->Read(&message)) return false;
-  ack = detail::fromWire(message);
-  return true;
-}
-
-void PointsStream::finish(std::vector<BatchAck>* remaining) {
-  {
-    std::lock_guard lock(impl_->write_mutex);
-    if (!impl_->writes_done) impl_->stream->WritesDone();
-    impl_->writes_done = true;
-  }
-  BatchAck ack;
-  while (read(ack)) {
-    if (remaining) remaining->push_back(ack);
-  }
-  impl_->finished = true;
-  throwIfFailed(impl_->stream->Finish());
+std::unique_ptr<PosesStream> MapClient::openPosesStream() {
+  auto impl = std::make_unique<PosesStream::Impl>();
+  impl->stub = impl_->ingest;
+  impl_->prepare(impl->context, 0.0);
+  impl->stream = impl->stub->StreamPoses(&impl->context);
+  return std::unique_ptr<PosesStream>(new PosesStream(std::move(impl)));
 }
 
 std::vector<BatchAck> MapClient::streamPoints(const std::vector<PointBatch>& batches) {

@@ -12,7 +12,7 @@
 // an empty list returns an empty answer without calling the server.
 // Units: metres, seconds; frame: the map's world frame.
 // Threads: one MapClient may be used from any number of threads at once (gRPC stubs are thread
-// safe); a PointsStream or Subscription belongs to the thread that drives it.
+// safe); an IngestStream or Subscription belongs to the thread(s) that drive it.
 #pragma once
 
 #include <Eigen/Core>
@@ -31,7 +31,12 @@ class Channel;
 
 namespace cenote::client {
 
-class PointsStream;
+template <typename Item, typename Ack>
+class IngestStream;
+// Streams of the Ingest service: items written, one acknowledgement read back per item.
+using PointsStream = IngestStream<PointBatch, BatchAck>;
+using FramesStream = IngestStream<StereoFrame, FrameAck>;
+using PosesStream = IngestStream<PoseStamped, PoseAck>;
 class Subscription;
 
 class MapClient {
@@ -77,6 +82,11 @@ class MapClient {
   std::unique_ptr<PointsStream> openPointsStream();
   // Sends every batch over one stream and returns the acks in order (reads acks while writing).
   std::vector<BatchAck> streamPoints(const std::vector<PointBatch>& batches);
+  // Stereo frames for the server's own pipeline (it needs --calibration), with back-pressure:
+  // write() blocks while the pipeline is busy. Closing the stream finishes the fusion window.
+  std::unique_ptr<FramesStream> openFramesStream();
+  // Camera poses at VIO rate, matched by timestamp to frames without a pose of their own.
+  std::unique_ptr<PosesStream> openPosesStream();
 
   // ---- Updates ----
   // Calls on_update for every MapUpdate (the full map first) from a background thread, until
@@ -103,28 +113,37 @@ class MapClient {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  friend class PointsStream;
+  template <typename Item, typename Ack>
+  friend class IngestStream;
   friend class Subscription;
 };
 
-// An open StreamPoints call. write() and read() may run on two threads (one each) at once.
-class PointsStream {
+// An open StreamPoints / StreamFrames / StreamPoses call. write() and read() may run on two
+// threads (one each) at once. A bad item is rejected in its ack and the stream goes on.
+template <typename Item, typename Ack>
+class IngestStream {
  public:
-  ~PointsStream();  // cancels the call if finish() was not called
+  ~IngestStream();  // cancels the call if finish() was not called
+  IngestStream(const IngestStream&) = delete;
+  IngestStream& operator=(const IngestStream&) = delete;
   // False when the stream is broken (finish() then says why).
-  bool write(const PointBatch& batch);
+  bool write(const Item& item);
   // The next acknowledgement; false when the server has closed its side.
-  bool read(BatchAck& ack);
+  bool read(Ack& ack);
   // Half-closes, drains the remaining acks into `remaining` (if given) and waits for the status.
   // @throws RpcError when the call failed.
-  void finish(std::vector<BatchAck>* remaining = nullptr);
+  void finish(std::vector<Ack>* remaining = nullptr);
 
  private:
   friend class MapClient;
   struct Impl;
-  explicit PointsStream(std::unique_ptr<Impl> impl);
+  explicit IngestStream(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
+
+extern template class IngestStream<PointBatch, BatchAck>;
+extern template class IngestStream<StereoFrame, FrameAck>;
+extern template class IngestStream<PoseStamped, PoseAck>;
 
 // A background Subscribe call (MapClient::subscribe).
 class Subscription {

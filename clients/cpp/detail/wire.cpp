@@ -35,6 +35,39 @@ void toWire(const PointBatch& batch, v1::PointBatch* out) {
   if (!batch.rgb.empty()) std::memcpy(rgb->data(), batch.rgb.data(), rgb->size());
 }
 
+void toWire(const Pose& pose, v1::Pose* out) {
+  toWire(pose.position_m, out->mutable_position());
+  v1::Quaternion* q = out->mutable_orientation();
+  q->set_x(pose.orientation.x());
+  q->set_y(pose.orientation.y());
+  q->set_z(pose.orientation.z());
+  q->set_w(pose.orientation.w());
+}
+
+void toWire(const Image& image, v1::Image* out) {
+  if (!image.encoded.empty()) {
+    out->set_encoded(image.encoded);
+    return;
+  }
+  v1::RawImage* raw = out->mutable_raw();
+  raw->set_width(image.width);
+  raw->set_height(image.height);
+  raw->set_encoding(static_cast<v1::ImageEncoding>(image.encoding));
+  raw->set_data(image.raw);
+}
+
+void toWire(const StereoFrame& frame, v1::StereoFrame* out) {
+  out->set_timestamp_s(frame.timestamp_s);
+  toWire(frame.left, out->mutable_left());
+  toWire(frame.right, out->mutable_right());
+  if (frame.has_pose) toWire(frame.T_world_cam, out->mutable_pose());
+}
+
+void toWire(const PoseStamped& pose, v1::PoseStamped* out) {
+  out->set_timestamp_s(pose.timestamp_s);
+  toWire(pose.T_world_cam, out->mutable_pose());
+}
+
 BoxCounts fromWire(const v1::BoxCounts& counts) {
   return {counts.unknown(), counts.free(), counts.occupied(), counts.any_occupied()};
 }
@@ -116,6 +149,21 @@ BatchAck fromWire(const v1::BatchAck& ack) {
   out.changed_blocks = ack.changed_blocks();
   out.map_version = ack.map_version();
   return out;
+}
+
+FrameAck fromWire(const v1::FrameAck& ack) {
+  FrameAck out;
+  out.sequence = ack.sequence();
+  out.timestamp_s = ack.timestamp_s();
+  out.outcome = static_cast<FrameOutcome>(ack.outcome());
+  out.status_code = ack.status_code();
+  out.message = ack.message();
+  out.map_version = ack.map_version();
+  return out;
+}
+
+PoseAck fromWire(const v1::PoseAck& ack) {
+  return {ack.sequence(), ack.timestamp_s(), ack.status_code(), ack.message()};
 }
 
 void fromWire(const v1::MapUpdate& update, MapUpdate& out) {

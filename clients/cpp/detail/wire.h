@@ -31,6 +31,10 @@ void appendFlat(const std::vector<Eigen::Vector3d>& points, size_t begin, size_t
 void toWire(const Segment& segment, v1::Segment* out);
 void toWire(const Ray& ray, v1::Ray* out);
 void toWire(const PointBatch& batch, v1::PointBatch* out);
+void toWire(const Pose& pose, v1::Pose* out);
+void toWire(const Image& image, v1::Image* out);
+void toWire(const StereoFrame& frame, v1::StereoFrame* out);
+void toWire(const PoseStamped& pose, v1::PoseStamped* out);
 
 BoxCounts fromWire(const v1::BoxCounts& counts);
 Collision fromWire(const v1::Collision& collision);
@@ -39,6 +43,8 @@ MapInfo fromWire(const v1::MapInfo& info);
 ServerStats fromWire(const v1::Stats& stats);
 ChangeResult fromWire(const v1::ChangeReply& reply);
 BatchAck fromWire(const v1::BatchAck& ack);
+FrameAck fromWire(const v1::FrameAck& ack);
+PoseAck fromWire(const v1::PoseAck& ack);
 // Fills `out` (reusing its blocks' storage).
 void fromWire(const v1::MapUpdate& update, MapUpdate& out);
 

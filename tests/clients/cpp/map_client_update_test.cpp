@@ -146,6 +146,49 @@ TEST(MapClientUpdates, PointStreamRejectsABadBatchInItsAckAndGoesOn) {
   EXPECT_EQ(map.stats().batches_integrated, batches.size() - 1);
 }
 
+TEST(MapClientUpdates, PoseStreamAcksEachPoseAndFrameStreamNeedsACalibration) {
+  ServerProcess server(CENOTE_SERVER_BINARY);
+  MapClient map(server.target());
+  auto poses = map.openPosesStream();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<PoseStamped> sent(4);
+  for (size_t i = 0; i < sent.size(); ++i) {
+    sent[i].timestamp_s = 1.0 + 0.1 * static_cast<double>(i);
+    sent[i].T_world_cam.position_m = Eigen::Vector3d(0.1 * static_cast<double>(i), 0, 0);
+  }
+  sent[1].T_world_cam.position_m.y() = nan;  // NaN: rejected
+  sent[3].timestamp_s = 0.5;                 // out of order: rejected
+  std::vector<PoseAck> acks;
+  for (const PoseStamped& pose : sent) {
+    ASSERT_TRUE(poses->write(pose));
+    PoseAck ack;
+    ASSERT_TRUE(poses->read(ack));
+    acks.push_back(ack);
+  }
+  poses->finish();
+  EXPECT_TRUE(acks[0].ok()) << acks[0].message;
+  EXPECT_EQ(acks[1].status_code, static_cast<int>(grpc::StatusCode::INVALID_ARGUMENT)) << acks[1].message;
+  EXPECT_TRUE(acks[2].ok()) << acks[2].message;
+  EXPECT_NE(acks[3].status_code, 0) << "an out-of-order pose was stored";
+  EXPECT_EQ(map.stats().poses_received, 2u);  // the poses stored (the pose buffer counts accepted ones)
+
+  // This server has no stereo rig (--calibration): the frame stream fails as a whole.
+  auto frames = map.openFramesStream();
+  StereoFrame frame;
+  frame.timestamp_s = 1.0;
+  frame.left.width = frame.right.width = 4;
+  frame.left.height = frame.right.height = 2;
+  frame.left.encoding = frame.right.encoding = ImageEncoding::kMono8;
+  frame.left.raw = frame.right.raw = std::string(8, '\x80');
+  frames->write(frame);
+  try {
+    frames->finish();
+    ADD_FAILURE() << "a frame stream without calibration succeeded";
+  } catch (const RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::FAILED_PRECONDITION) << e.what();
+  }
+}
+
 TEST(MapClientUpdates, AdminEditsAndSnapshots) {
   ServerProcess server(CENOTE_SERVER_BINARY);
   MapClient map(server.target());
