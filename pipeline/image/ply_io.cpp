@@ -1,8 +1,13 @@
 #include "pipeline/image/ply_io.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <bit>
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "common/error.h"
@@ -14,6 +19,7 @@ static_assert(std::endian::native == std::endian::little, "PLY writer assumes a 
 
 constexpr size_t kBytesPerPoint = 3 * sizeof(float) + 3;
 constexpr std::array<uint8_t, 3> kGrey = {128, 128, 128};
+constexpr size_t kWriteBehindBytes = size_t{8} << 20;
 
 // The header has a fixed size whatever the count: the count is right-aligned in a 20-digit field
 // made of a comment line's padding, so close() can rewrite it in place.
@@ -35,17 +41,48 @@ void packPoint(char* dst, const Eigen::Vector3f& p, const std::array<uint8_t, 3>
 }  // namespace
 
 PlyWriter::PlyWriter(std::string path) : path_(std::move(path)) {
-  out_.open(path_ + ".tmp", std::ios::binary | std::ios::trunc);
-  if (!out_) throw Error("cannot write " + path_ + ": cannot create file");
+  fd_ = ::open((path_ + ".tmp").c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw Error("cannot write " + path_ + ": cannot create file (" + std::strerror(errno) + ")");
   const std::string text = header(0);
-  out_.write(text.data(), static_cast<std::streamsize>(text.size()));
+  try {
+    writeAll(text.data(), text.size());
+  } catch (...) {
+    ::close(fd_);
+    throw;
+  }
 }
 
 PlyWriter::~PlyWriter() {
   if (closed_) return;
-  out_.close();
+  if (fd_ >= 0) ::close(fd_);
   std::error_code ec;
   std::filesystem::remove(path_ + ".tmp", ec);
+}
+
+void PlyWriter::writeAll(const char* data, size_t size) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd_, data, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw Error("cannot write " + path_ + ": write failed (" + std::strerror(n < 0 ? errno : ENOSPC) + ")");
+    data += n;
+    size -= static_cast<size_t>(n);
+    written_bytes_ += static_cast<size_t>(n);
+  }
+}
+
+void PlyWriter::writeBehind() {
+  if (written_bytes_ - flushed_bytes_ < kWriteBehindBytes) return;
+  // Best effort: a failure here only means the pages stay cached; write errors surface in write().
+  ::sync_file_range(fd_, static_cast<off_t>(flushed_bytes_), static_cast<off_t>(written_bytes_ - flushed_bytes_),
+                    SYNC_FILE_RANGE_WRITE);
+  if (flushed_bytes_ > dropped_bytes_) {
+    const auto start = static_cast<off_t>(dropped_bytes_), length = static_cast<off_t>(flushed_bytes_ - dropped_bytes_);
+    ::sync_file_range(fd_, start, length,
+                      SYNC_FILE_RANGE_WAIT_BEFORE | SYNC_FILE_RANGE_WRITE | SYNC_FILE_RANGE_WAIT_AFTER);
+    ::posix_fadvise(fd_, start, length, POSIX_FADV_DONTNEED);
+    dropped_bytes_ = flushed_bytes_;
+  }
+  flushed_bytes_ = written_bytes_;
 }
 
 void PlyWriter::append(const PointBatch& batch) {
@@ -57,18 +94,21 @@ void PlyWriter::append(const PointBatch& batch) {
   for (size_t i = 0; i < batch.size(); ++i) {
     packPoint(buffer_.data() + i * kBytesPerPoint, batch.points[i], batch.hasColor() ? batch.colors[i] : kGrey);
   }
-  out_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
-  if (!out_) throw Error("cannot write " + path_ + ": write failed (disk full?)");
+  writeAll(buffer_.data(), buffer_.size());
   count_ += batch.size();
+  writeBehind();
 }
 
 void PlyWriter::close() {
   if (closed_) return;
   const std::string text = header(count_);
-  out_.seekp(0);
-  out_.write(text.data(), static_cast<std::streamsize>(text.size()));
-  out_.close();
-  if (!out_) throw Error("cannot write " + path_ + ": write failed (disk full?)");
+  const bool header_written = ::pwrite(fd_, text.data(), text.size(), 0) == static_cast<ssize_t>(text.size());
+  const int header_errno = errno;
+  const bool closed = ::close(fd_) == 0;
+  fd_ = -1;
+  if (!header_written || !closed) {
+    throw Error("cannot write " + path_ + ": write failed (" + std::strerror(header_written ? errno : header_errno) + ")");
+  }
   std::error_code ec;
   std::filesystem::rename(path_ + ".tmp", path_, ec);
   if (ec) throw Error("cannot write " + path_ + ": " + ec.message());

@@ -68,6 +68,34 @@ TEST(PlyIo, StreamingWriterCountsEveryBatchAndGreysUncolouredOnes) {
   std::filesystem::remove(path);
 }
 
+TEST(PlyIo, StreamingWriterKeepsEveryPointPastItsWriteBehindWindow) {
+  // Three batches of ~10 MB: the writer hands the first ones to the disk and drops them from the
+  // page cache while writing the next; the file must still hold every point, in order.
+  const std::string path = tempPath("long.ply");
+  constexpr int kBatches = 3, kPerBatch = 700000;
+  {
+    PlyWriter writer(path);
+    for (int b = 0; b < kBatches; ++b) {
+      PointBatch batch;
+      for (int i = 0; i < kPerBatch; ++i) {
+        batch.points.emplace_back(static_cast<float>(b), static_cast<float>(i), 0.5f);
+        batch.colors.push_back({static_cast<uint8_t>(b), static_cast<uint8_t>(i % 256), 7});
+      }
+      writer.append(batch);
+    }
+    writer.close();
+  }
+  const PlyPoints read = readPly(path);
+  ASSERT_EQ(read.points.size(), static_cast<size_t>(kBatches) * kPerBatch);
+  for (size_t j = 0; j < read.points.size(); j += 9973) {
+    const int b = static_cast<int>(j / kPerBatch), i = static_cast<int>(j % kPerBatch);
+    ASSERT_EQ(read.points[j], Eigen::Vector3f(static_cast<float>(b), static_cast<float>(i), 0.5f)) << "point " << j;
+    ASSERT_EQ(read.colors[j][1], static_cast<uint8_t>(i % 256)) << "point " << j;
+  }
+  EXPECT_EQ(read.points.back(), Eigen::Vector3f(kBatches - 1, kPerBatch - 1, 0.5f));
+  std::filesystem::remove(path);
+}
+
 TEST(PlyIo, UnclosedWriterLeavesNoFile) {
   const std::string path = tempPath("unclosed.ply");
   {
