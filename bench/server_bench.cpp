@@ -3,11 +3,17 @@
 // targets (p99 <= 1 ms for single queries, >= 20k queries/s with 8 clients, a 100k-point batch
 // <= 30 ms).
 //   server_bench [--server HOST:PORT] [--token T] [--calls 5000] [--seconds 3] [--frames 20]
+//                [--map-threads N]      ray-marching threads of both maps (0: OpenMP's default)
+//                [--shared-channel 1]   the 8 query clients share one connection (default: one each)
+//                [--server-arg ARG]...  passed to the cenote-server it starts
 // Without --server it starts its own cenote-server (port 0, default settings) and also reports its
 // CPU use. The server is measured twice: idle, then while a background thread ingests frames at 15 Hz
 // (IntegratePoints; for the in-process figures, OccupancyMap::integrate on a local map): a 400x300 camera (fx 300)
 // flying 2 m above a sloping sea floor with rocks (tests/mapping/support/analytic_scene.h), about
-// 60k points a frame. Queries: single points and 2 m segments at random in the mapped region.
+// 70k points a frame. Queries: single points and 2 m segments at random in the mapped region. The
+// 100k-point batch: the first 100k points of a 480x360 frame of the same flight.
+// Also prints the CPU time per query of server and client, which the machine's other load does
+// not change, and the throughput two free cores could give at that cost.
 // Prints a Markdown table for docs/PERFORMANCE.md.
 #include <algorithm>
 #include <atomic>
@@ -16,6 +22,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
@@ -177,6 +184,7 @@ struct Figures {
   int frames = 0;
   double ingest_max_ms = 0.0;
   double cpu_cores = -1.0;
+  double server_cpu_us = 0.0, client_cpu_us = 0.0;  // CPU per query in the 8-client state phase
 };
 
 // User + system CPU seconds of a process so far (/proc/PID/stat); 0 when unknown.
@@ -203,7 +211,9 @@ double processCpuSeconds(pid_t pid) {
 
 int main(int argc, char** argv) {
   std::string target, token;
-  int calls = 5000, num_frames = 20;
+  int calls = 5000, num_frames = 20, map_threads = 0;
+  bool shared_channel = false;
+  std::vector<std::string> server_args;
   double seconds = 3.0;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--server")) target = argv[i + 1];
@@ -211,6 +221,9 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--calls")) calls = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--frames")) num_frames = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--map-threads")) map_threads = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--shared-channel")) shared_channel = std::atoi(argv[i + 1]) != 0;
+    if (!std::strcmp(argv[i], "--server-arg")) server_args.push_back(argv[i + 1]);
   }
   try {
     const mapping::test::Scene scene = seaFloor();
@@ -222,26 +235,36 @@ int main(int argc, char** argv) {
     }
     std::vector<client::PointBatch> client_frames;
     for (const auto& f : frames) client_frames.push_back(toClient(f));
-    // The 100k-point batch: every point of an 800x600 frame up to 100k (a 2-3 m swath of floor).
-    cenote::PointBatch big = renderFrame(scene, 800, 600, 600.0, num_frames / 2);
+    // The 100k-point batch: the first 100k points (image rows from the top) of a 480x360 frame.
+    cenote::PointBatch big = renderFrame(scene, 480, 360, 360.0, num_frames / 2);
     if (big.size() > 100000) {
-      std::vector<Eigen::Vector3f> kept;
-      const double step = static_cast<double>(big.size()) / 100000.0;
-      for (int i = 0; i < 100000; ++i) kept.push_back(big.points[static_cast<size_t>(i * step)]);
-      big.points = kept;
-      big.colors.clear();
+      big.points.resize(100000);
+      big.colors.resize(100000);
     }
     const client::PointBatch big_client = toClient(big);
+    const std::string big_label = "IntegratePoints, " + std::to_string(big.size() / 1000) + "k points, ms";
 
     std::unique_ptr<client::test::ServerProcess> server;
     if (target.empty()) {
-      server = std::make_unique<client::test::ServerProcess>(CENOTE_SERVER_BINARY);
+      client::test::ServerProcessOptions server_options;
+      std::string config_path;
+      if (map_threads > 0) {
+        // The server's map with the same ray-marching thread count as the local one.
+        config_path = (std::filesystem::temp_directory_path() / ("server_bench_" + std::to_string(getpid()) + ".yaml")).string();
+        std::ofstream(config_path) << "map:\n  num_threads: " << map_threads << "\n";
+        server_options.extra_args = {"--config", config_path};
+      }
+      server_options.extra_args.insert(server_options.extra_args.end(), server_args.begin(), server_args.end());
+      server = std::make_unique<client::test::ServerProcess>(CENOTE_SERVER_BINARY, server_options);
+      if (!config_path.empty()) std::filesystem::remove(config_path);
       target = server->target();
     }
     client::ClientOptions options;
     options.token = token;
     client::MapClient map(target, options);
-    mapping::OccupancyMap local{mapping::MapConfig{}};
+    mapping::MapConfig local_config;
+    local_config.num_threads = map_threads;
+    mapping::OccupancyMap local{local_config};
 
     // Prefill both maps with the first half of the sequence.
     for (int f = 0; f < num_frames / 2; ++f) {
@@ -269,7 +292,7 @@ int main(int argc, char** argv) {
     std::vector<std::unique_ptr<client::MapClient>> clients;
     for (int t = 0; t < 8; ++t) {
       client::ClientOptions own = options;
-      own.own_connection = true;
+      own.own_connection = !shared_channel;
       clients.push_back(std::make_unique<client::MapClient>(target, own));
       clients.back()->info();  // connect before timing
     }
@@ -287,7 +310,12 @@ int main(int argc, char** argv) {
       if (with_ingest) ingest = std::make_unique<Ingestor>([&](int) { map.integratePoints(client_frames[next_frame()]); });
       out.state = latency(calls, [&](int i) { map.voxels({points[pick(i)]}); });
       out.segment = latency(calls, [&](int i) { map.segments({segments[pick(i)]}); });
+      const double server_cpu0 = processCpuSeconds(server_pid), client_cpu0 = processCpuSeconds(getpid());
+      const auto qps_t0 = Clock::now();
       out.state_qps = throughput(8, seconds, [&](int t, int i) { clients[static_cast<size_t>(t)]->voxels({points[pick(i * 8 + t)]}); });
+      const double queries = out.state_qps * usSince(qps_t0) / 1e6;
+      out.server_cpu_us = (processCpuSeconds(server_pid) - server_cpu0) * 1e6 / queries;
+      out.client_cpu_us = (processCpuSeconds(getpid()) - client_cpu0) * 1e6 / queries;
       out.segment_qps = throughput(
           8, seconds, [&](int t, int i) { clients[static_cast<size_t>(t)]->segments({segments[pick(i * 8 + t)]}); });
       std::vector<double> integrate_ms, query_ms;
@@ -338,15 +366,24 @@ int main(int argc, char** argv) {
     }
 
     const client::ServerStats stats = map.stats();
-    std::printf("server_bench: %s, %u hardware threads; map %.2f M voxels (%.1f MB); background ingest at 15 Hz of "
+    std::printf("server_bench: %s, %u hardware threads, map threads %d; map %.2f M voxels (%.1f MB); background ingest at 15 Hz of "
                 "%zu-point frames (%zu on average): %d frames over gRPC (slowest IntegratePoints %.0f ms), %d in "
                 "process (slowest integrate %.0f ms)\n",
-                server ? "own cenote-server on loopback" : target.c_str(), std::thread::hardware_concurrency(),
+                server ? "own cenote-server on loopback" : target.c_str(), std::thread::hardware_concurrency(), map_threads,
                 static_cast<double>(stats.occupied + stats.free) / 1e6, static_cast<double>(stats.map_memory_bytes) / 1e6,
                 frames.empty() ? size_t{0} : frames.front().size(), frame_points / std::max(1, num_frames), rpc.frames,
                 rpc.ingest_max_ms, local_figures.frames, local_figures.ingest_max_ms);
     if (server_pid > 0) {
       std::printf("cenote-server CPU use: %.2f cores idle phase, %.2f cores ingest phase\n", idle.cpu_cores, rpc.cpu_cores);
+    }
+    if (server_pid > 0) {
+      // What the machine's cores can give, whoever else uses them: CPU time per query of both ends.
+      const double idle_cost = idle.server_cpu_us + idle.client_cpu_us;
+      std::printf("8-client single-point states: CPU per query %.1f µs server + %.1f µs client idle, %.1f + %.1f during "
+                  "ingest (the client's includes its ingest thread); at most %.0f queries/s on %u free cores\n",
+                  idle.server_cpu_us, idle.client_cpu_us, rpc.server_cpu_us, rpc.client_cpu_us,
+                  idle_cost > 0 ? std::thread::hardware_concurrency() * 1e6 / idle_cost : 0.0,
+                  std::thread::hardware_concurrency());
     }
     std::printf("\n| measure | server, 15 Hz ingest | server, idle | in process, 15 Hz ingest | ratio (ingest) | target | met |\n");
     std::printf("|---|---|---|---|---|---|---|\n");
@@ -358,7 +395,7 @@ int main(int argc, char** argv) {
     row("single-point states/s, 8 clients", rpc.state_qps, idle.state_qps, local_figures.state_qps, ">= 20000",
         rpc.state_qps >= 20000.0, 0);
     row("single segments/s, 8 clients", rpc.segment_qps, idle.segment_qps, local_figures.segment_qps, "", true, 0);
-    row("IntegratePoints, 100k points, ms", rpc.integrate_ms, idle.integrate_ms, local_figures.integrate_ms, "<= 30",
+    row(big_label.c_str(), rpc.integrate_ms, idle.integrate_ms, local_figures.integrate_ms, "<= 30",
         rpc.integrate_ms <= 30.0);
     row("GetVoxels, 100k points, ms", rpc.query_ms, idle.query_ms, local_figures.query_ms, "", true);
     for (const auto& m : stats.methods) {

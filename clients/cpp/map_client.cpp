@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -386,6 +387,7 @@ struct Subscription::Impl {
   std::atomic<bool> cancelled{false};
   std::atomic<uint64_t> received{0};
   grpc::Status status;
+  std::exception_ptr callback_error;  // what on_update threw (the stream was then cancelled)
 };
 
 namespace {
@@ -411,7 +413,14 @@ std::unique_ptr<Subscription> MapClient::subscribe(const SubscribeOptions& optio
       if (raw->cancelled) continue;  // drain: the call ends once the cancellation lands
       detail::fromWire(message, update);
       raw->received.fetch_add(1);
-      on_update(update);
+      try {
+        on_update(update);
+      } catch (...) {
+        // An exception must not leave this thread (std::terminate): keep it for wait().
+        raw->callback_error = std::current_exception();
+        raw->cancelled = true;
+        raw->context.TryCancel();
+      }
     }
     raw->status = reader->Finish();
     raw->active = false;
@@ -434,6 +443,7 @@ uint64_t Subscription::updatesReceived() const { return impl_->received; }
 
 void Subscription::wait() {
   if (impl_->thread.joinable()) impl_->thread.join();
+  if (impl_->callback_error) std::rethrow_exception(impl_->callback_error);
   if (!impl_->cancelled) throwIfFailed(impl_->status);
 }
 

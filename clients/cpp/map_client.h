@@ -155,8 +155,8 @@ class Subscription {
   bool isActive() const;
   // Updates received so far.
   uint64_t updatesReceived() const;
-  // Blocks until the stream ends (cancelled or failed); @throws RpcError when it failed for any
-  // other reason than cancel().
+  // Blocks until the stream ends (cancelled or failed). @throws what the callback threw (which
+  // ended the stream), or RpcError when the stream failed for any other reason than cancel().
   void wait();
 
  private:
