@@ -397,4 +397,33 @@ bool OccupancyMap::ConstAccessor::readBlock(const BlockIndex& block, BlockView& 
   return !mask.isOff();
 }
 
+bool OccupancyMap::ConstAccessor::readBlockMasks(const BlockIndex& block, std::array<uint64_t, 8>& known,
+                                                 std::array<uint64_t, 8>& occupied) const {
+  known.fill(0);
+  occupied.fill(0);
+  const auto* leaf = impl_->log_odds.probeConstLeaf(coordOf(block * kBlockSide));
+  if (leaf == nullptr) {
+    float l;
+    if (!impl_->log_odds.probeValue(coordOf(block * kBlockSide), l)) return false;
+    known.fill(~0ull);
+    if (map_->model_.isOccupied(l)) occupied.fill(~0ull);
+    return true;
+  }
+  const auto& mask = leaf->getValueMask();
+  const float* values = leaf->buffer().data();
+  const float threshold = map_->model_.occupied;
+  bool any = false;
+  for (int w = 0; w < 8; ++w) {
+    known[w] = mask.template getWord<uint64_t>(w);
+    any |= known[w] != 0;
+    if (known[w] == 0) continue;
+    uint64_t occ = 0;  // all 64 compared without branches; unknown ones are masked off below
+    for (int bit = 0; bit < 64; ++bit) {
+      occ |= static_cast<uint64_t>(values[w * 64 + bit] >= threshold) << bit;  // LogOddsModel::isOccupied
+    }
+    occupied[w] = occ & known[w];
+  }
+  return any;
+}
+
 }  // namespace cenote::mapping

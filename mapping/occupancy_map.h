@@ -105,6 +105,10 @@ class OccupancyMap {
     std::vector<BlockIndex> knownBlocks() const;
     // Copies one block; false (view all unknown) when the block holds no known voxel.
     bool readBlock(const BlockIndex& block, BlockView& view) const;
+    // Known and occupied bits of one block (bit offsetInBlock(ijk)), without copying its values;
+    // false (both all zero) when the block holds no known voxel.
+    bool readBlockMasks(const BlockIndex& block, std::array<uint64_t, 8>& known,
+                        std::array<uint64_t, 8>& occupied) const;
     const OccupancyMap& map() const { return *map_; }
 
    private:

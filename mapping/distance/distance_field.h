@@ -11,6 +11,8 @@
 // Distances are between voxel centres for cells; a point query returns |p - c| for the nearest
 // obstacle's centre c, and the gradient (p - c) / |p - c|, pointing away from the obstacle.
 // Unknown voxels are not obstacles (check the state too: unknown is never free).
+// Storage: dense 8x8x8 blocks of 8-byte cells (the offset to the nearest obstacle), created where a
+// wave reaches; the waves run from a bucket queue keyed by the integer squared distance in voxels.
 // Units: metres, world frame. Threads: update() is for one writer; query() may run from any number of
 // threads at the same time (a shared lock; update holds the exclusive lock while it runs).
 #pragma once
@@ -33,7 +35,8 @@ struct DistanceQuery {
 
 class DistanceField {
  public:
-  // Empty field over `map` (which must outlive it); max distance from map.config().max_distance_m.
+  // Empty field over `map` (which must outlive it); max distance from map.config().max_distance_m,
+  // limited to 1000 voxels.
   explicit DistanceField(const OccupancyMap& map);
   ~DistanceField();
   DistanceField(const DistanceField&) = delete;

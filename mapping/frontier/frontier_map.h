@@ -2,9 +2,10 @@
 // 6-neighbour, grouped into 26-connected clusters, large clusters split along their main axis
 // (PCA) until no side of their bounding box exceeds MapConfig::frontier_max_extent_m, clusters
 // smaller than MapConfig::frontier_min_voxels dropped.
-// Incremental: update(delta) re-examines only the voxels of the changed blocks and their one-voxel
-// shell, and re-clusters only the connected components that touch them; other clusters keep
-// their ids. Units: metres, world frame.
+// Incremental: update(delta) re-examines only the changed blocks whose voxel states (known,
+// occupied) changed, not just their log-odds, and their 6 face neighbours, with 512-bit masks per
+// block; it re-clusters only the connected components that touch them; other clusters keep their
+// ids. Units: metres, world frame.
 // Threads: update() for one writer; clusters() from any thread (a shared lock).
 #pragma once
 

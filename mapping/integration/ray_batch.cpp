@@ -143,10 +143,11 @@ struct CarveUntilRun {
       at_end_voxel = false;
       return true;
     }
-    if ((word & bit) != 0) return ++run < stop_run;
+    // Without a branch on "already carved": it alternates irregularly along a ray.
+    const int carved = (word & bit) != 0;
     word |= bit;
-    run = 0;
-    return true;
+    run = (run + 1) & -carved;
+    return run < stop_run;
   }
 };
 
