@@ -1,6 +1,6 @@
 """test_explore.py: the example exploration planner (clients/python/examples/explore.py) run to the
 end on the small scene against a real cenote-server: it must stop by itself because no frontier is
-left (or none is reachable), well before its step limit, with most of the room's free space known
+left (or none is reachable, or its scans stopped adding), well before its step limit, with most of the room's free space known
 and no move through an obstacle of the true scene; and it must save its plot.
 
 Run: CENOTE_SERVER_BINARY=<build>/server/cenote-server CENOTE_PYTHON_STUBS=<build>/clients/python/gen \
@@ -8,6 +8,7 @@ Run: CENOTE_SERVER_BINARY=<build>/server/cenote-server CENOTE_PYTHON_STUBS=<buil
 """
 
 import os
+import shutil
 import sys
 import tempfile
 import unittest
@@ -18,8 +19,9 @@ sys.path.insert(0, os.path.join(os.path.abspath(CLIENT_DIR), "examples"))
 import explore  # noqa: E402
 
 MAX_STEPS = 40
-# Measured: final coverage MEASURED on the small scene; asserted with a margin.
-MIN_COVERAGE = 0.90
+# Measured: the small scene ends after 6 steps at coverage 0.994 (0.804 after the first scan), the
+# same on every run (the map does not depend on thread count; the roadmap's samples are seeded).
+MIN_COVERAGE = 0.97
 
 
 class ExploreTest(unittest.TestCase):
@@ -32,8 +34,7 @@ class ExploreTest(unittest.TestCase):
                                    "--max-steps", str(MAX_STEPS), "--plot", plot])
         result = explore.explore(args, log=lines.append)
         print("\n".join(lines))
-        self.assertTrue(result.reason.startswith("no frontier left") or result.reason.startswith("no reachable"),
-                        result.reason)
+        self.assertTrue(result.reason.startswith(("no frontier left", "no reachable", "converged")), result.reason)
         self.assertLess(result.steps, MAX_STEPS)
         self.assertEqual(len(result.coverage), result.steps + 1)
         self.assertGreater(result.coverage[-1], MIN_COVERAGE)
@@ -41,6 +42,7 @@ class ExploreTest(unittest.TestCase):
         self.assertEqual(result.collisions, 0)
         self.assertGreater(os.path.getsize(plot), 1000)
         self.assertTrue(any(line.startswith("step 1:") for line in lines))
+        shutil.rmtree(out, ignore_errors=True)
 
 
 if __name__ == "__main__":
