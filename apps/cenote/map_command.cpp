@@ -6,6 +6,9 @@
 //   map info MAP                  resolution, bounds, voxel counts by state, memory
 //   map export MAP --mesh|--points out.ply, --bt|--ot|--vdb out
 //   map query MAP --state X,Y,Z | --segment X,Y,Z,X,Y,Z[,RADIUS] [--stop-at-unknown]
+//                 | --distance X,Y,Z [--max-distance M] | --frontiers [--position X,Y,Z]
+//       distances and frontiers are computed from the whole loaded map (DistanceField::rebuild,
+//       FrontierMap::rebuild) with the map: defaults of MapConfig unless given here.
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -14,6 +17,8 @@
 #include "apps/cenote/commands.h"
 #include "common/error.h"
 #include "common/yaml_section.h"
+#include "mapping/distance/distance_field.h"
+#include "mapping/frontier/frontier_map.h"
 #include "mapping/io/map_io.h"
 #include "mapping/io/scan_graph.h"
 #include "mapping/query/map_query.h"
@@ -147,13 +152,58 @@ void runExport(const ExportOptions& o) {
 
 struct QueryOptions {
   std::string map;
-  std::vector<std::string> states, segments;
+  std::vector<std::string> states, segments, distances;
   bool stop_at_unknown = false;
+  bool frontiers = false;
+  std::string position = "0,0,0";
+  double max_distance_m = MapConfig{}.max_distance_m;
+  int frontier_min_voxels = MapConfig{}.frontier_min_voxels;
+  double frontier_max_extent_m = MapConfig{}.frontier_max_extent_m;
 };
 
+void printDistances(const OccupancyMap& map, const QueryOptions& o) {
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& s : o.distances) points.push_back(parsePoint(s, "--distance"));
+  DistanceField field(map);
+  field.rebuild();
+  const auto results = field.query(points);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const DistanceQuery& d = results[i];
+    if (!d.within_max) {
+      std::printf("distance %s: beyond %.3f m (no occupied voxel nearer)\n", o.distances[i].c_str(), d.distance_m);
+    } else {
+      std::printf("distance %s: %.3f m, gradient %.3f,%.3f,%.3f\n", o.distances[i].c_str(), d.distance_m,
+                  d.gradient.x(), d.gradient.y(), d.gradient.z());
+    }
+  }
+}
+
+void printFrontiers(const OccupancyMap& map, const QueryOptions& o) {
+  const Eigen::Vector3d position = parsePoint(o.position, "--position");
+  FrontierMap frontiers(map);
+  frontiers.rebuild();
+  const auto clusters = frontiers.clusters(position);
+  std::printf("frontiers: %zu clusters (%zu frontier voxels), nearest first from %s\n", clusters.size(),
+              frontiers.numFrontierVoxels(), o.position.c_str());
+  for (const FrontierCluster& c : clusters) {
+    std::printf("frontier %llu: %zu voxels, centroid %.3f,%.3f,%.3f, distance %.3f m, box %.3f,%.3f,%.3f - %.3f,%.3f,%.3f, "
+                "direction %.3f,%.3f,%.3f\n",
+                static_cast<unsigned long long>(c.id), c.num_voxels, c.centroid_m.x(), c.centroid_m.y(), c.centroid_m.z(),
+                c.distance_m, c.bounds_m.min_m.x(), c.bounds_m.min_m.y(), c.bounds_m.min_m.z(), c.bounds_m.max_m.x(),
+                c.bounds_m.max_m.y(), c.bounds_m.max_m.z(), c.direction.x(), c.direction.y(), c.direction.z());
+  }
+}
+
 void runQuery(const QueryOptions& o) {
-  const auto map = loadMap(o.map);
-  if (o.states.empty() && o.segments.empty()) throw Error("map query: give --state or --segment");
+  if (o.states.empty() && o.segments.empty() && o.distances.empty() && !o.frontiers) {
+    throw Error("map query: give --state, --segment, --distance or --frontiers");
+  }
+  // The distance field's and frontiers' settings are not stored in map files: they come from here.
+  MapConfig defaults;
+  defaults.max_distance_m = o.max_distance_m;
+  defaults.frontier_min_voxels = o.frontier_min_voxels;
+  defaults.frontier_max_extent_m = o.frontier_max_extent_m;
+  const auto map = loadMap(o.map, defaults);
   std::vector<Eigen::Vector3d> points;
   for (const auto& s : o.states) points.push_back(parsePoint(s, "--state"));
   const auto states = queryVoxels(*map, points);
@@ -178,6 +228,8 @@ void runQuery(const QueryOptions& o) {
     if (r.crossed_unknown) std::printf("; unknown from %.3f m", r.unknown_distance_m);
     std::printf("\n");
   }
+  if (!o.distances.empty()) printDistances(*map, o);
+  if (o.frontiers) printFrontiers(*map, o);
 }
 
 }  // namespace
@@ -217,11 +269,17 @@ void registerMapCommand(CLI::App& app) {
   exp->callback([ex] { runExport(*ex); });
 
   auto q = std::make_shared<QueryOptions>();
-  CLI::App* query = map->add_subcommand("query", "Voxel states and segment collisions");
+  CLI::App* query = map->add_subcommand("query", "Voxel states, segment collisions, distances and frontiers");
   query->add_option("map", q->map, "map file (.vdb, .bt, .ot)")->required();
   query->add_option("--state", q->states, "X,Y,Z: state and probability of the voxel (repeatable)");
   query->add_option("--segment", q->segments, "X,Y,Z,X,Y,Z[,RADIUS]: first occupied voxel (repeatable)");
   query->add_flag("--stop-at-unknown", q->stop_at_unknown, "segments end at the first unknown voxel");
+  query->add_option("--distance", q->distances, "X,Y,Z: distance to the nearest occupied voxel, with gradient (repeatable)");
+  query->add_option("--max-distance", q->max_distance_m, "distance field's maximum distance in metres (map.max_distance_m)");
+  query->add_flag("--frontiers", q->frontiers, "frontier clusters: free voxels next to unknown, nearest first");
+  query->add_option("--position", q->position, "X,Y,Z: position the frontiers are sorted by (default 0,0,0)");
+  query->add_option("--frontier-min-voxels", q->frontier_min_voxels, "smaller frontier clusters are dropped");
+  query->add_option("--frontier-max-extent", q->frontier_max_extent_m, "larger frontier clusters are split (metres)");
   query->callback([q] { runQuery(*q); });
 }
 

@@ -29,6 +29,18 @@ grep -q "state 1.0,0.07,-0.5: free" <<<"$q"
 grep -q "state 50,50,50: unknown" <<<"$q"
 grep -q "segment 1.0,0.07,-0.5,6.0,0.4,-3.0: hit" <<<"$q"
 
+# Distances (the floor is within the 2 m default of the free point; far away there is nothing)
+# and frontiers (the survey leaves unknown space around what it saw).
+q=$("$cenote" map query "$dir/ours.vdb" --distance 1.0,0.07,-0.5 --distance 50,50,50 --frontiers --position 1,0,-0.5)
+echo "$q" | head -5
+grep -Eq "^distance 1.0,0.07,-0.5: [01]\.[0-9]+ m, gradient " <<<"$q"
+grep -q "^distance 50,50,50: beyond 2.000 m" <<<"$q"
+clusters=$(sed -n 's/^frontiers: \([0-9]*\) clusters.*/\1/p' <<<"$q")
+test "$clusters" -ge 1 || { echo "no frontier clusters"; exit 1; }
+test "$(grep -c '^frontier [0-9]*: ' <<<"$q")" -eq "$clusters"
+if "$cenote" map query "$dir/ours.vdb" --distance 1,0,0 --max-distance -1 2>"$dir/err"; then exit 1; fi
+grep -q "map.max_distance_m" "$dir/err"
+
 # Bad input: a clear error, non-zero exit.
 if "$cenote" map integrate --graph "$dir/missing.graph" --out "$dir/x.bt" 2>"$dir/err"; then exit 1; fi
 grep -q "missing.graph" "$dir/err"
