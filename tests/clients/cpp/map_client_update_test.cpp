@@ -9,6 +9,7 @@
 #include <chrono>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <thread>
 
 #include "clients/cpp/map_client.h"
@@ -112,6 +113,53 @@ TEST(MapClientUpdates, MirrorFromTheUpdateStreamEqualsTheMapForLiveAndLateSubscr
   late_subscription->cancel();
   EXPECT_FALSE(subscription->isActive());
   EXPECT_GT(subscription->updatesReceived(), 8u);
+}
+
+TEST(MapClientUpdates, RegionSubscriberGetsOnlyBlocksTouchingItsRegion) {
+  ServerProcess server(CENOTE_SERVER_BINARY);
+  MapClient map(server.target());
+  const Box region{{1.9, -0.2, -0.2}, {2.2, 0.2, 0.2}};
+  MapMirror mirror;
+  std::atomic<int> outside{0};
+  auto subscription = map.subscribe({region, false}, [&](const MapUpdate& u) {
+    for (const UpdateBlock& b : u.blocks) {
+      // Block faces in metres: 8 voxels a side.
+      const Eigen::Vector3d lo = b.index.cast<double>() * 8 * kVoxel_m, hi = lo.array() + 8 * kVoxel_m;
+      outside += (hi.array() < region.min_m.array()).any() || (lo.array() > region.max_m.array()).any();
+    }
+    mirror.apply(u);
+  });
+  for (const PointBatch& batch : sceneBatches()) map.integratePoints(batch);
+  // Changes outside the region send nothing: end with one that touches it, and wait for that.
+  const uint64_t version = map.integratePoints(wallBatch()).map_version;
+  ASSERT_TRUE(waitForVersion(mirror, version)) << "mirror at " << mirror.sequence() << ", map at " << version;
+  EXPECT_EQ(outside.load(), 0);
+  EXPECT_EQ(mirror.stateAt(centre(kWallX, 0, 0)), VoxelState::kOccupied);
+  EXPECT_EQ(mirror.stateAt(centre(kWallX, 15, 15)), VoxelState::kUnknown);  // outside: never sent
+  EXPECT_GT(mirror.numBlocks(), 0u);
+}
+
+TEST(MapClientUpdates, SlowSubscriberIsResyncedAndEndsEqualToTheMap) {
+  ServerProcess server(CENOTE_SERVER_BINARY);
+  MapClient map(server.target());
+  MapMirror mirror;
+  std::mutex gate;
+  std::unique_lock hold(gate);  // the callback blocks until the map has moved far ahead
+  std::atomic<int> resyncs{0};
+  auto subscription = map.subscribe({}, [&](const MapUpdate& u) {
+    std::lock_guard wait(gate);
+    resyncs += u.resync;
+    mirror.apply(u);
+  });
+  uint64_t version = 0;
+  for (int i = 0; i < 200; ++i) {
+    version = map.integratePoints(wallBatch(kWallX - (i % 20), centre(i % 7, (i % 5) - 2, (i % 3) - 1), 0.01 * i))
+                  .map_version;
+  }
+  hold.unlock();
+  ASSERT_TRUE(waitForVersion(mirror, version)) << "mirror at " << mirror.sequence() << ", map at " << version;
+  EXPECT_GT(resyncs.load(), 0) << "200 changes behind a blocked subscriber brought no resync";
+  EXPECT_EQ(differences(mirrorVoxels(mirror), serverVoxels(map)), 0u);
 }
 
 TEST(MapClientUpdates, PointStreamRejectsABadBatchInItsAckAndGoesOn) {
