@@ -1,13 +1,17 @@
 """test_client.py: every MapClient call against a real cenote-server on loopback, with answers
 known from an analytic scene (client_env.py: a wall 2.0 m ahead of the sensor), and the error
 codes of bad calls (missing or wrong token: UNAUTHENTICATED and the map unchanged; NaN points,
-negative radii, empty batches: INVALID_ARGUMENT).
+negative radii, empty batches: INVALID_ARGUMENT; a batch over the limit: RESOURCE_EXHAUSTED), and
+TLS / mutual TLS with certificates made by the openssl command (skipped without it).
 
 Run: CENOTE_SERVER_BINARY=<build>/server/cenote-server CENOTE_PYTHON_STUBS=<build>/clients/python/gen \
      /usr/bin/python3 tests/clients/python/test_client.py
 """
 
 import os
+import shutil
+import subprocess
+import tempfile
 import unittest
 
 import numpy as np
@@ -350,6 +354,57 @@ class AdminTest(ServerCase):
         at = np.flatnonzero((ijk[:, 0] == WALL_I) & (ijk[:, 1] == 0) & (ijk[:, 2] == 0))[0]
         self.assertEqual(states[at], VoxelState.UNKNOWN)
         updates.close()
+
+
+def make_certificate(folder, name):
+    """Self-signed certificate for 127.0.0.1 (openssl command): (pem path, key path)."""
+    pem, key = os.path.join(folder, name + ".pem"), os.path.join(folder, name + ".key")
+    subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "1", "-subj", "/CN=" + name,
+                    "-addext", "subjectAltName=IP:127.0.0.1", "-keyout", key, "-out", pem],
+                   check=True, capture_output=True)
+    return pem, key
+
+
+class TlsTest(unittest.TestCase):
+    """TLS and mutual TLS from Python: root_cert, client_cert, client_key."""
+
+    def setUp(self):
+        require_server(self)
+        if shutil.which("openssl") is None:
+            self.skipTest("no openssl command")
+        self.dir = tempfile.mkdtemp(prefix="cenote-tls-")
+        self.server_pem, self.server_key = make_certificate(self.dir, "server")
+        self.client_pem, self.client_key = make_certificate(self.dir, "client")
+
+    def tearDown(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    def test_tls_with_token(self):
+        with LocalServer(SERVER_BINARY, token=TOKEN,
+                         extra_args=["--tls-cert", self.server_pem, "--tls-key", self.server_key]) as server:
+            with MapClient(server.target, token=TOKEN, root_cert=self.server_pem) as client:
+                integrate_wall(client, S)
+                states, _ = client.voxels([centre(S, WALL_I, 0, 0)])
+                self.assertEqual(states[0], VoxelState.OCCUPIED)
+            with MapClient(server.target, token="wrong", root_cert=self.server_pem) as client:
+                with self.assertRaises(CenoteError) as ctx:
+                    client.info()
+                self.assertEqual(ctx.exception.code, "UNAUTHENTICATED")
+            with MapClient(server.target, token=TOKEN, timeout_s=5.0) as plaintext:
+                with self.assertRaises(CenoteError) as ctx:
+                    plaintext.info()
+                self.assertEqual(ctx.exception.code, "UNAVAILABLE")
+
+    def test_mutual_tls(self):
+        with LocalServer(SERVER_BINARY, extra_args=["--tls-cert", self.server_pem, "--tls-key", self.server_key,
+                                                    "--tls-client-ca", self.client_pem]) as server:
+            with MapClient(server.target, root_cert=self.server_pem, client_cert=self.client_pem,
+                           client_key=self.client_key) as client:
+                self.assertAlmostEqual(client.info().voxel_size_m, S)
+            with MapClient(server.target, root_cert=self.server_pem, timeout_s=5.0) as anonymous:
+                with self.assertRaises(CenoteError) as ctx:
+                    anonymous.info()
+                self.assertEqual(ctx.exception.code, "UNAVAILABLE")
 
 
 if __name__ == "__main__":
