@@ -152,6 +152,7 @@ struct StripBuffers {
   uint16_t* sums = nullptr;        // [kWinnerBatch][Dp]: path sums of the pixels awaiting their winner
   uint16_t* batch_best = nullptr;  // [kWinnerBatch][N]: lane-wise minimum of each pixel's sums
   uint16_t* batch_index = nullptr; // [kWinnerBatch][N]: and the first disparity that has it
+  uint16_t* batch_second = nullptr; // [kWinnerBatch][N]: lane-wise second smallest sum
   uint16_t* iota = nullptr;        // Dp: 0, 1, 2, ...
   uint16_t* right_min = nullptr;   // LR check: best sum per right pixel, stored reversed
   uint16_t* right_arg = nullptr;
@@ -179,10 +180,10 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws) {
   const std::size_t rev = b.reversed_length;
   const std::size_t path_row = (W + 2) * b.pixel_stride + 2 * N;
   const std::size_t sad = p.census ? 0 : W * Dp + (W * Dp * p.window + 1) / 2;
-  // Every piece is rounded up to 64 elements by take(); 20 pieces at most.
+  // Every piece is rounded up to 64 elements by take(); 32 pieces at most.
   const std::size_t total = 4 * (path_row + W + 2) + 2 * (Dp + 2 * N) + sad + 2 * Dp +
-                            kWinnerBatch * (Dp + 2 * N) + 2 * rev + W +
-                            (rev / 2 + 32) + 2 * rev + 20 * 64;
+                            kWinnerBatch * (Dp + 3 * N) + 2 * rev + W +
+                            (rev / 2 + 32) + 2 * rev + 32 * 64;
   if (ws.buffer_elements < total) {
     ws.buffer = hwy::AllocateAligned<uint16_t>(total);
     ws.buffer_elements = total;
@@ -207,6 +208,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws) {
   b.sums = take(kWinnerBatch * Dp);
   b.batch_best = take(kWinnerBatch * N);
   b.batch_index = take(kWinnerBatch * N);
+  b.batch_second = take(kWinnerBatch * N);
   b.iota = take(Dp);
   for (std::size_t k = 0; k < Dp; ++k) b.iota[k] = static_cast<uint16_t>(k);
   b.right_min = take(rev);
@@ -411,7 +413,7 @@ PenaltyTable makePenaltyTable(const SgmParams& p) {
 // Winner, sub-pixel offset and PKRN of one pixel's path sums `s` (lane-wise minimum `best`);
 // returns the integer winner k (or -1) and writes the outputs.
 HWY_INLINE int selectWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, VU16 best, VU16 best_index,
-                 float* disparity, float* confidence) {
+                            VU16 second_best, float* disparity, float* confidence) {
   const DU16 d;
   const int N = b.lanes, D = p.num_disparities, Dp = b.padded;
   // Disparities k with a right pixel: k <= x - min_d.
@@ -426,8 +428,10 @@ HWY_INLINE int selectWinner(const SgmParams& p, const StripBuffers& b, int x, ui
   if (valid < D) {
     std::fill(s + valid, s + Dp, kNoCost);
     best = hn::Set(d, kNoCost);
+    second_best = best;
     for (int k = 0; k < Dp; k += N) {
       const VU16 sum = hn::Load(d, s + k);
+      second_best = hn::Min(second_best, hn::Max(best, sum));
       best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, b.iota + k), best_index);
       best = hn::Min(best, sum);
     }
@@ -437,17 +441,16 @@ HWY_INLINE int selectWinner(const SgmParams& p, const StripBuffers& b, int x, ui
   const uint16_t c1 = minLane(d, best);
   const int winner = minLane(d, hn::IfThenElse(hn::Eq(best, hn::Set(d, c1)), best_index, hn::Set(d, kNoCost)));
   // Second minimum: outside winner-1..winner+1 (neighbours of the winner are the same match
-  // seen at a sub-pixel offset), or anywhere but the winner. In unsigned arithmetic, lanes below
-  // winner - reach wrap around to large values, so one comparison finds the excluded span.
+  // seen at a sub-pixel offset), or anywhere but the winner. A lane holds disparities N apart,
+  // so the excluded span takes at most one disparity from it: if that is the lane's first
+  // minimum, the lane's smallest outside the span is its second smallest, otherwise its minimum.
+  // In unsigned arithmetic, indices below winner - reach wrap around to large values, so one
+  // comparison finds the span.
   const int reach = p.pkrn_exclude_neighbours ? 1 : 0;
   const VU16 first_near = hn::Set(d, static_cast<uint16_t>(winner - reach));
   const VU16 span = hn::Set(d, static_cast<uint16_t>(2 * reach + 1));
-  VU16 second = hn::Set(d, kNoCost);
-  for (int k = 0; k < Dp; k += N) {
-    const auto near = hn::Lt(hn::Sub(hn::Load(d, b.iota + k), first_near), span);
-    second = hn::Min(second, hn::IfThenElse(near, hn::Set(d, kNoCost), hn::Load(d, s + k)));
-  }
-  const uint16_t c2 = minLane(d, second);
+  const auto best_is_near = hn::Lt(hn::Sub(best_index, first_near), span);
+  const uint16_t c2 = minLane(d, hn::IfThenElse(best_is_near, second_best, best));
   // PKRN = c2 / c1, with one cost unit added to both so that it is defined for c1 = 0. A pixel
   // with no second candidate at all is as ambiguous as it can be: confidence 1.
   const float pkrn = c2 == kNoCost ? 1.0f : (c2 + 1.0f) / (c1 + 1.0f);
@@ -581,7 +584,7 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
     const int sad_shift = p.sad_shift;
 
     VU16 mins_along = sentinel_v, mins_vertical = sentinel_v, mins_back = sentinel_v, mins_fwd = sentinel_v;
-    VU16 best = hn::Set(d, kNoCost), best_index = hn::Zero(d);
+    VU16 best = hn::Set(d, kNoCost), best_index = hn::Zero(d), second_best = best;
     // Along-row predecessor, rolled through registers: vectors k - 1, k and k + 1 (the pads
     // before and after the Dp values hold sentinels).
     VU16 along_before = hn::Load(d, along_prev - N);
@@ -652,6 +655,7 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
       VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
       if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
       hn::Store(sum, d, sums_out + k);
+      second_best = hn::Min(second_best, hn::Max(best, sum));
       best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
       best = hn::Min(best, sum);
       along_before = along_here;
@@ -677,6 +681,7 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
     if (output == RowOutput::kWinner) {
       hn::Store(best, d, b.batch_best + slot * N);
       hn::Store(best_index, d, b.batch_index + slot * N);
+      hn::Store(second_best, d, b.batch_second + slot * N);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
         for (int j = i - slot; j <= i; ++j) {
           const int xj = dx > 0 ? j : W - 1 - j;
@@ -686,6 +691,7 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
           b.winner[xj] = static_cast<int16_t>(selectWinner(p, b, xj, sums,
                                                            hn::Load(d, b.batch_best + (j % kWinnerBatch) * N),
                                                            hn::Load(d, b.batch_index + (j % kWinnerBatch) * N),
+                                                           hn::Load(d, b.batch_second + (j % kWinnerBatch) * N),
                                                            disparity + xj, confidence + xj));
         }
       }
