@@ -10,11 +10,13 @@ planner repeatedly:
      obstacles by more than the vehicle's radius (GetDistances), and reachable along a straight
      capsule that hits nothing occupied (CheckSegments with a radius, stop_at_unknown off); a
      frontier still there after a visit is given up (it cannot be seen from where we can go);
+     when no goal is straight ahead, straight legs through a small roadmap (the trail's viewpoints
+     and random known-free points, joined by clear capsules) reach one;
   3. "moves" the vehicle there in the simulator and scans again;
 until no frontier is left (or none is reachable, or the last scans made almost nothing new known,
-or the step limit). After each step it prints the
-coverage: the fraction of the scene's free space (voxel centres clear of every surface) that the map
-knows. At the end it saves a plot of coverage over steps (matplotlib, Agg).
+or the step limit). After each step it prints the coverage: the fraction of the scene's free space
+(voxel centres clear of every surface) that the map knows. At the end it saves a plot of coverage
+over steps and the path seen from above (matplotlib, Agg).
 
     explore.py --server-binary <build>/server/cenote-server --stubs <build>/clients/python/gen
     explore.py --server 127.0.0.1:50051 --token secret --plot cov.png
