@@ -1,6 +1,7 @@
 // cli_input.cpp: parsing of cenote-cli's points and files.
 #include "clients/cli/cli_input.h"
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -75,10 +76,18 @@ std::string readTextFile(const std::string& path, const std::string& what) {
   return text.str();
 }
 
+std::string formatNumber(double v) {
+  char text[32];
+  const auto result = std::to_chars(text, text + sizeof(text), v);
+  return std::string(text, result.ptr);
+}
+
 std::string formatPoint(const Eigen::Vector3d& p) {
-  char text[96];
-  std::snprintf(text, sizeof(text), "%g,%g,%g", p.x(), p.y(), p.z());
-  return text;
+  return formatNumber(p.x()) + "," + formatNumber(p.y()) + "," + formatNumber(p.z());
+}
+
+std::string formatPointSpaced(const Eigen::Vector3d& p) {
+  return formatNumber(p.x()) + " " + formatNumber(p.y()) + " " + formatNumber(p.z());
 }
 
 }  // namespace cenote::cli

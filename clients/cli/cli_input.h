@@ -24,7 +24,10 @@ std::vector<Eigen::Vector3d> readPointsFile(const std::string& path);
 std::string readTokenFile(const std::string& path);
 // The whole file (PEM certificates and keys); `what` names the option in the error.
 std::string readTextFile(const std::string& path, const std::string& what);
-// "x,y,z" with %g.
+// The shortest text that reads back as the same double ("2.025", "1234567.5").
+std::string formatNumber(double v);
+// "x,y,z" / "x y z" with formatNumber.
 std::string formatPoint(const Eigen::Vector3d& p);
+std::string formatPointSpaced(const Eigen::Vector3d& p);
 
 }  // namespace cenote::cli

@@ -59,7 +59,7 @@ void registerState(CLI::App& app, Connection& connection) {
     const auto points = gatherPoints(o->points, o->points_file, "state");
     const auto results = connection.client().voxels(points);
     for (size_t i = 0; i < points.size(); ++i) {
-      std::printf("%g %g %g %s %.4f\n", points[i].x(), points[i].y(), points[i].z(), client::toString(results[i].state),
+      std::printf("%s %s %.4f\n", formatPointSpaced(points[i]).c_str(), client::toString(results[i].state),
                   results[i].probability);
     }
   });
@@ -131,8 +131,8 @@ void registerDistance(CLI::App& app, Connection& connection) {
     const auto results = connection.client().distances(points);
     for (size_t i = 0; i < points.size(); ++i) {
       const auto& r = results[i];
-      std::printf("%g %g %g %.4f %.4f %.4f %.4f%s\n", points[i].x(), points[i].y(), points[i].z(), r.distance_m,
-                  r.gradient.x(), r.gradient.y(), r.gradient.z(), r.within_max ? "" : " beyond-max");
+      std::printf("%s %.4f %.4f %.4f %.4f%s\n", formatPointSpaced(points[i]).c_str(), r.distance_m, r.gradient.x(),
+                  r.gradient.y(), r.gradient.z(), r.within_max ? "" : " beyond-max");
     }
   });
 }
