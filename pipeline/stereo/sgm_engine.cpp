@@ -410,18 +410,27 @@ PenaltyTable makePenaltyTable(const SgmParams& p) {
   return t;
 }
 
-// Winner, sub-pixel offset and PKRN of one pixel's path sums `s` (lane-wise minimum `best`);
-// returns the integer winner k (or -1) and writes the outputs.
-HWY_INLINE int selectWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, VU16 best, VU16 best_index,
-                            VU16 second_best, float* disparity, float* confidence) {
+// Integer results of the winner search for a batch of pixels; finishWinners() turns them into
+// disparities and confidences (float arithmetic, for all pixels of the batch at once).
+struct WinnerBatch {
+  HWY_ALIGN int32_t winner[kWinnerBatch];  // -1: no disparity
+  HWY_ALIGN int32_t c1[kWinnerBatch];      // smallest sum
+  HWY_ALIGN int32_t c2[kWinnerBatch];      // second smallest outside the winner's span (kNoCost: none)
+  HWY_ALIGN int32_t below[kWinnerBatch];   // sums at winner - 1 and + 1; both c1 without sub-pixel
+  HWY_ALIGN int32_t above[kWinnerBatch];
+};
+
+// Winner and second minimum of one pixel's path sums `s` (lane-wise minimum `best`, its first
+// disparity `best_index`, lane-wise second smallest `second_best`), into slot j of the batch.
+HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, VU16 best, VU16 best_index,
+                           VU16 second_best, WinnerBatch& out, int j) {
   const DU16 d;
   const int N = b.lanes, D = p.num_disparities, Dp = b.padded;
   // Disparities k with a right pixel: k <= x - min_d.
   const int valid = std::min(D, x - p.min_disparity + 1);
   if (valid <= 0 || (p.invalidate_truncated && valid < D)) {
-    *disparity = std::numeric_limits<float>::infinity();
-    *confidence = 0.0f;
-    return -1;
+    out.winner[j] = -1;
+    return;
   }
   // Lanes past D hold sentinel sums, larger than any real one; only at the left border do lanes
   // without a right pixel need masking.
@@ -450,24 +459,54 @@ HWY_INLINE int selectWinner(const SgmParams& p, const StripBuffers& b, int x, ui
   const VU16 first_near = hn::Set(d, static_cast<uint16_t>(winner - reach));
   const VU16 span = hn::Set(d, static_cast<uint16_t>(2 * reach + 1));
   const auto best_is_near = hn::Lt(hn::Sub(best_index, first_near), span);
-  const uint16_t c2 = minLane(d, hn::IfThenElse(best_is_near, second_best, best));
-  // PKRN = c2 / c1, with one cost unit added to both so that it is defined for c1 = 0. A pixel
-  // with no second candidate at all is as ambiguous as it can be: confidence 1.
-  const float pkrn = c2 == kNoCost ? 1.0f : (c2 + 1.0f) / (c1 + 1.0f);
-  if (c2 == kNoCost ? 1.0f < p.min_confidence : (c2 + 1.0f) < p.min_confidence * (c1 + 1.0f)) {
-    *disparity = std::numeric_limits<float>::infinity();
-    *confidence = 0.0f;
-    return -1;
+  out.winner[j] = winner;
+  out.c1[j] = c1;
+  out.c2[j] = minLane(d, hn::IfThenElse(best_is_near, second_best, best));
+  const bool subpixel = p.subpixel && winner > 0 && winner + 1 < valid;
+  out.below[j] = subpixel ? s[winner - 1] : c1;
+  out.above[j] = subpixel ? s[winner + 1] : c1;
+}
+
+// Disparity, sub-pixel offset and PKRN of batch slots [0, count): pixel j of the batch is image
+// column xs[j]. Writes the outputs and the integer winner per column (-1 where invalid).
+void finishWinners(const SgmParams& p, const WinnerBatch& in, int count, const int* xs, float* disparity,
+                   float* confidence, int16_t* winners) {
+  const hn::ScalableTag<float> df;
+  const hn::RebindToSigned<decltype(df)> di;
+  const int L = static_cast<int>(hn::Lanes(df));
+  const auto one = hn::Set(df, 1.0f), zero = hn::Zero(df), two = hn::Set(df, 2.0f);
+  const auto min_confidence = hn::Set(df, p.min_confidence);
+  const auto no_cost = hn::Set(di, kNoCost);
+  HWY_ALIGN float out_disparity[kWinnerBatch], out_confidence[kWinnerBatch];
+  HWY_ALIGN int32_t out_winner[kWinnerBatch];
+  for (int j0 = 0; j0 < count; j0 += L) {
+    const auto winner = hn::Load(di, in.winner + j0);
+    const auto c1 = hn::Load(di, in.c1 + j0), c2 = hn::Load(di, in.c2 + j0);
+    const auto below = hn::Load(di, in.below + j0), above = hn::Load(di, in.above + j0);
+    const auto c1_plus = hn::Add(hn::ConvertTo(df, c1), one), c2_plus = hn::Add(hn::ConvertTo(df, c2), one);
+    // PKRN = c2 / c1, with one cost unit added to both so that it is defined for c1 = 0. A pixel
+    // with no second candidate at all is as ambiguous as it can be: confidence 1.
+    const auto no_second = hn::RebindMask(df, hn::Eq(c2, no_cost));
+    const auto pkrn = hn::IfThenElse(no_second, one, hn::Div(c2_plus, c1_plus));
+    const auto rejected = hn::IfThenElse(no_second, hn::VecFromMask(df, hn::Lt(one, min_confidence)),
+                                         hn::VecFromMask(df, hn::Lt(c2_plus, hn::Mul(min_confidence, c1_plus))));
+    const auto kept = hn::And(hn::RebindMask(df, hn::Gt(winner, hn::Set(di, -1))), hn::Not(hn::MaskFromVec(rejected)));
+    // Parabola through (winner - 1, below), (winner, c1), (winner + 1, above).
+    const auto denominator = hn::Sub(hn::Add(below, above), hn::Add(c1, c1));
+    const auto offset = hn::IfThenElse(hn::RebindMask(df, hn::Gt(denominator, hn::Zero(di))),
+                                       hn::Div(hn::ConvertTo(df, hn::Sub(below, above)),
+                                               hn::Mul(two, hn::ConvertTo(df, denominator))),
+                                       zero);
+    const auto value = hn::Add(hn::ConvertTo(df, hn::Add(winner, hn::Set(di, p.min_disparity))), offset);
+    hn::Store(hn::IfThenElse(kept, value, hn::Set(df, std::numeric_limits<float>::infinity())), df, out_disparity + j0);
+    hn::Store(hn::IfThenElse(kept, pkrn, zero), df, out_confidence + j0);
+    hn::Store(hn::IfThenElse(hn::RebindMask(di, kept), winner, hn::Set(di, -1)), di, out_winner + j0);
   }
-  float offset = 0.0f;
-  if (p.subpixel && winner > 0 && winner + 1 < valid) {
-    const int below = s[winner - 1], above = s[winner + 1];
-    const int denominator = below + above - 2 * c1;
-    if (denominator > 0) offset = static_cast<float>(below - above) / (2.0f * denominator);
+  for (int j = 0; j < count; ++j) {
+    disparity[xs[j]] = out_disparity[j];
+    confidence[xs[j]] = out_confidence[j];
+    winners[xs[j]] = static_cast<int16_t>(out_winner[j]);
   }
-  *disparity = static_cast<float>(p.min_disparity + winner) + offset;
-  *confidence = pkrn;
-  return winner;
 }
 
 // Right image's best sum per pixel (for the LR check): right pixel xr = x - min_d - k, stored
@@ -683,17 +722,18 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
       hn::Store(best_index, d, b.batch_index + slot * N);
       hn::Store(second_best, d, b.batch_second + slot * N);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
-        for (int j = i - slot; j <= i; ++j) {
-          const int xj = dx > 0 ? j : W - 1 - j;
-          uint16_t* sums = b.sums + (j % kWinnerBatch) * Dp;
-          // The right image's minimum first: selectWinner() masks lanes of the sums.
+        WinnerBatch batch;
+        int xs[kWinnerBatch];
+        for (int j = 0; j <= slot; ++j) {
+          const int xj = dx > 0 ? i - slot + j : W - 1 - (i - slot + j);
+          xs[j] = xj;
+          uint16_t* sums = b.sums + j * Dp;
+          // The right image's minimum first: pickWinner() masks lanes of the sums.
           if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx);
-          b.winner[xj] = static_cast<int16_t>(selectWinner(p, b, xj, sums,
-                                                           hn::Load(d, b.batch_best + (j % kWinnerBatch) * N),
-                                                           hn::Load(d, b.batch_index + (j % kWinnerBatch) * N),
-                                                           hn::Load(d, b.batch_second + (j % kWinnerBatch) * N),
-                                                           disparity + xj, confidence + xj));
+          pickWinner(p, b, xj, sums, hn::Load(d, b.batch_best + j * N), hn::Load(d, b.batch_index + j * N),
+                     hn::Load(d, b.batch_second + j * N), batch, j);
         }
+        finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
       }
     }
   }
