@@ -25,6 +25,7 @@
 
 #include "mapping/distance/distance_field.h"
 #include "mapping/frontier/frontier_map.h"
+#include "mapping/integration/depth_frame.h"
 #include "mapping/occupancy_map.h"
 #include "mapping/query/map_query.h"
 #include "tests/mapping/support/analytic_scene.h"
@@ -39,23 +40,46 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 
 constexpr double kPitch = 0.24;  // radians below the horizon
 
-std::vector<PointBatch> makeFrames(int count) {
+struct BenchView {
   test::Scene scene;
+  test::PinholeCamera camera;
+  std::vector<Eigen::Isometry3d> poses;
+};
+
+BenchView benchView(int count) {
+  BenchView view;
+  test::Scene& scene = view.scene;
   scene.planes.push_back({Eigen::Vector3d(0, 0, -2.0), Eigen::Vector3d(0.03, 0.05, 1.0).normalized()});
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> x(0.0, 14.0), y(-5.0, 5.0), r(0.2, 1.0);
   for (int i = 0; i < 40; ++i) scene.spheres.push_back({Eigen::Vector3d(x(rng), y(rng), -2.0), r(rng)});
-  test::PinholeCamera camera;
+  test::PinholeCamera& camera = view.camera;
   camera.width = 800;
   camera.height = 600;
   camera.fx = camera.fy = 600.0;
   camera.cx = 399.5;
   camera.cy = 299.5;
-  std::vector<PointBatch> frames;
   for (int f = 0; f < count; ++f) {
     const Eigen::Vector3d position(0.3 * f, 0.05 * f, 0.0);
     const Eigen::Vector3d target = position + Eigen::Vector3d(std::cos(kPitch), 0.0, -std::sin(kPitch));
-    frames.push_back(test::renderBatch(scene, camera, test::lookAt(position, target), 12.0, 0.01, 100 + f));
+    view.poses.push_back(test::lookAt(position, target));
+  }
+  return view;
+}
+
+std::vector<PointBatch> makeFrames(const BenchView& view) {
+  std::vector<PointBatch> frames;
+  for (size_t f = 0; f < view.poses.size(); ++f) {
+    frames.push_back(test::renderBatch(view.scene, view.camera, view.poses[f], 12.0, 0.01, 100 + f));
+  }
+  return frames;
+}
+
+// The same views as depth images, for projective integration.
+std::vector<DepthFrame> makeDepthFrames(const BenchView& view) {
+  std::vector<DepthFrame> frames;
+  for (size_t f = 0; f < view.poses.size(); ++f) {
+    frames.push_back(test::renderDepth(view.scene, view.camera, view.poses[f], 12.0, 0.01, 100 + f));
   }
   return frames;
 }
@@ -80,7 +104,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--voxel")) voxel_m = std::atof(argv[i + 1]);
   }
   const double max_range_m = 10.0;
-  const std::vector<PointBatch> frames = makeFrames(num_frames);
+  const BenchView view = benchView(num_frames);
+  const std::vector<PointBatch> frames = makeFrames(view);
   size_t points = 0;
   for (const auto& f : frames) points += f.size();
 
@@ -114,6 +139,24 @@ int main(int argc, char** argv) {
   }
   integrateOurs(1, ours_1t_ms);
   const auto map = integrateOurs(threads, ours_ms);
+
+  // Projective integration of the same views as depth images.
+  double projective_ms = 0.0;
+  size_t projective_free = 0;
+  {
+    const std::vector<DepthFrame> depth_frames = makeDepthFrames(view);
+    MapConfig config;
+    config.voxel_size_m = voxel_m;
+    config.max_range_m = max_range_m;
+    config.num_threads = threads;
+    OccupancyMap projected(config);
+    projected.integrateDepth(depth_frames[0]);  // warm-up, as above
+    projected.reset();
+    const auto t0 = Clock::now();
+    for (const auto& f : depth_frames) projected.integrateDepth(f);
+    projective_ms = msSince(t0) / depth_frames.size();
+    projective_free = projected.stats().free;
+  }
 
   octomap::OcTree tree(voxel_m);
   tree.setProbHit(0.7);
@@ -225,6 +268,8 @@ int main(int argc, char** argv) {
   std::printf("| measure | cenote | OctoMap | ratio |\n|---|---|---|---|\n");
   std::printf("| integration, ms/frame (%d threads) | %.1f | %.1f | %.1fx |\n", threads, ours_ms, octo_ms, octo_ms / ours_ms);
   std::printf("| integration, ms/frame (1 thread) | %.1f | %.1f | %.1fx |\n", ours_1t_ms, octo_ms, octo_ms / ours_1t_ms);
+  std::printf("| projective integration of the same views as depth images, ms/frame (%d threads) | %.1f | %.1f | %.1fx |\n",
+              threads, projective_ms, octo_ms, octo_ms / projective_ms);
   std::printf("| memory of the map, MB | %.1f | %.1f | %.2fx |\n", ours_mb, octo_mb, ours_mb / octo_mb);
   std::printf("| single voxel lookups, M/s (1 thread) | %.1f | %.1f | %.1fx |\n", ours_lookups / 1e6, octo_lookups / 1e6,
               ours_lookups / octo_lookups);
@@ -237,8 +282,9 @@ int main(int argc, char** argv) {
               MapConfig{}.max_distance_m, distance_ms, distance_mean_ms);
   std::printf("\nMap: %llu occupied, %llu free voxels (OctoMap: %zu leaf nodes); segments hitting: %zu ours, %zu OctoMap "
               "castRay (which also stops at unknown: counts differ by design); lookups saw %zu / %zu occupied; "
-              "%zu frontier clusters at the end.\n",
+              "%zu frontier clusters at the end; projective integration: %llu free voxels.\n",
               static_cast<unsigned long long>(stats.occupied), static_cast<unsigned long long>(stats.free),
-              tree.getNumLeafNodes(), ours_hits, octo_hits, occupied_seen, octo_occupied, num_clusters);
+              tree.getNumLeafNodes(), ours_hits, octo_hits, occupied_seen, octo_occupied, num_clusters,
+              static_cast<unsigned long long>(projective_free));
   return 0;
 }

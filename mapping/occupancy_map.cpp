@@ -8,6 +8,7 @@
 
 #include "common/error.h"
 #include "mapping/detail/map_impl.h"
+#include "mapping/integration/depth_frame.h"
 #include "mapping/integration/voxel_ray.h"
 
 namespace cenote::mapping {
@@ -167,7 +168,53 @@ MapDelta OccupancyMap::integrate(const PointBatch& batch) {
   std::lock_guard<std::mutex> writer(impl_->writer_mutex);
   RayBatch& rays = impl_->scratch;
   rays.build(batch, voxelSize(), config_.max_range_m, config_.num_threads, config_.ray_stop_run);
+  return publish(rays);
+}
 
+void OccupancyMap::checkDepthFrame(const DepthFrame& f) const {
+  const std::string where = "map: depth frame (t = " + std::to_string(f.t_s) + " s)";
+  if (f.width < 1 || f.height < 1) {
+    throw Error(where + " is " + std::to_string(f.width) + "x" + std::to_string(f.height) + ": must be at least 1x1");
+  }
+  const size_t pixels = static_cast<size_t>(f.width) * static_cast<size_t>(f.height);
+  if (f.depth_m.size() != pixels) {
+    throw Error(where + " has " + std::to_string(f.depth_m.size()) + " depths for " + std::to_string(pixels) + " pixels");
+  }
+  if (f.hasColor() && f.colors.size() != pixels) {
+    throw Error(where + " has " + std::to_string(f.colors.size()) + " colours for " + std::to_string(pixels) +
+                " pixels (must be equal, or no colours)");
+  }
+  if (!(f.fx > 0.0) || !(f.fy > 0.0) || !std::isfinite(f.fx) || !std::isfinite(f.fy) || !std::isfinite(f.cx) ||
+      !std::isfinite(f.cy)) {
+    throw Error(where + ": intrinsics fx " + std::to_string(f.fx) + ", fy " + std::to_string(f.fy) + ", cx " +
+                std::to_string(f.cx) + ", cy " + std::to_string(f.cy) + " must be finite with fx, fy > 0");
+  }
+  if (!f.T_world_cam.matrix().allFinite()) throw Error(where + ": camera pose T_world_cam must be finite");
+  // The farthest point: the largest depth at the image's corners (rays spread most there).
+  double max_depth = 0.0;
+  for (float d : f.depth_m) {
+    if (d > 0.0f && std::isfinite(d)) max_depth = std::max(max_depth, static_cast<double>(d));
+  }
+  const double corner = std::hypot(std::max(std::fabs(-0.5 - f.cx), std::fabs(f.width - 0.5 - f.cx)) / f.fx,
+                                   std::max(std::fabs(-0.5 - f.cy), std::fabs(f.height - 0.5 - f.cy)) / f.fy, 1.0);
+  const double limit_m = kMaxVoxelIndex * voxelSize();
+  const double reach_m = f.T_world_cam.translation().cwiseAbs().maxCoeff() + max_depth * corner;
+  if (!(reach_m < limit_m)) {
+    throw Error(where + ": camera and points must lie within " + std::to_string(limit_m) + " m of 0 (they reach " +
+                std::to_string(reach_m) + " m)");
+  }
+}
+
+MapDelta OccupancyMap::integrateDepth(const DepthFrame& frame) {
+  checkDepthFrame(frame);
+  std::lock_guard<std::mutex> writer(impl_->writer_mutex);
+  ProjectiveBatch& batch = impl_->projective_scratch;
+  batch.build(frame, voxelSize(), config_.max_range_m, config_.num_threads);
+  return publish(batch);
+}
+
+template <typename Batch>
+MapDelta OccupancyMap::publish(const Batch& rays) {
   MapDelta delta;
   delta.points_used = rays.numRays();
   const double s = voxelSize();

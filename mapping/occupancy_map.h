@@ -31,6 +31,8 @@
 
 namespace cenote::mapping {
 
+struct DepthFrame;  // integration/depth_frame.h
+
 namespace detail {
 struct MapImpl;
 struct AccessorImpl;
@@ -73,6 +75,16 @@ class OccupancyMap {
   // @throws Error, leaving the map unchanged, for: an empty batch, a non-finite origin or point,
   //   colours given for some points only, a point or origin farther than 2^23 voxels from 0.
   MapDelta integrate(const PointBatch& batch);
+
+  // Projective integration of a depth image with intrinsics and pose (integration/
+  // projective_batch.h): every voxel of the frustum's blocks is projected into the image once; free
+  // where its pixel sees past it, a hit at each pixel's back-projected point. Same rules (max range,
+  // pixels without depth carve nothing, each voxel updated at most once, occupied wins), publishing
+  // and MapDelta as integrate().
+  // @throws Error, leaving the map unchanged, for: width or height < 1, depth (or colours, when
+  //   given) not width * height, fx or fy not finite and > 0, cx or cy not finite, a non-finite
+  //   pose, a camera or point farther than 2^23 voxels from 0.
+  MapDelta integrateDepth(const DepthFrame& frame);
 
   // Forget (make unknown) the voxels whose centre lies in the box / sphere, or outside the sphere.
   // @throws Error for a non-finite or negative size. @return what changed.
@@ -123,6 +135,11 @@ class OccupancyMap {
  private:
   friend class detail::MapAccess;
   void checkBatch(const PointBatch& batch) const;
+  void checkDepthFrame(const DepthFrame& frame) const;
+  // Writes a computed batch (RayBatch or ProjectiveBatch) into the grids, publish_blocks blocks per
+  // exclusive lock. Called with the writer mutex held.
+  template <typename Batch>
+  MapDelta publish(const Batch& batch);
   template <typename Predicate>
   MapDelta removeVoxels(const VoxelBox& candidates, bool everywhere, Predicate&& remove);
 

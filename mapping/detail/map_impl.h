@@ -10,6 +10,7 @@
 #include <mutex>
 #include <shared_mutex>
 
+#include "mapping/integration/projective_batch.h"
 #include "mapping/integration/ray_batch.h"
 #include "mapping/occupancy_map.h"
 
@@ -33,6 +34,7 @@ struct MapImpl {
   std::mutex writer_mutex;
   std::atomic<uint64_t> version{0};
   RayBatch scratch;
+  ProjectiveBatch projective_scratch;
 };
 
 class MapAccess {

@@ -183,7 +183,9 @@ void checkAnalyticScene(const Scene& scene, const std::vector<Eigen::Isometry3d>
         const Eigen::Vector3d q = b.origin + t * d;
         if (scene.distanceToSurface(q) < 2 * s) continue;  // grazing rays near another surface
         const VoxelState state = acc.state(map.toIndex(q));
-        if (ray_stop_run == 0) EXPECT_EQ(state, VoxelState::kFree) << "at (" << q.transpose() << ")";
+        if (ray_stop_run == 0) {
+          EXPECT_EQ(state, VoxelState::kFree) << "at (" << q.transpose() << ")";
+        }
         EXPECT_NE(state, VoxelState::kOccupied) << "at (" << q.transpose() << ")";
         ++checked_free;
         found_free += state == VoxelState::kFree;

@@ -104,6 +104,36 @@ PointBatch renderBatch(const Scene& scene, const PinholeCamera& camera, const Ei
   return batch;
 }
 
+DepthFrame renderDepth(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_world_cam,
+                       double max_depth_m, double noise_m, uint32_t seed) {
+  DepthFrame frame;
+  frame.width = camera.width;
+  frame.height = camera.height;
+  frame.fx = camera.fx;
+  frame.fy = camera.fy;
+  frame.cx = camera.cx;
+  frame.cy = camera.cy;
+  frame.T_world_cam = T_world_cam;
+  frame.depth_m.assign(static_cast<size_t>(camera.width) * camera.height, std::numeric_limits<float>::quiet_NaN());
+  frame.colors.resize(frame.depth_m.size());
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, noise_m > 0.0 ? noise_m : 1.0);
+  const Eigen::Vector3d origin = T_world_cam.translation();
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      const size_t i = static_cast<size_t>(v) * camera.width + u;
+      frame.colors[i] = {static_cast<uint8_t>(u % 256), static_cast<uint8_t>(v % 256), 128};
+      const Eigen::Vector3d d_cam((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+      const Eigen::Vector3d d = (T_world_cam.linear() * d_cam).normalized();
+      const auto t = scene.intersect(origin, d, max_depth_m);
+      if (!t) continue;
+      const double range = *t + (noise_m > 0.0 ? noise(rng) : 0.0);
+      frame.depth_m[i] = static_cast<float>(range / d_cam.norm());  // z = range * cos(angle to the axis)
+    }
+  }
+  return frame;
+}
+
 Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
   const Eigen::Vector3d z = (target - position).normalized();
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/point_batch.h"
+#include "mapping/integration/depth_frame.h"
 
 namespace cenote::mapping::test {
 
@@ -56,6 +57,12 @@ struct PinholeCamera {
 // Colours encode the pixel (r = u % 256, g = v % 256, b = 128). noise_m adds Gaussian noise along
 // the ray (0: exact).
 PointBatch renderBatch(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_world_cam,
+                       double max_depth_m, double noise_m = 0.0, uint32_t seed = 1);
+
+// The same view as a depth image (z along the optical axis) with intrinsics and pose, for
+// projective integration; pixels that see nothing within max_depth_m have depth NaN. noise_m as
+// renderBatch (along the ray), colours as renderBatch.
+DepthFrame renderDepth(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_world_cam,
                        double max_depth_m, double noise_m = 0.0, uint32_t seed = 1);
 
 // A camera at `position` looking at `target` (world up: +z unless looking along it).
