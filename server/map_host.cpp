@@ -2,11 +2,13 @@
 
 namespace cenote::server {
 
-MapHost::MapHost(std::unique_ptr<mapping::OccupancyMap> map, size_t max_subscriber_lag)
+MapHost::MapHost(std::unique_ptr<mapping::OccupancyMap> map, const MapHostOptions& options)
     : map_(std::move(map)),
       distance_(std::make_unique<mapping::DistanceField>(*map_)),
       frontiers_(std::make_unique<mapping::FrontierMap>(*map_)),
-      feed_(max_subscriber_lag) {
+      feed_(options.max_subscriber_lag),
+      options_(options),
+      writer_(options.writer_nice) {
   // A loaded map: derive everything once before serving.
   if (map_->version() > 0 || map_->stats().occupied + map_->stats().free > 0) {
     distance_->rebuild();
@@ -27,17 +29,18 @@ MapHost::~MapHost() {
 
 template <typename Change>
 mapping::MapDelta MapHost::change(Change&& apply) {
-  std::lock_guard<std::mutex> writer(writer_mutex_);
-  mapping::MapDelta delta = apply();
-  const uint64_t version = map_->version();
-  {
-    std::lock_guard<std::mutex> lock(derived_mutex_);
-    pending_.merge(delta);
-    ++published_changes_;
-  }
-  derived_cv_.notify_all();
-  feed_.publish(MapChange{version, delta});
-  return delta;
+  return writer_.run([&] {
+    mapping::MapDelta delta = apply();
+    const uint64_t version = map_->version();
+    {
+      std::lock_guard<std::mutex> lock(derived_mutex_);
+      pending_.merge(delta);
+      ++published_changes_;
+    }
+    derived_cv_.notify_all();
+    feed_.publish(MapChange{version, delta});
+    return delta;
+  });
 }
 
 mapping::MapDelta MapHost::integrate(const PointBatch& batch) {
@@ -71,14 +74,33 @@ uint64_t MapHost::batchesIntegrated() const {
 bool MapHost::waitForDerived(std::chrono::system_clock::time_point deadline) const {
   std::unique_lock<std::mutex> lock(derived_mutex_);
   const uint64_t target = published_changes_;
-  return derived_cv_.wait_until(lock, deadline, [&] { return derived_changes_ >= target || stop_; });
+  if (derived_changes_ >= target) return true;
+  ++waiting_queries_;
+  derived_cv_.notify_all();
+  const bool done = derived_cv_.wait_until(lock, deadline, [&] { return derived_changes_ >= target || stop_; });
+  --waiting_queries_;
+  return done;
 }
 
 void MapHost::derivedLoop() {
+  using Clock = std::chrono::steady_clock;
+  setThreadNice(options_.derived_nice);
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.derived_period_s));
+  Clock::time_point last_update = Clock::now();
   std::unique_lock<std::mutex> lock(derived_mutex_);
   while (true) {
-    derived_cv_.wait(lock, [&] { return stop_ || derived_changes_ < published_changes_; });
+    const auto due = [&] {
+      return stop_ || (derived_changes_ < published_changes_ &&
+                       (waiting_queries_ > 0 || Clock::now() >= last_update + period));
+    };
+    if (derived_changes_ < published_changes_) {
+      derived_cv_.wait_until(lock, last_update + period, due);
+    } else {
+      derived_cv_.wait(lock, due);
+    }
     if (stop_) return;
+    if (!due()) continue;
+    last_update = Clock::now();
     mapping::MapDelta delta;
     std::swap(delta, pending_);
     const uint64_t changes = published_changes_;

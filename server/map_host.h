@@ -2,13 +2,17 @@
 // frontiers) and the feed of its changes. Every change of the map goes through here, so the
 // derived structures and the subscribers see every MapDelta, in order.
 //
-// The distance field and the frontiers are brought up to date by a thread of their own from the
-// accumulated deltas, so ingest never waits for them; a distance or frontier query first waits
-// (up to its deadline) until they include every change made before it arrived: a client reads
-// its own writes.
-// Units: metres, world frame.
-// Threads: changes serialise on a writer mutex; queries from any number of threads (the map's own
-// reader locks; see mapping/occupancy_map.h).
+// Changes run one at a time on the map's writer thread (serial_worker.h), at a lower CPU priority
+// than the gRPC handlers: when the cores are busy, planners' short queries go first.
+// The distance field and the frontiers are brought up to date by a thread of their own, lower
+// still, from the accumulated deltas: at most every `derived_period_s` while the map changes, and
+// at once when a distance or frontier query is waiting. Ingest never waits for them, and a map
+// nobody asks distances of does not spend half the machine keeping them. Such a query first waits
+// (up to its deadline) until they include every change made before it arrived: a client reads its
+// own writes.
+// Units: metres, world frame, seconds.
+// Threads: changes from any thread (they queue for the writer thread); queries from any number of
+// threads (the map's own reader locks; see mapping/occupancy_map.h).
 #pragma once
 
 #include <chrono>
@@ -22,12 +26,20 @@
 #include "mapping/frontier/frontier_map.h"
 #include "mapping/occupancy_map.h"
 #include "server/change_feed.h"
+#include "server/serial_worker.h"
 
 namespace cenote::server {
 
+struct MapHostOptions {
+  size_t max_subscriber_lag = 64;  // ChangeFeed
+  int writer_nice = 5;             // CPU priority of integration (0: as the handlers; 19: lowest)
+  int derived_nice = 10;           // ... of the distance field and frontier updates
+  double derived_period_s = 1.0;   // derived structures follow the map at least this often
+};
+
 class MapHost {
  public:
-  MapHost(std::unique_ptr<mapping::OccupancyMap> map, size_t max_subscriber_lag);
+  MapHost(std::unique_ptr<mapping::OccupancyMap> map, const MapHostOptions& options);
   ~MapHost();
   MapHost(const MapHost&) = delete;
   MapHost& operator=(const MapHost&) = delete;
@@ -59,15 +71,17 @@ class MapHost {
   std::unique_ptr<mapping::FrontierMap> frontiers_;
   ChangeFeed feed_;
 
-  std::mutex writer_mutex_;  // one change at a time
+  const MapHostOptions options_;
   mutable std::mutex derived_mutex_;
   mutable std::condition_variable derived_cv_;
   mapping::MapDelta pending_;        // changes not yet in the derived structures
   uint64_t published_changes_ = 0;   // changes made
   uint64_t derived_changes_ = 0;     // changes the derived structures include
   uint64_t batches_ = 0;
+  mutable int waiting_queries_ = 0;  // distance / frontier queries waiting for the derived structures
   bool stop_ = false;
   std::thread derived_thread_;
+  SerialWorker writer_;  // last: its queued changes finish before the rest goes
 };
 
 }  // namespace cenote::server

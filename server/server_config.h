@@ -40,7 +40,13 @@ struct ServerConfig {
   double pose_history_s = 60.0;             // poses older than this (before the newest) are dropped
   int max_frame_streams = 2;                // concurrent StreamFrames calls (each runs a pipeline)
   int max_subscriber_lag = 64;              // changes queued per subscriber before it is resynced
-  int threads = 0;                          // gRPC handler threads; 0: gRPC's default
+  int completion_queues = 1;                // gRPC's sync server: completion queues,
+  int min_pollers = 2;                      //   and threads polling each (handlers run on them;
+  int max_pollers = 4;                      //   more are made while calls wait)
+  int ingest_nice = 5;                      // CPU priority of integration below the query handlers
+  int derived_nice = 10;                    // ... of the distance field and frontier updates
+  double derived_period_s = 1.0;            // they follow the map at least this often (and at once
+                                            // when a distance / frontier query waits); 0: every change
   RequestLimits limits;
 
   std::vector<ConfigError> validate() const;
