@@ -4,9 +4,10 @@
 // up, up-left, up-right, as rSGM) or in two passes (8 paths; the first pass's path sums are kept in
 // a per-strip volume). The full cost volume is never stored: the matching cost of one row is built
 // from running box sums, aggregated along the paths, and the winner, second minimum and parabola
-// are taken on the fly. All arithmetic is uint16 SIMD (Highway, dispatched at run time to the best
-// instruction set of the machine); the result depends only on the input and the strip boundaries,
-// never on the thread count.
+// are taken on the fly. Costs, paths and the winner search are uint16 SIMD; disparity, sub-pixel
+// offset and PKRN are float SIMD over batches of pixels (Highway, dispatched at run time to the
+// best instruction set of the machine). The result depends only on the input and the strip
+// boundaries, never on the thread count.
 //
 // Threads: matchStrip() may run concurrently for different strips, each with its own workspace.
 #pragma once
