@@ -1,5 +1,6 @@
 #include "mapping/occupancy_map.h"
 
+#include <openvdb/tools/Count.h>
 #include <openvdb/tools/Prune.h>
 
 #include <algorithm>
@@ -382,7 +383,10 @@ MapStats OccupancyMap::stats() const {
     out.bounds_m.min_m = out.bounds.min.cast<double>() * voxelSize();
     out.bounds_m.max_m = (out.bounds.max.cast<double>().array() + 1.0).matrix() * voxelSize();
   }
-  out.memory_bytes = impl_->log_odds->memUsage() + impl_->color->memUsage();
+  // Serial count: Grid::memUsage() runs a TBB reduction, whose (uninstrumented) worker threads
+  // ThreadSanitizer reports as races; stats() is not a hot path.
+  out.memory_bytes = openvdb::tools::memUsage(impl_->log_odds->constTree(), false) +
+                     openvdb::tools::memUsage(impl_->color->constTree(), false);
   return out;
 }
 

@@ -35,6 +35,13 @@ struct MapImpl {
   std::atomic<uint64_t> version{0};
   RayBatch scratch;
   ProjectiveBatch projective_scratch;
+
+  // Frees the trees' nodes serially: Tree's destructor frees them with a TBB parallel_for, whose
+  // (uninstrumented) worker threads ThreadSanitizer reports as racing with ours.
+  ~MapImpl() {
+    if (log_odds) log_odds->tree().root().clear();
+    if (color) color->tree().root().clear();
+  }
 };
 
 class MapAccess {
