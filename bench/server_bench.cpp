@@ -237,6 +237,7 @@ int main(int argc, char** argv) {
     for (const auto& f : frames) client_frames.push_back(toClient(f));
     // The 100k-point batch: the first 100k points (image rows from the top) of a 480x360 frame.
     cenote::PointBatch big = renderFrame(scene, 480, 360, 360.0, num_frames / 2);
+    const size_t big_frame_points = big.size();
     if (big.size() > 100000) {
       big.points.resize(100000);
       big.colors.resize(100000);
@@ -373,6 +374,8 @@ int main(int argc, char** argv) {
                 static_cast<double>(stats.occupied + stats.free) / 1e6, static_cast<double>(stats.map_memory_bytes) / 1e6,
                 frames.empty() ? size_t{0} : frames.front().size(), frame_points / std::max(1, num_frames), rpc.frames,
                 rpc.ingest_max_ms, local_figures.frames, local_figures.ingest_max_ms);
+    std::printf("the 100k-point batch: %zu of the %zu points of a 480x360 frame (rays up to 10 m)\n", big.size(),
+                big_frame_points);
     if (server_pid > 0) {
       std::printf("cenote-server CPU use: %.2f cores idle phase, %.2f cores ingest phase\n", idle.cpu_cores, rpc.cpu_cores);
     }
