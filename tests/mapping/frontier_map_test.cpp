@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <tuple>
+
 #include "tests/mapping/support/analytic_scene.h"
 
 namespace cenote::mapping {
@@ -108,6 +111,41 @@ TEST(FrontierMap, LargeClustersAreSplitAndRegionOfInterestLimits) {
   }
   EXPECT_LT(limited.numFrontierVoxels(), frontiers.numFrontierVoxels());
   for (const auto& cl : limited.clusters(Eigen::Vector3d::Zero())) EXPECT_LE(cl.bounds_m.max_m.x(), 4.5 + 1e-9);
+}
+
+// The clusters depend only on the map, not on how its changes were grouped into update() calls
+// (the server merges changes that arrive while it is busy): one update per view, one update for
+// all views, and a rebuild give the same clusters, to the last bit.
+TEST(FrontierMap, ClustersDoNotDependOnHowChangesWereGrouped) {
+  const test::Scene scene = twoRooms();
+  MapConfig config = roomConfig();
+  config.frontier_max_extent_m = 0.4;  // many splits: ties on the splitting plane are likely
+  config.frontier_min_voxels = 3;
+  OccupancyMap map(config);
+  FrontierMap per_view(map), merged(map), rebuilt(map);
+  MapDelta all;
+  for (const Eigen::Vector3d& position : {Eigen::Vector3d(2.03, 2.01, 1.02), Eigen::Vector3d(1.0, 3.0, 1.5)}) {
+    for (const auto& view : cubeViews(scene, position)) {
+      const MapDelta delta = map.integrate(view);
+      per_view.update(delta);
+      all.merge(delta);
+    }
+  }
+  merged.update(all);
+  rebuilt.rebuild();
+  auto key = [](const FrontierMap& f) {
+    std::vector<std::tuple<double, double, double, size_t, double, double, double>> out;
+    for (const FrontierCluster& c : f.clusters(Eigen::Vector3d::Zero())) {
+      out.emplace_back(c.centroid_m.x(), c.centroid_m.y(), c.centroid_m.z(), c.num_voxels, c.direction.x(),
+                       c.direction.y(), c.direction.z());
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  const auto expected = key(rebuilt);
+  ASSERT_GT(expected.size(), 100u);  // 504 when written
+  EXPECT_EQ(key(per_view), expected);
+  EXPECT_EQ(key(merged), expected);
 }
 
 }  // namespace
