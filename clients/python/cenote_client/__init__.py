@@ -12,9 +12,9 @@ from ._stubs import StubsNotFound, use_stubs
 from .client import SNAPSHOT_FORMATS, MapClient
 from .errors import CenoteError
 from .local_server import LocalServer
-from .types import (Block, BoxCounts, Change, Collisions, Extract, Frontier, IntegrateResult, MapInfo, MapUpdate,
+from .types import (Ack, Block, BoxCounts, Change, Collisions, Extract, Frontier, IntegrateResult, MapInfo, MapUpdate,
                     MethodStats, SnapshotResult, StageTiming, Stats, VoxelState)
 
-__all__ = ["MapClient", "CenoteError", "LocalServer", "VoxelState", "use_stubs", "StubsNotFound", "SNAPSHOT_FORMATS",
+__all__ = ["MapClient", "CenoteError", "LocalServer", "VoxelState", "use_stubs", "StubsNotFound", "SNAPSHOT_FORMATS", "Ack",
            "Block", "BoxCounts", "Change", "Collisions", "Extract", "Frontier", "IntegrateResult", "MapInfo",
            "MapUpdate", "MethodStats", "SnapshotResult", "StageTiming", "Stats"]

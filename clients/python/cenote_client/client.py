@@ -17,7 +17,7 @@ import numpy as np
 
 from . import _stubs
 from .errors import CenoteError, from_rpc_error, status_name
-from .types import (Block, BoxCounts, Change, Collisions, Extract, Frontier, IntegrateResult, MapInfo, MapUpdate,
+from .types import (Ack, Block, BoxCounts, Change, Collisions, Extract, Frontier, IntegrateResult, MapInfo, MapUpdate,
                     MethodStats, SnapshotResult, StageTiming, Stats)
 
 SNAPSHOT_FORMATS = {"vdb": 1, "bt": 2, "ot": 3, "mesh_ply": 4, "points_ply": 5}
@@ -275,6 +275,77 @@ class MapClient:
         if ack.status_code != 0:
             raise CenoteError(status_name(ack.status_code), ack.message, "Ingest/IntegratePoints")
         return IntegrateResult(ack.voxels_updated, ack.changed_blocks, ack.map_version)
+
+    def _image(self, msg, image):
+        """Fills an Image message: bytes are sent as encoded (PNG / JPEG), a uint8 array (H, W) or
+        (H, W, 3) BGR as raw pixels."""
+        if isinstance(image, (bytes, bytearray)):
+            msg.encoded = bytes(image)
+            return
+        arr = np.ascontiguousarray(image, dtype=np.uint8)
+        if arr.ndim == 2:
+            encoding = self.pb.ingest.IMAGE_ENCODING_MONO8
+        elif arr.ndim == 3 and arr.shape[2] == 3:
+            encoding = self.pb.ingest.IMAGE_ENCODING_BGR8
+        else:
+            raise ValueError(f"image: expected encoded bytes or a uint8 (H, W) or (H, W, 3) array, got shape {arr.shape}")
+        msg.raw.width, msg.raw.height, msg.raw.encoding = arr.shape[1], arr.shape[0], encoding
+        msg.raw.data = arr.tobytes()
+
+    def _pose(self, msg, pose):
+        """pose: (position (3,), quaternion (x, y, z, w)) of the raw left camera in the world."""
+        position, quaternion = pose
+        _vec3(msg.position, position)
+        q = np.asarray(quaternion, dtype=np.float64).reshape(4)
+        msg.orientation.x, msg.orientation.y, msg.orientation.z, msg.orientation.w = (float(v) for v in q)
+
+    def _stream(self, method, stub_method, requests, ack_of, timeout_s):
+        try:
+            replies = stub_method(requests, timeout=timeout_s, metadata=self._metadata)
+            return [ack_of(r) for r in replies]
+        except grpc.RpcError as e:
+            raise from_rpc_error(e, method) from None
+
+    def stream_frames(self, frames, timeout_s=None):
+        """Sends stereo frames through the server's pipeline (rectify, stereo, fusion, map) in one
+        stream and returns one Ack per frame. frames: iterable of (timestamp_s, left, right) or
+        (timestamp_s, left, right, pose); images as encoded bytes or uint8 arrays; pose as in
+        stream_poses (without one, the server matches streamed poses by time). The call returns
+        once every frame's points are in the map. A bad frame is rejected in its Ack; the stream
+        goes on."""
+        outcomes = {v: k.replace("FRAME_OUTCOME_", "") for k, v in self.pb.ingest.FrameOutcome.items()}
+
+        def requests():
+            for frame in frames:
+                msg = self.pb.ingest.StereoFrame(timestamp_s=float(frame[0]))
+                self._image(msg.left, frame[1])
+                self._image(msg.right, frame[2])
+                if len(frame) > 3 and frame[3] is not None:
+                    self._pose(msg.pose, frame[3])
+                yield msg
+
+        return self._stream("Ingest/StreamFrames", self._ingest.StreamFrames, requests(),
+                            lambda a: Ack(a.sequence, a.timestamp_s, outcomes.get(a.outcome, str(a.outcome)),
+                                          status_name(a.status_code), a.message), timeout_s)
+
+    def stream_poses(self, timestamps_s, positions, quaternions_xyzw, timeout_s=None):
+        """Streams camera poses (T_world_cam of the raw left camera, at VIO rate) for frames sent
+        without a pose of their own. Returns one Ack per pose (outcome STORED or REJECTED)."""
+        t = np.asarray(timestamps_s, dtype=np.float64).reshape(-1)
+        p = _points(positions, "positions")
+        q = np.asarray(quaternions_xyzw, dtype=np.float64).reshape(-1, 4)
+        if not (len(t) == len(p) == len(q)):
+            raise ValueError(f"poses: {len(t)} timestamps, {len(p)} positions, {len(q)} quaternions")
+
+        def requests():
+            for i in range(len(t)):
+                msg = self.pb.ingest.PoseStamped(timestamp_s=float(t[i]))
+                self._pose(msg.pose, (p[i], q[i]))
+                yield msg
+
+        return self._stream("Ingest/StreamPoses", self._ingest.StreamPoses, requests(),
+                            lambda a: Ack(a.sequence, a.timestamp_s, "STORED" if a.status_code == 0 else "REJECTED",
+                                          status_name(a.status_code), a.message), timeout_s)
 
     # -- updates ----------------------------------------------------------------------------------
     def subscribe(self, region=None, include_probabilities=False, timeout_s=None):

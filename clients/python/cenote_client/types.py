@@ -137,6 +137,16 @@ class IntegrateResult:
 
 
 @dataclass
+class Ack:
+    """The acknowledgement of one streamed frame or pose, in stream order."""
+    sequence: int
+    timestamp_s: float
+    outcome: str       # frames: PROCESSED, SKIPPED_NO_POSE, SKIPPED_NOT_KEYFRAME, REJECTED; poses: STORED, REJECTED
+    status: str        # gRPC status name: OK unless rejected
+    message: str
+
+
+@dataclass
 class Change:
     """What a clear, crop or reset changed."""
     changed_blocks: int
