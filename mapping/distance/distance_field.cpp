@@ -13,8 +13,8 @@
 namespace cenote::mapping {
 namespace {
 
-// The constructor limits max_distance_m to this many voxels (50 m at 5 cm): offsets to the nearest
-// obstacle fit int16, and the queue has one bucket per squared distance (10^6 buckets at most).
+// The constructor limits max_distance_m to this many voxels (50 m at 5 cm), so that offsets to the
+// nearest obstacle fit int16 and squared distances an int.
 constexpr int kMaxOffsetVoxels = 1000;
 
 // One voxel of the field: the offset from it to its nearest obstacle voxel (none: kNoObstacle).

@@ -3,16 +3,20 @@
 // Algorithm: the dynamic Euclidean distance transform of Lau, Sprunk and Burgard ("Efficient
 // grid-based spatial representations for robot navigation in dynamic environments", RAS 2013;
 // OctoMap's dynamicEDT3D): every cell stores its nearest obstacle voxel; new obstacles start a
-// "lower" wave, removed obstacles a "raise" wave that clears the cells that pointed at them, and
-// the waves run in order of distance over the 26-neighbourhood, only as far as max_distance_m.
+// "lower" wave, removed obstacles a "raise" wave that clears the cells that pointed at them, only
+// as far as max_distance_m. Two departures, for speed (2 s -> about 0.25 s per frame of
+// bench/map_bench.cpp): the lower wave spreads to the 6 face neighbours (the raise wave to all 26),
+// and the waves run breadth-first, not in order of distance: the propagation is label-correcting
+// (a cell lowered again spreads again), so it reaches the same kind of field, and consecutive cells
+// stay close in memory, where a priority queue jumped across the whole wave front.
 // Propagating nearest-obstacle coordinates makes the distance exact Euclidean at almost every cell
 // and never more than one voxel too large (tests/mapping/distance_field_test.cpp checks this
-// against brute force after integrations and after clearing a box).
+// against brute force after integrations and after clearing a box: at least 99 % exact).
 // Distances are between voxel centres for cells; a point query returns |p - c| for the nearest
 // obstacle's centre c, and the gradient (p - c) / |p - c|, pointing away from the obstacle.
 // Unknown voxels are not obstacles (check the state too: unknown is never free).
 // Storage: dense 8x8x8 blocks of 8-byte cells (the offset to the nearest obstacle), created where a
-// wave reaches; the waves run from a bucket queue keyed by the integer squared distance in voxels.
+// wave reaches; a 512-bit obstacle mask per block, compared with the map's changed blocks.
 // Units: metres, world frame. Threads: update() is for one writer; query() may run from any number of
 // threads at the same time (a shared lock; update holds the exclusive lock while it runs).
 #pragma once
