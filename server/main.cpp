@@ -149,6 +149,7 @@ int serve(const Options& o) {
   sigwait(&signals, &signal);
   std::cerr << "cenote-server: " << (signal == SIGTERM ? "SIGTERM" : "SIGINT")
             << ": draining calls, then writing the snapshot" << std::endl;
+  if (grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService()) health->Shutdown();  // NOT_SERVING
   updates.shutdown();
   server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(10));
   server->Wait();
