@@ -8,8 +8,11 @@
 // Threads: pure functions; a NoiseTexture is immutable after construction and may be shared.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace cenote::pipeline {
@@ -53,6 +56,7 @@ class NoiseTexture {
 
   // Trilinear sample at texel coordinates (u, v) of level 0 (wrapping), footprint_texels the pixel's
   // size in level-0 texels (chooses and blends the mip levels; <= 1 samples level 0).
+  // Inline: the simulator calls it several times per pixel.
   float sample(float u, float v, float footprint_texels) const;
 
  private:
@@ -67,5 +71,51 @@ class NoiseTexture {
   int size_;
   std::vector<std::vector<uint8_t>> levels_;  // level k: (size >> k)^2 texels of value / 255, tiled
 };
+
+namespace detail {
+
+// log2 of x > 0 to ~1e-3: exponent plus a quadratic in the mantissa.
+inline float fastLog2(float x) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof(bits));
+  const float exponent = static_cast<float>(static_cast<int>(bits >> 23) - 127);
+  bits = (bits & 0x007FFFFF) | 0x3F800000;
+  float m;
+  std::memcpy(&m, &bits, sizeof(m));
+  return exponent + (-0.34484843f * m + 2.02466578f) * m - 0.67487759f;
+}
+
+}  // namespace detail
+
+inline float NoiseTexture::bilinear(int level, float u, float v) const {
+  const int n = size_ >> level;
+  const float scale = 1.0f / static_cast<float>(1 << level);
+  // Texel centres of level k sit at (i + 0.5) * 2^k - 0.5 in level-0 coordinates.
+  const float x = (u + 0.5f) * scale - 0.5f, y = (v + 0.5f) * scale - 0.5f;
+  const float fx = std::floor(x), fy = std::floor(y);
+  const float tx = x - fx, ty = y - fy;
+  const int mask = n - 1;
+  const int x0 = static_cast<int>(fx) & mask, y0 = static_cast<int>(fy) & mask;
+  const int x1 = (x0 + 1) & mask, y1 = (y0 + 1) & mask;
+  const uint8_t* t = levels_[level].data();
+  const float t00 = t[offset(x0, y0, n)], t10 = t[offset(x1, y0, n)];
+  const float t01 = t[offset(x0, y1, n)], t11 = t[offset(x1, y1, n)];
+  const float a = t00 + (t10 - t00) * tx;
+  const float b = t01 + (t11 - t01) * tx;
+  return (a + (b - a) * ty) * (1.0f / 255.0f);
+}
+
+inline float NoiseTexture::sample(float u, float v, float footprint_texels) const {
+  // Keep texture coordinates small so that float keeps sub-texel precision far from the origin.
+  const float period = static_cast<float>(size_);
+  u -= period * std::floor(u / period);
+  v -= period * std::floor(v / period);
+  if (footprint_texels <= 1.0f) return bilinear(0, u, v);
+  const float lod = std::min(detail::fastLog2(footprint_texels), static_cast<float>(levels() - 1) - 1e-3f);
+  const int level = static_cast<int>(lod);
+  const float t = lod - static_cast<float>(level);
+  const float a = bilinear(level, u, v);
+  return a + (bilinear(level + 1, u, v) - a) * t;
+}
 
 }  // namespace cenote::pipeline
