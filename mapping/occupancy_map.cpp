@@ -154,6 +154,13 @@ void OccupancyMap::checkBatch(const PointBatch& batch) const {
                 std::to_string(batch.points.size()) + " points (must be equal, or no colours)");
   }
   const float limit_f = static_cast<float>(limit_m);
+  // One pass without branches (|x| < limit is false for NaN and infinity too); the message's loop
+  // below runs only for a bad batch.
+  bool all_good = true;
+  for (const Eigen::Vector3f& p : batch.points) {
+    all_good &= (std::fabs(p.x()) < limit_f) & (std::fabs(p.y()) < limit_f) & (std::fabs(p.z()) < limit_f);
+  }
+  if (all_good) return;
   for (size_t i = 0; i < batch.points.size(); ++i) {
     const Eigen::Vector3f& p = batch.points[i];
     if (!p.allFinite() || (p.array().abs() >= limit_f).any()) {

@@ -38,9 +38,10 @@ class MaskWriter {
 // voxels in the same order, with the same tie rules, so that ray_stop_run 0 stays OctoMap's voxel
 // set. Made for the hot loop: the state stays in registers, and the current block's masks are
 // looked up only when the walk crosses into another block (about every 8 steps).
-// Visit: bool operator()(uint64_t& free_word, uint64_t bit), false to stop.
+// Visit: bool operator()(uint64_t& free_word, uint64_t bit), false to stop. Returns false when
+// the visitor stopped the walk.
 template <typename Visit>
-void marchFree(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double voxel_size_m, bool include_end,
+bool marchFree(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double voxel_size_m, bool include_end,
                MaskWriter& writer, Visit visit) {
   const VoxelIndex key_start = toVoxel(start_m, voxel_size_m);
   const VoxelIndex key_end = toVoxel(end_m, voxel_size_m);
@@ -48,10 +49,7 @@ void marchFree(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, dou
     const int o = offsetInBlock(ijk);
     return visit(writer.masksOf(blockOf(ijk))->free[o >> 6], 1ull << (o & 63));
   };
-  if (key_start == key_end) {
-    if (include_end) visitVoxel(key_end);
-    return;
-  }
+  if (key_start == key_end) return include_end ? visitVoxel(key_end) : true;
   Eigen::Vector3d direction = end_m - start_m;
   const double length = direction.norm();
   direction /= length;
@@ -77,7 +75,7 @@ void marchFree(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, dou
   const int sx = step[0], sy = step[1], sz = step[2];
   BlockMasks* masks = writer.masksOf(block);
   uint64_t* words = masks->free.data();
-  if (!visit(words[lx], 1ull << ((ly << 3) | lz))) return;
+  if (!visit(words[lx], 1ull << ((ly << 3) | lz))) return false;
   // Each step moves one voxel towards the end voxel on one axis, so the walk can be in the end
   // voxel only after exactly this many steps (and never, if rounding made an axis overshoot).
   const long steps_to_end = (key_end - key_start).cwiseAbs().sum();
@@ -112,15 +110,92 @@ void marchFree(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, dou
     }
     if (n == steps_to_end &&
         VoxelIndex(block.x() * kBlockSide + lx, block.y() * kBlockSide + ly, block.z() * kBlockSide + lz) == key_end) {
-      if (include_end) visitVoxel(key_end);
-      return;
+      return include_end ? visitVoxel(key_end) : true;
     }
     if (std::min(std::min(tx, ty), tz) > length) {
-      if (include_end) visitVoxel(key_end);
+      return include_end ? visitVoxel(key_end) : true;
+    }
+    if (crossed) words = writer.masksOf(block)->free.data();
+    if (!visit(words[lx], 1ull << ((ly << 3) | lz))) return false;
+  }
+  return true;
+}
+
+// The cells of side cell_m = 2 voxels (cell c holds voxels 2c and 2c + 1 on each axis; 4 cells
+// per block side) that the segment from start_m to end_m passes through, both end cells included:
+// the same 3D DDA as marchFree, one level up. Each cell is 2 words of its block's free mask (x =
+// 2cx and 2cx + 1) with the same 4-bit pattern (y = 2cy, 2cy + 1; z = 2cz, 2cz + 1).
+// Visit: bool operator()(uint64_t* two_free_words, uint64_t pattern), false to stop.
+template <typename Visit>
+void marchCoarse(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double cell_m, MaskWriter& writer,
+                 Visit visit) {
+  const VoxelIndex key_start = toVoxel(start_m, cell_m);
+  const VoxelIndex key_end = toVoxel(end_m, cell_m);
+  auto pattern = [](int ly, int lz) { return 0x303ull << ((ly << 4) | (lz << 1)); };
+  auto visitCell = [&](const VoxelIndex& c) {
+    const BlockIndex b(c.x() >> 2, c.y() >> 2, c.z() >> 2);
+    return visit(writer.masksOf(b)->free.data() + ((c.x() & 3) << 1), pattern(c.y() & 3, c.z() & 3));
+  };
+  if (!visitCell(key_start) || key_start == key_end) return;
+  Eigen::Vector3d direction = end_m - start_m;
+  const double length = direction.norm();
+  direction /= length;
+  double t_max[3], t_delta[3];
+  int step[3];
+  for (int i = 0; i < 3; ++i) {
+    step[i] = direction[i] > 0.0 ? 1 : (direction[i] < 0.0 ? -1 : 0);
+    if (step[i] != 0) {
+      const double border = (key_start[i] + 0.5) * cell_m + step[i] * cell_m * 0.5;
+      t_max[i] = (border - start_m[i]) / direction[i];
+      t_delta[i] = cell_m / std::fabs(direction[i]);
+    } else {
+      t_max[i] = std::numeric_limits<double>::max();
+      t_delta[i] = 0.0;
+    }
+  }
+  int lx = key_start.x() & 3, ly = key_start.y() & 3, lz = key_start.z() & 3;
+  BlockIndex block(key_start.x() >> 2, key_start.y() >> 2, key_start.z() >> 2);
+  double tx = t_max[0], ty = t_max[1], tz = t_max[2];
+  const double dx = t_delta[0], dy = t_delta[1], dz = t_delta[2];
+  const int sx = step[0], sy = step[1], sz = step[2];
+  uint64_t* words = writer.masksOf(block)->free.data();
+  const long steps_to_end = (key_end - key_start).cwiseAbs().sum();
+  const long max_steps = 3 * static_cast<long>(length / cell_m) + 6;
+  for (long n = 1; n <= max_steps; ++n) {
+    bool crossed;
+    if (tx < ty && tx < tz) {
+      lx += sx;
+      tx += dx;
+      crossed = (lx & ~3) != 0;
+      if (crossed) {
+        block.x() += sx;
+        lx &= 3;
+      }
+    } else if (ty < tz) {
+      ly += sy;
+      ty += dy;
+      crossed = (ly & ~3) != 0;
+      if (crossed) {
+        block.y() += sy;
+        ly &= 3;
+      }
+    } else {
+      lz += sz;
+      tz += dz;
+      crossed = (lz & ~3) != 0;
+      if (crossed) {
+        block.z() += sz;
+        lz &= 3;
+      }
+    }
+    const bool at_end =
+        n == steps_to_end && VoxelIndex(block.x() * 4 + lx, block.y() * 4 + ly, block.z() * 4 + lz) == key_end;
+    if (!at_end && std::min(std::min(tx, ty), tz) > length) {
+      visitCell(key_end);  // left the segment without entering the end cell (it ends on a face or an edge)
       return;
     }
     if (crossed) words = writer.masksOf(block)->free.data();
-    if (!visit(words[lx], 1ull << ((ly << 3) | lz))) return;
+    if (!visit(words + (lx << 1), pattern(ly, lz)) || at_end) return;
   }
 }
 
@@ -146,6 +221,20 @@ struct CarveUntilRun {
     // Without a branch on "already carved": it alternates irregularly along a ray.
     const int carved = (word & bit) != 0;
     word |= bit;
+    run = (run + 1) & -carved;
+    return run < stop_run;
+  }
+};
+
+// marchCoarse's counterpart of CarveUntilRun: stops after stop_run cells in a row whose 8 voxels
+// were all carved already.
+struct CarveCellsUntilRun {
+  int stop_run;
+  int run = 0;
+  bool operator()(uint64_t* words, uint64_t pattern) {
+    const int carved = ((words[0] & pattern) == pattern) & ((words[1] & pattern) == pattern);
+    words[0] |= pattern;
+    words[1] |= pattern;
     run = (run + 1) & -carved;
     return run < stop_run;
   }
@@ -215,7 +304,18 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
       if (exact) {
         marchFree(origin, stop, voxel_size_m, false, writer, CarveAll{});
       } else {
-        marchFree(stop, origin, voxel_size_m, true, writer, CarveUntilRun{stop_run});
+        // Voxel by voxel for the last kFineVoxels before the end, then by 2-voxel cells (5.).
+        const double fine_m = RayBatch::kFineVoxels * voxel_size_m;
+        const double length = (stop - origin).norm();
+        if (length <= fine_m + 2.0 * voxel_size_m) {
+          marchFree(stop, origin, voxel_size_m, true, writer, CarveUntilRun{stop_run});
+        } else {
+          const Eigen::Vector3d coarse_start = stop + (origin - stop) * (fine_m / length);
+          if (marchFree(stop, coarse_start, voxel_size_m, false, writer, CarveUntilRun{stop_run})) {
+            marchCoarse(coarse_start, origin, 2.0 * voxel_size_m, writer,
+                        CarveCellsUntilRun{std::max(1, stop_run / 2)});
+          }
+        }
       }
       if (in_range) writer.setHit(endpoint);
     }
