@@ -69,8 +69,11 @@ cv::Mat renderRadiance(const SimScene& scene, const SurfaceTexture& texture, con
   const Eigen::Array3f beta = light.attenuation_per_m;
   const auto fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
   const auto cx = static_cast<float>(cam.cx), cy = static_cast<float>(cam.cy);
+  std::vector<float> ray_x(static_cast<size_t>(cam.width));  // x / z of each column's ray
+  for (int x = 0; x < cam.width; ++x) ray_x[x] = (x - cx) / fx;
 #pragma omp parallel for schedule(static)
   for (int y = 0; y < cam.height; ++y) {
+    const float ray_y = (y - cy) / fy;
     const int32_t* ids = vis.triangle.ptr<int32_t>(y);
     const float* depth = vis.depth.ptr<float>(y);
     auto* row = out.ptr<cv::Vec3f>(y);
@@ -80,7 +83,7 @@ cv::Mat renderRadiance(const SimScene& scene, const SurfaceTexture& texture, con
         continue;
       }
       const float z = depth[x];
-      const Eigen::Vector3f ray_cam((x - cx) / fx * z, (y - cy) / fy * z, z);
+      const Eigen::Vector3f ray_cam(ray_x[x] * z, ray_y * z, z);
       const float range = ray_cam.norm();
       const Eigen::Vector3f offset_world = R * ray_cam;  // from the camera centre to the point
       // World position relative to the camera, then absolute in double (keeps float precision local).

@@ -65,6 +65,7 @@ NoiseTexture::NoiseTexture(int size, uint64_t seed) : size_(size) {
   if (size < 8 || (size & (size - 1)) != 0) {
     throw Error("NoiseTexture: size " + std::to_string(size) + " must be a power of two >= 8");
   }
+  while ((1 << size_log2_) < size) ++size_log2_;
   // Level 0: octaves of period size, size/2, ..., 4 texels, amplitude falling slower than 1/f so
   // that fine detail (what stereo matches on) stays strong.
   std::vector<float> base(static_cast<size_t>(size) * size);

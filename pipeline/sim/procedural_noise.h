@@ -68,7 +68,14 @@ class NoiseTexture {
     return static_cast<size_t>(((((y >> 3) * (n >> 3) + (x >> 3)) << 6) | ((y & 7) << 3) | (x & 7)));
   }
 
+  // 2^-k for k in [0, 31]: exact, and no division per sample.
+  static constexpr float kInversePowersOfTwo[32] = {
+      1.0f,        0x1p-1f,  0x1p-2f,  0x1p-3f,  0x1p-4f,  0x1p-5f,  0x1p-6f,  0x1p-7f,  0x1p-8f,  0x1p-9f,  0x1p-10f,
+      0x1p-11f,    0x1p-12f, 0x1p-13f, 0x1p-14f, 0x1p-15f, 0x1p-16f, 0x1p-17f, 0x1p-18f, 0x1p-19f, 0x1p-20f, 0x1p-21f,
+      0x1p-22f,    0x1p-23f, 0x1p-24f, 0x1p-25f, 0x1p-26f, 0x1p-27f, 0x1p-28f, 0x1p-29f, 0x1p-30f, 0x1p-31f};
+
   int size_;
+  int size_log2_ = 0;
   std::vector<std::vector<uint8_t>> levels_;  // level k: (size >> k)^2 texels of value / 255, tiled
 };
 
@@ -89,7 +96,7 @@ inline float fastLog2(float x) {
 
 inline float NoiseTexture::bilinear(int level, float u, float v) const {
   const int n = size_ >> level;
-  const float scale = 1.0f / static_cast<float>(1 << level);
+  const float scale = kInversePowersOfTwo[level];
   // Texel centres of level k sit at (i + 0.5) * 2^k - 0.5 in level-0 coordinates.
   const float x = (u + 0.5f) * scale - 0.5f, y = (v + 0.5f) * scale - 0.5f;
   const float fx = std::floor(x), fy = std::floor(y);
@@ -107,9 +114,11 @@ inline float NoiseTexture::bilinear(int level, float u, float v) const {
 
 inline float NoiseTexture::sample(float u, float v, float footprint_texels) const {
   // Keep texture coordinates small so that float keeps sub-texel precision far from the origin.
+  // (u * inverse_size is u / size to the bit: size is a power of two.)
   const float period = static_cast<float>(size_);
-  u -= period * std::floor(u / period);
-  v -= period * std::floor(v / period);
+  const float inverse_period = kInversePowersOfTwo[size_log2_];
+  u -= period * std::floor(u * inverse_period);
+  v -= period * std::floor(v * inverse_period);
   if (footprint_texels <= 1.0f) return bilinear(0, u, v);
   const float lod = std::min(detail::fastLog2(footprint_texels), static_cast<float>(levels() - 1) - 1e-3f);
   const int level = static_cast<int>(lod);
