@@ -20,6 +20,13 @@ struct RasterTriangle {
   int32_t triangle;   // mesh index
 };
 
+// Buffers of one rasterize() call, kept per thread so that their pages are reused.
+struct Scratch {
+  std::vector<std::vector<RasterTriangle>> per_chunk;
+  std::vector<RasterTriangle> triangles;
+  std::vector<std::vector<int32_t>> bands;
+};
+
 struct Plane {
   Eigen::Vector3d n;
   double d;
@@ -41,12 +48,31 @@ int clipNear(const std::array<Eigen::Vector3d, 3>& in, double near, std::array<E
   return count;
 }
 
+// screen: pixel position of each chunk vertex (meaningful for vertices at z >= near), computed once
+// per vertex instead of once per triangle corner.
 void setupTriangle(const SceneMesh& mesh, uint32_t t, const std::vector<Eigen::Vector3d>& cam_vertices,
-                   uint32_t first_vertex, const PinholeCamera& cam, double near, std::vector<RasterTriangle>& out) {
+                   const std::vector<Eigen::Vector2d>& screen, uint32_t first_vertex, const PinholeCamera& cam,
+                   double near, std::vector<RasterTriangle>& out) {
   const auto& tri = mesh.triangles[t];
-  const std::array<Eigen::Vector3d, 3> v = {cam_vertices[tri[0] - first_vertex], cam_vertices[tri[1] - first_vertex],
-                                            cam_vertices[tri[2] - first_vertex]};
-  if (v[0].z() < near && v[1].z() < near && v[2].z() < near) return;
+  const uint32_t i[3] = {tri[0] - first_vertex, tri[1] - first_vertex, tri[2] - first_vertex};
+  const std::array<Eigen::Vector3d, 3> v = {cam_vertices[i[0]], cam_vertices[i[1]], cam_vertices[i[2]]};
+  const bool all_in = v[0].z() >= near && v[1].z() >= near && v[2].z() >= near;
+  if (!all_in && v[0].z() < near && v[1].z() < near && v[2].z() < near) return;
+  double px[4], py[4];
+  int count = 3;
+  if (all_in) {
+    // Off the image: rejected before the plane (the usual case in a chunk at the edge of the view).
+    for (int k = 0; k < 3; ++k) {
+      px[k] = screen[i[k]].x();
+      py[k] = screen[i[k]].y();
+    }
+    // Also rejected: no pixel centre within the bounds (a triangle smaller than a pixel, between
+    // centres), which drawTriangle would skip anyway.
+    const double min_x = std::min({px[0], px[1], px[2]}), max_x = std::max({px[0], px[1], px[2]});
+    const double min_y = std::min({py[0], py[1], py[2]}), max_y = std::max({py[0], py[1], py[2]});
+    if (max_x < 0 || max_y < 0 || min_x > cam.width - 1 || min_y > cam.height - 1) return;
+    if (std::ceil(min_x) > std::floor(max_x) || std::ceil(min_y) > std::floor(max_y)) return;
+  }
   Plane plane{(v[1] - v[0]).cross(v[2] - v[0]), 0.0};
   plane.d = plane.n.dot(v[0]);
   // Seen edge-on (the plane passes through the optical centre): covers no pixel.
@@ -55,25 +81,21 @@ void setupTriangle(const SceneMesh& mesh, uint32_t t, const std::vector<Eigen::V
     plane.n = -plane.n;
     plane.d = -plane.d;
   }
-  std::array<Eigen::Vector3d, 4> poly;
-  int count = 3;
-  if (v[0].z() >= near && v[1].z() >= near && v[2].z() >= near) {
-    poly = {v[0], v[1], v[2], Eigen::Vector3d::Zero()};
-  } else {
+  if (!all_in) {
+    std::array<Eigen::Vector3d, 4> poly;
     count = clipNear(v, near, poly);
     if (count < 3) return;
+    double min_x = 1e300, max_x = -1e300, min_y = 1e300, max_y = -1e300;
+    for (int k = 0; k < count; ++k) {
+      px[k] = cam.fx * poly[k].x() / poly[k].z() + cam.cx;
+      py[k] = cam.fy * poly[k].y() / poly[k].z() + cam.cy;
+      min_x = std::min(min_x, px[k]);
+      max_x = std::max(max_x, px[k]);
+      min_y = std::min(min_y, py[k]);
+      max_y = std::max(max_y, py[k]);
+    }
+    if (max_x < 0 || max_y < 0 || min_x > cam.width - 1 || min_y > cam.height - 1) return;
   }
-  double px[4], py[4];
-  double min_x = 1e300, max_x = -1e300, min_y = 1e300, max_y = -1e300;
-  for (int i = 0; i < count; ++i) {
-    px[i] = cam.fx * poly[i].x() / poly[i].z() + cam.cx;
-    py[i] = cam.fy * poly[i].y() / poly[i].z() + cam.cy;
-    min_x = std::min(min_x, px[i]);
-    max_x = std::max(max_x, px[i]);
-    min_y = std::min(min_y, py[i]);
-    max_y = std::max(max_y, py[i]);
-  }
-  if (max_x < 0 || max_y < 0 || min_x > cam.width - 1 || min_y > cam.height - 1) return;
   RasterTriangle r;
   r.a = plane.n.x() / (cam.fx * plane.d);
   r.b = plane.n.y() / (cam.fy * plane.d);
@@ -159,36 +181,42 @@ VisibilityBuffer rasterize(const SceneMesh& mesh, const PinholeCamera& cam, cons
     if (!outside) visible.push_back(static_cast<int>(k));
   }
 
-  // Triangle setup per visible chunk (in parallel), concatenated in chunk order.
-  std::vector<std::vector<RasterTriangle>> per_chunk(visible.size());
+  // Triangle setup per visible chunk (in parallel), concatenated in chunk order. The lists live on
+  // in per-thread scratch (about 14 MB per camera at 800x600): fresh pages for them each frame cost
+  // more kernel time (page faults, zeroing) than the setup itself.
+  static thread_local Scratch scratch;
+  std::vector<std::vector<RasterTriangle>>& per_chunk = scratch.per_chunk;
+  if (per_chunk.size() < visible.size()) per_chunk.resize(visible.size());
+  for (size_t k = 0; k < visible.size(); ++k) per_chunk[k].clear();
 #pragma omp parallel
   {
     std::vector<Eigen::Vector3d> cam_vertices;
+    std::vector<Eigen::Vector2d> screen;
 #pragma omp for schedule(dynamic, 4)
     for (int k = 0; k < static_cast<int>(visible.size()); ++k) {
       const MeshChunk& chunk = mesh.chunks[visible[k]];
       cam_vertices.resize(chunk.num_vertices);
+      screen.resize(chunk.num_vertices);
       for (uint32_t v = 0; v < chunk.num_vertices; ++v) {
-        cam_vertices[v] = R * mesh.vertices[chunk.first_vertex + v].cast<double>() + t;
+        const Eigen::Vector3d p = R * mesh.vertices[chunk.first_vertex + v].cast<double>() + t;
+        cam_vertices[v] = p;
+        screen[v] = Eigen::Vector2d(cam.fx * p.x() / p.z() + cam.cx, cam.fy * p.y() / p.z() + cam.cy);
       }
       per_chunk[k].reserve(chunk.num_triangles);
       for (uint32_t tri = chunk.first_triangle; tri < chunk.first_triangle + chunk.num_triangles; ++tri) {
-        setupTriangle(mesh, tri, cam_vertices, chunk.first_vertex, cam, near_m, per_chunk[k]);
+        setupTriangle(mesh, tri, cam_vertices, screen, chunk.first_vertex, cam, near_m, per_chunk[k]);
       }
     }
   }
 
   // Flatten in chunk order, then bin into fixed bands of rows, keeping mesh order within each band.
-  std::vector<RasterTriangle> triangles;
-  size_t total = 0;
-  for (const auto& list : per_chunk) total += list.size();
-  triangles.reserve(total);
-  for (auto& list : per_chunk) {
-    triangles.insert(triangles.end(), list.begin(), list.end());
-    std::vector<RasterTriangle>().swap(list);
-  }
+  std::vector<RasterTriangle>& triangles = scratch.triangles;
+  triangles.clear();
+  for (size_t k = 0; k < visible.size(); ++k) triangles.insert(triangles.end(), per_chunk[k].begin(), per_chunk[k].end());
   const int band_rows = (cam.height + kBands - 1) / kBands;
-  std::vector<std::vector<int32_t>> bands(kBands);
+  std::vector<std::vector<int32_t>>& bands = scratch.bands;
+  bands.resize(kBands);
+  for (auto& band : bands) band.clear();
   for (size_t k = 0; k < triangles.size(); ++k) {
     const RasterTriangle& tri = triangles[k];
     const double lo = std::min({tri.y[0], tri.y[1], tri.y[2]}), hi = std::max({tri.y[0], tri.y[1], tri.y[2]});

@@ -7,7 +7,8 @@
 // Triangles are two-sided; ties keep the triangle that comes first in the mesh.
 // Units: pixels, metres. Frames: camera x right, y down, z forward; T_world_cam maps camera to world.
 // Threads: OpenMP over mesh chunks and over fixed horizontal bands of the image; the output is
-// bit-identical whatever the thread count (each band is drawn by one thread in mesh order).
+// bit-identical whatever the thread count (each band is drawn by one thread in mesh order). Calls
+// from several threads at once are safe: the scratch buffers a call reuses are per calling thread.
 #pragma once
 
 #include <Eigen/Geometry>
