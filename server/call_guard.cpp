@@ -1,6 +1,5 @@
 #include "server/call_guard.h"
 
-#include <fstream>
 
 namespace cenote::server {
 namespace {
@@ -15,17 +14,6 @@ bool equalConstantTime(const std::string& given, const std::string& token) {
 }
 
 }  // namespace
-
-std::string Authenticator::readTokenFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error("token file " + path + " cannot be read");
-  std::string line;
-  std::getline(in, line);
-  const size_t first = line.find_first_not_of(" \t\r\n");
-  const size_t last = line.find_last_not_of(" \t\r\n");
-  if (first == std::string::npos) throw Error("token file " + path + " holds no token on its first line");
-  return line.substr(first, last - first + 1);
-}
 
 grpc::Status Authenticator::check(const grpc::ServerContext& context) const {
   if (token_.empty()) return grpc::Status::OK;

@@ -27,9 +27,6 @@ class Authenticator {
  public:
   // Empty token: every call is let in.
   explicit Authenticator(std::string token) : token_(std::move(token)) {}
-  // Reads the first line of `path` (surrounding white space trimmed).
-  // @throws cenote::Error when the file cannot be read or holds no token.
-  static std::string readTokenFile(const std::string& path);
   grpc::Status check(const grpc::ServerContext& context) const;
   bool enabled() const { return !token_.empty(); }
 

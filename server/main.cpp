@@ -18,9 +18,9 @@
 #include <fstream>
 #include <iostream>
 #include <pthread.h>
-#include <sstream>
 
 #include "common/error.h"
+#include "common/text_file.h"
 #include "mapping/io/map_io.h"
 #include "pipeline/calibration/stereo_calibration.h"
 #include "pipeline/dataset/stereo_dataset.h"
@@ -39,14 +39,6 @@ struct Options {
   std::string tls_cert, tls_key, tls_client_ca;
   double snapshot_period_s = -1.0;
 };
-
-std::string readFile(const std::string& path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(std::string(what) + " " + path + " cannot be read");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 ServerSettings settingsFrom(const Options& o) {
   ServerSettings s = ServerSettings::load(o.config);
@@ -74,9 +66,9 @@ std::shared_ptr<grpc::ServerCredentials> credentialsFrom(const Options& o) {
   }
   if (o.tls_cert.empty() || o.tls_key.empty()) throw Error("TLS needs both --tls-cert and --tls-key");
   grpc::SslServerCredentialsOptions tls;
-  tls.pem_key_cert_pairs.push_back({readFile(o.tls_key, "TLS key"), readFile(o.tls_cert, "TLS certificate")});
+  tls.pem_key_cert_pairs.push_back({readTextFile(o.tls_key, "TLS key"), readTextFile(o.tls_cert, "TLS certificate")});
   if (!o.tls_client_ca.empty()) {
-    tls.pem_root_certs = readFile(o.tls_client_ca, "TLS client CA");
+    tls.pem_root_certs = readTextFile(o.tls_client_ca, "TLS client CA");
     tls.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   return grpc::SslServerCredentials(tls);
@@ -102,7 +94,7 @@ sigset_t blockShutdownSignals() {
 int serve(const Options& o) {
   const sigset_t signals = blockShutdownSignals();
   const ServerSettings settings = settingsFrom(o);
-  const std::string token = settings.server.token_file.empty() ? "" : Authenticator::readTokenFile(settings.server.token_file);
+  const std::string token = settings.server.token_file.empty() ? "" : readTokenFile(settings.server.token_file, "token file");
   CallGuard guard{Authenticator(token)};
   MapHostOptions host_options;
   host_options.max_subscriber_lag = static_cast<size_t>(settings.server.max_subscriber_lag);

@@ -57,25 +57,6 @@ std::vector<Eigen::Vector3d> readPointsFile(const std::string& path) {
   return points;
 }
 
-std::string readTokenFile(const std::string& path) {
-  std::ifstream file(path);
-  if (!file) throw CliError("--token-file " + path + ": cannot open");
-  std::string token;
-  std::getline(file, token);
-  const size_t first = token.find_first_not_of(" \t\r\n");
-  const size_t last = token.find_last_not_of(" \t\r\n");
-  if (first == std::string::npos) throw CliError("--token-file " + path + ": empty first line (no token)");
-  return token.substr(first, last - first + 1);
-}
-
-std::string readTextFile(const std::string& path, const std::string& what) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw CliError(what + " " + path + ": cannot open");
-  std::ostringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
-
 std::string formatNumber(double v) {
   char text[32];
   const auto result = std::to_chars(text, text + sizeof(text), v);

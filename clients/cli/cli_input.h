@@ -20,10 +20,6 @@ class CliError : public std::runtime_error {
 Eigen::Vector3d parsePoint(const std::string& text, const std::string& what);
 // One "x y z" (spaces, tabs or commas) per line; blank lines and lines starting with '#' skipped.
 std::vector<Eigen::Vector3d> readPointsFile(const std::string& path);
-// The file's first line without surrounding white space; an empty token is an error.
-std::string readTokenFile(const std::string& path);
-// The whole file (PEM certificates and keys); `what` names the option in the error.
-std::string readTextFile(const std::string& path, const std::string& what);
 // The shortest text that reads back as the same double ("2.025", "1234567.5").
 std::string formatNumber(double v);
 // "x,y,z" / "x y z" with formatNumber.

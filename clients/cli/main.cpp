@@ -6,13 +6,14 @@
 
 #include "clients/cli/cli_input.h"
 #include "clients/cli/commands.h"
+#include "common/text_file.h"
 
 namespace cenote::cli {
 
 client::MapClient& Connection::client() {
   if (!client_) {
     client::ClientOptions options;
-    options.token = token_file.empty() ? token : readTokenFile(token_file);
+    options.token = token_file.empty() ? token : readTokenFile(token_file, "--token-file");
     options.deadline_s = deadline_s;
     options.use_tls = tls || !tls_ca.empty() || !tls_cert.empty();
     if (!tls_ca.empty()) options.tls_root_cert_pem = readTextFile(tls_ca, "--tls-ca");
