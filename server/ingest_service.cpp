@@ -222,10 +222,8 @@ void IngestService::integrateBatch(const v1::PointBatch& wire, v1::BatchAck& ack
   PointBatch batch;
   batch.t_s = wire.timestamp_s();
   batch.origin = finitePoint(wire.origin(), "origin");
-  const std::vector<Eigen::Vector3d> points = pointsFromWire(
-      wire.xyz(), "xyz", settings_.server.limits.max_points_per_batch, "server.limits.max_points_per_batch");
-  batch.points.reserve(points.size());
-  for (const Eigen::Vector3d& p : points) batch.points.push_back(p.cast<float>());
+  batch.points = pointsFromWire<float>(wire.xyz(), "xyz", settings_.server.limits.max_points_per_batch,
+                                      "server.limits.max_points_per_batch");
   if (batch.points.empty()) throw invalidArgument("xyz: the batch has no points");
   if (!wire.rgb().empty()) {
     if (wire.rgb().size() != 3 * batch.points.size()) {
@@ -250,10 +248,8 @@ grpc::Status IngestService::StreamPoints(grpc::ServerContext* context,
         integrateBatch(wire, ack);
       } catch (const StatusError& e) {
         reject(ack, e);
-        ++counters_.points_batches_rejected;
       } catch (const Error& e) {
         reject(ack, invalidArgument(e.what()));
-        ++counters_.points_batches_rejected;
       }
       return true;
     });
@@ -264,12 +260,7 @@ grpc::Status IngestService::StreamPoints(grpc::ServerContext* context,
 grpc::Status IngestService::IntegratePoints(grpc::ServerContext* context, const v1::PointBatch* request,
                                             v1::BatchAck* reply) {
   return guard_.run(context, "Ingest/IntegratePoints", [&] {
-    try {
-      integrateBatch(*request, *reply);
-    } catch (...) {
-      ++counters_.points_batches_rejected;
-      throw;
-    }
+    integrateBatch(*request, *reply);
     return grpc::Status::OK;
   });
 }

@@ -27,7 +27,6 @@ namespace cenote::server {
 // Frames counted over the server's life (Admin.GetStats).
 struct IngestCounters {
   std::atomic<uint64_t> frames_received{0}, frames_processed{0}, frames_skipped{0}, frames_rejected{0};
-  std::atomic<uint64_t> points_batches_rejected{0};
 };
 
 struct StageSummaryNamed {

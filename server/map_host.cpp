@@ -9,8 +9,9 @@ MapHost::MapHost(std::unique_ptr<mapping::OccupancyMap> map, const MapHostOption
       feed_(options.max_subscriber_lag),
       options_(options),
       writer_(options.writer_nice) {
-  // A loaded map: derive everything once before serving.
-  if (map_->version() > 0 || map_->stats().occupied + map_->stats().free > 0) {
+  // A loaded map: derive everything once before serving (stats() walks the grid: ask once).
+  const mapping::MapStats loaded = map_->stats();
+  if (loaded.occupied + loaded.free > 0) {
     distance_->rebuild();
     frontiers_->rebuild();
   }
