@@ -77,22 +77,29 @@ void checkCount(int64_t count, const std::string& what, int64_t limit, const std
   }
 }
 
-std::vector<Eigen::Vector3d> pointsFromWire(const google::protobuf::RepeatedField<double>& xyz, const std::string& what,
-                                            int64_t limit, const std::string& limit_name) {
+template <typename Scalar>
+std::vector<Eigen::Matrix<Scalar, 3, 1>> pointsFromWire(const google::protobuf::RepeatedField<double>& xyz,
+                                                        const std::string& what, int64_t limit,
+                                                        const std::string& limit_name) {
   if (xyz.size() % 3 != 0) {
     throw invalidArgument(what + ": " + std::to_string(xyz.size()) + " numbers, not a multiple of 3 (x, y, z per point)");
   }
   const int64_t n = xyz.size() / 3;
   checkCount(n, what, limit, limit_name);
-  std::vector<Eigen::Vector3d> points(static_cast<size_t>(n));
+  std::vector<Eigen::Matrix<Scalar, 3, 1>> points(static_cast<size_t>(n));
   const double* p = xyz.data();
   for (int64_t i = 0; i < n; ++i, p += 3) {
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
       throw invalidArgument(what + ": point " + std::to_string(i) + " has a non-finite coordinate");
     }
-    points[i] = Eigen::Vector3d(p[0], p[1], p[2]);
+    points[i] = Eigen::Vector3d(p[0], p[1], p[2]).cast<Scalar>();
   }
   return points;
 }
+
+template std::vector<Eigen::Vector3d> pointsFromWire<double>(const google::protobuf::RepeatedField<double>&,
+                                                             const std::string&, int64_t, const std::string&);
+template std::vector<Eigen::Vector3f> pointsFromWire<float>(const google::protobuf::RepeatedField<double>&,
+                                                            const std::string&, int64_t, const std::string&);
 
 }  // namespace cenote::server
