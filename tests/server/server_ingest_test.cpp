@@ -44,6 +44,17 @@ void toWire(const Eigen::Isometry3d& T, v1::Pose* pose) {
   pose->mutable_orientation()->set_w(q.w());
 }
 
+// One frame of the dive as the wire carries it: its PNG files, with an identity pose or none.
+v1::StereoFrame diveFrame(const std::string& dir, const pipeline::StereoDataset& dataset, size_t i, bool with_pose) {
+  v1::StereoFrame frame;
+  frame.set_timestamp_s(dataset.timestamp(i));
+  const std::string name = dataset.frameName(i) + ".png";
+  frame.mutable_left()->set_encoded(readBytes(fs::path(dir) / "dive/mav0/cam0/data" / name));
+  frame.mutable_right()->set_encoded(readBytes(fs::path(dir) / "dive/mav0/cam1/data" / name));
+  if (with_pose) toWire(Eigen::Isometry3d::Identity(), frame.mutable_pose());
+  return frame;
+}
+
 // A short simulated cave dive and `cenote run`'s map of it, made once for the suite.
 class SimulatedDive : public ::testing::Test {
  protected:
@@ -87,12 +98,7 @@ TEST_F(SimulatedDive, StreamedFramesAndPosesGiveTheSameMapAsCenoteRun) {
   auto frames = stubs.ingest->StreamFrames(context.get());
   size_t processed = 0;
   for (size_t i = 0; i < dataset->size(); ++i) {
-    v1::StereoFrame frame;
-    frame.set_timestamp_s(dataset->timestamp(i));
-    const std::string name = dataset->frameName(i) + ".png";
-    frame.mutable_left()->set_encoded(readBytes(fs::path(dir_) / "dive/mav0/cam0/data" / name));
-    frame.mutable_right()->set_encoded(readBytes(fs::path(dir_) / "dive/mav0/cam1/data" / name));
-    ASSERT_TRUE(frames->Write(frame));
+    ASSERT_TRUE(frames->Write(diveFrame(dir_, *dataset, i, false)));
     v1::FrameAck ack;
     ASSERT_TRUE(frames->Read(&ack));
     EXPECT_EQ(ack.sequence(), i);
@@ -115,22 +121,11 @@ TEST_F(SimulatedDive, StreamedFramesAndPosesGiveTheSameMapAsCenoteRun) {
   EXPECT_EQ(diff.different_log_odds, 0u);
 }
 
-// One frame of the dive as the wire carries it.
-v1::StereoFrame diveFrame(const std::string& dir, const pipeline::StereoDataset& dataset, size_t i) {
-  v1::StereoFrame frame;
-  frame.set_timestamp_s(dataset.timestamp(i));
-  const std::string name = dataset.frameName(i) + ".png";
-  frame.mutable_left()->set_encoded(readBytes(fs::path(dir) / "dive/mav0/cam0/data" / name));
-  frame.mutable_right()->set_encoded(readBytes(fs::path(dir) / "dive/mav0/cam1/data" / name));
-  toWire(Eigen::Isometry3d::Identity(), frame.mutable_pose());
-  return frame;
-}
-
 TEST_F(SimulatedDive, BadFramesAreRejectedWithTheirStatusAndTheMapIsUnchanged) {
   ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", config_, "--calibration", dir_ + "/dive"}});
   Stubs stubs(server.target());
   const auto dataset = pipeline::openDataset(dir_ + "/dive");
-  const v1::StereoFrame good = diveFrame(dir_, *dataset, 0);
+  const v1::StereoFrame good = diveFrame(dir_, *dataset, 0, true);
 
   std::vector<std::pair<std::string, v1::StereoFrame>> cases;
   v1::StereoFrame corrupt = good;
