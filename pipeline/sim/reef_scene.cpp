@@ -113,14 +113,8 @@ SimScene buildReef(const SimConfig& config, double path_length_m) {
   scene.kind = SimSceneKind::kReef;
   scene.mesh = builder.finish();
   setDefaultAlbedo(scene);
-  SceneLighting& light = scene.lighting;
-  const auto turbidity = static_cast<float>(config.turbidity);
-  light.attenuation_per_m = Eigen::Array3f(0.10f, 0.09f, 0.42f) * turbidity;
-  light.backscatter = Eigen::Array3f(0.30f, 0.24f, 0.03f) * std::min(1.0f, turbidity) * 0.35f;
-  light.sun = true;
-  light.surface_z_m = 10.0f;
-  light.downwelling_per_m = Eigen::Array3f(0.05f, 0.06f, 0.30f) * turbidity;
-  light.rig_light = false;
+  scene.lighting = sunlitWater(config.turbidity, {0.10f, 0.09f, 0.42f}, {0.30f, 0.24f, 0.03f}, 10.0f,
+                               {0.05f, 0.06f, 0.30f});
 
   const double speed = config.speed_m_s;
   scene.T_world_cam0 = [path, speed](double t_s) {

@@ -19,6 +19,20 @@ Eigen::Matrix3d lookRotation(const Eigen::Vector3d& forward, const Eigen::Vector
 
 namespace detail {
 
+SceneLighting sunlitWater(double turbidity, const Eigen::Array3f& attenuation_per_m,
+                          const Eigen::Array3f& backscatter, float surface_z_m,
+                          const Eigen::Array3f& downwelling_per_m) {
+  const auto t = static_cast<float>(turbidity);
+  SceneLighting light;
+  light.attenuation_per_m = attenuation_per_m * t;
+  light.backscatter = backscatter * std::min(1.0f, t) * 0.35f;
+  light.sun = true;
+  light.surface_z_m = surface_z_m;
+  light.downwelling_per_m = downwelling_per_m * t;
+  light.rig_light = false;
+  return light;
+}
+
 void setDefaultAlbedo(SimScene& scene) {
   auto set = [&](Material m, float b, float g, float r) { scene.albedo[static_cast<size_t>(m)] = {b, g, r}; };
   set(Material::kRock, 0.50f, 0.55f, 0.60f);    // limestone grey-beige

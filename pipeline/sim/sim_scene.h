@@ -56,6 +56,11 @@ SimScene buildCave(const SimConfig& config, double path_length_m);
 SimScene buildReef(const SimConfig& config, double path_length_m);
 SimScene buildWreck(const SimConfig& config, double path_length_m);
 void setDefaultAlbedo(SimScene& scene);
+// Open water lit by the sun (reef, wreck): attenuation and downwelling scale with turbidity, the
+// backscatter with min(1, turbidity) and a 0.35 share; no rig light.
+SceneLighting sunlitWater(double turbidity, const Eigen::Array3f& attenuation_per_m,
+                          const Eigen::Array3f& backscatter, float surface_z_m,
+                          const Eigen::Array3f& downwelling_per_m);
 }  // namespace detail
 
 }  // namespace cenote::pipeline

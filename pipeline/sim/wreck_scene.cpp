@@ -100,14 +100,8 @@ SimScene buildWreck(const SimConfig& config, double path_length_m) {
   scene.kind = SimSceneKind::kWreck;
   scene.mesh = builder.finish();
   setDefaultAlbedo(scene);
-  SceneLighting& light = scene.lighting;
-  const auto turbidity = static_cast<float>(config.turbidity);
-  light.attenuation_per_m = Eigen::Array3f(0.13f, 0.10f, 0.45f) * turbidity;
-  light.backscatter = Eigen::Array3f(0.22f, 0.28f, 0.04f) * std::min(1.0f, turbidity) * 0.35f;
-  light.sun = true;
-  light.surface_z_m = 14.0f;
-  light.downwelling_per_m = Eigen::Array3f(0.06f, 0.06f, 0.32f) * turbidity;
-  light.rig_light = false;
+  scene.lighting = sunlitWater(config.turbidity, {0.13f, 0.10f, 0.45f}, {0.22f, 0.28f, 0.04f}, 14.0f,
+                               {0.06f, 0.06f, 0.32f});
 
   // Counter-clockwise around the hull, which stays on the left; the camera looks left and down.
   const double px = kHalfLength_m + kStandOff_m, py = kHalfBeam_m + kStandOff_m;
