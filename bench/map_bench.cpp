@@ -4,8 +4,12 @@
 // maximum range; ms/frame, ratio and memory of both. Then queries on the resulting maps: single
 // voxel lookups per second (one thread), 10 m segment checks, and OctoMap's search() / castRay()
 // beside them. Prints a Markdown table for docs/PERFORMANCE.md.
-//   map_bench [--frames 10] [--threads 2] [--voxel 0.05] [--integrate-only 1]
+//   map_bench [--frames 10] [--threads 2] [--voxel 0.05] [--integrate-only 1] [--updates-only 1]
+//             [--distance 0]
 // --integrate-only: integrates the frames into our map only (for perf / callgrind), prints ms/frame.
+// --updates-only: integrates the frames and times only the frontier and distance field updates
+// (wall and thread CPU time, medians after the first frame), with a fingerprint of the clusters to
+// compare versions; --distance 0 leaves the distance field out (profile frontiers alone).
 // Frames: an 800x600 camera (fx 600) flying 2 m above a sloping sea floor with rocks, looking
 // 14 degrees down (so that a frame has ~270k points), ray-cast exactly with 1 cm depth noise
 // (tests/mapping/support/analytic_scene.h);
@@ -16,6 +20,7 @@
 #include <algorithm>
 #include <numeric>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <random>
@@ -84,6 +89,62 @@ std::vector<DepthFrame> makeDepthFrames(const BenchView& view) {
   return frames;
 }
 
+double threadCpuMs() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+}
+
+double medianAfterFirst(std::vector<double> v) {
+  if (v.size() > 1) v.erase(v.begin());
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+double mean(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / v.size(); }
+
+// Per-frame times of the incremental frontier and distance field updates, each frame's MapDelta
+// given to both right after its integration.
+struct UpdateTimes {
+  std::vector<double> frontier_ms, frontier_cpu_ms, distance_ms, distance_cpu_ms;
+  size_t num_clusters = 0, num_frontier_voxels = 0;
+  uint64_t cluster_fingerprint = 0;  // FNV-1a over the clusters' counts, centroids and directions
+};
+
+UpdateTimes timeUpdates(const std::vector<PointBatch>& frames, const MapConfig& config, bool with_distance) {
+  UpdateTimes out;
+  OccupancyMap live(config);
+  FrontierMap frontiers(live);
+  DistanceField field(live);
+  for (const auto& f : frames) {
+    const MapDelta delta = live.integrate(f);
+    auto t = Clock::now();
+    double c = threadCpuMs();
+    frontiers.update(delta);
+    out.frontier_ms.push_back(msSince(t));
+    out.frontier_cpu_ms.push_back(threadCpuMs() - c);
+    if (!with_distance) continue;
+    t = Clock::now();
+    c = threadCpuMs();
+    field.update(delta);
+    out.distance_ms.push_back(msSince(t));
+    out.distance_cpu_ms.push_back(threadCpuMs() - c);
+  }
+  const auto clusters = frontiers.clusters(Eigen::Vector3d::Zero());
+  out.num_clusters = clusters.size();
+  out.num_frontier_voxels = frontiers.numFrontierVoxels();
+  uint64_t h = 14695981039346656037ull;
+  auto mix = [&h](double v) {
+    const int64_t q = std::llround(v * 1e6);
+    for (int i = 0; i < 8; ++i) h = (h ^ ((q >> (8 * i)) & 0xFF)) * 1099511628211ull;
+  };
+  for (const auto& c : clusters) {
+    mix(static_cast<double>(c.num_voxels));
+    for (int i = 0; i < 3; ++i) mix(c.centroid_m[i]), mix(c.direction[i]), mix(c.bounds_m.min_m[i]), mix(c.bounds_m.max_m[i]);
+  }
+  out.cluster_fingerprint = h;
+  return out;
+}
+
 octomap::Pointcloud toOctomap(const PointBatch& batch) {
   octomap::Pointcloud cloud;
   cloud.reserve(batch.size());
@@ -96,9 +157,11 @@ octomap::Pointcloud toOctomap(const PointBatch& batch) {
 int main(int argc, char** argv) {
   int num_frames = 10, threads = 2;
   double voxel_m = 0.05;
-  bool integrate_only = false;
+  bool integrate_only = false, updates_only = false, with_distance = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--integrate-only")) integrate_only = std::atoi(argv[i + 1]) != 0;
+    if (!std::strcmp(argv[i], "--updates-only")) updates_only = std::atoi(argv[i + 1]) != 0;
+    if (!std::strcmp(argv[i], "--distance")) with_distance = std::atoi(argv[i + 1]) != 0;
     if (!std::strcmp(argv[i], "--frames")) num_frames = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--voxel")) voxel_m = std::atof(argv[i + 1]);
@@ -108,6 +171,23 @@ int main(int argc, char** argv) {
   const std::vector<PointBatch> frames = makeFrames(view);
   size_t points = 0;
   for (const auto& f : frames) points += f.size();
+
+  MapConfig live_config;
+  live_config.voxel_size_m = voxel_m;
+  live_config.max_range_m = max_range_m;
+  live_config.num_threads = threads;
+  if (updates_only) {
+    const UpdateTimes u = timeUpdates(frames, live_config, with_distance);
+    std::printf("frontier update: %.2f ms/frame median wall, %.2f ms CPU (mean with the first frame %.2f wall); "
+                "%zu clusters, %zu frontier voxels, fingerprint %016llx\n",
+                medianAfterFirst(u.frontier_ms), medianAfterFirst(u.frontier_cpu_ms), mean(u.frontier_ms),
+                u.num_clusters, u.num_frontier_voxels, static_cast<unsigned long long>(u.cluster_fingerprint));
+    if (with_distance) {
+      std::printf("distance field update: %.2f ms/frame median wall, %.2f ms CPU (mean with the first frame %.2f wall)\n",
+                  medianAfterFirst(u.distance_ms), medianAfterFirst(u.distance_cpu_ms), mean(u.distance_ms));
+    }
+    return 0;
+  }
 
   // Integration, ours: `threads` threads and one thread.
   auto integrateOurs = [&](int n_threads, double& ms_per_frame) {
@@ -228,38 +308,10 @@ int main(int argc, char** argv) {
 
   // Incremental distance field and frontiers: update time per frame from each frame's MapDelta
   // (median over the frames after the first, which starts from an empty map; and the mean of all).
-  double frontier_ms = 0.0, distance_ms = 0.0, frontier_mean_ms = 0.0, distance_mean_ms = 0.0;
-  size_t num_clusters = 0;
-  {
-    MapConfig config;
-    config.voxel_size_m = voxel_m;
-    config.max_range_m = max_range_m;
-    config.num_threads = threads;
-    OccupancyMap live(config);
-    FrontierMap frontiers(live);
-    DistanceField field(live);
-    std::vector<double> frontier_times, distance_times;
-    for (const auto& f : frames) {
-      const MapDelta delta = live.integrate(f);
-      auto t = Clock::now();
-      frontiers.update(delta);
-      frontier_times.push_back(msSince(t));
-      t = Clock::now();
-      field.update(delta);
-      distance_times.push_back(msSince(t));
-    }
-    auto mean = [](const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / v.size(); };
-    auto medianAfterFirst = [](std::vector<double> v) {
-      if (v.size() > 1) v.erase(v.begin());
-      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-      return v[v.size() / 2];
-    };
-    frontier_mean_ms = mean(frontier_times);
-    distance_mean_ms = mean(distance_times);
-    frontier_ms = medianAfterFirst(frontier_times);
-    distance_ms = medianAfterFirst(distance_times);
-    num_clusters = frontiers.clusters(Eigen::Vector3d::Zero()).size();
-  }
+  const UpdateTimes updates = timeUpdates(frames, live_config, true);
+  const double frontier_ms = medianAfterFirst(updates.frontier_ms), frontier_mean_ms = mean(updates.frontier_ms);
+  const double distance_ms = medianAfterFirst(updates.distance_ms), distance_mean_ms = mean(updates.distance_ms);
+  const size_t num_clusters = updates.num_clusters;
 
   std::printf("## Map\n\n");
   std::printf("%d frames of %.0fk points (800x600 camera over a rocky sea floor, 1 cm depth noise), "
