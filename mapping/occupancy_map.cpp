@@ -1,10 +1,11 @@
 #include "mapping/occupancy_map.h"
 
+#include <openvdb/tools/Count.h>
+#include <openvdb/tools/Prune.h>
+
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <sstream>
-#include <tuple>
 
 #include "common/error.h"
 #include "mapping/detail/map_impl.h"
@@ -15,38 +16,38 @@ namespace cenote::mapping {
 
 namespace detail {
 
-// One reader's view of the store, caching the last block looked up (neighbouring lookups, as in
-// a segment walk, mostly fall into the same block).
 struct AccessorImpl {
-  explicit AccessorImpl(const MapImpl& impl) : store(&impl.store) {}
-  // The block holding ijk; nullptr when absent.
-  const VoxelBlock* blockAt(const VoxelIndex& ijk) {
-    const BlockIndex block = blockOf(ijk);
-    if (block != last_index) {
-      last_index = block;
-      last = store->find(block);
-    }
-    return last;
-  }
-  const BlockStore* store;
-  BlockIndex last_index = BlockIndex::Constant(std::numeric_limits<int>::min());  // outside the store's range
-  const VoxelBlock* last = nullptr;
+  explicit AccessorImpl(const MapImpl& impl) : log_odds(impl.log_odds->constTree()), color(impl.color->constTree()) {}
+  openvdb::tree::ValueAccessor<const openvdb::FloatTree, false> log_odds;
+  openvdb::tree::ValueAccessor<const openvdb::Int32Tree, false> color;
 };
+
+openvdb::math::Transform::Ptr makeTransform(double voxel_size_m) {
+  auto transform = openvdb::math::Transform::createLinearTransform(voxel_size_m);
+  transform->postTranslate(openvdb::Vec3d(0.5 * voxel_size_m));
+  return transform;
+}
 
 }  // namespace detail
 
 namespace {
 
-using detail::BlockStore;
-using detail::VoxelBlock;
+using openvdb::Coord;
 
 // Points and origins beyond this many voxels from 0 are rejected (packed block keys, int32 safety).
 constexpr double kMaxVoxelIndex = 1 << 23;
+
+Coord coordOf(const VoxelIndex& ijk) { return Coord(ijk.x(), ijk.y(), ijk.z()); }
 
 std::string formatPoint(const Eigen::Vector3d& p) {
   std::ostringstream text;
   text << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
   return text.str();
+}
+
+void initialiseOpenVdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
 }
 
 // Adds a changed block to a delta under construction (blocks arrive in any order; sorted later).
@@ -80,30 +81,6 @@ VoxelBox boxOfBits(const BlockIndex& block, const std::array<uint64_t, 8>& bits)
   box.min = base + VoxelIndex(x_min, y_min, __builtin_ctz(z_bits));
   box.max = base + VoxelIndex(x_max, y_max, 31 - __builtin_clz(z_bits));
   return box;
-}
-
-// Bits of the known voxels of a block whose log-odds make them occupied (LogOddsModel::isOccupied).
-std::array<uint64_t, 8> occupiedBits(const VoxelBlock& block, float threshold) {
-  std::array<uint64_t, 8> occupied{};
-  for (int w = 0; w < 8; ++w) {
-    if (block.known[w] == 0) continue;
-    const float* values = block.log_odds.data() + w * 64;
-    uint64_t occ = 0;  // all 64 compared without branches (NaN, unknown, compares false)
-    for (int bit = 0; bit < 64; ++bit) occ |= static_cast<uint64_t>(values[bit] >= threshold) << bit;
-    occupied[w] = occ & block.known[w];
-  }
-  return occupied;
-}
-
-// The order in which OpenVDB's tree (5, 4, 3 levels: 4096^3, 128^3 and 8^3 voxels) visits its
-// leaves, which the map's block lists kept before it moved to a hash: node origins
-// lexicographically, then children x-major inside each node.
-bool openVdbOrder(const BlockIndex& a, const BlockIndex& b) {
-  auto key = [](const BlockIndex& v) {
-    return std::make_tuple(v.x() >> 9, v.y() >> 9, v.z() >> 9, (v.x() >> 4) & 31, (v.y() >> 4) & 31, (v.z() >> 4) & 31,
-                           v.x() & 15, v.y() & 15, v.z() & 15);
-  };
-  return key(a) < key(b);
 }
 
 void finishDelta(MapDelta& delta, double s) {
@@ -146,7 +123,15 @@ void MapDelta::merge(const MapDelta& other) {
 OccupancyMap::OccupancyMap(const MapConfig& config) : config_(config) {
   throwIfInvalid(config.validate(), "map configuration");
   model_ = config.logOddsModel();
+  initialiseOpenVdb();
   impl_ = std::make_unique<detail::MapImpl>();
+  impl_->log_odds = openvdb::FloatGrid::create(0.0f);
+  impl_->log_odds->setTransform(detail::makeTransform(config.voxel_size_m));
+  impl_->log_odds->setName("log_odds");
+  impl_->log_odds->setGridClass(openvdb::GRID_UNKNOWN);
+  impl_->color = openvdb::Int32Grid::create(0);
+  impl_->color->setTransform(detail::makeTransform(config.voxel_size_m));
+  impl_->color->setName("color");
 }
 
 OccupancyMap::~OccupancyMap() = default;
@@ -241,7 +226,8 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
   MapDelta delta;
   delta.points_used = rays.numRays();
   const double s = voxelSize();
-  BlockStore& store = impl_->store;
+  auto& tree = impl_->log_odds->tree();
+  openvdb::tree::ValueAccessor<openvdb::FloatTree, false> acc(tree);
   const size_t group = static_cast<size_t>(config_.publish_blocks);
   for (size_t begin = 0; begin < rays.numBlocks(); begin += group) {
     const size_t end = std::min(rays.numBlocks(), begin + group);
@@ -249,12 +235,13 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
     for (size_t b = begin; b < end; ++b) {
       const BlockIndex& block = rays.block(b);
       const BlockMasks& masks = rays.masks(b);
-      VoxelBlock& voxels = store.touch(block);
-      // One 64-bit word = 64 voxels of one x slice.
-      float* values = voxels.log_odds.data();
+      auto* leaf = acc.touchLeaf(coordOf(block * kBlockSide));
+      // Straight on the leaf's buffer and value mask (one 64-bit word = 64 voxels of one x slice).
+      float* values = leaf->buffer().data();
+      auto& known_mask = leaf->getValueMask();
       std::array<uint64_t, 8> changed{};
       for (int w = 0; w < 8; ++w) {
-        uint64_t& known = voxels.known[w];
+        uint64_t& known = known_mask.template getWord<uint64_t>(w);
         const uint64_t hits = masks.hit[w];
         uint64_t bits = masks.free[w] | hits;
         delta.voxels_updated += static_cast<uint64_t>(__builtin_popcountll(bits));
@@ -278,18 +265,18 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
   }
   // Colours of the hit voxels: a running mean per voxel.
   if (!rays.colors().empty()) {
+    auto& color_tree = impl_->color->tree();
+    openvdb::tree::ValueAccessor<openvdb::Int32Tree, false> color_acc(color_tree);
     const size_t n = rays.colors().size();
     for (size_t begin = 0; begin < n; begin += group * 64) {
       const size_t end = std::min(n, begin + group * 64);
       std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
       for (size_t i = begin; i < end; ++i) {
         const EndpointColor& c = rays.colors()[i];
-        VoxelBlock& voxels = store.touch(blockOf(c.ijk));
-        if (!voxels.colors) voxels.colors = std::make_unique<detail::BlockColors>();
-        const int offset = offsetInBlock(c.ijk);
+        const Coord xyz = coordOf(c.ijk);
         int32_t packed;
-        if (!voxels.colors->get(offset, packed)) {
-          voxels.colors->set(offset, detail::packColor(c.rgb, 1));
+        if (!color_acc.probeValue(xyz, packed)) {
+          color_acc.setValueOn(xyz, detail::packColor(c.rgb, 1));
           continue;
         }
         const int count = detail::colorCount(packed);
@@ -298,7 +285,7 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
         for (int k = 0; k < 3; ++k) {
           mean[k] = static_cast<uint8_t>((old[k] * count + c.rgb[k] + (count + 1) / 2) / (count + 1));
         }
-        voxels.colors->set(offset, detail::packColor(mean, std::min(count + 1, 127)));
+        color_acc.setValueOn(xyz, detail::packColor(mean, std::min(count + 1, 127)));
       }
     }
   }
@@ -313,42 +300,31 @@ MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere,
   std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
   MapDelta delta;
   const double s = voxelSize();
-  auto removed = [&](const VoxelIndex& ijk) {
-    return (everywhere || candidates.contains(ijk)) && remove(voxelCentre(ijk, s));
-  };
-  for (const auto& owned : impl_->store.blocks()) {
-    VoxelBlock& voxels = *owned;
-    const VoxelIndex base = voxels.index * kBlockSide;
-    if (!everywhere && ((base.array() > candidates.max.array()).any() ||
-                        ((base.array() + (kBlockSide - 1)) < candidates.min.array()).any())) {
-      continue;
-    }
-    VoxelBox box;
-    for (int w = 0; w < 8; ++w) {
-      for (uint64_t bits = voxels.known[w]; bits != 0; bits &= bits - 1) {
-        const int o = w * 64 + __builtin_ctzll(bits);
-        const VoxelIndex ijk = voxelOfOffset(voxels.index, o);
-        if (!removed(ijk)) continue;
-        voxels.known[w] &= ~(1ull << (o & 63));
-        voxels.log_odds[o] = std::numeric_limits<float>::quiet_NaN();
+  const openvdb::CoordBBox region(coordOf(candidates.min), coordOf(candidates.max));
+  auto sweep = [&](auto& tree, bool record) {
+    for (auto leaf = tree.beginLeaf(); leaf; ++leaf) {
+      if (!everywhere && !region.hasOverlap(leaf->getNodeBoundingBox())) continue;
+      const Coord origin = leaf->origin();
+      const BlockIndex block(origin.x() >> kBlockShift, origin.y() >> kBlockShift, origin.z() >> kBlockShift);
+      VoxelBox box;
+      for (auto it = leaf->beginValueOn(); it; ++it) {
+        const Coord xyz = it.getCoord();
+        const VoxelIndex ijk(xyz.x(), xyz.y(), xyz.z());
+        if (!everywhere && !candidates.contains(ijk)) continue;
+        if (!remove(voxelCentre(ijk, s))) continue;
+        it.setValueOff();
+        it.setValue(0);
         box.extend(ijk);
       }
-    }
-    if (!box.isEmpty()) noteChanged(delta, voxels.index, box, s);
-    if (voxels.colors) {
-      auto kept = std::make_unique<detail::BlockColors>();
-      for (int w = 0; w < 8; ++w) {
-        for (uint64_t bits = voxels.colors->has[w]; bits != 0; bits &= bits - 1) {
-          const int o = w * 64 + __builtin_ctzll(bits);
-          int32_t packed = 0;
-          voxels.colors->get(o, packed);
-          if (!removed(voxelOfOffset(voxels.index, o))) kept->set(o, packed);
-        }
+      if (record && !box.isEmpty()) {
+        noteChanged(delta, block, box, s);
+        delta.voxels_updated += 0;
       }
-      voxels.colors = kept->empty() ? nullptr : std::move(kept);
     }
-  }
-  impl_->store.eraseUnless([](const VoxelBlock& voxels) { return voxels.hasKnown() || voxels.colors != nullptr; });
+    openvdb::tools::pruneInactive(tree);
+  };
+  sweep(impl_->log_odds->tree(), true);
+  sweep(impl_->color->tree(), false);
   finishDelta(delta, s);
   impl_->version.fetch_add(1);
   return delta;
@@ -394,13 +370,19 @@ MapStats OccupancyMap::stats() const {
   std::shared_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
   MapStats out;
   out.voxel_size_m = voxelSize();
-  for (const auto& voxels : impl_->store.blocks()) {
-    const std::array<uint64_t, 8> occupied = occupiedBits(*voxels, model_.occupied);
-    for (int w = 0; w < 8; ++w) {
-      out.occupied += static_cast<uint64_t>(__builtin_popcountll(occupied[w]));
-      out.free += static_cast<uint64_t>(__builtin_popcountll(voxels->known[w] & ~occupied[w]));
+  const auto& tree = impl_->log_odds->constTree();
+  for (auto it = tree.cbeginValueOn(); it; ++it) {
+    // Tiles never occur (integration writes voxels), but count them right if a loaded file has them.
+    const uint64_t count = it.getVoxelCount();
+    if (model_.isOccupied(*it)) {
+      out.occupied += count;
+    } else {
+      out.free += count;
     }
-    out.bounds.extend(boxOfBits(voxels->index, voxels->known));
+    openvdb::CoordBBox bbox;
+    it.getBoundingBox(bbox);
+    out.bounds.extend(VoxelIndex(bbox.min().x(), bbox.min().y(), bbox.min().z()));
+    out.bounds.extend(VoxelIndex(bbox.max().x(), bbox.max().y(), bbox.max().z()));
   }
   if (!out.bounds.isEmpty()) {
     const Eigen::Vector3d extent = (out.bounds.max - out.bounds.min).cast<double>().array() + 1.0;
@@ -408,7 +390,10 @@ MapStats OccupancyMap::stats() const {
     out.bounds_m.min_m = out.bounds.min.cast<double>() * voxelSize();
     out.bounds_m.max_m = (out.bounds.max.cast<double>().array() + 1.0).matrix() * voxelSize();
   }
-  out.memory_bytes = impl_->store.memoryBytes();
+  // Serial count: Grid::memUsage() runs a TBB reduction, whose (uninstrumented) worker threads
+  // ThreadSanitizer reports as races; stats() is not a hot path.
+  out.memory_bytes = openvdb::tools::memUsage(impl_->log_odds->constTree(), false) +
+                     openvdb::tools::memUsage(impl_->color->constTree(), false);
   return out;
 }
 
@@ -419,70 +404,84 @@ OccupancyMap::ConstAccessor::~ConstAccessor() = default;
 OccupancyMap::ConstAccessor::ConstAccessor(ConstAccessor&&) noexcept = default;
 
 bool OccupancyMap::ConstAccessor::logOdds(const VoxelIndex& ijk, float& l) const {
-  const VoxelBlock* block = impl_->blockAt(ijk);
-  if (block == nullptr) return false;
-  const float value = block->log_odds[offsetInBlock(ijk)];
-  if (std::isnan(value)) return false;
-  l = value;
-  return true;
+  return impl_->log_odds.probeValue(coordOf(ijk), l);
 }
 
 VoxelState OccupancyMap::ConstAccessor::state(const VoxelIndex& ijk) const {
   float l;
-  if (!logOdds(ijk, l)) return VoxelState::kUnknown;
+  if (!impl_->log_odds.probeValue(coordOf(ijk), l)) return VoxelState::kUnknown;
   return map_->model_.isOccupied(l) ? VoxelState::kOccupied : VoxelState::kFree;
 }
 
 double OccupancyMap::ConstAccessor::probability(const VoxelIndex& ijk) const {
   float l;
-  if (!logOdds(ijk, l)) return 0.5;
+  if (!impl_->log_odds.probeValue(coordOf(ijk), l)) return 0.5;
   return mapping::probability(l);
 }
 
 bool OccupancyMap::ConstAccessor::color(const VoxelIndex& ijk, std::array<uint8_t, 3>& rgb) const {
-  const VoxelBlock* block = impl_->blockAt(ijk);
   int32_t packed;
-  if (block == nullptr || block->colors == nullptr || !block->colors->get(offsetInBlock(ijk), packed)) return false;
+  if (!impl_->color.probeValue(coordOf(ijk), packed)) return false;
   rgb = detail::unpackColor(packed);
   return true;
 }
 
 std::vector<BlockIndex> OccupancyMap::ConstAccessor::knownBlocks() const {
   std::vector<BlockIndex> blocks;
-  const auto& all = map_->impl_->store.blocks();
-  blocks.reserve(all.size());
-  for (const auto& voxels : all) {
-    if (voxels->hasKnown()) blocks.push_back(voxels->index);
+  const auto& tree = map_->impl_->log_odds->constTree();
+  blocks.reserve(tree.leafCount());
+  for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
+    if (leaf->isEmpty()) continue;
+    const Coord o = leaf->origin();
+    blocks.emplace_back(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift);
   }
-  std::sort(blocks.begin(), blocks.end(), openVdbOrder);
   return blocks;
 }
 
 bool OccupancyMap::ConstAccessor::readBlock(const BlockIndex& block, BlockView& view) const {
-  const VoxelBlock* voxels = impl_->store->find(block);
-  if (voxels == nullptr) {
-    view.known.fill(0);
-    return false;
+  view.known.fill(0);
+  const auto* leaf = impl_->log_odds.probeConstLeaf(coordOf(block * kBlockSide));
+  if (leaf == nullptr) {
+    // A tile (only from loaded files) covers the whole block with one value.
+    float l;
+    if (!impl_->log_odds.probeValue(coordOf(block * kBlockSide), l)) return false;
+    view.known.fill(~0ull);
+    view.log_odds.fill(l);
+    return true;
   }
-  view.known = voxels->known;
-  for (int o = 0; o < kBlockVoxels; ++o) {
-    const float l = voxels->log_odds[o];
-    view.log_odds[o] = l == l ? l : 0.0f;  // unknown (NaN) reads 0, as an OpenVDB leaf's inactive values did
-  }
-  return voxels->hasKnown();
+  const auto& mask = leaf->getValueMask();
+  for (openvdb::Index w = 0; w < 8; ++w) view.known[w] = mask.template getWord<uint64_t>(w);
+  std::copy(leaf->buffer().data(), leaf->buffer().data() + kBlockVoxels, view.log_odds.begin());
+  return !mask.isOff();
 }
 
 bool OccupancyMap::ConstAccessor::readBlockMasks(const BlockIndex& block, std::array<uint64_t, 8>& known,
                                                  std::array<uint64_t, 8>& occupied) const {
-  const VoxelBlock* voxels = impl_->store->find(block);
-  if (voxels == nullptr) {
-    known.fill(0);
-    occupied.fill(0);
-    return false;
+  known.fill(0);
+  occupied.fill(0);
+  const auto* leaf = impl_->log_odds.probeConstLeaf(coordOf(block * kBlockSide));
+  if (leaf == nullptr) {
+    float l;
+    if (!impl_->log_odds.probeValue(coordOf(block * kBlockSide), l)) return false;
+    known.fill(~0ull);
+    if (map_->model_.isOccupied(l)) occupied.fill(~0ull);
+    return true;
   }
-  known = voxels->known;
-  occupied = occupiedBits(*voxels, map_->model_.occupied);
-  return voxels->hasKnown();
+  const auto& mask = leaf->getValueMask();
+  const float* values = leaf->buffer().data();
+  const float threshold = map_->model_.occupied;
+  bool any = false;
+  for (int w = 0; w < 8; ++w) {
+    known[w] = mask.template getWord<uint64_t>(w);
+    any |= known[w] != 0;
+    if (known[w] == 0) continue;
+    uint64_t occ = 0;  // all 64 compared without branches; unknown ones are masked off below
+    for (int bit = 0; bit < 64; ++bit) {
+      occ |= static_cast<uint64_t>(values[w * 64 + bit] >= threshold) << bit;  // LogOddsModel::isOccupied
+    }
+    occupied[w] = occ & known[w];
+  }
+  return any;
 }
 
 }  // namespace cenote::mapping

@@ -1,6 +1,5 @@
-// occupancy_map.h: probabilistic occupancy of the world, log-odds on a sparse voxel grid (a hash
-// of 8x8x8-voxel blocks, detail/block_store.h; .vdb files hold it as OpenVDB grids), with a colour
-// per voxel some point hit.
+// occupancy_map.h: probabilistic occupancy of the world, log-odds on a sparse voxel grid (OpenVDB),
+// with a colour per occupied voxel.
 // Units: metres (voxel_size_m fixed at construction). Frame: world. Grid convention: voxel_types.h.
 // Unknown is never free: a voxel never observed (or cleared) reports VoxelState::kUnknown.
 //
@@ -53,7 +52,7 @@ struct MapStats {
   uint64_t unknown_in_bounds = 0;  // never-observed voxels inside the bounding box of known ones
   VoxelBox bounds;                 // of the known voxels
   Aabb bounds_m;
-  uint64_t memory_bytes = 0;       // of the voxel store: blocks, colours and hash table
+  uint64_t memory_bytes = 0;       // of the grids (OpenVDB memUsage)
 };
 
 class OccupancyMap {

@@ -1,14 +1,15 @@
-// map_impl.h: the state behind OccupancyMap (its voxels in a BlockStore, locks, scratch).
-// Included only by occupancy_map.cpp and io/map_io.cpp (which converts to and from OpenVDB grids).
-// Threads: see occupancy_map.h; grid_mutex guards the store, writer_mutex serialises writers.
+// map_impl.h: the OpenVDB grids behind OccupancyMap. Included only by the few .cpp files that
+// need the grids (occupancy_map.cpp, io/*.cpp): every file that sees openvdb/ pays a minute of
+// compile time on 2 cores.
+// Threads: see occupancy_map.h; grid_mutex guards the grids, writer_mutex serialises writers.
 #pragma once
 
-#include <array>
+#include <openvdb/openvdb.h>
+
 #include <atomic>
 #include <mutex>
 #include <shared_mutex>
 
-#include "mapping/detail/block_store.h"
 #include "mapping/integration/projective_batch.h"
 #include "mapping/integration/ray_batch.h"
 #include "mapping/occupancy_map.h"
@@ -27,12 +28,20 @@ inline std::array<uint8_t, 3> unpackColor(int32_t packed) {
 inline int colorCount(int32_t packed) { return (packed >> 24) & 127; }
 
 struct MapImpl {
-  BlockStore store;  // log-odds (known voxels) and colours (voxels some point hit)
+  openvdb::FloatGrid::Ptr log_odds;  // active voxel = known; value = log-odds
+  openvdb::Int32Grid::Ptr color;     // active where some point hit
   mutable detail::FairSharedMutex grid_mutex;
   std::mutex writer_mutex;
   std::atomic<uint64_t> version{0};
   RayBatch scratch;
   ProjectiveBatch projective_scratch;
+
+  // Frees the trees' nodes serially: Tree's destructor frees them with a TBB parallel_for, whose
+  // (uninstrumented) worker threads ThreadSanitizer reports as racing with ours.
+  ~MapImpl() {
+    if (log_odds) log_odds->tree().root().clear();
+    if (color) color->tree().root().clear();
+  }
 };
 
 class MapAccess {
@@ -40,5 +49,9 @@ class MapAccess {
   static MapImpl& of(OccupancyMap& map) { return *map.impl_; }
   static const MapImpl& of(const OccupancyMap& map) { return *map.impl_; }
 };
+
+// OpenVDB index space: our voxel i has its centre at (i + 0.5) * s, so the grids' transform is a
+// scale by s and a translation by s / 2.
+openvdb::math::Transform::Ptr makeTransform(double voxel_size_m);
 
 }  // namespace cenote::mapping::detail

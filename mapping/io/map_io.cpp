@@ -3,7 +3,6 @@
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 #include <openvdb/io/File.h>
-#include <openvdb/openvdb.h>
 #include <openvdb/tools/VolumeToMesh.h>
 #include <unistd.h>
 
@@ -12,7 +11,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <mutex>
 
 #include "common/error.h"
 #include "mapping/detail/map_impl.h"
@@ -46,90 +44,6 @@ void writeAtomically(const std::string& path, Write&& write) {
   if (ec) {
     std::remove(temp.c_str());
     throw Error("cannot write " + path + ": " + ec.message());
-  }
-}
-
-// OpenVDB index space: our voxel i has its centre at (i + 0.5) * s, so the grids' transform is a
-// scale by s and a translation by s / 2.
-openvdb::math::Transform::Ptr makeTransform(double voxel_size_m) {
-  auto transform = openvdb::math::Transform::createLinearTransform(voxel_size_m);
-  transform->postTranslate(openvdb::Vec3d(0.5 * voxel_size_m));
-  return transform;
-}
-
-void initialiseOpenVdb() {
-  static std::once_flag once;
-  std::call_once(once, [] { openvdb::initialize(); });
-}
-
-// The map's blocks as OpenVDB grids, the form of .vdb files: log_odds (float, active = known,
-// inactive values 0) and color (int32 packColor, active where some point hit), both with 8^3
-// leaves at the same places as the map's blocks. Call under the map's shared lock.
-std::pair<openvdb::FloatGrid::Ptr, openvdb::Int32Grid::Ptr> toGrids(const detail::BlockStore& store, double voxel_size_m) {
-  auto log_odds = openvdb::FloatGrid::create(0.0f);
-  log_odds->setTransform(makeTransform(voxel_size_m));
-  log_odds->setName("log_odds");
-  log_odds->setGridClass(openvdb::GRID_UNKNOWN);
-  auto color = openvdb::Int32Grid::create(0);
-  color->setTransform(makeTransform(voxel_size_m));
-  color->setName("color");
-  for (const auto& voxels : store.blocks()) {
-    const Coord origin(voxels->index.x() * kBlockSide, voxels->index.y() * kBlockSide, voxels->index.z() * kBlockSide);
-    if (voxels->hasKnown()) {
-      auto* leaf = log_odds->tree().touchLeaf(origin);
-      float* values = leaf->buffer().data();
-      for (int w = 0; w < 8; ++w) {
-        leaf->getValueMask().template getWord<uint64_t>(w) = voxels->known[w];
-        for (uint64_t bits = voxels->known[w]; bits != 0; bits &= bits - 1) {
-          const int o = w * 64 + __builtin_ctzll(bits);
-          values[o] = voxels->log_odds[o];
-        }
-      }
-    }
-    if (voxels->colors) {
-      auto* leaf = color->tree().touchLeaf(origin);
-      const detail::BlockColors& colors = *voxels->colors;
-      for (int w = 0; w < 8; ++w) {
-        for (uint64_t bits = colors.has[w]; bits != 0; bits &= bits - 1) {
-          const int o = w * 64 + __builtin_ctzll(bits);
-          int32_t packed = 0;
-          colors.get(o, packed);
-          leaf->setValueOn(static_cast<openvdb::Index>(o), packed);
-        }
-      }
-    }
-  }
-  return {log_odds, color};
-}
-
-// Fills an empty store from grids read from a .vdb file (tiles are split into voxels).
-// @throws Error for a voxel beyond the +-2^23 the map holds.
-void fromGrids(openvdb::FloatGrid& log_odds, openvdb::Int32Grid& color, detail::BlockStore& store,
-               const std::string& path) {
-  auto blockAt = [&](const Coord& origin) -> detail::VoxelBlock& {
-    const BlockIndex block(origin.x() >> kBlockShift, origin.y() >> kBlockShift, origin.z() >> kBlockShift);
-    if (!detail::BlockStore::inRange(block)) {
-      throw Error(path + ": voxel (" + std::to_string(origin.x()) + ", " + std::to_string(origin.y()) + ", " +
-                  std::to_string(origin.z()) + ") lies beyond the 2^23 voxels per axis a map holds");
-    }
-    return store.touch(block);
-  };
-  log_odds.tree().voxelizeActiveTiles(false);
-  color.tree().voxelizeActiveTiles(false);
-  for (auto leaf = log_odds.tree().cbeginLeaf(); leaf; ++leaf) {
-    if (leaf->isEmpty()) continue;
-    detail::VoxelBlock& voxels = blockAt(leaf->origin());
-    for (auto it = leaf->cbeginValueOn(); it; ++it) {
-      const openvdb::Index o = it.pos();
-      voxels.known[o >> 6] |= 1ull << (o & 63);
-      voxels.log_odds[o] = *it;
-    }
-  }
-  for (auto leaf = color.tree().cbeginLeaf(); leaf; ++leaf) {
-    if (leaf->isEmpty()) continue;
-    detail::VoxelBlock& voxels = blockAt(leaf->origin());
-    if (!voxels.colors) voxels.colors = std::make_unique<detail::BlockColors>();
-    for (auto it = leaf->cbeginValueOn(); it; ++it) voxels.colors->set(static_cast<int>(it.pos()), *it);
   }
 }
 
@@ -203,14 +117,12 @@ void saveOctomap(const OccupancyMap& map, const std::string& path, bool full) {
 }
 
 void saveVdb(const OccupancyMap& map, const std::string& path, const std::string& frame_id) {
-  initialiseOpenVdb();
   const detail::MapImpl& impl = detail::MapAccess::of(map);
   openvdb::GridPtrVec grids;
   {
     std::shared_lock<detail::FairSharedMutex> lock(impl.grid_mutex);
-    auto [log_odds, color] = toGrids(impl.store, map.voxelSize());
-    grids.push_back(log_odds);
-    grids.push_back(color);
+    grids.push_back(impl.log_odds->deepCopy());
+    grids.push_back(impl.color->deepCopy());
   }
   const MapConfig& c = map.config();
   openvdb::MetaMap meta;
@@ -258,7 +170,8 @@ std::unique_ptr<OccupancyMap> loadVdb(const std::string& path, const MapConfig& 
   auto map = std::make_unique<OccupancyMap>(c);
   detail::MapImpl& impl = detail::MapAccess::of(*map);
   std::unique_lock<detail::FairSharedMutex> lock(impl.grid_mutex);
-  fromGrids(*log_odds, *color, impl.store, path);
+  impl.log_odds = log_odds;
+  impl.color = color;
   return map;
 }
 
@@ -269,6 +182,8 @@ std::unique_ptr<OccupancyMap> fromOctree(const Tree& tree, const MapConfig& defa
   auto map = std::make_unique<OccupancyMap>(c);
   detail::MapImpl& impl = detail::MapAccess::of(*map);
   std::unique_lock<detail::FairSharedMutex> lock(impl.grid_mutex);
+  auto acc = impl.log_odds->getAccessor();
+  auto color_acc = impl.color->getAccessor();
   const double s = c.voxel_size_m;
   for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
     const double size = it.getSize();
@@ -281,16 +196,11 @@ std::unique_ptr<OccupancyMap> fromOctree(const Tree& tree, const MapConfig& defa
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < n; ++j) {
         for (int k = 0; k < n; ++k) {
-          const VoxelIndex ijk = first + VoxelIndex(i, j, k);
-          detail::VoxelBlock& voxels = impl.store.touch(blockOf(ijk));
-          const int o = offsetInBlock(ijk);
-          voxels.known[o >> 6] |= 1ull << (o & 63);
-          voxels.log_odds[o] = l;
+          const Coord xyz(first.x() + i, first.y() + j, first.z() + k);
+          acc.setValueOn(xyz, l);
           if constexpr (std::is_same_v<Tree, octomap::ColorOcTree>) {
             const auto col = it->getColor();
-            if (!tree.isNodeOccupied(*it)) continue;
-            if (!voxels.colors) voxels.colors = std::make_unique<detail::BlockColors>();
-            voxels.colors->set(o, detail::packColor({col.r, col.g, col.b}, 1));
+            if (tree.isNodeOccupied(*it)) color_acc.setValueOn(xyz, detail::packColor({col.r, col.g, col.b}, 1));
           }
         }
       }
@@ -388,7 +298,7 @@ size_t exportOccupiedPointsPly(const OccupancyMap& map, const std::string& path)
 
 MeshStats exportMeshPly(const OccupancyMap& map, const std::string& path) {
   auto occupancy = openvdb::FloatGrid::create(0.0f);
-  occupancy->setTransform(makeTransform(map.voxelSize()));
+  occupancy->setTransform(detail::makeTransform(map.voxelSize()));
   {
     auto acc = occupancy->getAccessor();
     forEachKnown(map, [&](const VoxelIndex& ijk, float l, const OccupancyMap::ConstAccessor&) {
