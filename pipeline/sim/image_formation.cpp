@@ -7,27 +7,12 @@
 #include <vector>
 
 #include "common/error.h"
+#include "pipeline/sim/radiance_kernels.h"
 
 namespace cenote::pipeline {
 namespace {
 
-constexpr float kMinCosine = 0.2f;         // footprint of grazing views is capped at 5x
 constexpr int kGammaLevels = 4096;
-
-// exp(x) for x <= 0 to ~2e-4 relative: 2^(x log2 e) split into integer and fraction.
-inline float fastExp(float x) {
-  x = std::max(x, -80.0f);
-  const float t = x * 1.44269504f;
-  const float fi = std::floor(t);
-  const float f = t - fi;
-  const float p = 1.0f + f * (0.6931472f + f * (0.2402265f + f * (0.05550411f + f * (0.009618129f + f * 0.001333355f))));
-  const int32_t bits = (static_cast<int32_t>(fi) + 127) << 23;
-  float scale;
-  std::memcpy(&scale, &bits, sizeof(scale));
-  return p * scale;
-}
-
-inline Eigen::Array3f expArray(const Eigen::Array3f& x) { return {fastExp(x[0]), fastExp(x[1]), fastExp(x[2])}; }
 
 }  // namespace
 
@@ -35,84 +20,92 @@ SurfaceTexture::SurfaceTexture(uint64_t seed) : fine(kFineSize, hash64(seed, 1))
 
 Eigen::Array3f surfaceAlbedo(const SimScene& scene, const SurfaceTexture& texture, const Eigen::Vector3f& p,
                              int triangle, float footprint_m) {
-  const Eigen::Vector3f& n = scene.mesh.normals[triangle];
-  // Planar projection along the normal's dominant axis (fixed per triangle: view-independent).
-  const Eigen::Vector3f a = n.cwiseAbs();
   float u, v;
-  if (a.z() >= a.x() && a.z() >= a.y()) {
-    u = p.x();
-    v = p.y();
-  } else if (a.x() >= a.y()) {
-    u = p.y();
-    v = p.z();
-  } else {
-    u = p.x();
-    v = p.z();
+  switch (static_cast<TexturePlane>(scene.mesh.shading_codes[triangle] & 3)) {
+    case TexturePlane::kXY: u = p.x(), v = p.y(); break;
+    case TexturePlane::kYZ: u = p.y(), v = p.z(); break;
+    default: u = p.x(), v = p.z(); break;
   }
   constexpr auto kFine = static_cast<float>(1.0 / SurfaceTexture::kFineTexel_m);
   constexpr auto kCoarse = static_cast<float>(1.0 / SurfaceTexture::kCoarseTexel_m);
   const float fine = texture.fine.sample(u * kFine, v * kFine, footprint_m * kFine);
-  const float coarse = texture.coarse.sample(u * kCoarse + 37.1f, v * kCoarse + 91.7f, footprint_m * kCoarse);
-  const float value = std::clamp(0.5f + 1.4f * (0.55f * fine + 0.45f * coarse - 0.5f), 0.0f, 1.0f);
-  return scene.albedo[static_cast<size_t>(scene.mesh.materials[triangle])] * (0.15f + 0.85f * value);
+  const float coarse = texture.coarse.sample(u * kCoarse + SurfaceTexture::kCoarseShiftU,
+                                             v * kCoarse + SurfaceTexture::kCoarseShiftV, footprint_m * kCoarse);
+  using T = SurfaceTexture;
+  const float mix = T::kFineWeight * fine + (1.0f - T::kFineWeight) * coarse;
+  const float value = std::clamp(0.5f + T::kContrast * (mix - 0.5f), 0.0f, 1.0f);
+  return scene.albedo[static_cast<size_t>(scene.mesh.materials[triangle])] * (T::kMinShade + (1.0f - T::kMinShade) * value);
 }
+
+namespace {
+
+// The texture layer as the shader reads it, with the camera centre's coordinates in each plane.
+detail::TextureLayer textureLayer(const NoiseTexture& texture, double texel_m, float shift_u, float shift_v,
+                                  const Eigen::Vector3d& camera_world) {
+  detail::TextureLayer layer;
+  layer.quads = texture.quads();
+  layer.level_offsets = texture.levelOffsets();
+  layer.size_log2 = texture.sizeLog2();
+  layer.levels = texture.levels();
+  layer.texels_per_m = static_cast<float>(1.0 / texel_m);
+  const double period = texture.size();
+  auto wrap = [&](double texels) {
+    const auto w = static_cast<float>(texels - period * std::floor(texels / period));
+    return w < period ? w : 0.0f;
+  };
+  const Eigen::Vector3d c = camera_world * static_cast<double>(layer.texels_per_m);
+  const double u[3] = {c.x(), c.y(), c.x()}, v[3] = {c.y(), c.z(), c.z()};  // TexturePlane order
+  for (int plane = 0; plane < 3; ++plane) {
+    layer.origin_u[plane] = wrap(u[plane] + shift_u);
+    layer.origin_v[plane] = wrap(v[plane] + shift_v);
+  }
+  return layer;
+}
+
+}  // namespace
 
 cv::Mat renderRadiance(const SimScene& scene, const SurfaceTexture& texture, const PinholeCamera& cam,
                        const Eigen::Isometry3d& T_world_cam, const VisibilityBuffer& vis,
                        const Eigen::Isometry3d& T_world_light) {
   const SceneLighting& light = scene.lighting;
-  cv::Mat out(cam.height, cam.width, CV_32FC3);
-  const Eigen::Matrix3f R = T_world_cam.linear().cast<float>();
   const Eigen::Vector3d origin = T_world_cam.translation();
-  const Eigen::Vector3d lamp_world = T_world_light * light.light_in_cam0;
+  detail::RadianceSetup s;
+  s.width = cam.width;
+  s.fx = static_cast<float>(cam.fx);
+  s.fy = static_cast<float>(cam.fy);
+  s.cx = static_cast<float>(cam.cx);
+  s.cy = static_cast<float>(cam.cy);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) s.R[3 * r + c] = static_cast<float>(T_world_cam.linear()(r, c));
+  }
+  s.normals = scene.mesh.normals.front().data();
+  s.shading_codes = scene.mesh.shading_codes.data();
+  for (size_t m = 0; m < scene.albedo.size(); ++m) {
+    for (int c = 0; c < 3; ++c) s.albedo[c][m] = scene.albedo[m][c];
+  }
+  s.fine = textureLayer(texture.fine, SurfaceTexture::kFineTexel_m, 0.0f, 0.0f, origin);
+  s.coarse = textureLayer(texture.coarse, SurfaceTexture::kCoarseTexel_m, SurfaceTexture::kCoarseShiftU,
+                          SurfaceTexture::kCoarseShiftV, origin);
+  const Eigen::Vector3d lamp = T_world_light * light.light_in_cam0 - origin;
   const Eigen::Vector3d lamp_axis = T_world_light.linear().col(2);
-  const Eigen::Array3f beta = light.attenuation_per_m;
-  const auto fx = static_cast<float>(cam.fx), fy = static_cast<float>(cam.fy);
-  const auto cx = static_cast<float>(cam.cx), cy = static_cast<float>(cam.cy);
-  std::vector<float> ray_x(static_cast<size_t>(cam.width));  // x / z of each column's ray
-  for (int x = 0; x < cam.width; ++x) ray_x[x] = (x - cx) / fx;
+  for (int c = 0; c < 3; ++c) {
+    s.beta[c] = light.attenuation_per_m[c];
+    s.backscatter[c] = light.backscatter[c];
+    s.sun_irradiance[c] = light.sun_irradiance[c];
+    s.downwelling[c] = light.downwelling_per_m[c];
+    s.lamp[c] = static_cast<float>(lamp[c]);
+    s.lamp_axis[c] = static_cast<float>(lamp_axis[c]);
+  }
+  s.rig_light = light.rig_light;
+  s.rig_intensity = light.rig_intensity;
+  s.sun = light.sun;
+  s.surface_above_camera_m = static_cast<float>(light.surface_z_m - origin.z());
+  s.ambient = light.ambient;
+
+  cv::Mat out(cam.height, cam.width, CV_32FC3);
 #pragma omp parallel for schedule(static)
   for (int y = 0; y < cam.height; ++y) {
-    const float ray_y = (y - cy) / fy;
-    const int32_t* ids = vis.triangle.ptr<int32_t>(y);
-    const float* depth = vis.depth.ptr<float>(y);
-    auto* row = out.ptr<cv::Vec3f>(y);
-    for (int x = 0; x < cam.width; ++x) {
-      if (ids[x] < 0) {
-        row[x] = cv::Vec3f(light.backscatter[0], light.backscatter[1], light.backscatter[2]);
-        continue;
-      }
-      const float z = depth[x];
-      const Eigen::Vector3f ray_cam(ray_x[x] * z, ray_y * z, z);
-      const float range = ray_cam.norm();
-      const Eigen::Vector3f offset_world = R * ray_cam;  // from the camera centre to the point
-      // World position relative to the camera, then absolute in double (keeps float precision local).
-      const Eigen::Vector3d p_world = origin + offset_world.cast<double>();
-      const Eigen::Vector3f view = offset_world / range;
-      Eigen::Vector3f n = scene.mesh.normals[ids[x]];
-      if (n.dot(view) > 0) n = -n;
-      const float cos_view = std::max(kMinCosine, -n.dot(view));
-      const float footprint_m = z / fx / cos_view;
-      const Eigen::Array3f albedo = surfaceAlbedo(scene, texture, p_world.cast<float>(), ids[x], footprint_m);
-      Eigen::Array3f irradiance = Eigen::Array3f::Zero();
-      if (light.rig_light) {
-        const Eigen::Vector3f to_lamp = (lamp_world - p_world).cast<float>();
-        const float d = to_lamp.norm();
-        const Eigen::Vector3f l = to_lamp / d;
-        const float incidence = std::max(0.0f, n.dot(l));
-        const float axis_cos = std::max(0.0f, -l.dot(lamp_axis.cast<float>()));
-        const float spot = axis_cos * axis_cos;
-        irradiance += light.rig_intensity * spot * incidence / (d * d) * expArray(-beta * d);
-      }
-      if (light.sun) {
-        const float below = std::max(0.0f, light.surface_z_m - static_cast<float>(p_world.z()));
-        const float facing = light.ambient + (1.0f - light.ambient) * std::max(0.0f, n.z());
-        irradiance += light.sun_irradiance * expArray(-light.downwelling_per_m * below) * facing;
-      }
-      const Eigen::Array3f transmission = expArray(-beta * range);
-      const Eigen::Array3f radiance = albedo * irradiance * transmission + light.backscatter * (1.0f - transmission);
-      row[x] = cv::Vec3f(radiance[0], radiance[1], radiance[2]);
-    }
+    detail::shadeRadianceRow(s, y, vis.triangle.ptr<int32_t>(y), vis.depth.ptr<float>(y), out.ptr<float>(y));
   }
   return out;
 }

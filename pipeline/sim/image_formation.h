@@ -22,9 +22,15 @@ namespace cenote::pipeline {
 
 // Surface texture: a fine layer (4 mm texels, period 2 m) plus a coarse one (29 mm, period 7.4 m),
 // so that the sum does not repeat within a scene. Small enough to stay in cache.
+// A surface point's reflectance is the material's base colour times
+//   kMinShade + (1 - kMinShade) clamp(0.5 + kContrast (kFineWeight fine + (1 - kFineWeight) coarse - 0.5), 0, 1)
+// with the layers sampled at its texture-plane coordinates (texturePlane(), scene_mesh.h), the coarse
+// one shifted by (kCoarseShiftU, kCoarseShiftV) texels so that the layers' origins do not line up.
 struct SurfaceTexture {
   static constexpr int kFineSize = 512, kCoarseSize = 256;
   static constexpr double kFineTexel_m = 0.004, kCoarseTexel_m = 0.029;
+  static constexpr float kCoarseShiftU = 37.1f, kCoarseShiftV = 91.7f;
+  static constexpr float kFineWeight = 0.55f, kContrast = 1.4f, kMinShade = 0.15f;
   explicit SurfaceTexture(uint64_t seed);
   NoiseTexture fine, coarse;
 };

@@ -92,13 +92,15 @@ NoiseTexture::NoiseTexture(int size, uint64_t seed) : size_(size) {
   const double sigma = std::sqrt(std::max(1e-12, square / static_cast<double>(base.size()) - mean * mean));
   for (float& v : base) v = static_cast<float>(std::clamp(0.5 + kContrast * (v - mean) / sigma, 0.0, 1.0));
   auto store = [this](const std::vector<float>& level, int n) {
-    std::vector<uint8_t> texels(level.size());
+    level_offsets_.push_back(static_cast<int32_t>(quads_.size()));
+    auto at = [&](int x, int y) {
+      return static_cast<uint32_t>(std::lround(255.0f * level[static_cast<size_t>(y & (n - 1)) * n + (x & (n - 1))]));
+    };
     for (int y = 0; y < n; ++y) {
       for (int x = 0; x < n; ++x) {
-        texels[offset(x, y, n)] = static_cast<uint8_t>(std::lround(255.0f * level[static_cast<size_t>(y) * n + x]));
+        quads_.push_back(at(x, y) | at(x + 1, y) << 8 | at(x, y + 1) << 16 | at(x + 1, y + 1) << 24);
       }
     }
-    levels_.push_back(std::move(texels));
   };
   store(base, size);
   std::vector<float> up = std::move(base);

@@ -3,7 +3,9 @@
 //   valueNoise3()     smooth value noise in [-1, 1], unit lattice spacing
 //   fbm3()            fractal sum of octaves of valueNoise3, roughly in [-1, 1]
 //   approxGaussian()  unit-variance noise from one hash (sum of four uniforms, |x| <= 3.46)
-//   NoiseTexture      a tileable square fBm texture (mean 0.5, sd 0.2, in [0, 1]) with mips, sampled trilinearly
+//   NoiseTexture      a tileable square fBm texture (mean 0.5, sd 0.2, in [0, 1]) with mips, sampled trilinearly;
+//                     each texel stores its 2 x 2 neighbourhood, so a bilinear tap is one 32-bit load
+//                     (or one SIMD gather lane: radiance_kernels.cpp reads quads() directly)
 // Units: the caller's (noise is defined on a unit lattice; scale the input).
 // Threads: pure functions; a NoiseTexture is immutable after construction and may be shared.
 #pragma once
@@ -52,21 +54,22 @@ class NoiseTexture {
   NoiseTexture(int size, uint64_t seed);
 
   int size() const { return size_; }
-  int levels() const { return static_cast<int>(levels_.size()); }
+  int levels() const { return static_cast<int>(level_offsets_.size()); }
 
   // Trilinear sample at texel coordinates (u, v) of level 0 (wrapping), footprint_texels the pixel's
   // size in level-0 texels (chooses and blends the mip levels; <= 1 samples level 0).
   // Inline: the simulator calls it several times per pixel.
   float sample(float u, float v, float footprint_texels) const;
 
+  // Texel (x, y) of level k (n = size >> k texels wide) is quads()[levelOffsets()[k] + y * n + x]:
+  // bits 0-7 texel (x, y), 8-15 (x + 1, y), 16-23 (x, y + 1), 24-31 (x + 1, y + 1), wrapping;
+  // 8-bit values of value * 255.
+  const uint32_t* quads() const { return quads_.data(); }
+  const int32_t* levelOffsets() const { return level_offsets_.data(); }
+  int sizeLog2() const { return size_log2_; }
+
  private:
   float bilinear(int level, float u, float v) const;
-  // Offset of texel (x, y) of a level n texels wide: 8 x 8 tiles of one cache line each.
-  // (Levels under 8 texels wide are row-major.)
-  static size_t offset(int x, int y, int n) {
-    if (n < 8) return static_cast<size_t>(y * n + x);
-    return static_cast<size_t>(((((y >> 3) * (n >> 3) + (x >> 3)) << 6) | ((y & 7) << 3) | (x & 7)));
-  }
 
   // 2^-k for k in [0, 31]: exact, and no division per sample.
   static constexpr float kInversePowersOfTwo[32] = {
@@ -76,12 +79,14 @@ class NoiseTexture {
 
   int size_;
   int size_log2_ = 0;
-  std::vector<std::vector<uint8_t>> levels_;  // level k: (size >> k)^2 texels of value / 255, tiled
+  std::vector<uint32_t> quads_;         // all levels, finest first, row-major
+  std::vector<int32_t> level_offsets_;  // first texel of each level in quads_
 };
 
 namespace detail {
 
-// log2 of x > 0 to ~1e-3: exponent plus a quadratic in the mantissa.
+// log2 of x > 0 to ~1e-2: exponent plus a quadratic in the mantissa m in [1, 2) that is exact at
+// m = 1, 1.5 and 2 (so continuous across powers of two).
 inline float fastLog2(float x) {
   uint32_t bits;
   std::memcpy(&bits, &x, sizeof(bits));
@@ -89,7 +94,7 @@ inline float fastLog2(float x) {
   bits = (bits & 0x007FFFFF) | 0x3F800000;
   float m;
   std::memcpy(&m, &bits, sizeof(m));
-  return exponent + (-0.34484843f * m + 2.02466578f) * m - 0.67487759f;
+  return exponent + (-0.33985f * m + 2.01955f) * m - 1.6797f;
 }
 
 }  // namespace detail
@@ -103,10 +108,9 @@ inline float NoiseTexture::bilinear(int level, float u, float v) const {
   const float tx = x - fx, ty = y - fy;
   const int mask = n - 1;
   const int x0 = static_cast<int>(fx) & mask, y0 = static_cast<int>(fy) & mask;
-  const int x1 = (x0 + 1) & mask, y1 = (y0 + 1) & mask;
-  const uint8_t* t = levels_[level].data();
-  const float t00 = t[offset(x0, y0, n)], t10 = t[offset(x1, y0, n)];
-  const float t01 = t[offset(x0, y1, n)], t11 = t[offset(x1, y1, n)];
+  const uint32_t q = quads_[static_cast<size_t>(level_offsets_[level]) + static_cast<size_t>(y0 * n + x0)];
+  const auto t00 = static_cast<float>(q & 0xFF), t10 = static_cast<float>((q >> 8) & 0xFF);
+  const auto t01 = static_cast<float>((q >> 16) & 0xFF), t11 = static_cast<float>(q >> 24);
   const float a = t00 + (t10 - t00) * tx;
   const float b = t01 + (t11 - t01) * tx;
   return (a + (b - a) * ty) * (1.0f / 255.0f);

@@ -102,6 +102,12 @@ void MeshBuilder::addBox(const Eigen::Vector3d& o, const Eigen::Vector3d& ex, co
   addQuad(p100, p110, p111, p101, material, cell_m);  // +x side
 }
 
+TexturePlane texturePlane(const Eigen::Vector3f& normal) {
+  const Eigen::Vector3f a = normal.cwiseAbs();
+  if (a.z() >= a.x() && a.z() >= a.y()) return TexturePlane::kXY;
+  return a.x() >= a.y() ? TexturePlane::kYZ : TexturePlane::kXZ;
+}
+
 SceneMesh MeshBuilder::finish() {
   if (mesh_.triangles.empty()) throw Error("sim: the scene has no triangles");
   mesh_.normals.resize(mesh_.triangles.size());
@@ -111,6 +117,11 @@ SceneMesh MeshBuilder::finish() {
         (mesh_.vertices[tri[1]] - mesh_.vertices[tri[0]]).cross(mesh_.vertices[tri[2]] - mesh_.vertices[tri[0]]);
     if (!(n.norm() > 1e-12f)) throw Error("sim: degenerate triangle " + std::to_string(t) + " in the scene mesh");
     mesh_.normals[t] = n.normalized();
+  }
+  mesh_.shading_codes.resize(mesh_.triangles.size());
+  for (size_t t = 0; t < mesh_.triangles.size(); ++t) {
+    mesh_.shading_codes[t] =
+        4 * static_cast<int32_t>(mesh_.materials[t]) + static_cast<int32_t>(texturePlane(mesh_.normals[t]));
   }
   for (MeshChunk& chunk : mesh_.chunks) {
     Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = Eigen::Vector3f::Constant(-1e30f);

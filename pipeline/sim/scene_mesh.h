@@ -15,6 +15,11 @@ namespace cenote::pipeline {
 
 enum class Material : uint8_t { kRock, kSand, kCoral, kSponge, kHull, kRust, kCount };
 
+// The world plane a triangle's texture is projected from, by the dominant axis of its normal
+// (fixed per triangle, so the texture is view-independent): texture (u, v) = (x, y), (y, z) or (x, z).
+enum class TexturePlane : uint8_t { kXY, kYZ, kXZ };
+TexturePlane texturePlane(const Eigen::Vector3f& normal);
+
 // A run of triangles whose vertices lie in one contiguous vertex range, with a bounding sphere.
 struct MeshChunk {
   uint32_t first_vertex = 0, num_vertices = 0;
@@ -28,6 +33,8 @@ struct SceneMesh {
   std::vector<std::array<uint32_t, 3>> triangles;  // indices into vertices
   std::vector<Material> materials;                 // one per triangle
   std::vector<Eigen::Vector3f> normals;            // unit, one per triangle (winding order)
+  // Per triangle 4 * material + texture plane, one int32 each: what the SIMD shader gathers.
+  std::vector<int32_t> shading_codes;
   std::vector<MeshChunk> chunks;
 
   size_t numTriangles() const { return triangles.size(); }
