@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 #include "common/error.h"
 #include "mapping/detail/map_impl.h"
@@ -16,10 +17,13 @@ namespace cenote::mapping {
 
 namespace detail {
 
+using detail::ColorStore;
+using detail::LogOddsTree;
+
 struct AccessorImpl {
-  explicit AccessorImpl(const MapImpl& impl) : log_odds(impl.log_odds->constTree()), color(impl.color->constTree()) {}
-  openvdb::tree::ValueAccessor<const openvdb::FloatTree, false> log_odds;
-  openvdb::tree::ValueAccessor<const openvdb::Int32Tree, false> color;
+  explicit AccessorImpl(const MapImpl& impl) : log_odds(impl.log_odds->constTree()), color(&impl.color) {}
+  openvdb::tree::ValueAccessor<const LogOddsTree, false> log_odds;
+  const ColorStore* color;
 };
 
 openvdb::math::Transform::Ptr makeTransform(double voxel_size_m) {
@@ -83,6 +87,18 @@ VoxelBox boxOfBits(const BlockIndex& block, const std::array<uint64_t, 8>& bits)
   return box;
 }
 
+// The order in which a standard FloatTree (internal nodes of 32^3 and 16^3 children: 4096^3 and
+// 128^3 voxels) visits its leaves, which knownBlocks() kept before the map's tree got smaller
+// internal nodes: node origins lexicographically, then children x-major inside each node. Keeps
+// every consumer's block order (and so its results, e.g. frontier cluster numbering) unchanged.
+bool floatTreeOrder(const BlockIndex& a, const BlockIndex& b) {
+  auto key = [](const BlockIndex& v) {
+    return std::make_tuple(v.x() >> 9, v.y() >> 9, v.z() >> 9, (v.x() >> 4) & 31, (v.y() >> 4) & 31, (v.z() >> 4) & 31,
+                           v.x() & 15, v.y() & 15, v.z() & 15);
+  };
+  return key(a) < key(b);
+}
+
 void finishDelta(MapDelta& delta, double s) {
   auto less = [](const BlockIndex& a, const BlockIndex& b) {
     return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
@@ -125,13 +141,10 @@ OccupancyMap::OccupancyMap(const MapConfig& config) : config_(config) {
   model_ = config.logOddsModel();
   initialiseOpenVdb();
   impl_ = std::make_unique<detail::MapImpl>();
-  impl_->log_odds = openvdb::FloatGrid::create(0.0f);
+  impl_->log_odds = detail::LogOddsGrid::create(0.0f);
   impl_->log_odds->setTransform(detail::makeTransform(config.voxel_size_m));
   impl_->log_odds->setName("log_odds");
   impl_->log_odds->setGridClass(openvdb::GRID_UNKNOWN);
-  impl_->color = openvdb::Int32Grid::create(0);
-  impl_->color->setTransform(detail::makeTransform(config.voxel_size_m));
-  impl_->color->setName("color");
 }
 
 OccupancyMap::~OccupancyMap() = default;
@@ -227,7 +240,7 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
   delta.points_used = rays.numRays();
   const double s = voxelSize();
   auto& tree = impl_->log_odds->tree();
-  openvdb::tree::ValueAccessor<openvdb::FloatTree, false> acc(tree);
+  openvdb::tree::ValueAccessor<detail::LogOddsTree, false> acc(tree);
   const size_t group = static_cast<size_t>(config_.publish_blocks);
   for (size_t begin = 0; begin < rays.numBlocks(); begin += group) {
     const size_t end = std::min(rays.numBlocks(), begin + group);
@@ -265,18 +278,16 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
   }
   // Colours of the hit voxels: a running mean per voxel.
   if (!rays.colors().empty()) {
-    auto& color_tree = impl_->color->tree();
-    openvdb::tree::ValueAccessor<openvdb::Int32Tree, false> color_acc(color_tree);
+    detail::ColorStore& colors = impl_->color;
     const size_t n = rays.colors().size();
     for (size_t begin = 0; begin < n; begin += group * 64) {
       const size_t end = std::min(n, begin + group * 64);
       std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
       for (size_t i = begin; i < end; ++i) {
         const EndpointColor& c = rays.colors()[i];
-        const Coord xyz = coordOf(c.ijk);
         int32_t packed;
-        if (!color_acc.probeValue(xyz, packed)) {
-          color_acc.setValueOn(xyz, detail::packColor(c.rgb, 1));
+        if (!colors.get(c.ijk, packed)) {
+          colors.set(c.ijk, detail::packColor(c.rgb, 1));
           continue;
         }
         const int count = detail::colorCount(packed);
@@ -285,7 +296,7 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
         for (int k = 0; k < 3; ++k) {
           mean[k] = static_cast<uint8_t>((old[k] * count + c.rgb[k] + (count + 1) / 2) / (count + 1));
         }
-        color_acc.setValueOn(xyz, detail::packColor(mean, std::min(count + 1, 127)));
+        colors.set(c.ijk, detail::packColor(mean, std::min(count + 1, 127)));
       }
     }
   }
@@ -301,7 +312,11 @@ MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere,
   MapDelta delta;
   const double s = voxelSize();
   const openvdb::CoordBBox region(coordOf(candidates.min), coordOf(candidates.max));
-  auto sweep = [&](auto& tree, bool record) {
+  auto removed = [&](const VoxelIndex& ijk) {
+    return (everywhere || candidates.contains(ijk)) && remove(voxelCentre(ijk, s));
+  };
+  auto& tree = impl_->log_odds->tree();
+  {
     for (auto leaf = tree.beginLeaf(); leaf; ++leaf) {
       if (!everywhere && !region.hasOverlap(leaf->getNodeBoundingBox())) continue;
       const Coord origin = leaf->origin();
@@ -310,21 +325,16 @@ MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere,
       for (auto it = leaf->beginValueOn(); it; ++it) {
         const Coord xyz = it.getCoord();
         const VoxelIndex ijk(xyz.x(), xyz.y(), xyz.z());
-        if (!everywhere && !candidates.contains(ijk)) continue;
-        if (!remove(voxelCentre(ijk, s))) continue;
+        if (!removed(ijk)) continue;
         it.setValueOff();
         it.setValue(0);
         box.extend(ijk);
       }
-      if (record && !box.isEmpty()) {
-        noteChanged(delta, block, box, s);
-        delta.voxels_updated += 0;
-      }
+      if (!box.isEmpty()) noteChanged(delta, block, box, s);
     }
     openvdb::tools::pruneInactive(tree);
-  };
-  sweep(impl_->log_odds->tree(), true);
-  sweep(impl_->color->tree(), false);
+  }
+  impl_->color.eraseIf(removed);
   finishDelta(delta, s);
   impl_->version.fetch_add(1);
   return delta;
@@ -392,8 +402,7 @@ MapStats OccupancyMap::stats() const {
   }
   // Serial count: Grid::memUsage() runs a TBB reduction, whose (uninstrumented) worker threads
   // ThreadSanitizer reports as races; stats() is not a hot path.
-  out.memory_bytes = openvdb::tools::memUsage(impl_->log_odds->constTree(), false) +
-                     openvdb::tools::memUsage(impl_->color->constTree(), false);
+  out.memory_bytes = openvdb::tools::memUsage(impl_->log_odds->constTree(), false) + impl_->color.memoryBytes();
   return out;
 }
 
@@ -421,7 +430,7 @@ double OccupancyMap::ConstAccessor::probability(const VoxelIndex& ijk) const {
 
 bool OccupancyMap::ConstAccessor::color(const VoxelIndex& ijk, std::array<uint8_t, 3>& rgb) const {
   int32_t packed;
-  if (!impl_->color.probeValue(coordOf(ijk), packed)) return false;
+  if (!impl_->color->get(ijk, packed)) return false;
   rgb = detail::unpackColor(packed);
   return true;
 }
@@ -435,6 +444,7 @@ std::vector<BlockIndex> OccupancyMap::ConstAccessor::knownBlocks() const {
     const Coord o = leaf->origin();
     blocks.emplace_back(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift);
   }
+  std::sort(blocks.begin(), blocks.end(), floatTreeOrder);
   return blocks;
 }
 

@@ -52,7 +52,7 @@ struct MapStats {
   uint64_t unknown_in_bounds = 0;  // never-observed voxels inside the bounding box of known ones
   VoxelBox bounds;                 // of the known voxels
   Aabb bounds_m;
-  uint64_t memory_bytes = 0;       // of the grids (OpenVDB memUsage)
+  uint64_t memory_bytes = 0;       // of the log-odds grid (OpenVDB memUsage) and the colours
 };
 
 class OccupancyMap {
@@ -113,7 +113,7 @@ class OccupancyMap {
     double probability(const VoxelIndex& ijk) const;
     // Mean colour of the points that hit the voxel; false when it has none.
     bool color(const VoxelIndex& ijk, std::array<uint8_t, 3>& rgb) const;
-    // Every block holding a known voxel, in the grid's order.
+    // Every block holding a known voxel, in the order a standard OpenVDB FloatTree visits its leaves.
     std::vector<BlockIndex> knownBlocks() const;
     // Copies one block; false (view all unknown) when the block holds no known voxel.
     bool readBlock(const BlockIndex& block, BlockView& view) const;

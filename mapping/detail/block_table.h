@@ -58,6 +58,9 @@ class BlockTable {
     }
   }
   size_t size() const { return size_; }
+  size_t memoryBytes() const {
+    return keys_.capacity() * sizeof(uint64_t) + slots_.capacity() * sizeof(uint32_t) + order_.capacity() * sizeof(uint64_t);
+  }
   // Key of slot s (slots are numbered in insertion order).
   uint64_t keyOf(uint32_t slot) const { return order_[slot]; }
   void clear() {

@@ -1,7 +1,7 @@
-// map_impl.h: the OpenVDB grids behind OccupancyMap. Included only by the few .cpp files that
-// need the grids (occupancy_map.cpp, io/*.cpp): every file that sees openvdb/ pays a minute of
-// compile time on 2 cores.
-// Threads: see occupancy_map.h; grid_mutex guards the grids, writer_mutex serialises writers.
+// map_impl.h: the OpenVDB grid behind OccupancyMap, with its colours. Included only by the few .cpp
+// files that need the grid (occupancy_map.cpp, io/*.cpp): every file that sees openvdb/ pays a
+// minute of compile time on 2 cores.
+// Threads: see occupancy_map.h; grid_mutex guards the grid and colours, writer_mutex serialises writers.
 #pragma once
 
 #include <openvdb/openvdb.h>
@@ -10,6 +10,7 @@
 #include <mutex>
 #include <shared_mutex>
 
+#include "mapping/detail/color_store.h"
 #include "mapping/integration/projective_batch.h"
 #include "mapping/integration/ray_batch.h"
 #include "mapping/occupancy_map.h"
@@ -27,9 +28,16 @@ inline std::array<uint8_t, 3> unpackColor(int32_t packed) {
 }
 inline int colorCount(int32_t packed) { return (packed >> 24) & 127; }
 
+// The log-odds tree: OpenVDB's FloatTree has internal nodes of 32^3 and 16^3 children (264 KB and
+// 33 KB each, however few leaves they hold: 2.2 MB of the bench's 7.4 MB grid at 5 cm); this one
+// has 16^3 and 8^3 (33 KB and 4 KB), over the same 8^3-voxel leaves (LeafNode<float, 3>, shared
+// with FloatTree, so .vdb files still hold a standard FloatGrid: map_io.cpp copies the leaves).
+using LogOddsTree = openvdb::tree::Tree4<float, 4, 3, 3>::Type;
+using LogOddsGrid = openvdb::Grid<LogOddsTree>;
+
 struct MapImpl {
-  openvdb::FloatGrid::Ptr log_odds;  // active voxel = known; value = log-odds
-  openvdb::Int32Grid::Ptr color;     // active where some point hit
+  LogOddsGrid::Ptr log_odds;  // active voxel = known; value = log-odds
+  ColorStore color;           // where some point hit
   mutable detail::FairSharedMutex grid_mutex;
   std::mutex writer_mutex;
   std::atomic<uint64_t> version{0};
@@ -40,7 +48,6 @@ struct MapImpl {
   // (uninstrumented) worker threads ThreadSanitizer reports as racing with ours.
   ~MapImpl() {
     if (log_odds) log_odds->tree().root().clear();
-    if (color) color->tree().root().clear();
   }
 };
 

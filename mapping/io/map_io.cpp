@@ -47,6 +47,47 @@ void writeAtomically(const std::string& path, Write&& write) {
   }
 }
 
+// The map as the grids of a .vdb file, readable by any OpenVDB tool: log_odds (a standard FloatGrid
+// holding copies of the map's leaves) and color (Int32Grid, active where some point hit).
+// Call under the map's shared lock.
+openvdb::GridPtrVec toFileGrids(const detail::MapImpl& impl, double voxel_size_m) {
+  auto log_odds = openvdb::FloatGrid::create(0.0f);
+  log_odds->setTransform(detail::makeTransform(voxel_size_m));
+  log_odds->setName("log_odds");
+  log_odds->setGridClass(openvdb::GRID_UNKNOWN);
+  for (auto leaf = impl.log_odds->constTree().cbeginLeaf(); leaf; ++leaf) {
+    log_odds->tree().addLeaf(new openvdb::FloatTree::LeafNodeType(*leaf));
+  }
+  auto color = openvdb::Int32Grid::create(0);
+  color->setTransform(detail::makeTransform(voxel_size_m));
+  color->setName("color");
+  auto acc = color->getAccessor();
+  impl.color.forEach([&](const VoxelIndex& ijk, int32_t packed) { acc.setValueOn(Coord(ijk.x(), ijk.y(), ijk.z()), packed); });
+  return {log_odds, color};
+}
+
+// Fills an empty map from the grids of a .vdb file (tiles are split into voxels).
+// @throws Error for a coloured voxel beyond the +-2^23 voxels per axis the map holds.
+void fromFileGrids(openvdb::FloatGrid& log_odds, openvdb::Int32Grid& color, detail::MapImpl& impl,
+                   const std::string& path) {
+  log_odds.tree().voxelizeActiveTiles(false);
+  for (auto leaf = log_odds.tree().cbeginLeaf(); leaf; ++leaf) {
+    impl.log_odds->tree().addLeaf(new openvdb::FloatTree::LeafNodeType(*leaf));
+  }
+  for (auto it = color.tree().cbeginValueOn(); it; ++it) {
+    openvdb::CoordBBox box;
+    it.getBoundingBox(box);
+    for (auto xyz = box.begin(); xyz; ++xyz) {
+      const VoxelIndex ijk((*xyz).x(), (*xyz).y(), (*xyz).z());
+      if (!detail::ColorStore::inRange(blockOf(ijk))) {
+        throw Error(path + ": coloured voxel (" + std::to_string(ijk.x()) + ", " + std::to_string(ijk.y()) + ", " +
+                    std::to_string(ijk.z()) + ") lies beyond the 2^23 voxels per axis a map holds");
+      }
+      impl.color.set(ijk, *it);
+    }
+  }
+}
+
 void checkStream(const std::ostream& out, const std::string& path) {
   if (!out) throw Error("cannot write " + path + ": " + std::strerror(errno));
 }
@@ -121,8 +162,7 @@ void saveVdb(const OccupancyMap& map, const std::string& path, const std::string
   openvdb::GridPtrVec grids;
   {
     std::shared_lock<detail::FairSharedMutex> lock(impl.grid_mutex);
-    grids.push_back(impl.log_odds->deepCopy());
-    grids.push_back(impl.color->deepCopy());
+    grids = toFileGrids(impl, map.voxelSize());
   }
   const MapConfig& c = map.config();
   openvdb::MetaMap meta;
@@ -170,8 +210,7 @@ std::unique_ptr<OccupancyMap> loadVdb(const std::string& path, const MapConfig& 
   auto map = std::make_unique<OccupancyMap>(c);
   detail::MapImpl& impl = detail::MapAccess::of(*map);
   std::unique_lock<detail::FairSharedMutex> lock(impl.grid_mutex);
-  impl.log_odds = log_odds;
-  impl.color = color;
+  fromFileGrids(*log_odds, *color, impl, path);
   return map;
 }
 
@@ -183,7 +222,6 @@ std::unique_ptr<OccupancyMap> fromOctree(const Tree& tree, const MapConfig& defa
   detail::MapImpl& impl = detail::MapAccess::of(*map);
   std::unique_lock<detail::FairSharedMutex> lock(impl.grid_mutex);
   auto acc = impl.log_odds->getAccessor();
-  auto color_acc = impl.color->getAccessor();
   const double s = c.voxel_size_m;
   for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
     const double size = it.getSize();
@@ -200,7 +238,7 @@ std::unique_ptr<OccupancyMap> fromOctree(const Tree& tree, const MapConfig& defa
           acc.setValueOn(xyz, l);
           if constexpr (std::is_same_v<Tree, octomap::ColorOcTree>) {
             const auto col = it->getColor();
-            if (tree.isNodeOccupied(*it)) color_acc.setValueOn(xyz, detail::packColor({col.r, col.g, col.b}, 1));
+            if (tree.isNodeOccupied(*it)) impl.color.set(first + VoxelIndex(i, j, k), detail::packColor({col.r, col.g, col.b}, 1));
           }
         }
       }
