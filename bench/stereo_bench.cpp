@@ -2,7 +2,8 @@
 // the same run, on the same number of threads. Prints a Markdown table for docs/PERFORMANCE.md.
 // Besides the wall-clock median it prints the median CPU time per frame (all threads of the
 // process): on a machine shared with other work it barely moves when the wall clock doubles.
-//   stereo_bench [--threads 2] [--repeat 15]
+//   stereo_bench [--threads 2] [--repeat 15] [--only-first]
+// cenote's rows: the full search and the coarse-to-fine band (StereoConfig::search) of each mode.
 // Inputs: Middlebury Cloth3 resized to 800x600 (the paper's image size) with 112 disparities,
 // and the Middlebury pairs at their own size (cones 64, Cloth3 128 disparities).
 #include <omp.h>
@@ -70,9 +71,11 @@ cv::Mat grey(const cv::Mat& bgr) {
 
 int main(int argc, char** argv) {
   int threads = 2, repeat = 15;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--repeat")) repeat = std::atoi(argv[i + 1]);
+  bool only_first = false;  // the 800x600 input alone
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) threads = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--only-first")) only_first = true;
   }
   omp_set_num_threads(threads);
   cv::setNumThreads(threads);
@@ -86,6 +89,7 @@ int main(int argc, char** argv) {
     inputs.push_back({"Cloth3 626x555", grey(cloth->left), grey(cloth->right), 128});
   }
   if (auto cones = test::loadCones()) inputs.push_back({"cones 450x375", grey(cones->left), grey(cones->right), 64});
+  if (only_first && inputs.size() > 1) inputs.resize(1);
   if (inputs.empty()) {
     // No data beside the project: a textured random pair still measures speed.
     cv::Mat left(600, 800, CV_8U), right;
@@ -106,8 +110,9 @@ int main(int argc, char** argv) {
       Timing t;
     };
     std::vector<Row> rows;
-    auto ours = [&](const char* name, pipeline::MatchingCost cost, int window, int paths) {
+    auto ours = [&](const char* name, pipeline::MatchingCost cost, int window, int paths, pipeline::SearchMode search) {
       pipeline::StereoConfig c;
+      c.search = search;
       c.num_disparities = in.disparities;
       c.cost = cost;
       c.window_px = window;
@@ -121,9 +126,14 @@ int main(int argc, char** argv) {
       cv::Mat out;
       rows.push_back({name, medianMs([&] { sgbm->compute(in.left, in.right, out); }, repeat)});
     };
-    ours("cenote SAD 3x3, 4 paths", pipeline::MatchingCost::kSad, 3, 4);
-    ours("cenote census 5x5, 4 paths", pipeline::MatchingCost::kCensus, 5, 4);
-    ours("cenote SAD 3x3, 8 paths", pipeline::MatchingCost::kSad, 3, 8);
+    using pipeline::MatchingCost;
+    using pipeline::SearchMode;
+    ours("cenote SAD 3x3, 4 paths, full search", MatchingCost::kSad, 3, 4, SearchMode::kFull);
+    ours("cenote SAD 3x3, 4 paths, band", MatchingCost::kSad, 3, 4, SearchMode::kBand);
+    ours("cenote census 5x5, 4 paths, full search", MatchingCost::kCensus, 5, 4, SearchMode::kFull);
+    ours("cenote census 5x5, 4 paths, band", MatchingCost::kCensus, 5, 4, SearchMode::kBand);
+    ours("cenote SAD 3x3, 8 paths, full search", MatchingCost::kSad, 3, 8, SearchMode::kFull);
+    ours("cenote SAD 3x3, 8 paths, band", MatchingCost::kSad, 3, 8, SearchMode::kBand);
     opencv("OpenCV StereoSGBM MODE_HH4", cv::StereoSGBM::MODE_HH4);
     opencv("OpenCV StereoSGBM MODE_SGBM_3WAY", cv::StereoSGBM::MODE_SGBM_3WAY);
     const Timing three_way = rows.back().t;

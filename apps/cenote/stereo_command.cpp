@@ -18,7 +18,7 @@ namespace {
 struct StereoOptions {
   std::string left, right, calib, config;
   std::string out_disparity, out_confidence, out_depth, out_preview;
-  std::string cost;
+  std::string cost, search;
   int disparities = 0, min_disparity = -1, window = 0, paths = 0, repeat = 0;
   bool lr_check = false;
   double focal_px = 0.0, baseline_m = 0.0;
@@ -40,6 +40,7 @@ pipeline::StereoConfig makeConfig(const StereoOptions& o) {
   if (o.min_disparity >= 0) config.min_disparity_px = o.min_disparity;
   if (o.window > 0) config.window_px = o.window;
   if (o.paths > 0) config.num_paths = o.paths;
+  if (!o.search.empty()) config.search = pipeline::parseSearchMode(o.search);
   if (o.lr_check) config.lr_check = true;
   return config;
 }
@@ -113,6 +114,8 @@ void registerStereoCommand(CLI::App& app) {
   cmd->add_option("--cost", options->cost, "Matching cost")->check(CLI::IsMember({"sad", "census"}));
   cmd->add_option("--window", options->window, "Cost window side (SAD 1..9 odd, census 3 or 5)");
   cmd->add_option("--paths", options->paths, "SGM paths")->check(CLI::IsMember({4, 8}));
+  cmd->add_option("--search", options->search, "Disparities searched: full range, or a band around a half-size match")
+      ->check(CLI::IsMember({"full", "band"}));
   cmd->add_flag("--lr-check", options->lr_check, "Left-right consistency check");
   cmd->add_option("--focal-px", options->focal_px, "Focal length for depth without --calib");
   cmd->add_option("--baseline-m", options->baseline_m, "Baseline for depth without --calib");

@@ -8,6 +8,8 @@
 // Path recurrence (Hirschmueller 2008), for one direction r:
 //   L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d+-1) + P1, min_k L(p-r, k) + P2) - min_k L(p-r, k)
 // which stays within [0, max_cost + P2]; the sum over all paths is validated to fit 16 bits.
+// Band (coarse to fine): path rows hold [kBandDisparities values][2 kBandDisparities sentinels]
+// per pixel, the values of disparities [band_start, + kBandDisparities); see aggregateRowBand().
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "pipeline/stereo/sgm_engine.cpp"
@@ -142,7 +144,9 @@ struct StripBuffers {
   int width = 0;
   int lanes = 0;          // N
   int padded = 0;         // Dp: disparities rounded up to N
-  int pixel_stride = 0;   // Dp, plus N sentinel lanes when Dp == D
+  int pixel_stride = 0;   // Dp, plus N sentinel lanes when Dp == D; band: 3 kBandDisparities
+  int lead = 0;           // sentinel lanes before pixel -1 of a path row: N; band: 2 kBandDisparities
+  bool band = false;      // coarse-to-fine band (SgmImages::band_start)
   uint16_t* path[4] = {};
   uint16_t* path_min[4] = {};  // W + 2 each, pixel x at x + 1
   uint16_t* along[2] = {};     // [N sentinels][Dp][N sentinels]: previous and current pixel
@@ -162,26 +166,29 @@ struct StripBuffers {
   int reversed_length = 0;
 
   uint16_t* pathPixel(uint16_t* row, int x) const {
-    return row + lanes + static_cast<std::ptrdiff_t>(x + 1) * pixel_stride;
+    return row + lead + static_cast<std::ptrdiff_t>(x + 1) * pixel_stride;
   }
 };
 
 std::size_t alignUp(std::size_t n, std::size_t a) { return (n + a - 1) / a * a; }
 
-StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws) {
+StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   const DU16 d;
   StripBuffers b;
   b.width = p.width;
   b.lanes = static_cast<int>(hn::Lanes(d));
+  b.band = band;
   b.padded = static_cast<int>(alignUp(p.num_disparities, b.lanes));
-  b.pixel_stride = b.padded + (b.padded > p.num_disparities ? 0 : b.lanes);
+  b.pixel_stride = band ? 3 * kBandDisparities : b.padded + (b.padded > p.num_disparities ? 0 : b.lanes);
+  b.lead = band ? 2 * kBandDisparities : b.lanes;
   const std::size_t W = p.width, Dp = b.padded, N = b.lanes;
   b.reversed_length = static_cast<int>(alignUp(W + p.min_disparity + Dp + 2 * N, 64));
   const std::size_t rev = b.reversed_length;
-  const std::size_t path_row = (W + 2) * b.pixel_stride + 2 * N;
+  const std::size_t path_row = (W + 2) * b.pixel_stride + 2 * b.lead;
+  const std::size_t along = std::max<std::size_t>(Dp + 2 * N, 5 * kBandDisparities);
   const std::size_t sad = p.census ? 0 : W * Dp + (W * Dp * p.window + 1) / 2;
   // Every piece is rounded up to 64 elements by take(); 32 pieces at most.
-  const std::size_t total = 4 * (path_row + W + 2) + 2 * (Dp + 2 * N) + sad + 2 * Dp +
+  const std::size_t total = 4 * (path_row + W + 2) + 2 * along + sad + 2 * Dp +
                             kWinnerBatch * (Dp + 3 * N) + 2 * rev + W +
                             (rev / 2 + 32) + 2 * rev + 32 * 64;
   if (ws.buffer_elements < total) {
@@ -198,8 +205,8 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws) {
     b.path[i] = take(path_row);
     b.path_min[i] = take(W + 2);
   }
-  b.along[0] = take(Dp + 2 * N);
-  b.along[1] = take(Dp + 2 * N);
+  b.along[0] = take(along);
+  b.along[1] = take(along);
   if (!p.census) {
     b.column_sum = take(W * Dp);
     b.ring = reinterpret_cast<uint8_t*>(take((W * Dp * p.window + 1) / 2));  // window rows of bytes
@@ -365,19 +372,20 @@ CostSource beginCostRow(const SgmParams& p, const SgmImages& im, const StripBuff
 
 // Every path row to "no predecessor": zero costs (so that a path starts with L = C), sentinels in
 // the lanes past D.
+// Band: each pixel's kBandDisparities values, the rest of its stride sentinels.
 void resetPaths(const SgmParams& p, const StripBuffers& b, uint16_t sentinel) {
-  const int N = b.lanes, D = p.num_disparities;
+  const int D = b.band ? kBandDisparities : p.num_disparities;
   const std::size_t pixels = static_cast<std::size_t>(b.width) + 2;
   for (int i = 0; i < 4; ++i) {
     uint16_t* row = b.path[i];
-    std::fill(row, row + N, sentinel);
+    std::fill(row, row + b.lead, sentinel);
     for (std::size_t px = 0; px < pixels; ++px) {
-      uint16_t* pixel = row + N + px * b.pixel_stride;
+      uint16_t* pixel = row + b.lead + px * b.pixel_stride;
       std::fill(pixel, pixel + D, 0);
       std::fill(pixel + D, pixel + b.pixel_stride, sentinel);
     }
-    uint16_t* end = row + N + pixels * b.pixel_stride;
-    std::fill(end, end + N, sentinel);
+    uint16_t* end = row + b.lead + pixels * b.pixel_stride;
+    std::fill(end, end + b.lead, sentinel);
     std::fill(b.path_min[i], b.path_min[i] + pixels, 0);
   }
 }
@@ -422,13 +430,16 @@ struct WinnerBatch {
 
 // Winner and second minimum of one pixel's path sums `s` (lane-wise minimum `best`, its first
 // disparity `best_index`, lane-wise second smallest `second_best`), into slot j of the batch.
+// The sums are those of disparities [first, first + D) (the band, or the whole range with
+// first = 0), padded to Dp; indices and `best_index` count from `first`.
 HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, VU16 best, VU16 best_index,
-                           VU16 second_best, WinnerBatch& out, int j) {
+                           VU16 second_best, WinnerBatch& out, int j, int first, int D, int Dp) {
   const DU16 d;
-  const int N = b.lanes, D = p.num_disparities, Dp = b.padded;
+  const int N = b.lanes;
   // Disparities k with a right pixel: k <= x - min_d.
-  const int valid = std::min(D, x - p.min_disparity + 1);
-  if (valid <= 0 || (p.invalidate_truncated && valid < D)) {
+  const int valid_in_range = std::min(p.num_disparities, x - p.min_disparity + 1);
+  const int valid = std::min(D, valid_in_range - first);
+  if (valid <= 0 || (p.invalidate_truncated && valid_in_range < p.num_disparities)) {
     out.winner[j] = -1;
     return;
   }
@@ -459,7 +470,7 @@ HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uin
   const VU16 first_near = hn::Set(d, static_cast<uint16_t>(winner - reach));
   const VU16 span = hn::Set(d, static_cast<uint16_t>(2 * reach + 1));
   const auto best_is_near = hn::Lt(hn::Sub(best_index, first_near), span);
-  out.winner[j] = winner;
+  out.winner[j] = first + winner;
   out.c1[j] = c1;
   out.c2[j] = minLane(d, hn::IfThenElse(best_is_near, second_best, best));
   const bool subpixel = p.subpixel && winner > 0 && winner + 1 < valid;
@@ -512,11 +523,14 @@ void finishWinners(const SgmParams& p, const WinnerBatch& in, int count, const i
 // Right image's best sum per pixel (for the LR check): right pixel xr = x - min_d - k, stored
 // reversed at W - 1 - xr so that one left pixel's disparities are contiguous. Ties keep the
 // smaller k, whichever way the row is swept.
-void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const uint16_t* sums, int dx) {
+// `sums` hold disparities [first, first + count).
+void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const uint16_t* sums, int dx, int first,
+                        int count) {
   const DU16 d;
   const int N = b.lanes;
-  const std::ptrdiff_t base = p.width - 1 - x + p.min_disparity;
-  for (int k = 0; k < b.padded; k += N) {
+  const std::ptrdiff_t base = p.width - 1 - x + p.min_disparity + first;
+  const VU16 offset = hn::Set(d, static_cast<uint16_t>(first));
+  for (int k = 0; k < count; k += N) {
     const VU16 m = hn::LoadU(d, b.right_min + base + k);
     const VU16 a = hn::LoadU(d, b.right_arg + base + k);
     const VU16 s = hn::Load(d, sums + k);
@@ -524,7 +538,7 @@ void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const 
     // an equal sum replaces.
     const auto better = dx > 0 ? hn::Lt(s, m) : hn::Not(hn::Lt(m, s));
     hn::StoreU(hn::Min(m, s), d, b.right_min + base + k);
-    hn::StoreU(hn::IfThenElse(better, hn::Load(d, b.iota + k), a), d, b.right_arg + base + k);
+    hn::StoreU(hn::IfThenElse(better, hn::Add(hn::Load(d, b.iota + k), offset), a), d, b.right_arg + base + k);
   }
 }
 
@@ -554,9 +568,9 @@ enum class PixelKind { kGeneral, kSadInterior, kCensusInterior };
 // 2 from (x - dx, y - dx), 3 from (x + dx, y - dx); rows 0..2 of b.path hold directions 1..3
 // (row 3: direction 2's new costs).
 // `stored_sums`: first-pass sums to add (8-path second pass) or to write (8-path first pass).
-void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y,
-                  int dx, bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored,
-                  float* disparity, float* confidence) {
+void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y,
+                      int dx, bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored,
+                      float* disparity, float* confidence) {
   const DU16 d;
   const int N = b.lanes, Dp = b.padded, W = p.width, D = p.num_disparities, r = p.window / 2;
   const VU16 p1 = hn::Set(d, static_cast<uint16_t>(p.p1));
@@ -729,9 +743,9 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
           xs[j] = xj;
           uint16_t* sums = b.sums + j * Dp;
           // The right image's minimum first: pickWinner() masks lanes of the sums.
-          if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx);
+          if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx, 0, Dp);
           pickWinner(p, b, xj, sums, hn::Load(d, b.batch_best + j * N), hn::Load(d, b.batch_index + j * N),
-                     hn::Load(d, b.batch_second + j * N), batch, j);
+                     hn::Load(d, b.batch_second + j * N), batch, j, 0, D, Dp);
         }
         finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
       }
@@ -744,11 +758,277 @@ void aggregateRow(const SgmParams& p, const SgmImages& im, StripBuffers& b, cons
   if (output == RowOutput::kWinner && p.lr_check) leftRightCheck(p, b, disparity, confidence);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Coarse-to-fine band: every pixel searches kBandDisparities disparities from its own start
+// (SgmImages::band_start), so a path's predecessor may cover other disparities. Its costs are
+// read at the current pixel's start, shifted by the difference of the two starts; the lanes of a
+// path pixel past its band hold sentinels larger than any path cost plus P2 (so a disparity the
+// predecessor did not search counts as infinite), and a shift beyond the band reads sentinels only.
+
+// Predecessor shift, clamped to where only sentinels are read (the d - 1 / d + 1 loads reach one
+// lane further than the band on either side).
+HWY_INLINE int bandShift(int start, int start_prev) {
+  return std::clamp(start - start_prev, -(kBandDisparities + 1), kBandDisparities + 1);
+}
+
+// The along-row path starts fresh at the first pixel of every row: zero costs in the band.
+void resetAlongBand(const StripBuffers& b, uint16_t sentinel) {
+  for (uint16_t* pixel : {b.along[0], b.along[1]}) {
+    std::fill(pixel, pixel + 5 * kBandDisparities, sentinel);
+    std::fill(pixel + 2 * kBandDisparities, pixel + 3 * kBandDisparities, 0);
+  }
+}
+
+// The band of the previous pixel on the row (`prev`, lanes past it sentinels) as seen from a
+// band starting `shift` disparities later: lane i holds lane i + shift + kOffset of `prev`.
+// In registers: the previous pixel's path was just computed, and reloading it from memory at
+// another alignment would miss store-to-load forwarding.
+template <int kOffset, class V>
+HWY_INLINE V shiftedBand(V prev, V sentinel, int shift, const uint16_t* iota) {
+  constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+  if constexpr (kLanes == 32) {
+    const __m512i index = _mm512_add_epi16(_mm512_load_si512(iota), _mm512_set1_epi16(static_cast<int16_t>(shift + kOffset)));
+    // Lanes whose source index is outside [0, 32) (as unsigned) keep the sentinel.
+    const __mmask32 inside = _mm512_cmplt_epu16_mask(index, _mm512_set1_epi16(32));
+    return V{_mm512_mask_permutexvar_epi16(sentinel.raw, inside, index, prev.raw)};
+  }
+#endif
+  (void)iota;
+  const DU16 d;
+  HWY_ALIGN uint16_t lanes[3 * kLanes];
+  hn::Store(sentinel, d, lanes);
+  hn::Store(prev, d, lanes + kLanes);
+  hn::Store(sentinel, d, lanes + 2 * kLanes);
+  const int at = std::clamp(shift + kOffset, -static_cast<int>(kLanes), static_cast<int>(kLanes));
+  return hn::LoadU(d, lanes + kLanes + at);
+}
+
+// One row of one pass, as aggregateRowFull(), over each pixel's band. kWindow: the SAD window
+// side, 0 for census.
+template <int kWindow>
+void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y,
+                      int dx, bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored,
+                      float* disparity, float* confidence) {
+  const DU16 d;
+  constexpr bool kCensus = kWindow == 0;
+  constexpr int kN = static_cast<int>(hn::MaxLanes(DU16()));
+  constexpr int kB = kBandDisparities;
+  constexpr int kVectors = kB / kN;
+  static_assert(kB % kN == 0, "the band must be a whole number of vectors");
+  const int Dp = b.padded, W = p.width;
+  constexpr int r = kWindow / 2;
+  const VU16 p1 = hn::Set(d, static_cast<uint16_t>(p.p1));
+  const uint16_t sentinel = static_cast<uint16_t>(p.max_cost + 2 * p.p2 + p.p1);
+  const VU16 sentinel_v = hn::Set(d, sentinel);
+  const VU16 worst_cost = hn::Set(d, static_cast<uint16_t>(p.max_cost));
+  const uint8_t* row = im.guide + y * im.image_stride;
+  const uint8_t* prev_row = im.guide + (y - dx) * im.image_stride;  // inside the image border
+  const int16_t* starts = im.band_start + y * im.band_stride;
+  const int16_t* prev_starts = first_row ? nullptr : im.band_start + (y - dx) * im.band_stride;
+  const CostSource src = beginCostRow(p, im, b, y, dx, dx, first_row);
+  if (output == RowOutput::kWinner && p.lr_check) {
+    std::fill(b.right_min, b.right_min + b.reversed_length, kNoCost);
+    std::fill(b.right_arg, b.right_arg + b.reversed_length, 0);
+  }
+  resetAlongBand(b, sentinel);
+  uint16_t* const along_buffer = b.along[0] + 2 * kB;  // the previous pixel's along path, when shifted
+  VU16 along[kVectors];
+  for (int j = 0; j < kVectors; ++j) along[j] = hn::Zero(d);
+  VU16 along_min = hn::Zero(d);
+  HWY_ALIGN int32_t band_first[kWinnerBatch];
+  // Everything the pixel loop reads, in locals: Highway's stores may alias anything, and the
+  // compiler would otherwise reload struct fields after every store.
+  constexpr int kStride = 3 * kB;  // StripBuffers::pixel_stride of the band
+  uint16_t* const path_vertical = b.pathPixel(b.path[0], 0);
+  const uint16_t* const path_back = b.pathPixel(b.path[1], 0);
+  uint16_t* const path_back_out = b.pathPixel(b.path[3], 0);
+  uint16_t* const path_fwd = b.pathPixel(b.path[2], 0);
+  uint16_t* const min_row_vertical = b.path_min[0];
+  const uint16_t* const min_row_back = b.path_min[1];
+  uint16_t* const min_row_fwd = b.path_min[2];
+  uint16_t* const min_row_back_out = b.path_min[3];
+  const uint16_t* const iota = b.iota;
+  uint16_t* const column_sum = b.column_sum;
+  uint16_t* const batch_sums = b.sums;
+  const uint16_t* const census_right_lo = b.census_reversed[0];
+  const uint16_t* const census_right_hi = b.census_reversed[1];
+  const int sad_shift = p.sad_shift;
+  for (int i = 0; i < W; ++i) {
+    const int x = dx > 0 ? i : W - 1 - i;
+    const int start = starts[x];
+    // Shifts of the predecessors; pixels off the image (and the first row) read zero costs at 0.
+    auto shiftFrom = [&](int xp) HWY_ATTR {
+      return (prev_starts == nullptr || xp < 0 || xp >= W) ? 0 : bandShift(start, prev_starts[xp]);
+    };
+    const int shift_along = i == 0 ? 0 : bandShift(start, starts[x - dx]);
+    const int shift_vertical = shiftFrom(x), shift_back = shiftFrom(x - dx), shift_fwd = shiftFrom(x + dx);
+
+    // SAD: the column one past the window ahead of x is brought to this row over the whole
+    // range (the pixels ahead may search other disparities), then the window sums of the band
+    // are added up. One column early: the band's unaligned loads of a column stored just before
+    // would miss store-to-load forwarding. beginCostRow() brought the first columns up to x0 + r.
+    const int ahead = x + dx * (r + 1);
+    if (src.update_columns && ahead >= 0 && ahead < W) {
+      const EnteringColumn column = enteringColumn(p, b, src, ahead);
+      for (int k = 0; k < Dp; k += kN) updateColumn(column, k);
+    }
+    const int valid_max = x - p.min_disparity;  // largest disparity index with a right pixel
+    const bool border = start + kB - 1 > valid_max;
+    const VU16 max_valid_k = hn::Set(d, static_cast<uint16_t>(valid_max < 0 ? 0 : valid_max));
+    const uint16_t census_lo = kCensus ? static_cast<uint16_t>(src.census_left[x] & 0xFFFF) : 0;
+    const uint16_t census_hi = kCensus ? static_cast<uint16_t>(src.census_left[x] >> 16) : 0;
+    const std::ptrdiff_t census_base = W - 1 - x + p.min_disparity + start;
+
+    uint16_t* const vertical = path_vertical + static_cast<std::ptrdiff_t>(x) * kStride;
+    const uint16_t* const vertical_in = vertical + shift_vertical;
+    const uint16_t* const back = path_back + static_cast<std::ptrdiff_t>(x - dx) * kStride + shift_back;
+    uint16_t* const back_out = path_back_out + static_cast<std::ptrdiff_t>(x) * kStride;
+    const uint16_t* const fwd = path_fwd + static_cast<std::ptrdiff_t>(x + dx) * kStride + shift_fwd;
+    uint16_t* const fwd_out = path_fwd + static_cast<std::ptrdiff_t>(x) * kStride;
+    const uint16_t min_vertical = min_row_vertical[x + 1];
+    const uint16_t min_back = min_row_back[x - dx + 1], min_fwd = min_row_fwd[x + dx + 1];
+    const VU16 min_vertical_v = hn::Set(d, min_vertical);
+    const VU16 min_back_v = hn::Set(d, min_back), min_fwd_v = hn::Set(d, min_fwd);
+    const VU16 jump_along = hn::Add(along_min, hn::Set(d, pen.p2[std::abs(row[x] - row[x - dx])]));
+    const VU16 jump_vertical =
+        hn::Set(d, static_cast<uint16_t>(min_vertical + pen.p2[std::abs(row[x] - prev_row[x])]));
+    const VU16 jump_back =
+        hn::Set(d, static_cast<uint16_t>(min_back + pen.p2[std::abs(row[x] - prev_row[x - dx])]));
+    const VU16 jump_fwd = hn::Set(d, static_cast<uint16_t>(min_fwd + pen.p2[std::abs(row[x] - prev_row[x + dx])]));
+    const int slot = i % kWinnerBatch;
+    band_first[slot] = start;
+    uint16_t* const sums_out = output == RowOutput::kStoreSums
+                                   ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp
+                                   : batch_sums + slot * Dp;
+    const uint16_t* const sums_in = add_stored ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp : nullptr;
+    // The window's columns, clamped to the image, at the band's first disparity.
+    const uint16_t* columns[kCensus ? 1 : kWindow];
+    if constexpr (!kCensus) {
+      for (int c = -r; c <= r; ++c) {
+        columns[c + r] = column_sum + static_cast<std::ptrdiff_t>(clampColumn(x + c, W)) * Dp + start;
+      }
+    }
+    // The along-row predecessor when it searched another band: one vector is shifted in
+    // registers, several go through memory.
+    if (kVectors > 1 && shift_along != 0) {
+      for (int j = 0; j < kVectors; ++j) hn::Store(along[j], d, along_buffer + j * kN);
+    }
+
+    VU16 mins_along = sentinel_v, mins_vertical = sentinel_v, mins_back = sentinel_v, mins_fwd = sentinel_v;
+    VU16 best = hn::Set(d, kNoCost), best_index = hn::Zero(d), second_best = best;
+    VU16 along_new[kVectors], vertical_new[kVectors];
+    for (int j = 0; j < kVectors; ++j) {
+      const int k = j * kN;
+      VU16 cost;
+      if constexpr (kCensus) {
+        const VU16 lo = hn::Xor(hn::Set(d, census_lo), hn::LoadU(d, census_right_lo + census_base + k));
+        const VU16 hi = hn::Xor(hn::Set(d, census_hi), hn::LoadU(d, census_right_hi + census_base + k));
+        cost = hn::Add(hn::PopulationCount(lo), hn::PopulationCount(hi));
+      } else {
+        VU16 acc = hn::LoadU(d, columns[0] + k);
+        for (int c = 1; c < kWindow; ++c) acc = hn::Add(acc, hn::LoadU(d, columns[c] + k));
+        cost = hn::ShiftRightSame(acc, sad_shift);
+      }
+      if (border) {
+        // start + k + lane > x - min_d: no right pixel, largest cost.
+        const VU16 disparity_index = hn::Add(hn::Load(d, iota + k), hn::Set(d, static_cast<uint16_t>(start)));
+        const auto beyond = valid_max < 0 ? hn::FirstN(d, kN) : hn::Gt(disparity_index, max_valid_k);
+        cost = hn::IfThenElse(beyond, worst_cost, cost);
+      }
+      auto step = [&](VU16 same, VU16 neighbours, VU16 jump, VU16 min_prev) HWY_ATTR {
+        return hn::Add(cost, hn::Sub(hn::Min(hn::Min(same, hn::Add(neighbours, p1)), jump), min_prev));
+      };
+      VU16 along_same, along_neighbours;
+      if (shift_along == 0) {
+        const VU16 before = j > 0 ? along[j - 1] : sentinel_v;
+        const VU16 after = j + 1 < kVectors ? along[j + 1] : sentinel_v;
+        along_same = along[j];
+        along_neighbours = hn::Min(shiftInPrevious(before, along[j]), shiftInNext(along[j], after));
+      } else if constexpr (kVectors == 1) {
+        along_same = shiftedBand<0>(along[0], sentinel_v, shift_along, iota);
+        along_neighbours = hn::Min(shiftedBand<-1>(along[0], sentinel_v, shift_along, iota),
+                                   shiftedBand<1>(along[0], sentinel_v, shift_along, iota));
+      } else {
+        const uint16_t* a = along_buffer + shift_along + k;
+        along_same = hn::LoadU(d, a);
+        along_neighbours = hn::Min(hn::LoadU(d, a - 1), hn::LoadU(d, a + 1));
+      }
+      const VU16 l0 = step(along_same, along_neighbours, jump_along, along_min);
+      const VU16 l1 = step(hn::LoadU(d, vertical_in + k),
+                           hn::Min(hn::LoadU(d, vertical_in + k - 1), hn::LoadU(d, vertical_in + k + 1)),
+                           jump_vertical, min_vertical_v);
+      const VU16 l2 = step(hn::LoadU(d, back + k), hn::Min(hn::LoadU(d, back + k - 1), hn::LoadU(d, back + k + 1)),
+                           jump_back, min_back_v);
+      const VU16 l3 = step(hn::LoadU(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)),
+                           jump_fwd, min_fwd_v);
+      along_new[j] = l0;
+      vertical_new[j] = l1;  // stored after every vector has read the old values
+      hn::Store(l2, d, back_out + k);
+      hn::Store(l3, d, fwd_out + k);
+      mins_along = hn::Min(mins_along, l0);
+      mins_vertical = hn::Min(mins_vertical, l1);
+      mins_back = hn::Min(mins_back, l2);
+      mins_fwd = hn::Min(mins_fwd, l3);
+      VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
+      if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
+      hn::Store(sum, d, sums_out + k);
+      second_best = hn::Min(second_best, hn::Max(best, sum));
+      best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
+      best = hn::Min(best, sum);
+    }
+    for (int j = 0; j < kVectors; ++j) {
+      hn::Store(vertical_new[j], d, vertical + j * kN);
+      along[j] = along_new[j];
+    }
+    along_min = minLaneBroadcast(d, mins_along);
+    min_row_vertical[x + 1] = minLane(d, mins_vertical);
+    min_row_fwd[x + 1] = minLane(d, mins_fwd);
+    min_row_back_out[x + 1] = minLane(d, mins_back);
+    if (output == RowOutput::kWinner) {
+      const int N = kN;
+      hn::Store(best, d, b.batch_best + slot * N);
+      hn::Store(best_index, d, b.batch_index + slot * N);
+      hn::Store(second_best, d, b.batch_second + slot * N);
+      if (slot == kWinnerBatch - 1 || i == W - 1) {
+        WinnerBatch batch;
+        int xs[kWinnerBatch];
+        for (int j = 0; j <= slot; ++j) {
+          const int xj = dx > 0 ? i - slot + j : W - 1 - (i - slot + j);
+          xs[j] = xj;
+          uint16_t* sums = b.sums + j * Dp;
+          if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx, band_first[j], kB);
+          pickWinner(p, b, xj, sums, hn::Load(d, b.batch_best + j * N), hn::Load(d, b.batch_index + j * N),
+                     hn::Load(d, b.batch_second + j * N), batch, j, band_first[j], kB, kB);
+        }
+        finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
+      }
+    }
+  }
+  std::swap(b.path[1], b.path[3]);
+  std::swap(b.path_min[1], b.path_min[3]);
+  if (output == RowOutput::kWinner && p.lr_check) leftRightCheck(p, b, disparity, confidence);
+}
+
 void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int row_end, int overlap,
                     SgmWorkspace& ws, const SgmOutput& out) {
-  StripBuffers b = carveBuffers(p, ws);
+  const bool band = im.band_start != nullptr;
+  StripBuffers b = carveBuffers(p, ws, band);
   const PenaltyTable pen = makePenaltyTable(p);
-  const uint16_t sentinel = static_cast<uint16_t>(p.max_cost + p.p2 + p.p1);
+  // Band: a predecessor's disparity outside its band must lose even against min + P2 (min <=
+  // max_cost + P2 there, since a pixel's band may miss its predecessor's entirely).
+  const uint16_t sentinel = static_cast<uint16_t>(p.max_cost + (band ? 2 : 1) * p.p2 + p.p1);
+  auto aggregateRow = &aggregateRowFull;
+  if (band) {
+    switch (p.census ? 0 : p.window) {
+      case 0: aggregateRow = &aggregateRowBand<0>; break;
+      case 1: aggregateRow = &aggregateRowBand<1>; break;
+      case 3: aggregateRow = &aggregateRowBand<3>; break;
+      case 5: aggregateRow = &aggregateRowBand<5>; break;
+      case 7: aggregateRow = &aggregateRowBand<7>; break;
+      default: aggregateRow = &aggregateRowBand<9>; break;
+    }
+  }
   uint16_t* volume = nullptr;
   if (p.eight_paths) {
     const std::size_t n = static_cast<std::size_t>(row_end - row_begin) * p.width * b.padded;

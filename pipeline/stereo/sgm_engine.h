@@ -8,6 +8,8 @@
 // offset and PKRN are float SIMD over batches of pixels (Highway, dispatched at run time to the
 // best instruction set of the machine). The result depends only on the input and the strip
 // boundaries, never on the thread count.
+// With SgmImages::band_start each pixel searches only kBandDisparities disparities (coarse to
+// fine; the caller places the bands from a half-size match): one vector of path costs per pixel.
 //
 // Threads: matchStrip() may run concurrently for different strips, each with its own workspace.
 #pragma once
@@ -16,6 +18,8 @@
 
 #include <cstddef>
 #include <cstdint>
+
+#include "pipeline/stereo/stereo_config.h"
 
 namespace cenote::pipeline::detail {
 
@@ -52,6 +56,10 @@ struct SgmImages {
   const uint32_t* census_left = nullptr;
   const uint32_t* census_right = nullptr;
   std::ptrdiff_t census_stride = 0;  // elements per row
+  // Coarse-to-fine band (null: every pixel searches all disparities): pixel (x, y) searches
+  // disparity indices [band_start[y * band_stride + x], + kBandDisparities), inside [0, D).
+  const int16_t* band_start = nullptr;
+  std::ptrdiff_t band_stride = 0;  // elements per row
 };
 
 struct SgmOutput {

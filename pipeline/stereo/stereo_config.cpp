@@ -11,6 +11,8 @@ int censusBits(int window_px) { return window_px * window_px - 1; }
 
 }  // namespace
 
+bool StereoConfig::usesBand() const { return search == SearchMode::kBand && num_disparities > kBandDisparities; }
+
 int StereoConfig::sadPixelRange() const { return prefilter == Prefilter::kSobelX ? 2 * prefilter_cap : 255; }
 
 int StereoConfig::sadShift() const {
@@ -88,6 +90,9 @@ void StereoConfig::read(YamlSection& section) {
   prefilter = parsePrefilter(prefilter_name);
   section.read("prefilter_cap", prefilter_cap);
   section.read("num_paths", num_paths);
+  std::string search_name = toString(search);
+  section.read("search", search_name);
+  search = parseSearchMode(search_name);
   section.read("p1", p1);
   section.read("p2", p2);
   section.read("adaptive_p2", adaptive_p2);
@@ -105,6 +110,14 @@ void StereoConfig::read(YamlSection& section) {
 const char* toString(MatchingCost cost) { return cost == MatchingCost::kSad ? "sad" : "census"; }
 
 const char* toString(Prefilter prefilter) { return prefilter == Prefilter::kNone ? "none" : "sobel_x"; }
+
+const char* toString(SearchMode search) { return search == SearchMode::kFull ? "full" : "band"; }
+
+SearchMode parseSearchMode(const std::string& name) {
+  if (name == "full") return SearchMode::kFull;
+  if (name == "band") return SearchMode::kBand;
+  throw Error("stereo.search = " + name + ": must be 'full' or 'band'");
+}
 
 Prefilter parsePrefilter(const std::string& name) {
   if (name == "none") return Prefilter::kNone;

@@ -21,6 +21,13 @@ enum class MatchingCost { kSad, kCensus };
 // cameras and far better on Middlebury Motorcycle (tests/pipeline/stereo/middlebury_test.cpp).
 enum class Prefilter { kNone, kSobelX };
 
+// Which disparities each pixel searches. kFull: all num_disparities. kBand: coarse to fine (as
+// tSGM): full SGM on the pair halved in size, then at full size each pixel searches
+// kBandDisparities around twice its coarse disparity (path costs outside a pixel's band count as
+// infinite). Ranges of at most kBandDisparities are always searched in full.
+enum class SearchMode { kFull, kBand };
+inline constexpr int kBandDisparities = 32;
+
 struct StereoConfig {
   MatchingCost cost = MatchingCost::kSad;
   int num_disparities = 112;   // search range size; a multiple of 16 in [16, 512]
@@ -30,6 +37,7 @@ struct StereoConfig {
   int prefilter_cap = 63;      // derivative clipped to +-cap grey levels, in [1, 127]; 63 keeps the
                                // sub-pixel error of a slanted plane at 0.13 px (31: 0.15)
   int num_paths = 4;           // SGM: 4 = one top-down pass (rSGM), 8 = two passes
+  SearchMode search = SearchMode::kFull;  // full range, or a band around a half-size match
   int p1 = -1;                 // penalty for a disparity step of 1; -1 = default of the cost
   int p2 = -1;                 // penalty for larger steps; -1 = default of the cost
   bool adaptive_p2 = false;    // P2 / (1 + |I(p) - I(p-r)| / p2_gradient_scale), never below P1 + 1
@@ -52,6 +60,8 @@ struct StereoConfig {
   int effectiveP2() const;
   // Largest cost of one pixel and disparity in cost units.
   int maxCost() const;
+  // True when matching uses the coarse-to-fine band (kBand and a range wider than the band).
+  bool usesBand() const;
   // Right shift applied to SAD window sums so that maxCost() <= 4095.
   int sadShift() const;
   // Largest difference of one pixel pair that SAD sees (255, or 2 * prefilter_cap).
@@ -65,6 +75,9 @@ struct StereoConfig {
 
 const char* toString(MatchingCost cost);
 const char* toString(Prefilter prefilter);
+const char* toString(SearchMode search);
+// @throws cenote::Error for anything but "full" or "band".
+SearchMode parseSearchMode(const std::string& name);
 // @throws cenote::Error for anything but "none" or "sobel_x".
 Prefilter parsePrefilter(const std::string& name);
 // @throws cenote::Error for anything but "sad" or "census".

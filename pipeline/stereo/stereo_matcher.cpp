@@ -2,6 +2,8 @@
 
 #include <omp.h>
 
+#include <algorithm>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -34,7 +36,8 @@ std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + s
 
 }  // namespace
 
-struct StereoMatcher::Impl {
+// One resolution of the match: its parameters, bordered images and per-strip memory.
+struct MatchLevel {
   detail::SgmParams params;
   std::vector<detail::SgmWorkspace> workspaces;  // one per strip
   cv::Mat guide_bordered;                        // grey left image, for the adaptive P2
@@ -42,26 +45,140 @@ struct StereoMatcher::Impl {
   cv::Mat census_left, census_right;
 };
 
+struct StereoMatcher::Impl {
+  MatchLevel full;
+  MatchLevel coarse;     // coarse to fine only: the pair halved in size
+  cv::Mat coarse_left, coarse_right;
+  DisparityMap coarse_result;
+  cv::Mat band_start;    // CV_16S: first disparity index searched per pixel
+};
+
+namespace {
+
+detail::SgmParams paramsOf(const StereoConfig& config) {
+  detail::SgmParams p;
+  p.num_disparities = config.num_disparities;
+  p.min_disparity = config.min_disparity_px;
+  p.census = config.cost == MatchingCost::kCensus;
+  p.window = config.window_px;
+  p.sad_shift = p.census ? 0 : config.sadShift();
+  p.max_cost = config.maxCost();
+  p.p1 = config.effectiveP1();
+  p.p2 = config.effectiveP2();
+  p.adaptive_p2 = config.adaptive_p2;
+  p.p2_gradient_scale = static_cast<float>(config.p2_gradient_scale);
+  p.eight_paths = config.num_paths == 8;
+  p.subpixel = config.subpixel;
+  p.pkrn_exclude_neighbours = config.pkrn_exclude_neighbours;
+  p.lr_check = config.lr_check;
+  p.invalidate_truncated = config.invalidate_truncated;
+  p.lr_max_diff = config.lr_max_diff_px;
+  p.min_confidence = static_cast<float>(config.min_confidence);
+  return p;
+}
+
+// The half-size match that places the bands: disparities halved (the range rounded outwards),
+// integer winners only, no checks that would leave pixels without a band.
+detail::SgmParams coarseParamsOf(const detail::SgmParams& full) {
+  detail::SgmParams p = full;
+  p.min_disparity = full.min_disparity / 2;
+  p.num_disparities = (full.min_disparity + full.num_disparities + 1) / 2 - p.min_disparity;
+  p.subpixel = false;
+  p.lr_check = false;
+  p.invalidate_truncated = false;
+  p.min_confidence = 0.0f;
+  return p;
+}
+
+// Matches one grey pair at one resolution into `result` (allocated here), with strips of the
+// image height; `band_start` (CV_16S, or empty) restricts each pixel's disparities.
+void matchLevel(MatchLevel& level, const StereoConfig& config, const cv::Mat& left, const cv::Mat& right,
+                int strip_overlap, const cv::Mat& band_start, DisparityMap& result) {
+  detail::SgmParams& p = level.params;
+  p.width = left.cols;
+  p.height = left.rows;
+  const int b = detail::kImageBorder;
+  const bool prefiltered = !p.census && config.prefilter != Prefilter::kNone;
+  cv::copyMakeBorder(left, level.guide_bordered, b, b, b, b, cv::BORDER_REPLICATE);
+  if (prefiltered) {
+    cv::copyMakeBorder(prefilterForSad(left, config.prefilter, config.prefilter_cap), level.left_bordered, b, b, b,
+                       b, cv::BORDER_REPLICATE);
+    cv::copyMakeBorder(prefilterForSad(right, config.prefilter, config.prefilter_cap), level.right_bordered, b, b,
+                       b, b, cv::BORDER_REPLICATE);
+  } else {
+    level.left_bordered = level.guide_bordered;
+    cv::copyMakeBorder(right, level.right_bordered, b, b, b, b, cv::BORDER_REPLICATE);
+  }
+  detail::SgmImages images;
+  images.guide = level.guide_bordered.ptr<uint8_t>(b) + b;
+  images.left = level.left_bordered.ptr<uint8_t>(b) + b;
+  images.right = level.right_bordered.ptr<uint8_t>(b) + b;
+  images.image_stride = static_cast<std::ptrdiff_t>(level.left_bordered.step[0]);
+  if (!band_start.empty()) {
+    images.band_start = band_start.ptr<int16_t>();
+    images.band_stride = static_cast<std::ptrdiff_t>(band_start.step[0] / sizeof(int16_t));
+  }
+
+  const int strips = std::min(config.num_strips, p.height);
+  if (p.census) {
+    level.census_left.create(p.height, p.width, CV_32SC1);
+    level.census_right.create(p.height, p.width, CV_32SC1);
+    const std::ptrdiff_t cstride = static_cast<std::ptrdiff_t>(level.census_left.step[0] / 4);
+#pragma omp parallel for schedule(static)
+    for (int s = 0; s < 2 * strips; ++s) {
+      const int strip = s % strips;
+      const int y0 = strip * p.height / strips, y1 = (strip + 1) * p.height / strips;
+      const bool is_left = s < strips;
+      detail::censusTransform(is_left ? images.left : images.right, images.image_stride, p.width, y0, y1,
+                              p.window, (is_left ? level.census_left : level.census_right).ptr<uint32_t>(),
+                              cstride);
+    }
+    images.census_left = level.census_left.ptr<uint32_t>();
+    images.census_right = level.census_right.ptr<uint32_t>();
+    images.census_stride = cstride;
+  }
+
+  result.disparity.create(p.height, p.width, CV_32FC1);
+  result.confidence.create(p.height, p.width, CV_32FC1);
+  detail::SgmOutput output;
+  output.disparity = result.disparity.ptr<float>();
+  output.confidence = result.confidence.ptr<float>();
+  output.stride = static_cast<std::ptrdiff_t>(result.disparity.step[0] / sizeof(float));
+
+  if (static_cast<int>(level.workspaces.size()) < strips) level.workspaces.resize(strips);
+  // Dynamic schedule: strips are equal in work but threads may not be equally free.
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int s = 0; s < strips; ++s) {
+    const int y0 = s * p.height / strips, y1 = (s + 1) * p.height / strips;
+    detail::matchStrip(p, images, y0, y1, strip_overlap, level.workspaces[s], output);
+  }
+}
+
+// First disparity index of each pixel's band: kBandDisparities centred on twice the coarse
+// disparity of the pixel's coarse pixel (index 0 where that has none), kept inside [0, D) and,
+// where the image border cuts the range, on the disparities that have a right pixel.
+void placeBands(const cv::Mat& coarse_disparity, const detail::SgmParams& full, cv::Mat& band_start) {
+  const int width = kBandDisparities, D = full.num_disparities;
+  band_start.create(full.height, full.width, CV_16SC1);
+#pragma omp parallel for schedule(static)
+  for (int y = 0; y < full.height; ++y) {
+    const float* coarse = coarse_disparity.ptr<float>(y / 2);
+    int16_t* out = band_start.ptr<int16_t>(y);
+    for (int x = 0; x < full.width; ++x) {
+      const float dc = coarse[x / 2];
+      const int centre = std::isfinite(dc) ? 2 * static_cast<int>(dc) - full.min_disparity : 0;
+      const int lo = std::clamp(centre - width / 2, 0, D - width);
+      out[x] = static_cast<int16_t>(std::min(lo, std::max(0, x - full.min_disparity + 1 - width)));
+    }
+  }
+}
+
+}  // namespace
+
 StereoMatcher::StereoMatcher(const StereoConfig& config) : config_(config), impl_(std::make_unique<Impl>()) {
   throwIfInvalid(config_.validate(), "stereo configuration");
-  detail::SgmParams& p = impl_->params;
-  p.num_disparities = config_.num_disparities;
-  p.min_disparity = config_.min_disparity_px;
-  p.census = config_.cost == MatchingCost::kCensus;
-  p.window = config_.window_px;
-  p.sad_shift = p.census ? 0 : config_.sadShift();
-  p.max_cost = config_.maxCost();
-  p.p1 = config_.effectiveP1();
-  p.p2 = config_.effectiveP2();
-  p.adaptive_p2 = config_.adaptive_p2;
-  p.p2_gradient_scale = static_cast<float>(config_.p2_gradient_scale);
-  p.eight_paths = config_.num_paths == 8;
-  p.subpixel = config_.subpixel;
-  p.pkrn_exclude_neighbours = config_.pkrn_exclude_neighbours;
-  p.lr_check = config_.lr_check;
-  p.invalidate_truncated = config_.invalidate_truncated;
-  p.lr_max_diff = config_.lr_max_diff_px;
-  p.min_confidence = static_cast<float>(config_.min_confidence);
+  impl_->full.params = paramsOf(config_);
+  impl_->coarse.params = coarseParamsOf(impl_->full.params);
 }
 
 StereoMatcher::~StereoMatcher() = default;
@@ -75,62 +192,35 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
     throw Error("stereo: right image is " + sizeText(right) + " but left is " + sizeText(left));
   }
   Impl& impl = *impl_;
-  detail::SgmParams& p = impl.params;
-  p.width = left.cols;
-  p.height = left.rows;
-  const int b = detail::kImageBorder;
-  const bool prefiltered = !p.census && config_.prefilter != Prefilter::kNone;
-  cv::copyMakeBorder(left, impl.guide_bordered, b, b, b, b, cv::BORDER_REPLICATE);
-  if (prefiltered) {
-    cv::copyMakeBorder(prefilterForSad(left, config_.prefilter, config_.prefilter_cap), impl.left_bordered, b, b, b,
-                       b, cv::BORDER_REPLICATE);
-    cv::copyMakeBorder(prefilterForSad(right, config_.prefilter, config_.prefilter_cap), impl.right_bordered, b, b,
-                       b, b, cv::BORDER_REPLICATE);
-  } else {
-    impl.left_bordered = impl.guide_bordered;
-    cv::copyMakeBorder(right, impl.right_bordered, b, b, b, b, cv::BORDER_REPLICATE);
-  }
-  detail::SgmImages images;
-  images.guide = impl.guide_bordered.ptr<uint8_t>(b) + b;
-  images.left = impl.left_bordered.ptr<uint8_t>(b) + b;
-  images.right = impl.right_bordered.ptr<uint8_t>(b) + b;
-  images.image_stride = static_cast<std::ptrdiff_t>(impl.left_bordered.step[0]);
-
-  const int strips = std::min(config_.num_strips, p.height);
-  if (p.census) {
-    impl.census_left.create(p.height, p.width, CV_32SC1);
-    impl.census_right.create(p.height, p.width, CV_32SC1);
-    const std::ptrdiff_t cstride = static_cast<std::ptrdiff_t>(impl.census_left.step[0] / 4);
-#pragma omp parallel for schedule(static)
-    for (int s = 0; s < 2 * strips; ++s) {
-      const int strip = s % strips;
-      const int y0 = strip * p.height / strips, y1 = (strip + 1) * p.height / strips;
-      const bool is_left = s < strips;
-      detail::censusTransform(is_left ? images.left : images.right, images.image_stride, p.width, y0, y1,
-                              p.window, (is_left ? impl.census_left : impl.census_right).ptr<uint32_t>(),
-                              cstride);
-    }
-    images.census_left = impl.census_left.ptr<uint32_t>();
-    images.census_right = impl.census_right.ptr<uint32_t>();
-    images.census_stride = cstride;
-  }
-
   DisparityMap result;
-  result.disparity.create(p.height, p.width, CV_32FC1);
-  result.confidence.create(p.height, p.width, CV_32FC1);
-  detail::SgmOutput output;
-  output.disparity = result.disparity.ptr<float>();
-  output.confidence = result.confidence.ptr<float>();
-  output.stride = static_cast<std::ptrdiff_t>(result.disparity.step[0] / sizeof(float));
-
-  if (static_cast<int>(impl.workspaces.size()) < strips) impl.workspaces.resize(strips);
-  // Dynamic schedule: strips are equal in work but threads may not be equally free.
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int s = 0; s < strips; ++s) {
-    const int y0 = s * p.height / strips, y1 = (s + 1) * p.height / strips;
-    detail::matchStrip(p, images, y0, y1, config_.strip_overlap_px, impl.workspaces[s], output);
+  if (!config_.usesBand()) {
+    matchLevel(impl.full, config_, left, right, config_.strip_overlap_px, cv::Mat(), result);
+    return result;
   }
+  halveImage(left, impl.coarse_left);
+  halveImage(right, impl.coarse_right);
+  matchLevel(impl.coarse, config_, impl.coarse_left, impl.coarse_right, (config_.strip_overlap_px + 1) / 2, cv::Mat(),
+             impl.coarse_result);
+  impl.full.params.width = left.cols;
+  impl.full.params.height = left.rows;
+  placeBands(impl.coarse_result.disparity, impl.full.params, impl.band_start);
+  matchLevel(impl.full, config_, left, right, config_.strip_overlap_px, impl.band_start, result);
   return result;
+}
+
+void halveImage(const cv::Mat& grey, cv::Mat& half) {
+  half.create((grey.rows + 1) / 2, (grey.cols + 1) / 2, CV_8UC1);
+  const int last_row = grey.rows - 1, last_column = grey.cols - 1;
+#pragma omp parallel for schedule(static)
+  for (int y = 0; y < half.rows; ++y) {
+    const uint8_t* top = grey.ptr<uint8_t>(2 * y);
+    const uint8_t* bottom = grey.ptr<uint8_t>(std::min(2 * y + 1, last_row));
+    uint8_t* out = half.ptr<uint8_t>(y);
+    for (int x = 0; x < half.cols; ++x) {
+      const int x1 = std::min(2 * x + 1, last_column);
+      out[x] = static_cast<uint8_t>((top[2 * x] + top[x1] + bottom[2 * x] + bottom[x1] + 2) / 4);
+    }
+  }
 }
 
 cv::Mat prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap) {

@@ -8,6 +8,10 @@
 //                smallest; c2 is taken outside d*-1..d*+1 by default, since the naive second
 //                smallest is nearly always the winner's neighbour and says little about ambiguity
 //                (measured on cones in tests/pipeline/stereo/middlebury_test.cpp)
+//   search:      every disparity of the range, or (SearchMode::kBand) coarse to fine: the pair
+//                halved and matched over the halved range, then kBandDisparities per pixel around
+//                twice its coarse disparity (about 2x faster at 112 disparities; accuracy in
+//                tests/pipeline/stereo/middlebury_test.cpp)
 //   validity:    +inf disparity where the pixel has no right match, fails the optional
 //                left-right check, or falls below min_confidence
 //
@@ -46,6 +50,10 @@ class StereoMatcher {
 // The image SAD compares under `prefilter`: for kSobelX, clamp(dI/dx, -cap, cap) + cap per pixel
 // (3x3 Sobel, replicated border); for kNone the image itself. @param grey CV_8UC1.
 cv::Mat prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap);
+
+// The 2x2 mean of `grey` (CV_8UC1), rounded: (a + b + c + d + 2) / 4; an odd last row or column
+// averages with itself. Size ((cols + 1) / 2, (rows + 1) / 2). The coarse level of SearchMode::kBand.
+void halveImage(const cv::Mat& grey, cv::Mat& half);
 
 // Z = f * b / d per pixel; +inf where the disparity is invalid or not positive.
 // @param focal_px rectified focal length, @param baseline_m stereo baseline.

@@ -17,8 +17,10 @@ namespace {
 using test::BadPixelStats;
 using test::StereoPairWithTruth;
 
-StereoConfig configFor(const StereoPairWithTruth& pair, MatchingCost cost, int window, int paths) {
+StereoConfig configFor(const StereoPairWithTruth& pair, MatchingCost cost, int window, int paths,
+                       SearchMode search = StereoConfig().search) {
   StereoConfig c;
+  c.search = search;
   c.num_disparities = pair.num_disparities;
   c.cost = cost;
   c.window_px = window;
@@ -31,7 +33,7 @@ BadPixelStats evaluate(const StereoPairWithTruth& pair, const StereoConfig& conf
   DisparityMap map = matcher.match(pair.left, pair.right);
   const BadPixelStats s = test::badPixels(map.disparity, pair);
   std::cout << pair.name << " " << toString(config.cost) << " " << config.window_px << "x" << config.window_px
-            << " " << config.num_paths << " paths: bad-1 " << s.bad1 << " %, bad-2 " << s.bad2 << " %, density "
+            << " " << config.num_paths << " paths, search " << toString(config.search) << ": bad-1 " << s.bad1 << " %, bad-2 " << s.bad2 << " %, density "
             << s.density << " %\n";
   if (out) *out = std::move(map);
   return s;
@@ -179,6 +181,34 @@ TEST(MiddleburyMotorcycle, Bad2NoWorseThanOpenCvSgbm) {
   const double three_way = evaluateOpenCv(*pair, config, cv::StereoSGBM::MODE_SGBM_3WAY).bad2;
   EXPECT_LE(ours, hh4);
   EXPECT_LE(ours, three_way);
+}
+
+// Coarse to fine (SearchMode::kBand) against the same thresholds as the full search, whichever
+// of the two is the default.
+TEST(MiddleburyCones, BandSearchMeetsTheFullSearchThresholds) {
+  REQUIRE_PAIR(pair, test::loadCones);
+  EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kBand)).bad1, 10.0);
+  EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kCensus, 5, 4, SearchMode::kBand)).bad1, 5.5);
+  EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kFull)).bad1, 10.0);
+  EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kCensus, 5, 4, SearchMode::kFull)).bad1, 5.5);
+}
+
+TEST(MiddleburyCloth3, BandAndFullSearchBad2NoWorseThanOpenCvSgbm) {
+  REQUIRE_PAIR(pair, test::loadCloth3);
+  const StereoConfig band = configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kBand);
+  const double opencv = std::min(evaluateOpenCv(*pair, band, cv::StereoSGBM::MODE_HH4).bad2,
+                                 evaluateOpenCv(*pair, band, cv::StereoSGBM::MODE_SGBM_3WAY).bad2);
+  EXPECT_LE(evaluate(*pair, band).bad2, opencv);
+  EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kFull)).bad2, opencv);
+}
+
+TEST(MiddleburyMotorcycle, BandAndFullSearchBad2NoWorseThanOpenCvSgbm) {
+  REQUIRE_PAIR(pair, test::loadMotorcycle);
+  const StereoConfig band = configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kBand);
+  const double opencv = std::min(evaluateOpenCv(*pair, band, cv::StereoSGBM::MODE_HH4).bad2,
+                                 evaluateOpenCv(*pair, band, cv::StereoSGBM::MODE_SGBM_3WAY).bad2);
+  EXPECT_LE(evaluate(*pair, band).bad2, opencv);
+  EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kFull)).bad2, opencv);
 }
 
 }  // namespace

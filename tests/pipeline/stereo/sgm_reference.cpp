@@ -70,11 +70,23 @@ int adaptedP2(const StereoConfig& c, int gradient) {
   return std::min(std::max(value, c.effectiveP1() + 1), c.effectiveP2());
 }
 
+// Band of searched disparities per pixel: [start, start + width). The full search is one band.
+struct Bands {
+  cv::Mat start;  // CV_32S, empty: every pixel starts at 0
+  int width = 0;
+  int lo(int x, int y) const { return start.empty() ? 0 : start.at<int>(y, x); }
+};
+
+constexpr int kInfinite = 1 << 28;  // path cost outside a pixel's band
+
 // Adds the path costs along direction (rx, ry) to `sums`. Pixels are visited so that the
-// predecessor (x - rx, y - ry) always comes first.
-void aggregate(const Volume& cost, const cv::Mat& L, const StereoConfig& c, int rx, int ry, Volume& sums) {
+// predecessor (x - rx, y - ry) always comes first. Outside a pixel's band its path costs are
+// infinite (and its sums are never read).
+void aggregate(const Volume& cost, const cv::Mat& L, const StereoConfig& c, const Bands& bands, int rx, int ry,
+               Volume& sums) {
   const int W = cost.W, H = cost.H, D = cost.D, P1 = c.effectiveP1();
   Volume path(W, H, D);
+  std::fill(path.v.begin(), path.v.end(), kInfinite);
   const int y0 = ry >= 0 ? 0 : H - 1, ystep = ry >= 0 ? 1 : -1;
   const int x0 = rx >= 0 ? 0 : W - 1, xstep = rx >= 0 ? 1 : -1;
   for (int y = y0; y >= 0 && y < H; y += ystep) {
@@ -86,7 +98,8 @@ void aggregate(const Volume& cost, const cv::Mat& L, const StereoConfig& c, int 
         for (int k = 0; k < D; ++k) min_prev = std::min(min_prev, path.at(px, py, k));
       }
       const int P2 = has_prev ? adaptedP2(c, std::abs(pixel(L, x, y) - pixel(L, px, py))) : 0;
-      for (int k = 0; k < D; ++k) {
+      const int lo = bands.lo(x, y);
+      for (int k = lo; k < lo + bands.width; ++k) {
         int value = const_cast<Volume&>(cost).at(x, y, k);
         if (has_prev) {
           int best = path.at(px, py, k);
@@ -102,9 +115,54 @@ void aggregate(const Volume& cost, const cv::Mat& L, const StereoConfig& c, int 
   }
 }
 
+// The 2x2 mean of the image (rounded; an odd last row or column averages with itself).
+cv::Mat halve(const cv::Mat& grey) {
+  cv::Mat out((grey.rows + 1) / 2, (grey.cols + 1) / 2, CV_8U);
+  for (int y = 0; y < out.rows; ++y) {
+    for (int x = 0; x < out.cols; ++x) {
+      const int sum = pixel(grey, 2 * x, 2 * y) + pixel(grey, 2 * x + 1, 2 * y) + pixel(grey, 2 * x, 2 * y + 1) +
+                      pixel(grey, 2 * x + 1, 2 * y + 1);
+      out.at<uint8_t>(y, x) = static_cast<uint8_t>((sum + 2) / 4);
+    }
+  }
+  return out;
+}
+
+pipeline::DisparityMap match(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c, const Bands& bands);
+
+// Coarse to fine: the half-size match (integer disparities, no checks) centres each pixel's band
+// on twice its coarse disparity, kept inside the range and, where the image border cuts the
+// range, on the disparities that have a right pixel.
+Bands bandsFromHalfSize(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c) {
+  StereoConfig coarse = c;
+  coarse.min_disparity_px = c.min_disparity_px / 2;
+  coarse.num_disparities = (c.min_disparity_px + c.num_disparities + 1) / 2 - coarse.min_disparity_px;
+  coarse.subpixel = false;
+  coarse.lr_check = false;
+  coarse.invalidate_truncated = false;
+  coarse.min_confidence = 0.0;
+  coarse.p1 = c.effectiveP1();
+  coarse.p2 = c.effectiveP2();
+  const cv::Mat coarse_disparity = match(halve(L), halve(R), coarse, Bands{{}, coarse.num_disparities}).disparity;
+  const int width = pipeline::kBandDisparities, D = c.num_disparities;
+  Bands bands{cv::Mat(L.size(), CV_32S), width};
+  for (int y = 0; y < L.rows; ++y) {
+    for (int x = 0; x < L.cols; ++x) {
+      const float dc = coarse_disparity.at<float>(y / 2, x / 2);
+      const int centre = std::isfinite(dc) ? 2 * static_cast<int>(dc) - c.min_disparity_px : 0;
+      int lo = std::clamp(centre - width / 2, 0, D - width);
+      lo = std::min(lo, std::max(0, x - c.min_disparity_px + 1 - width));
+      bands.start.at<int>(y, x) = lo;
+    }
+  }
+  return bands;
+}
+
 }  // namespace
 
-pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c) {
+namespace {
+
+pipeline::DisparityMap match(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c, const Bands& bands) {
   const int W = L.cols, H = L.rows, D = c.num_disparities;
   const bool sad = c.cost == pipeline::MatchingCost::kSad;
   const Volume cost = sad ? matchingCost(pipeline::prefilterForSad(L, c.prefilter, c.prefilter_cap),
@@ -112,7 +170,7 @@ pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const St
                           : matchingCost(L, R, c);
   Volume sums(W, H, D);
   const int directions[8][2] = {{1, 0}, {0, 1}, {1, 1}, {-1, 1}, {-1, 0}, {0, -1}, {-1, -1}, {1, -1}};
-  for (int i = 0; i < c.num_paths; ++i) aggregate(cost, L, c, directions[i][0], directions[i][1], sums);
+  for (int i = 0; i < c.num_paths; ++i) aggregate(cost, L, c, bands, directions[i][0], directions[i][1], sums);
 
   pipeline::DisparityMap out;
   out.disparity.create(H, W, CV_32F);
@@ -122,7 +180,7 @@ pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const St
     // Right image's winner per right pixel (smallest k on ties), for the LR check.
     std::vector<int> right_best(W, std::numeric_limits<int>::max()), right_arg(W, 0);
     for (int x = 0; x < W; ++x) {
-      for (int k = 0; k < D; ++k) {
+      for (int k = bands.lo(x, y); k < bands.lo(x, y) + bands.width; ++k) {
         const int xr = x - c.min_disparity_px - k;
         if (xr < 0) continue;
         const int s = sums.at(x, y, k);
@@ -139,14 +197,17 @@ pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const St
       confidence = 0.0f;
       const int valid = std::min(D, x - c.min_disparity_px + 1);
       if (valid <= 0 || (c.invalidate_truncated && valid < D)) continue;
-      int winner = 0;
-      for (int k = 1; k < valid; ++k) {
+      // Searched: the band's disparities that have a right pixel.
+      const int first = bands.lo(x, y), end = std::min(valid, first + bands.width);
+      if (end <= first) continue;
+      int winner = first;
+      for (int k = first + 1; k < end; ++k) {
         if (sums.at(x, y, k) < sums.at(x, y, winner)) winner = k;
       }
       const int c1 = sums.at(x, y, winner);
       const int reach = c.pkrn_exclude_neighbours ? 1 : 0;
       int c2 = -1;
-      for (int k = 0; k < valid; ++k) {
+      for (int k = first; k < end; ++k) {
         if (std::abs(k - winner) <= reach) continue;
         if (c2 < 0 || sums.at(x, y, k) < c2) c2 = sums.at(x, y, k);
       }
@@ -154,7 +215,7 @@ pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const St
       if (pkrn < c.min_confidence) continue;
       if (c.lr_check && std::abs(right_arg[x - c.min_disparity_px - winner] - winner) > c.lr_max_diff_px) continue;
       float offset = 0.0f;
-      if (c.subpixel && winner > 0 && winner + 1 < valid) {
+      if (c.subpixel && winner > first && winner + 1 < end) {
         const int below = sums.at(x, y, winner - 1), above = sums.at(x, y, winner + 1);
         const int denominator = below + above - 2 * c1;
         if (denominator > 0) offset = static_cast<float>(below - above) / (2.0f * denominator);
@@ -164,6 +225,13 @@ pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const St
     }
   }
   return out;
+}
+
+}  // namespace
+
+pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c) {
+  if (c.usesBand()) return match(L, R, c, bandsFromHalfSize(L, R, c));
+  return match(L, R, c, Bands{{}, c.num_disparities});
 }
 
 }  // namespace cenote::test

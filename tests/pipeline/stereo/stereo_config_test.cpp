@@ -90,6 +90,25 @@ TEST(StereoConfig, ReadsYamlAndRejectsUnknownCostName) {
   }
 }
 
+TEST(StereoConfig, ReadsSearchModeAndRejectsUnknownName) {
+  YamlSection ok(YAML::Load("{search: band}"), "stereo", "c.yaml");
+  StereoConfig c;
+  c.search = SearchMode::kFull;
+  c.read(ok);
+  ok.finish();
+  EXPECT_EQ(c.search, SearchMode::kBand);
+  EXPECT_TRUE(c.usesBand());
+  c.num_disparities = kBandDisparities;  // a range no wider than the band is searched in full
+  EXPECT_FALSE(c.usesBand());
+  YamlSection bad(YAML::Load("{search: coarse}"), "stereo", "c.yaml");
+  try {
+    c.read(bad);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "stereo.search = coarse: must be 'full' or 'band'");
+  }
+}
+
 TEST(StereoConfig, ConstructingAMatcherWithAnInvalidConfigThrowsWithEveryRule) {
   StereoConfig c;
   c.num_disparities = 7;

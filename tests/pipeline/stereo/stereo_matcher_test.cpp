@@ -88,6 +88,8 @@ struct ReferenceCase {
   int window, paths, min_disparity;
   bool adaptive, lr, naive_pkrn;
   Prefilter prefilter = Prefilter::kSobelX;
+  SearchMode search = SearchMode::kFull;
+  int disparities = 48;
 };
 
 class MatchesScalarReference : public ::testing::TestWithParam<ReferenceCase> {};
@@ -107,7 +109,8 @@ TEST_P(MatchesScalarReference, BitForBitWithOneStrip) {
   config.cost = rc.cost;
   config.window_px = rc.window;
   config.num_paths = rc.paths;
-  config.num_disparities = 48;
+  config.num_disparities = rc.disparities;
+  config.search = rc.search;
   config.min_disparity_px = rc.min_disparity;
   config.adaptive_p2 = rc.adaptive;
   config.lr_check = rc.lr;
@@ -135,15 +138,32 @@ INSTANTIATE_TEST_SUITE_P(
                       ReferenceCase{"sad3_grey_levels", MatchingCost::kSad, 3, 4, 0, false, false, false,
                                     Prefilter::kNone},
                       ReferenceCase{"sad9_grey_levels_8paths", MatchingCost::kSad, 9, 8, 0, true, true, false,
-                                    Prefilter::kNone}),
+                                    Prefilter::kNone},
+                      // Coarse to fine: bands of 32 of the 48 (or 80) disparities.
+                      ReferenceCase{"band_sad3_4paths", MatchingCost::kSad, 3, 4, 0, false, false, false,
+                                    Prefilter::kSobelX, SearchMode::kBand},
+                      ReferenceCase{"band_sad3_80_disparities", MatchingCost::kSad, 3, 4, 0, false, false, false,
+                                    Prefilter::kSobelX, SearchMode::kBand, 80},
+                      ReferenceCase{"band_census5_4paths", MatchingCost::kCensus, 5, 4, 0, false, false, false,
+                                    Prefilter::kSobelX, SearchMode::kBand},
+                      ReferenceCase{"band_sad5_8paths", MatchingCost::kSad, 5, 8, 0, false, false, false,
+                                    Prefilter::kSobelX, SearchMode::kBand},
+                      ReferenceCase{"band_sad3_min_disparity", MatchingCost::kSad, 3, 4, 9, false, false, false,
+                                    Prefilter::kSobelX, SearchMode::kBand},
+                      ReferenceCase{"band_sad3_adaptive_lr_check", MatchingCost::kSad, 3, 4, 0, true, true, false,
+                                    Prefilter::kSobelX, SearchMode::kBand},
+                      ReferenceCase{"band_sad3_naive_pkrn_grey", MatchingCost::kSad, 3, 4, 0, false, false, true,
+                                    Prefilter::kNone, SearchMode::kBand}),
     [](const ::testing::TestParamInfo<ReferenceCase>& info) { return std::string(info.param.name); });
 
 TEST(StereoMatcher, OneAndTwoThreadsGiveBitIdenticalResults) {
   const SyntheticPair pair = slantedPlane(320, 240, 20.0, 0.03, 0.02, 7);
   for (int paths : {4, 8}) {
+   for (SearchMode search : {SearchMode::kFull, SearchMode::kBand}) {
     StereoConfig config;
     config.num_disparities = 64;
     config.num_paths = paths;
+    config.search = search;
     config.lr_check = true;
     StereoMatcher matcher(config);
     const int saved = omp_get_max_threads();
@@ -152,7 +172,8 @@ TEST(StereoMatcher, OneAndTwoThreadsGiveBitIdenticalResults) {
     omp_set_num_threads(2);
     const DisparityMap two = matcher.match(pair.left, pair.right);
     omp_set_num_threads(saved);
-    expectBitIdentical(one, two, paths == 4 ? "4 paths" : "8 paths");
+    expectBitIdentical(one, two, std::to_string(paths) + " paths, search " + toString(search));
+   }
   }
 }
 
