@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "common/error.h"
-#include "pipeline/sim/radiance_kernels.h"
+#include "pipeline/sim/image_formation_kernels.h"
 
 namespace cenote::pipeline {
 namespace {
@@ -118,18 +118,11 @@ cv::Mat exposeImage(const cv::Mat& radiance, float gain, float noise_sigma, uint
     return table;
   }();
   cv::Mat out(radiance.size(), CV_8UC3);
-  const int width = radiance.cols;
+  const int samples = 3 * radiance.cols;
 #pragma omp parallel for schedule(static)
   for (int y = 0; y < radiance.rows; ++y) {
-    const auto* in = radiance.ptr<float>(y);
-    uint8_t* o = out.ptr<uint8_t>(y);
-    for (int i = 0; i < 3 * width; ++i) {
-      const float v = std::clamp(in[i] * gain, 0.0f, 1.0f);
-      const float level = gamma[static_cast<int>(v * kGammaLevels + 0.5f)];
-      const uint64_t index = static_cast<uint64_t>(y) * 3 * width + i;
-      const float noisy = level + noise_sigma * approxGaussian(hash64(noise_seed, index));
-      o[i] = static_cast<uint8_t>(std::clamp(noisy + 0.5f, 0.0f, 255.0f));
-    }
+    detail::exposeRow(radiance.ptr<float>(y), samples, static_cast<uint32_t>(y) * static_cast<uint32_t>(samples), gain,
+                      noise_sigma, noise_seed, gamma.data(), kGammaLevels, out.ptr<uint8_t>(y));
   }
   return out;
 }

@@ -48,7 +48,8 @@ cv::Mat renderRadiance(const SimScene& scene, const SurfaceTexture& texture, con
                        const Eigen::Isometry3d& T_world_light);
 
 // @return CV_8UC3: round(255 * (gain * radiance)^(1/2.2) + noise_sigma * n), clipped to [0, 255],
-//         n approximately standard normal per pixel and channel from hash(noise_seed, pixel, channel).
+//         n approximately standard normal per pixel and channel (sensorNoise() of
+//         image_formation_kernels.h: a hash of noise_seed and the sample's index, |n| <= 3.45).
 cv::Mat exposeImage(const cv::Mat& radiance, float gain, float noise_sigma, uint64_t noise_seed);
 
 // Gain that maps the given percentile (0-100) of the brightest channel of the surface pixels

@@ -1,9 +1,10 @@
-// radiance_kernels.cpp: Highway implementation of radiance_kernels.h, compiled once per instruction
-// set. Every lane is one pixel; per-triangle data (normal, material, texture plane) and texture taps
-// are gathered. A texture tap is one 32-bit gather of a texel's 2 x 2 neighbourhood.
+// image_formation_kernels.cpp: Highway implementation of image_formation_kernels.h, compiled once per
+// instruction set. Shading: every lane is one pixel; per-triangle data (normal, material, texture
+// plane) and texture taps are gathered, a texture tap being one 32-bit gather of a texel's 2 x 2
+// neighbourhood. Exposure: every lane is one sample (pixel channel); its noise is a hash of its index.
 
 #undef HWY_TARGET_INCLUDE
-#define HWY_TARGET_INCLUDE "pipeline/sim/radiance_kernels.cpp"
+#define HWY_TARGET_INCLUDE "pipeline/sim/image_formation_kernels.cpp"
 #include <hwy/foreach_target.h>  // must precede highway.h
 #include <hwy/highway.h>
 
@@ -11,7 +12,7 @@
 #include <cstring>
 
 #include "pipeline/sim/image_formation.h"
-#include "pipeline/sim/radiance_kernels.h"
+#include "pipeline/sim/image_formation_kernels.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace cenote::pipeline::detail {
@@ -25,6 +26,9 @@ using VI = hn::Vec<DI>;
 using MF = hn::Mask<DF>;
 
 constexpr float kMinViewCosine = 0.2f;  // the footprint of grazing views is capped at 5x
+
+using DU = hn::RebindToUnsigned<DF>;
+using VU = hn::Vec<DU>;
 
 // exp(x) for x <= 0 to ~2e-4 relative: 2^(x log2 e) split into integer and fraction.
 HWY_INLINE VF fastExp(DF df, VF x) {
@@ -214,6 +218,58 @@ void ShadeRadianceRowImpl(const RadianceSetup& s, int y, const int32_t* ids, con
   std::memcpy(out_bgr + 3 * x, out_tail, sizeof(float) * 3 * static_cast<size_t>(rest));
 }
 
+// sensorNoise() of samples i (the same operations, lane by lane).
+HWY_INLINE VF sensorNoiseLanes(DF df, uint64_t key, VU i) {
+  const DU du;
+  const DI di;
+  VU h = hn::Mul(hn::Xor(i, hn::Set(du, static_cast<uint32_t>(key))), hn::Set(du, kNoiseMul0));
+  h = hn::Xor(h, hn::Set(du, static_cast<uint32_t>(key >> 32)));
+  h = hn::Xor(h, hn::ShiftRight<16>(h));
+  h = hn::Mul(h, hn::Set(du, kNoiseMul1));
+  h = hn::Xor(h, hn::ShiftRight<13>(h));
+  h = hn::Mul(h, hn::Set(du, kNoiseMul2));
+  h = hn::Xor(h, hn::ShiftRight<16>(h));
+  const VU byte = hn::Set(du, 0xFFu);
+  const VU sum = hn::Add(hn::Add(hn::And(h, byte), hn::And(hn::ShiftRight<8>(h), byte)),
+                         hn::Add(hn::And(hn::ShiftRight<16>(h), byte), hn::ShiftRight<24>(h)));
+  return hn::Mul(hn::Sub(hn::ConvertTo(df, hn::BitCast(di, sum)), hn::Set(df, kNoiseMean)), hn::Set(df, kNoiseScale));
+}
+
+// Samples [k, k + lanes) of exposeRow.
+HWY_INLINE void exposeSamples(const float* in, int k, uint32_t first, float gain, float noise_sigma, uint64_t key,
+                              const float* gamma_table, int gamma_levels, uint8_t* out) {
+  const DF df;
+  const DI di;
+  const DU du;
+  const hn::Rebind<uint8_t, DI> d8;
+  const VF v = hn::Min(hn::Set(df, 1.0f), hn::Max(hn::Zero(df), hn::Mul(hn::LoadU(df, in + k), hn::Set(df, gain))));
+  const VI j = hn::ConvertTo(di, hn::MulAdd(v, hn::Set(df, static_cast<float>(gamma_levels)), hn::Set(df, 0.5f)));
+  const VF level = hn::GatherIndex(df, gamma_table, j);
+  const VU i = hn::Add(hn::Iota(du, static_cast<uint32_t>(k)), hn::Set(du, first));
+  const VF noisy = hn::MulAdd(hn::Set(df, noise_sigma), sensorNoiseLanes(df, key, i), level);
+  const VF clipped = hn::Min(hn::Set(df, 255.0f), hn::Max(hn::Zero(df), hn::Add(noisy, hn::Set(df, 0.5f))));
+  hn::StoreU(hn::DemoteTo(d8, hn::ConvertTo(di, clipped)), d8, out + k);
+}
+
+void ExposeRowImpl(const float* in, int count, uint32_t first, float gain, float noise_sigma, uint64_t key,
+                   const float* gamma_table, int gamma_levels, uint8_t* out) {
+  const DF df;
+  const int lanes = static_cast<int>(hn::Lanes(df));
+  if (count >= lanes) {
+    // The last vector is shifted back to end at the last sample (a sample's value depends only on
+    // its index, so the overlap writes the same bytes twice).
+    for (int k = 0; k < count; k += lanes) {
+      exposeSamples(in, std::min(k, count - lanes), first, gain, noise_sigma, key, gamma_table, gamma_levels, out);
+    }
+    return;
+  }
+  HWY_ALIGN float in_pad[HWY_MAX_BYTES / sizeof(float)] = {};
+  HWY_ALIGN uint8_t out_pad[HWY_MAX_BYTES / sizeof(float)];
+  std::memcpy(in_pad, in, sizeof(float) * static_cast<size_t>(count));
+  exposeSamples(in_pad, 0, first, gain, noise_sigma, key, gamma_table, gamma_levels, out_pad);
+  std::memcpy(out, out_pad, static_cast<size_t>(count));
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace cenote::pipeline::detail
 HWY_AFTER_NAMESPACE();
@@ -222,6 +278,24 @@ HWY_AFTER_NAMESPACE();
 namespace cenote::pipeline::detail {
 
 HWY_EXPORT(ShadeRadianceRowImpl);
+HWY_EXPORT(ExposeRowImpl);
+
+float sensorNoise(uint64_t key, uint32_t i) {
+  uint32_t h = (i ^ static_cast<uint32_t>(key)) * kNoiseMul0;
+  h ^= static_cast<uint32_t>(key >> 32);
+  h ^= h >> 16;
+  h *= kNoiseMul1;
+  h ^= h >> 13;
+  h *= kNoiseMul2;
+  h ^= h >> 16;
+  const uint32_t sum = (h & 0xFF) + ((h >> 8) & 0xFF) + ((h >> 16) & 0xFF) + (h >> 24);
+  return (static_cast<float>(sum) - kNoiseMean) * kNoiseScale;
+}
+
+void exposeRow(const float* in, int count, uint32_t first, float gain, float noise_sigma, uint64_t key,
+               const float* gamma_table, int gamma_levels, uint8_t* out) {
+  HWY_DYNAMIC_DISPATCH(ExposeRowImpl)(in, count, first, gain, noise_sigma, key, gamma_table, gamma_levels, out);
+}
 
 void shadeRadianceRow(const RadianceSetup& setup, int y, const int32_t* ids, const float* depth, float* out_bgr) {
   HWY_DYNAMIC_DISPATCH(ShadeRadianceRowImpl)(setup, y, ids, depth, out_bgr);

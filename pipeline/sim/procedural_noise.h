@@ -2,10 +2,9 @@
 //   hash64()          counter-based hash: the same inputs give the same bits on every machine
 //   valueNoise3()     smooth value noise in [-1, 1], unit lattice spacing
 //   fbm3()            fractal sum of octaves of valueNoise3, roughly in [-1, 1]
-//   approxGaussian()  unit-variance noise from one hash (sum of four uniforms, |x| <= 3.46)
 //   NoiseTexture      a tileable square fBm texture (mean 0.5, sd 0.2, in [0, 1]) with mips, sampled trilinearly;
 //                     each texel stores its 2 x 2 neighbourhood, so a bilinear tap is one 32-bit load
-//                     (or one SIMD gather lane: radiance_kernels.cpp reads quads() directly)
+//                     (or one SIMD gather lane: image_formation_kernels.cpp reads quads() directly)
 // Units: the caller's (noise is defined on a unit lattice; scale the input).
 // Threads: pure functions; a NoiseTexture is immutable after construction and may be shared.
 #pragma once
@@ -34,12 +33,6 @@ inline uint64_t hash64(uint64_t a, uint64_t b = 0, uint64_t c = 0, uint64_t d = 
 
 // Uniform in [0, 1) from a hash.
 inline double hashToUnit(uint64_t h) { return static_cast<double>(h >> 11) * (1.0 / 9007199254740992.0); }
-
-// Approximately standard normal: (sum of four 16-bit uniforms - 2) * sqrt(3).
-inline float approxGaussian(uint64_t h) {
-  const float s = static_cast<float>((h & 0xFFFF) + ((h >> 16) & 0xFFFF) + ((h >> 32) & 0xFFFF) + (h >> 48));
-  return (s * (1.0f / 65536.0f) - 2.0f) * 1.7320508f;
-}
 
 // Smooth (quintic-interpolated) value noise in [-1, 1].
 double valueNoise3(double x, double y, double z, uint64_t seed);

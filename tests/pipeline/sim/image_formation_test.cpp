@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "pipeline/sim/image_formation_kernels.h"
 #include "pipeline/sim/simulator.h"
 
 namespace cenote::pipeline {
@@ -85,6 +86,30 @@ TEST_P(ImageFormation, RadianceMatchesTheModelPerPixel) {
   EXPECT_GT(surface, checked / 2);
   std::printf("[ image formation ] %s: worst relative error %.2g over %d pixels\n", toString(GetParam()), worst,
               checked);
+}
+
+TEST(Exposure, NoiseIsTheSensorNoiseWithTheConfiguredSigma) {
+  const cv::Mat radiance(64, 101, CV_32FC3, cv::Scalar::all(0.25));
+  constexpr float kSigma = 5.0f;
+  constexpr uint64_t kKey = 0x0123456789ABCDEFULL;
+  const cv::Mat image = exposeImage(radiance, 1.0f, kSigma, kKey);
+  const double level = 255.0 * std::pow(0.25, 1.0 / 2.2);
+  double sum = 0.0, square = 0.0;
+  int exact = 0;
+  const int samples = 3 * radiance.cols * radiance.rows;
+  for (int k = 0; k < samples; ++k) {
+    const int got = image.data[k];
+    const double noisy = level + kSigma * detail::sensorNoise(kKey, static_cast<uint32_t>(k));
+    const long expected = std::lround(std::clamp(noisy, 0.0, 255.0));
+    ASSERT_LE(std::abs(got - expected), 1) << "sample " << k;  // 1: rounding of x.5 with a fused multiply-add
+    exact += got == expected;
+    sum += got - level;
+    square += (got - level) * (got - level);
+  }
+  EXPECT_GT(exact, 0.99 * samples);
+  const double mean = sum / samples, sd = std::sqrt(square / samples - mean * mean);
+  EXPECT_NEAR(mean, 0.0, 0.1);
+  EXPECT_NEAR(sd, std::sqrt(kSigma * kSigma + 1.0 / 12.0), 0.1);  // noise and 8-bit rounding
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ImageFormation,
