@@ -1,6 +1,7 @@
 #include "pipeline/stereo/stereo_matcher.h"
 
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 #include <omp.h>
 
 #include <cmath>
@@ -155,6 +156,31 @@ INSTANTIATE_TEST_SUITE_P(
                       ReferenceCase{"band_sad3_naive_pkrn_grey", MatchingCost::kSad, 3, 4, 0, false, false, true,
                                     Prefilter::kNone, SearchMode::kBand}),
     [](const ::testing::TestParamInfo<ReferenceCase>& info) { return std::string(info.param.name); });
+
+// The band kernel holds one band in one vector on AVX-512 and in several on narrower
+// instruction sets: every one of them the machine runs must match the reference. Not HWY_SCALAR:
+// the winner search needs at least 3 lanes per vector (see pickWinner()), in both search modes.
+TEST(StereoMatcher, BandMatchesTheReferenceOnEveryInstructionSet) {
+  const SyntheticPair pair = slantedPlane(120, 60, 20.0, 0.1, 0.05, 5);
+  for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    if (target == HWY_SCALAR) continue;
+    std::cout << "instruction set " << hwy::TargetName(target) << "\n";
+    hwy::SetSupportedTargetsForTest(target);
+    for (const MatchingCost cost : {MatchingCost::kSad, MatchingCost::kCensus}) {
+      StereoConfig config;
+      config.cost = cost;
+      config.window_px = cost == MatchingCost::kSad ? 3 : 5;
+      config.num_disparities = 64;
+      config.search = SearchMode::kBand;
+      config.lr_check = true;
+      config.num_strips = 1;
+      StereoMatcher matcher(config);
+      expectBitIdentical(matcher.match(pair.left, pair.right), test::referenceSgm(pair.left, pair.right, config),
+                         std::string(hwy::TargetName(target)) + " " + toString(cost));
+    }
+  }
+  hwy::SetSupportedTargetsForTest(0);
+}
 
 TEST(StereoMatcher, OneAndTwoThreadsGiveBitIdenticalResults) {
   const SyntheticPair pair = slantedPlane(320, 240, 20.0, 0.03, 0.02, 7);
