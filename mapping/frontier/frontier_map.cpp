@@ -1,48 +1,90 @@
 #include "mapping/frontier/frontier_map.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <deque>
-#include <limits>
 #include <mutex>
 #include <unordered_map>
 
 #include "mapping/detail/block_table.h"
+#include "mapping/frontier/cluster_split.h"
+#include "mapping/frontier/frontier_bits.h"
 #include "mapping/integration/voxel_ray.h"
 
 namespace cenote::mapping {
 namespace {
 
-using Mask = std::array<uint64_t, 8>;  // one bit per voxel of a block, bit offsetInBlock(ijk)
+using Mask = detail::BlockMask;  // one bit per voxel of a block, bit offsetInBlock(ijk)
+using detail::FrontierVoxel;
 
-const VoxelIndex kFaces[6] = {VoxelIndex(1, 0, 0),  VoxelIndex(-1, 0, 0), VoxelIndex(0, 1, 0),
-                              VoxelIndex(0, -1, 0), VoxelIndex(0, 0, 1),  VoxelIndex(0, 0, -1)};
 const BlockIndex kBlockFaces[6] = {BlockIndex(1, 0, 0),  BlockIndex(-1, 0, 0), BlockIndex(0, 1, 0),
                                    BlockIndex(0, -1, 0), BlockIndex(0, 0, 1),  BlockIndex(0, 0, -1)};
 
-bool testBit(const Mask& m, int o) { return (m[o >> 6] >> (o & 63)) & 1; }
+// The 26 neighbour blocks' offsets.
+const std::array<BlockIndex, 26> kNeighbourBlocks = [] {
+  std::array<BlockIndex, 26> out;
+  int i = 0;
+  for (int x = -1; x <= 1; ++x)
+    for (int y = -1; y <= 1; ++y)
+      for (int z = -1; z <= 1; ++z)
+        if (x != 0 || y != 0 || z != 0) out[i++] = BlockIndex(x, y, z);
+  return out;
+}();
 
-struct FrontierVoxel {
-  VoxelIndex ijk;
-  uint8_t faces;  // unknown face neighbours, bit i: kFaces[i]
+// A 26-connected piece of one block's frontier, and the component it belongs to.
+struct Piece {
+  Mask bits{};
+  detail::FaceLayers layers;  // of bits
+  uint32_t component = 0;     // 0: not yet assigned (during an update)
+  uint32_t node = 0;          // its union-find node during an update
 };
 
-struct Component {
-  std::vector<FrontierVoxel> voxels;
-  std::vector<FrontierCluster> clusters;
-};
-
-// Frontier bits of one block and the component of each frontier voxel.
+// Frontier bits of one block, their unknown faces, and their pieces.
 struct FrontierBlock {
+  BlockIndex index;
   Mask frontier{};
-  std::array<uint32_t, kBlockVoxels> component{};  // meaningful where frontier is set; 0 = unassigned
-  std::array<uint8_t, kBlockVoxels> faces{};       // unknown face neighbours (frontierMask)
+  std::array<uint8_t, kBlockVoxels> faces{};  // unknown face neighbours where frontier, else 0
+  std::vector<Piece> pieces;
+  uint32_t mark = 0;  // update number that last queued it for labelling
+};
+
+// A connected component of the frontier: the blocks holding its pieces, and its clusters.
+struct Component {
+  std::vector<uint32_t> blocks;  // slots, each once
+  std::vector<FrontierCluster> clusters;
 };
 
 // The map's voxel states in a block as this frontier map last saw them: a block whose states did
 // not change (only log-odds moved) changes no frontier.
 struct StateSnapshot {
   Mask known{}, occupied{};
+};
+
+// Union-find over pieces, with path halving and union by index (the smaller root wins, so the
+// result does not depend on the order of the unions).
+class UnionFind {
+ public:
+  uint32_t add() {
+    parent_.push_back(static_cast<uint32_t>(parent_.size()));
+    return parent_.back();
+  }
+  uint32_t find(uint32_t i) {
+    while (parent_[i] != i) {
+      parent_[i] = parent_[parent_[i]];
+      i = parent_[i];
+    }
+    return i;
+  }
+  void unite(uint32_t a, uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a < b) parent_[b] = a;
+    if (b < a) parent_[a] = b;
+  }
+  size_t size() const { return parent_.size(); }
+  void clear() { parent_.clear(); }
+
+ private:
+  std::vector<uint32_t> parent_;
 };
 
 // Known / occupied masks of the map's blocks, read once per update through the accessor.
@@ -75,19 +117,8 @@ class MaskCache {
   Entry* last_ = nullptr;
 };
 
-// Unit direction into the unknown of a voxel whose unknown face neighbours are the set bits of
-// `faces` (bit i: kFaces[i]); zero when none.
-Eigen::Vector3d faceDirection(uint8_t faces) {
-  Eigen::Vector3d d = Eigen::Vector3d::Zero();
-  for (int i = 0; i < 6; ++i) {
-    if ((faces >> i) & 1) d += kFaces[i].cast<double>();
-  }
-  const double n = d.norm();
-  return n > 0.0 ? Eigen::Vector3d(d / n) : d;
-}
-
 // Frontier voxels of a block: free (known, not occupied) with an unknown face neighbour; and for
-// each, its unknown faces (bit i: kFaces[i]). Words are x slices (word = x), bits y * 8 + z; a
+// each, its unknown faces (bit i: detail::kFaceOffsets[i]). Words are x slices (word = x), bits y * 8 + z; a
 // neighbour across the block's face comes from the neighbouring block's facing layer.
 Mask frontierMask(MaskCache& masks, const BlockIndex& b, std::array<uint8_t, kBlockVoxels>& faces) {
   Mask free_bits;
@@ -107,7 +138,7 @@ Mask frontierMask(MaskCache& masks, const BlockIndex& b, std::array<uint8_t, kBl
   const Mask& kzm = masks.known(b + kBlockFaces[5]);
   constexpr uint64_t kZ0 = 0x0101010101010101ull, kZ7 = kZ0 << 7;
   for (int w = 0; w < 8; ++w) {
-    // Known bits of each face neighbour, in the order of kFaces.
+    // Known bits of each face neighbour, in the order of detail::kFaceOffsets.
     const uint64_t known_at[6] = {
         w < 7 ? k[w + 1] : kxp[0],
         w > 0 ? k[w - 1] : kxm[7],
@@ -140,24 +171,31 @@ struct FrontierMap::Impl {
   std::unordered_map<uint32_t, Component> components;
   uint32_t next_component = 1;
   uint64_t next_cluster = 1;
+  uint32_t update_number = 0;
   size_t num_frontier = 0;
   int min_voxels = 10;
   double max_extent_m = 2.0;
   double s = 0.05;
+  // Scratch of one update, kept for its capacity.
+  UnionFind sets;
+  std::vector<std::pair<uint32_t, uint32_t>> nodes;  // union-find node -> (block slot, piece index)
+  std::vector<Mask> new_pieces;
+  std::vector<FrontierVoxel> voxels;
 
-  FrontierBlock* findBlock(const BlockIndex& b) const {
-    const uint32_t slot = table.find(detail::packIndex(b));
-    return slot == detail::BlockTable::kNone ? nullptr : blocks[slot].get();
-  }
-  FrontierBlock& getBlock(const BlockIndex& b) {
+  uint32_t findSlot(const BlockIndex& b) const { return table.find(detail::packIndex(b)); }
+  uint32_t getSlot(const BlockIndex& b) {
     bool inserted;
     const uint32_t slot = table.findOrInsert(detail::packIndex(b), inserted);
-    if (inserted) blocks.push_back(std::make_unique<FrontierBlock>());
-    return *blocks[slot];
+    if (inserted) {
+      blocks.push_back(std::make_unique<FrontierBlock>());
+      blocks.back()->index = b;
+    }
+    return slot;
   }
 
-  // Frontier mask of a block with the region of interest applied.
+  // Frontier mask of a block with the region of interest applied; faces zero where not frontier.
   Mask frontierInRoi(MaskCache& masks, const BlockIndex& b, std::array<uint8_t, kBlockVoxels>& faces) const {
+    faces.fill(0);
     if (roi) {
       Aabb box;
       box.min_m = (b * kBlockSide).cast<double>() * s;
@@ -171,86 +209,35 @@ struct FrontierMap::Impl {
       while (bits != 0) {
         const int bit = __builtin_ctzll(bits);
         bits &= bits - 1;
-        if (!roi->contains(voxelCentre(voxelOfOffset(b, w * 64 + bit), s))) m[w] &= ~(1ull << bit);
+        if (!roi->contains(voxelCentre(voxelOfOffset(b, w * 64 + bit), s))) {
+          m[w] &= ~(1ull << bit);
+          faces[w * 64 + bit] = 0;
+        }
       }
     }
     return m;
   }
 
-  // Splits voxels along their main axis until small enough; appends clusters of >= min_voxels.
-  void split(std::vector<FrontierVoxel> voxels, std::vector<FrontierCluster>& out) {
-    if (static_cast<int>(voxels.size()) < min_voxels) return;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    VoxelBox box;
-    for (const auto& v : voxels) {
-      mean += voxelCentre(v.ijk, s);
-      box.extend(v.ijk);
-    }
-    mean /= static_cast<double>(voxels.size());
-    const double extent_m = ((box.max - box.min).cast<double>().array() + 1.0).maxCoeff() * s;
-    if (extent_m > max_extent_m && voxels.size() >= 2) {
-      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (const auto& v : voxels) {
-        const Eigen::Vector3d d = voxelCentre(v.ijk, s) - mean;
-        cov += d * d.transpose();
+  // Takes the component `id` apart: its pieces become unassigned, its clusters go.
+  void dissolve(uint32_t id, std::vector<uint32_t>* unassigned_blocks) {
+    auto it = components.find(id);
+    if (it == components.end()) return;
+    for (uint32_t slot : it->second.blocks) {
+      FrontierBlock& fb = *blocks[slot];
+      for (Piece& p : fb.pieces) {
+        if (p.component == id) p.component = 0;
       }
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-      const Eigen::Vector3d axis = eig.eigenvectors().col(2);
-      std::vector<FrontierVoxel> a, b;
-      for (const auto& v : voxels) ((voxelCentre(v.ijk, s) - mean).dot(axis) < 0.0 ? a : b).push_back(v);
-      if (!a.empty() && !b.empty()) {
-        split(std::move(a), out);
-        split(std::move(b), out);
-        return;
-      }
+      if (unassigned_blocks != nullptr) unassigned_blocks->push_back(slot);
     }
-    FrontierCluster c;
-    c.id = next_cluster++;
-    c.num_voxels = voxels.size();
-    c.centroid_m = mean;
-    c.bounds_m.min_m = box.min.cast<double>() * s;
-    c.bounds_m.max_m = (box.max.cast<double>().array() + 1.0).matrix() * s;
-    for (const auto& v : voxels) c.direction += faceDirection(v.faces);
-    if (c.direction.norm() > 0.0) c.direction.normalize();
-    out.push_back(c);
+    components.erase(it);
   }
 
-  // The component label of a frontier voxel, or nullptr when v is not a frontier voxel. Caches
-  // the 27 blocks around the last block asked for: a flood fill's neighbours lie in them.
-  struct LabelCursor {
-    const Impl& impl;
-    BlockIndex centre = BlockIndex::Zero();
-    bool has_centre = false;
-    std::array<FrontierBlock*, 27> around{};
-    std::array<bool, 27> looked_up{};
-    uint8_t faces = 0;  // of the voxel last found by at()
-
-    uint32_t* at(const VoxelIndex& v) {
-      const BlockIndex b = blockOf(v);
-      if (!has_centre || ((b - centre).array().abs() > 1).any()) {
-        centre = b;
-        has_centre = true;
-        looked_up.fill(false);
-      }
-      const BlockIndex r = b - centre;
-      const int i = (r.x() + 1) * 9 + (r.y() + 1) * 3 + (r.z() + 1);
-      if (!looked_up[i]) {
-        around[i] = impl.findBlock(b);
-        looked_up[i] = true;
-      }
-      FrontierBlock* fb = around[i];
-      if (fb == nullptr) return nullptr;
-      const int o = offsetInBlock(v);
-      if (!testBit(fb->frontier, o)) return nullptr;
-      faces = fb->faces[o];
-      return &fb->component[o];
-    }
-  };
-
-  // Re-examines `blocks` and their face neighbours (whose boundary voxels see the changed ones).
+  // Re-examines `changed` blocks whose voxel states changed, and their face neighbours (whose
+  // boundary voxels see the changed ones); re-labels the components whose voxels changed.
   void apply(const OccupancyMap& map, const std::vector<BlockIndex>& changed) {
     const auto acc = map.constAccessor();
     MaskCache masks(acc);
+    ++update_number;
     // 1. The region: changed blocks and their face neighbours, each once.
     detail::BlockTable seen;
     std::vector<BlockIndex> region;
@@ -270,98 +257,143 @@ struct FrontierMap::Impl {
       addBlock(b);
       for (const BlockIndex& f : kBlockFaces) addBlock(b + f);
     }
-    // 2. New frontier masks; components that lose or keep voxels here are rebuilt (a removed
-    // voxel may split its component, and a kept one's direction into the unknown may change).
+    // 2. New frontier masks. A block whose frontier voxels or their faces changed loses its
+    // pieces, and the components they belonged to are taken apart (a removed voxel may split one,
+    // a changed face turns its direction).
+    std::vector<uint32_t> relabel;  // blocks with unassigned frontier voxels
     std::vector<uint32_t> dirty;
-    std::vector<VoxelIndex> seeds;
     std::array<uint8_t, kBlockVoxels> faces;
     for (const BlockIndex& b : region) {
       const Mask now = frontierInRoi(masks, b, faces);
-      FrontierBlock* fb = findBlock(b);
-      if (fb == nullptr) {
-        if (std::all_of(now.begin(), now.end(), [](uint64_t w) { return w == 0; })) continue;
-        fb = &getBlock(b);
+      uint32_t slot = findSlot(b);
+      if (slot == detail::BlockTable::kNone) {
+        if (detail::isEmpty(now)) continue;
+        slot = getSlot(b);
       }
+      FrontierBlock& fb = *blocks[slot];
+      if (fb.frontier == now && fb.faces == faces) continue;
       for (int w = 0; w < 8; ++w) {
-        uint64_t old_bits = fb->frontier[w];
-        num_frontier -= static_cast<size_t>(__builtin_popcountll(old_bits));
+        num_frontier -= static_cast<size_t>(__builtin_popcountll(fb.frontier[w]));
         num_frontier += static_cast<size_t>(__builtin_popcountll(now[w]));
-        while (old_bits != 0) {
-          const int bit = __builtin_ctzll(old_bits);
-          old_bits &= old_bits - 1;
-          const uint32_t id = fb->component[w * 64 + bit];
-          if (id != 0 && (dirty.empty() || dirty.back() != id)) dirty.push_back(id);
-        }
-        uint64_t new_bits = now[w] & ~fb->frontier[w];
-        fb->frontier[w] = now[w];
-        uint64_t kept = now[w];
-        while (kept != 0) {
-          const int bit = __builtin_ctzll(kept);
-          kept &= kept - 1;
-          fb->faces[w * 64 + bit] = faces[w * 64 + bit];
-        }
-        while (new_bits != 0) {
-          const int bit = __builtin_ctzll(new_bits);
-          new_bits &= new_bits - 1;
-          fb->component[w * 64 + bit] = 0;
-          seeds.push_back(voxelOfOffset(b, w * 64 + bit));
-        }
       }
+      fb.frontier = now;
+      fb.faces = faces;
+      for (const Piece& p : fb.pieces) dirty.push_back(p.component);
+      fb.pieces.clear();
+      relabel.push_back(slot);
     }
     std::sort(dirty.begin(), dirty.end());
     dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
-    LabelCursor cursor{*this};
-    for (uint32_t id : dirty) {
-      auto it = components.find(id);
-      if (it == components.end()) continue;
-      for (const auto& v : it->second.voxels) {
-        if (uint32_t* label = cursor.at(v.ijk)) {
-          *label = 0;
-          seeds.push_back(v.ijk);
+    for (uint32_t id : dirty) dissolve(id, &relabel);
+    // 3. Pieces of the unassigned voxels of each block, a union-find node each.
+    sets.clear();
+    nodes.clear();
+    std::vector<uint32_t> queued;
+    for (uint32_t slot : relabel) {
+      FrontierBlock& fb = *blocks[slot];
+      if (fb.mark == update_number) continue;
+      fb.mark = update_number;
+      queued.push_back(slot);
+      Mask unassigned = fb.frontier;
+      for (const Piece& p : fb.pieces) {
+        for (int w = 0; w < 8; ++w) unassigned[w] &= ~p.bits[w];
+      }
+      new_pieces.clear();
+      detail::appendPieces(unassigned, new_pieces);
+      for (const Mask& bits : new_pieces) {
+        Piece p;
+        p.bits = bits;
+        p.layers = detail::faceLayers(bits);
+        fb.pieces.push_back(p);
+      }
+      for (uint32_t i = 0; i < fb.pieces.size(); ++i) {
+        if (fb.pieces[i].component != 0) continue;
+        fb.pieces[i].node = sets.add();
+        nodes.emplace_back(slot, i);
+      }
+    }
+    // 4. Join touching pieces across blocks. A piece of an untouched component that touches an
+    // unassigned one is merged with it: that component is taken apart, its pieces joined at once
+    // (they are connected).
+    for (uint32_t slot : queued) {
+      const BlockIndex b = blocks[slot]->index;
+      std::array<uint32_t, 26> around;
+      for (int n = 0; n < 26; ++n) around[n] = findSlot(b + kNeighbourBlocks[n]);
+      for (uint32_t i = 0; i < blocks[slot]->pieces.size(); ++i) {
+        const Piece& p = blocks[slot]->pieces[i];
+        if (p.component != 0) continue;
+        for (int n = 0; n < 26; ++n) {
+          if (around[n] == detail::BlockTable::kNone) continue;
+          FrontierBlock& nb = *blocks[around[n]];
+          for (uint32_t j = 0; j < nb.pieces.size(); ++j) {
+            if (!detail::piecesTouch(p.layers, nb.pieces[j].layers, kNeighbourBlocks[n])) continue;
+            if (nb.pieces[j].component != 0) absorb(nb.pieces[j].component);
+            sets.unite(p.node, nb.pieces[j].node);
+          }
         }
       }
-      components.erase(it);
     }
-    // 3. Flood fill (26-connected) from the seeds; an untouched component reached on the way is
-    // absorbed into the new one.
-    std::vector<FrontierVoxel> stack;
-    LabelCursor near{*this};
-    for (const VoxelIndex& seed : seeds) {
-      uint32_t* seed_label = cursor.at(seed);
-      if (seed_label == nullptr || *seed_label != 0) continue;
-      const uint32_t id = next_component++;
-      Component comp;
-      *seed_label = id;
-      stack.assign(1, {seed, cursor.faces});
-      while (!stack.empty()) {
-        const FrontierVoxel fv = stack.back();
-        stack.pop_back();
-        comp.voxels.push_back(fv);
-        const VoxelIndex& v = fv.ijk;
-        for (int dx = -1; dx <= 1; ++dx)
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dz = -1; dz <= 1; ++dz) {
-              const VoxelIndex n = v + VoxelIndex(dx, dy, dz);
-              uint32_t* label = near.at(n);
-              if (label == nullptr || *label == id) continue;
-              if (*label != 0) {
-                auto old = components.find(*label);
-                if (old != components.end()) {
-                  LabelCursor other{*this};
-                  for (const auto& w : old->second.voxels) {
-                    uint32_t* wl = other.at(w.ijk);
-                    if (wl != nullptr && *wl == old->first) *wl = 0;
-                  }
-                  components.erase(old);
-                }
-              }
-              *label = id;
-              stack.push_back({n, near.faces});
-            }
+    // 5. One component per set, in the order of their first piece; split into clusters.
+    std::vector<uint32_t> component_of_root(sets.size(), 0);
+    std::vector<uint32_t> order;  // new component ids in creation order
+    for (uint32_t node = 0; node < nodes.size(); ++node) {
+      const uint32_t root = sets.find(node);
+      if (component_of_root[root] == 0) {
+        component_of_root[root] = next_component++;
+        order.push_back(component_of_root[root]);
+        components.emplace(component_of_root[root], Component{});
       }
-      split(comp.voxels, comp.clusters);
-      components.emplace(id, std::move(comp));
+      const auto [slot, i] = nodes[node];
+      FrontierBlock& fb = *blocks[slot];
+      const uint32_t id = component_of_root[root];
+      fb.pieces[i].component = id;
+      std::vector<uint32_t>& comp_blocks = components[id].blocks;
+      if (comp_blocks.empty() || comp_blocks.back() != slot) comp_blocks.push_back(slot);
     }
+    for (uint32_t id : order) {
+      Component& comp = components[id];
+      std::sort(comp.blocks.begin(), comp.blocks.end());
+      comp.blocks.erase(std::unique(comp.blocks.begin(), comp.blocks.end()), comp.blocks.end());
+      voxels.clear();
+      for (uint32_t slot : comp.blocks) {
+        const FrontierBlock& fb = *blocks[slot];
+        for (const Piece& p : fb.pieces) {
+          if (p.component != id) continue;
+          for (int w = 0; w < 8; ++w) {
+            uint64_t bits = p.bits[w];
+            while (bits != 0) {
+              const int o = w * 64 + __builtin_ctzll(bits);
+              bits &= bits - 1;
+              voxels.push_back({voxelOfOffset(fb.index, o), fb.faces[o]});
+            }
+          }
+        }
+      }
+      const detail::SplitParams params{s, max_extent_m, min_voxels};
+      detail::splitComponent(voxels, params, next_cluster, comp.clusters);
+    }
+  }
+
+  // Merges the untouched component `id` into this update's sets: its pieces get nodes, joined.
+  void absorb(uint32_t id) {
+    auto it = components.find(id);
+    if (it == components.end()) return;
+    uint32_t first = 0;
+    bool has_first = false;
+    for (uint32_t slot : it->second.blocks) {
+      FrontierBlock& fb = *blocks[slot];
+      for (uint32_t i = 0; i < fb.pieces.size(); ++i) {
+        Piece& p = fb.pieces[i];
+        if (p.component != id) continue;
+        p.component = 0;
+        p.node = sets.add();
+        nodes.emplace_back(slot, i);
+        if (has_first) sets.unite(first, p.node);
+        first = has_first ? first : p.node;
+        has_first = true;
+      }
+    }
+    components.erase(it);
   }
 };
 

@@ -4,8 +4,13 @@
 // smaller than MapConfig::frontier_min_voxels dropped.
 // Incremental: update(delta) re-examines only the changed blocks whose voxel states (known,
 // occupied) changed, not just their log-odds, and their 6 face neighbours, with 512-bit masks per
-// block; it re-clusters only the connected components that touch them; other clusters keep their
-// ids. Units: metres, world frame.
+// block (frontier = free and not known in some face direction, by 64-bit word shifts). Each
+// block's frontier is cut into 26-connected pieces by bit-parallel dilation
+// (frontier/frontier_bits.h); pieces of neighbouring blocks are joined by a union-find on their
+// facing layers. Only the components whose voxels or faces changed, and those they now touch, are
+// re-labelled and re-split (frontier/cluster_split.h, exact integer moments: the clusters depend
+// only on the map, not on the order or grouping of updates); other clusters keep their ids.
+// Units: metres, world frame.
 // Threads: update() for one writer; clusters() from any thread (a shared lock).
 #pragma once
 

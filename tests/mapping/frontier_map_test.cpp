@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <deque>
+#include <map>
 #include <tuple>
 
+#include "mapping/frontier/cluster_split.h"
 #include "tests/mapping/support/analytic_scene.h"
 
 namespace cenote::mapping {
@@ -146,6 +149,104 @@ TEST(FrontierMap, ClustersDoNotDependOnHowChangesWereGrouped) {
   ASSERT_GT(expected.size(), 100u);  // 504 when written
   EXPECT_EQ(key(per_view), expected);
   EXPECT_EQ(key(merged), expected);
+}
+
+using ClusterKey = std::tuple<double, double, double, size_t, double, double, double, double, double, double, double,
+                              double, double>;
+
+ClusterKey keyOf(const FrontierCluster& c) {
+  const Aabb& b = c.bounds_m;
+  return {c.centroid_m.x(), c.centroid_m.y(), c.centroid_m.z(), c.num_voxels, c.direction.x(), c.direction.y(),
+          c.direction.z(), b.min_m.x(),       b.min_m.y(),       b.min_m.z(),  b.max_m.x(),    b.max_m.y(),
+          b.max_m.z()};
+}
+
+std::vector<ClusterKey> sortedKeys(const std::vector<FrontierCluster>& clusters) {
+  std::vector<ClusterKey> out;
+  for (const FrontierCluster& c : clusters) out.push_back(keyOf(c));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The frontier clusters of the whole map the slow way: every free voxel with an unknown face
+// neighbour, voxel by voxel; 26-connected components by breadth-first search; each component
+// split as FrontierMap splits one.
+std::vector<ClusterKey> bruteForceClusters(const OccupancyMap& map) {
+  const auto acc = map.constAccessor();
+  std::map<std::tuple<int, int, int>, uint8_t> faces_of;
+  for (const BlockIndex& b : acc.knownBlocks()) {
+    for (int o = 0; o < kBlockVoxels; ++o) {
+      const VoxelIndex v = voxelOfOffset(b, o);
+      if (acc.state(v) != VoxelState::kFree) continue;
+      uint8_t faces = 0;
+      for (int i = 0; i < 6; ++i) {
+        if (acc.state(v + detail::kFaceOffsets[i]) == VoxelState::kUnknown) faces |= static_cast<uint8_t>(1 << i);
+      }
+      if (faces != 0) faces_of[{v.x(), v.y(), v.z()}] = faces;
+    }
+  }
+  const detail::SplitParams params{map.voxelSize(), map.config().frontier_max_extent_m, map.config().frontier_min_voxels};
+  std::vector<FrontierCluster> clusters;
+  uint64_t next_id = 1;
+  std::map<std::tuple<int, int, int>, bool> visited;
+  for (const auto& [start, start_faces] : faces_of) {
+    if (visited[start]) continue;
+    visited[start] = true;
+    std::vector<detail::FrontierVoxel> component;
+    std::deque<std::tuple<int, int, int>> open{start};
+    while (!open.empty()) {
+      const auto [x, y, z] = open.front();
+      open.pop_front();
+      component.push_back({VoxelIndex(x, y, z), faces_of.at({x, y, z})});
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const std::tuple<int, int, int> n{x + dx, y + dy, z + dz};
+            if (faces_of.count(n) == 0 || visited[n]) continue;
+            visited[n] = true;
+            open.push_back(n);
+          }
+    }
+    detail::splitComponent(component, params, next_id, clusters);
+  }
+  return sortedKeys(clusters);
+}
+
+// Incremental updates (views from several places, then a box cleared, which removes frontiers and
+// makes new ones) give, after every step, the clusters that a from-scratch, voxel-by-voxel
+// computation gives: the block-piece labelling, and the re-labelling of only the components that
+// changed, lose and invent nothing.
+TEST(FrontierMap, IncrementalClustersEqualBruteForceAfterEveryStep) {
+  const test::Scene scene = twoRooms();
+  MapConfig config = roomConfig();
+  config.frontier_max_extent_m = 0.6;
+  config.frontier_min_voxels = 4;
+  OccupancyMap map(config);
+  FrontierMap frontiers(map);
+  const Eigen::Vector3d positions[3] = {Eigen::Vector3d(2.03, 2.01, 1.02), Eigen::Vector3d(1.0, 3.0, 1.5),
+                                        Eigen::Vector3d(6.02, 2.03, 1.01)};
+  int step = 0;
+  auto check = [&](const char* what) {
+    const auto expected = bruteForceClusters(map);
+    const auto got = sortedKeys(frontiers.clusters(Eigen::Vector3d::Zero()));
+    EXPECT_EQ(got.size(), expected.size()) << "step " << step << " (" << what << ")";
+    EXPECT_TRUE(got == expected) << "step " << step << " (" << what << ")";
+    ++step;
+  };
+  for (const Eigen::Vector3d& position : positions) {
+    const auto views = cubeViews(scene, position);
+    for (size_t v = 0; v < views.size(); v += 2) {
+      frontiers.update(map.integrate(views[v]));
+      if (v + 1 < views.size()) frontiers.update(map.integrate(views[v + 1]));
+      check("views");
+    }
+  }
+  Aabb box;
+  box.min_m = Eigen::Vector3d(1.0, 1.0, 0.5);
+  box.max_m = Eigen::Vector3d(2.5, 2.0, 1.5);
+  frontiers.update(map.clearBox(box));
+  check("box cleared");
+  ASSERT_GT(bruteForceClusters(map).size(), 20u);
 }
 
 }  // namespace
