@@ -43,14 +43,21 @@ struct MatchLevel {
   cv::Mat guide_bordered;                        // grey left image, for the adaptive P2
   cv::Mat left_bordered, right_bordered;         // what the cost compares
   cv::Mat census_left, census_right;
+  detail::SgmImages images;                      // views of the above
+};
+
+// Coarse to fine, per strip: the strip's own half-size match (so that a strip never waits for
+// another) and the bands placed from it; full image size, only the strip's rows written.
+struct StripBands {
+  cv::Mat coarse_disparity, coarse_confidence;  // CV_32F, half size
+  cv::Mat band_start;                           // CV_16S: first disparity index searched per pixel
 };
 
 struct StereoMatcher::Impl {
   MatchLevel full;
   MatchLevel coarse;     // coarse to fine only: the pair halved in size
   cv::Mat coarse_left, coarse_right;
-  DisparityMap coarse_result;
-  cv::Mat band_start;    // CV_16S: first disparity index searched per pixel
+  std::vector<StripBands> bands;  // one per strip
 };
 
 namespace {
@@ -90,10 +97,8 @@ detail::SgmParams coarseParamsOf(const detail::SgmParams& full) {
   return p;
 }
 
-// Matches one grey pair at one resolution into `result` (allocated here), with strips of the
-// image height; `band_start` (CV_16S, or empty) restricts each pixel's disparities.
-void matchLevel(MatchLevel& level, const StereoConfig& config, const cv::Mat& left, const cv::Mat& right,
-                int strip_overlap, const cv::Mat& band_start, DisparityMap& result) {
+// Borders, prefilters and (census) transforms one grey pair for matching at its size.
+void prepareLevel(MatchLevel& level, const StereoConfig& config, const cv::Mat& left, const cv::Mat& right) {
   detail::SgmParams& p = level.params;
   p.width = left.cols;
   p.height = left.rows;
@@ -109,26 +114,22 @@ void matchLevel(MatchLevel& level, const StereoConfig& config, const cv::Mat& le
     level.left_bordered = level.guide_bordered;
     cv::copyMakeBorder(right, level.right_bordered, b, b, b, b, cv::BORDER_REPLICATE);
   }
-  detail::SgmImages images;
+  detail::SgmImages& images = level.images;
+  images = detail::SgmImages{};
   images.guide = level.guide_bordered.ptr<uint8_t>(b) + b;
   images.left = level.left_bordered.ptr<uint8_t>(b) + b;
   images.right = level.right_bordered.ptr<uint8_t>(b) + b;
   images.image_stride = static_cast<std::ptrdiff_t>(level.left_bordered.step[0]);
-  if (!band_start.empty()) {
-    images.band_start = band_start.ptr<int16_t>();
-    images.band_stride = static_cast<std::ptrdiff_t>(band_start.step[0] / sizeof(int16_t));
-  }
-
-  const int strips = std::min(config.num_strips, p.height);
   if (p.census) {
     level.census_left.create(p.height, p.width, CV_32SC1);
     level.census_right.create(p.height, p.width, CV_32SC1);
     const std::ptrdiff_t cstride = static_cast<std::ptrdiff_t>(level.census_left.step[0] / 4);
+    const int parts = 4;
 #pragma omp parallel for schedule(static)
-    for (int s = 0; s < 2 * strips; ++s) {
-      const int strip = s % strips;
-      const int y0 = strip * p.height / strips, y1 = (strip + 1) * p.height / strips;
-      const bool is_left = s < strips;
+    for (int s = 0; s < 2 * parts; ++s) {
+      const int part = s % parts;
+      const int y0 = part * p.height / parts, y1 = (part + 1) * p.height / parts;
+      const bool is_left = s < parts;
       detail::censusTransform(is_left ? images.left : images.right, images.image_stride, p.width, y0, y1,
                               p.window, (is_left ? level.census_left : level.census_right).ptr<uint32_t>(),
                               cstride);
@@ -137,31 +138,24 @@ void matchLevel(MatchLevel& level, const StereoConfig& config, const cv::Mat& le
     images.census_right = level.census_right.ptr<uint32_t>();
     images.census_stride = cstride;
   }
-
-  result.disparity.create(p.height, p.width, CV_32FC1);
-  result.confidence.create(p.height, p.width, CV_32FC1);
-  detail::SgmOutput output;
-  output.disparity = result.disparity.ptr<float>();
-  output.confidence = result.confidence.ptr<float>();
-  output.stride = static_cast<std::ptrdiff_t>(result.disparity.step[0] / sizeof(float));
-
-  if (static_cast<int>(level.workspaces.size()) < strips) level.workspaces.resize(strips);
-  // Dynamic schedule: strips are equal in work but threads may not be equally free.
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int s = 0; s < strips; ++s) {
-    const int y0 = s * p.height / strips, y1 = (s + 1) * p.height / strips;
-    detail::matchStrip(p, images, y0, y1, strip_overlap, level.workspaces[s], output);
-  }
 }
 
-// First disparity index of each pixel's band: kBandDisparities centred on twice the coarse
-// disparity of the pixel's coarse pixel (index 0 where that has none), kept inside [0, D) and,
-// where the image border cuts the range, on the disparities that have a right pixel.
-void placeBands(const cv::Mat& coarse_disparity, const detail::SgmParams& full, cv::Mat& band_start) {
+detail::SgmOutput outputOf(DisparityMap& map, const detail::SgmParams& p) {
+  map.disparity.create(p.height, p.width, CV_32FC1);
+  map.confidence.create(p.height, p.width, CV_32FC1);
+  detail::SgmOutput output;
+  output.disparity = map.disparity.ptr<float>();
+  output.confidence = map.confidence.ptr<float>();
+  output.stride = static_cast<std::ptrdiff_t>(map.disparity.step[0] / sizeof(float));
+  return output;
+}
+
+// First disparity index of each pixel's band, rows [y0, y1): kBandDisparities centred on twice
+// the coarse disparity of the pixel's coarse pixel (index 0 where that has none), kept inside
+// [0, D) and, where the image border cuts the range, on the disparities that have a right pixel.
+void placeBands(const cv::Mat& coarse_disparity, const detail::SgmParams& full, int y0, int y1, cv::Mat& band_start) {
   const int width = kBandDisparities, D = full.num_disparities;
-  band_start.create(full.height, full.width, CV_16SC1);
-#pragma omp parallel for schedule(static)
-  for (int y = 0; y < full.height; ++y) {
+  for (int y = y0; y < y1; ++y) {
     const float* coarse = coarse_disparity.ptr<float>(y / 2);
     int16_t* out = band_start.ptr<int16_t>(y);
     for (int x = 0; x < full.width; ++x) {
@@ -192,19 +186,50 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
     throw Error("stereo: right image is " + sizeText(right) + " but left is " + sizeText(left));
   }
   Impl& impl = *impl_;
-  DisparityMap result;
-  if (!config_.usesBand()) {
-    matchLevel(impl.full, config_, left, right, config_.strip_overlap_px, cv::Mat(), result);
-    return result;
+  const bool band = config_.usesBand();
+  prepareLevel(impl.full, config_, left, right);
+  if (band) {
+    halveImage(left, impl.coarse_left);
+    halveImage(right, impl.coarse_right);
+    prepareLevel(impl.coarse, config_, impl.coarse_left, impl.coarse_right);
   }
-  halveImage(left, impl.coarse_left);
-  halveImage(right, impl.coarse_right);
-  matchLevel(impl.coarse, config_, impl.coarse_left, impl.coarse_right, (config_.strip_overlap_px + 1) / 2, cv::Mat(),
-             impl.coarse_result);
-  impl.full.params.width = left.cols;
-  impl.full.params.height = left.rows;
-  placeBands(impl.coarse_result.disparity, impl.full.params, impl.band_start);
-  matchLevel(impl.full, config_, left, right, config_.strip_overlap_px, impl.band_start, result);
+  const detail::SgmParams& p = impl.full.params;
+  const detail::SgmParams& pc = impl.coarse.params;
+  DisparityMap result;
+  const detail::SgmOutput output = outputOf(result, p);
+  const int strips = std::min(config_.num_strips, p.height);
+  const int overlap = config_.strip_overlap_px;
+  if (static_cast<int>(impl.full.workspaces.size()) < strips) impl.full.workspaces.resize(strips);
+  if (band) {
+    if (static_cast<int>(impl.coarse.workspaces.size()) < strips) impl.coarse.workspaces.resize(strips);
+    if (static_cast<int>(impl.bands.size()) < strips) impl.bands.resize(strips);
+  }
+  // One parallel region per frame: strips are equal in work but threads may not be equally free
+  // (dynamic schedule), and a strip never waits for another.
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int s = 0; s < strips; ++s) {
+    const int y0 = s * p.height / strips, y1 = (s + 1) * p.height / strips;
+    detail::SgmImages images = impl.full.images;
+    if (band) {
+      // Rows this strip reads (warm-up included), their coarse rows, and the coarse match of
+      // those with its own warm-up.
+      StripBands& sb = impl.bands[s];
+      const int fine_begin = std::max(0, y0 - overlap);
+      const int fine_end = p.eight_paths ? std::min(p.height, y1 + overlap) : y1;
+      const int coarse_begin = fine_begin / 2, coarse_end = (fine_end - 1) / 2 + 1;
+      DisparityMap coarse{sb.coarse_disparity, sb.coarse_confidence};
+      const detail::SgmOutput coarse_output = outputOf(coarse, pc);
+      sb.coarse_disparity = coarse.disparity;
+      sb.coarse_confidence = coarse.confidence;
+      detail::matchStrip(pc, impl.coarse.images, coarse_begin, coarse_end, (overlap + 1) / 2, impl.coarse.workspaces[s],
+                         coarse_output);
+      sb.band_start.create(p.height, p.width, CV_16SC1);
+      placeBands(sb.coarse_disparity, p, fine_begin, fine_end, sb.band_start);
+      images.band_start = sb.band_start.ptr<int16_t>();
+      images.band_stride = static_cast<std::ptrdiff_t>(sb.band_start.step[0] / sizeof(int16_t));
+    }
+    detail::matchStrip(p, images, y0, y1, overlap, impl.full.workspaces[s], output);
+  }
   return result;
 }
 
