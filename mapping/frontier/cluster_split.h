@@ -35,5 +35,10 @@ struct SplitParams {
 // Indices must lie within +-2^20 (the map's limit). Empty input: no cluster.
 void splitComponent(std::vector<FrontierVoxel>& voxels, const SplitParams& params, uint64_t& next_id,
                     std::vector<FrontierCluster>& out);
+// The same clusters, faster when `voxels` comes in compact runs (e.g. one block's piece each):
+// chunk_ends holds the end index of each run, ascending, the last voxels.size(). A run wholly on
+// one side of a splitting plane moves as a whole; only runs the plane cuts are split voxel by voxel.
+void splitComponent(std::vector<FrontierVoxel>& voxels, const std::vector<uint32_t>& chunk_ends,
+                    const SplitParams& params, uint64_t& next_id, std::vector<FrontierCluster>& out);
 
 }  // namespace cenote::mapping::detail

@@ -181,6 +181,7 @@ struct FrontierMap::Impl {
   std::vector<std::pair<uint32_t, uint32_t>> nodes;  // union-find node -> (block slot, piece index)
   std::vector<Mask> new_pieces;
   std::vector<FrontierVoxel> voxels;
+  std::vector<uint32_t> piece_ends;  // end of each piece's voxels in `voxels`
 
   uint32_t findSlot(const BlockIndex& b) const { return table.find(detail::packIndex(b)); }
   uint32_t getSlot(const BlockIndex& b) {
@@ -355,6 +356,7 @@ struct FrontierMap::Impl {
       std::sort(comp.blocks.begin(), comp.blocks.end());
       comp.blocks.erase(std::unique(comp.blocks.begin(), comp.blocks.end()), comp.blocks.end());
       voxels.clear();
+      piece_ends.clear();
       for (uint32_t slot : comp.blocks) {
         const FrontierBlock& fb = *blocks[slot];
         for (const Piece& p : fb.pieces) {
@@ -367,10 +369,11 @@ struct FrontierMap::Impl {
               voxels.push_back({voxelOfOffset(fb.index, o), fb.faces[o]});
             }
           }
+          piece_ends.push_back(static_cast<uint32_t>(voxels.size()));
         }
       }
       const detail::SplitParams params{s, max_extent_m, min_voxels};
-      detail::splitComponent(voxels, params, next_cluster, comp.clusters);
+      detail::splitComponent(voxels, piece_ends, params, next_cluster, comp.clusters);
     }
   }
 
