@@ -77,9 +77,9 @@ SimScene buildCave(const SimConfig& config, double path_length_m) {
     return patch > 0.35 ? Material::kSponge : Material::kRock;
   };
   MeshBuilder builder;
-  // Tessellate with the winding that faces the inside of the tunnel.
-  builder.addGrid(nu, nv, [&](int i, int j) { return position(nu - i, j); },
-                  [&](int i, int j) { return material(nu - 1 - i, j); }, /*wrap_u=*/true);
+  // The winding faces the inside of the tunnel (the rasteriser draws only that side): d/dtheta x d/ds
+  // points to the centreline (at theta = 0, up x tangent = -side).
+  builder.addGrid(nu, nv, position, material, /*wrap_u=*/true);
 
   SimScene scene;
   scene.kind = SimSceneKind::kCave;

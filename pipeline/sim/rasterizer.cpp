@@ -75,12 +75,11 @@ void setupTriangle(const SceneMesh& mesh, uint32_t t, const std::vector<Eigen::V
   }
   Plane plane{(v[1] - v[0]).cross(v[2] - v[0]), 0.0};
   plane.d = plane.n.dot(v[0]);
-  // Seen edge-on (the plane passes through the optical centre): covers no pixel.
-  if (!(std::abs(plane.d) > 1e-12 * plane.n.norm())) return;
-  if (plane.d < 0) {
-    plane.n = -plane.n;
-    plane.d = -plane.d;
-  }
+  // Seen from behind (the winding's normal points away from the camera: d > 0), or edge-on (the
+  // plane passes through the optical centre): covers no pixel.
+  if (!(plane.d < -1e-12 * plane.n.norm())) return;
+  plane.n = -plane.n;
+  plane.d = -plane.d;
   if (!all_in) {
     std::array<Eigen::Vector3d, 4> poly;
     count = clipNear(v, near, poly);

@@ -4,7 +4,10 @@
 // nearest surface. Depth is exact for the mesh: Z = d / (n . r) from the triangle's plane
 // n . p = d (camera frame) and the pixel's ray r = ((x - cx) / fx, (y - cy) / fy, 1), so
 // p_world = T_world_cam * (r * Z) lies on the triangle to rounding (well under a millimetre).
-// Triangles are two-sided; ties keep the triangle that comes first in the mesh.
+// Triangles are one-sided: only the side their winding's normal points to is drawn (every scene
+// mesh is wound to face where the camera can be: the inside of the cave, the outside of boxes and
+// hull, up from the floors; a back face is always hidden behind a front face, so culling it
+// changes no pixel). Ties keep the triangle that comes first in the mesh.
 // Units: pixels, metres. Frames: camera x right, y down, z forward; T_world_cam maps camera to world.
 // Threads: OpenMP over mesh chunks and over fixed horizontal bands of the image; the output is
 // bit-identical whatever the thread count (each band is drawn by one thread in mesh order). Calls

@@ -2,6 +2,8 @@
 // Units: metres. Frame: world (z up; the scenes put the water surface above z = 0 where it matters).
 // Every triangle carries a material (which base colour the texture modulates); the mesh is the
 // ground truth of the simulator: rendered depth lies exactly on it.
+// Winding: every triangle's normal (v1 - v0) x (v2 - v0) points to the side a camera may see it
+// from (the rasteriser draws only that side); addGrid's normal is d/di x d/dj of the position.
 // Threads: a SceneMesh is built once (MeshBuilder) and then immutable; share it freely.
 #pragma once
 
