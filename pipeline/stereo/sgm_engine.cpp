@@ -459,7 +459,10 @@ HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uin
   // Smallest sum, and the smallest disparity that has it: each lane already holds its own
   // minimum and first index (branch-free; searching the vectors for the winner mispredicts).
   const uint16_t c1 = minLane(d, best);
-  const int winner = minLane(d, hn::IfThenElse(hn::Eq(best, hn::Set(d, c1)), best_index, hn::Set(d, kNoCost)));
+  // With one vector (a band, or a short range) lane i holds disparity i: the first lane with c1.
+  const int winner =
+      Dp <= N ? static_cast<int>(hn::FindKnownFirstTrue(d, hn::Eq(best, hn::Set(d, c1))))
+              : minLane(d, hn::IfThenElse(hn::Eq(best, hn::Set(d, c1)), best_index, hn::Set(d, kNoCost)));
   // Second minimum: outside winner-1..winner+1 (neighbours of the winner are the same match
   // seen at a sub-pixel offset), or anywhere but the winner. A lane holds disparities N apart,
   // so the excluded span takes at most one disparity from it: if that is the lane's first
