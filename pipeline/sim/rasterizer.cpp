@@ -23,8 +23,7 @@ struct RasterTriangle {
 // Buffers of one rasterize() call, kept per thread so that their pages are reused.
 struct Scratch {
   std::vector<std::vector<RasterTriangle>> per_chunk;
-  std::vector<RasterTriangle> triangles;
-  std::vector<std::vector<int32_t>> bands;
+  std::vector<std::vector<const RasterTriangle*>> bands;  // into per_chunk, in mesh order
 };
 
 struct Plane {
@@ -110,8 +109,12 @@ void setupTriangle(const SceneMesh& mesh, uint32_t t, const std::vector<Eigen::V
   }
 }
 
-// Draws `tri` into rows [row0, row1) of the band buffers (row-major, `width` wide, row0 first).
-void drawTriangle(const RasterTriangle& tri, int32_t id, int row0, int row1, int width, float* inv_depth, int32_t* ids) {
+// Draws `tri` into rows [row0, row1): the z-test on the band's inverse-depth buffer (row-major,
+// `width` wide, row0 first); a pixel the triangle wins gets its mesh index and its exact depth
+// (double, from the inverse-depth plane) in `ids` and `depth` (same layout), so nothing needs to
+// look the winner up again.
+void drawTriangle(const RasterTriangle& tri, int row0, int row1, int width, float* inv_depth, int32_t* ids,
+                  float* depth) {
   double x[3] = {tri.x[0], tri.x[1], tri.x[2]}, y[3] = {tri.y[0], tri.y[1], tri.y[2]};
   const double area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
   if (area == 0.0 || !std::isfinite(area)) return;
@@ -135,17 +138,21 @@ void drawTriangle(const RasterTriangle& tri, int32_t id, int row0, int row1, int
     tol[i] = 1e-7 * (std::abs(ex[i]) + std::abs(ey[i]));
   }
   for (int py = y_begin; py <= y_end; ++py) {
-    float* depth_row = inv_depth + static_cast<size_t>(py - row0) * width;
-    int32_t* id_row = ids + static_cast<size_t>(py - row0) * width;
+    const size_t row = static_cast<size_t>(py - row0) * width;
+    float* inv_depth_row = inv_depth + row;
+    int32_t* id_row = ids + row;
+    float* depth_row = depth + row;
     double e[3];
     for (int i = 0; i < 3; ++i) e[i] = e0[i] + ey[i] * py + ex[i] * x_begin;
     const double z_row = tri.b * py + tri.c;
     for (int px = x_begin; px <= x_end; ++px) {
       if (e[0] >= -tol[0] && e[1] >= -tol[1] && e[2] >= -tol[2]) {
         const auto inv_z = static_cast<float>(tri.a * px + z_row);
-        if (inv_z > depth_row[px]) {
-          depth_row[px] = inv_z;
-          id_row[px] = id;
+        if (inv_z > inv_depth_row[px]) {
+          inv_depth_row[px] = inv_z;
+          id_row[px] = tri.triangle;
+          const double z = 1.0 / (tri.a * px + tri.b * py + tri.c);
+          depth_row[px] = z > 0 && std::isfinite(z) ? static_cast<float>(z) : std::numeric_limits<float>::infinity();
         }
       }
       e[0] += ex[0];
@@ -208,54 +215,38 @@ VisibilityBuffer rasterize(const SceneMesh& mesh, const PinholeCamera& cam, cons
     }
   }
 
-  // Flatten in chunk order, then bin into fixed bands of rows, keeping mesh order within each band.
-  std::vector<RasterTriangle>& triangles = scratch.triangles;
-  triangles.clear();
-  for (size_t k = 0; k < visible.size(); ++k) triangles.insert(triangles.end(), per_chunk[k].begin(), per_chunk[k].end());
+  // Bin into fixed bands of rows, in chunk order, so that each band sees its triangles in mesh order.
   const int band_rows = (cam.height + kBands - 1) / kBands;
-  std::vector<std::vector<int32_t>>& bands = scratch.bands;
+  std::vector<std::vector<const RasterTriangle*>>& bands = scratch.bands;
   bands.resize(kBands);
   for (auto& band : bands) band.clear();
-  for (size_t k = 0; k < triangles.size(); ++k) {
-    const RasterTriangle& tri = triangles[k];
-    const double lo = std::min({tri.y[0], tri.y[1], tri.y[2]}), hi = std::max({tri.y[0], tri.y[1], tri.y[2]});
-    const int y0 = std::max(0, static_cast<int>(std::ceil(lo)));
-    const int y1 = std::min(cam.height - 1, static_cast<int>(std::floor(hi)));
-    if (y0 > y1) continue;
-    for (int b = y0 / band_rows; b <= y1 / band_rows; ++b) bands[b].push_back(static_cast<int32_t>(k));
+  for (size_t k = 0; k < visible.size(); ++k) {
+    for (const RasterTriangle& tri : per_chunk[k]) {
+      const double lo = std::min({tri.y[0], tri.y[1], tri.y[2]}), hi = std::max({tri.y[0], tri.y[1], tri.y[2]});
+      const int y0 = std::max(0, static_cast<int>(std::ceil(lo)));
+      const int y1 = std::min(cam.height - 1, static_cast<int>(std::floor(hi)));
+      if (y0 > y1) continue;
+      for (int b = y0 / band_rows; b <= y1 / band_rows; ++b) bands[b].push_back(&tri);
+    }
   }
 
+  // Each band is drawn by one thread straight into its rows of the output.
   VisibilityBuffer out;
   out.triangle.create(cam.height, cam.width, CV_32S);
   out.depth.create(cam.height, cam.width, CV_32F);
-  const float inf = std::numeric_limits<float>::infinity();
 #pragma omp parallel
   {
     std::vector<float> inv_depth;
-    std::vector<int32_t> ids;
 #pragma omp for schedule(dynamic, 1)
     for (int b = 0; b < kBands; ++b) {
       const int row0 = b * band_rows, row1 = std::min(cam.height, row0 + band_rows);
       if (row0 >= row1) continue;
       inv_depth.assign(static_cast<size_t>(row1 - row0) * cam.width, 0.0f);
-      ids.assign(inv_depth.size(), -1);
-      for (const int32_t k : bands[b]) drawTriangle(triangles[k], k, row0, row1, cam.width, inv_depth.data(), ids.data());
-      for (int y = row0; y < row1; ++y) {
-        const int32_t* id_row = ids.data() + static_cast<size_t>(y - row0) * cam.width;
-        int32_t* out_ids = out.triangle.ptr<int32_t>(y);
-        float* out_depth = out.depth.ptr<float>(y);
-        for (int x = 0; x < cam.width; ++x) {
-          if (id_row[x] < 0) {
-            out_ids[x] = -1;
-            out_depth[x] = inf;
-            continue;
-          }
-          // Depth in double from the exact inverse-depth plane of the winning triangle.
-          const RasterTriangle& tri = triangles[id_row[x]];
-          out_ids[x] = tri.triangle;
-          const double z = 1.0 / (tri.a * x + tri.b * y + tri.c);
-          out_depth[x] = z > 0 && std::isfinite(z) ? static_cast<float>(z) : inf;
-        }
+      cv::Mat ids = out.triangle.rowRange(row0, row1), depth = out.depth.rowRange(row0, row1);
+      ids.setTo(-1);
+      depth.setTo(std::numeric_limits<float>::infinity());
+      for (const RasterTriangle* tri : bands[b]) {
+        drawTriangle(*tri, row0, row1, cam.width, inv_depth.data(), ids.ptr<int32_t>(0), depth.ptr<float>(0));
       }
     }
   }
