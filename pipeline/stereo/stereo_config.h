@@ -37,7 +37,7 @@ struct StereoConfig {
   int prefilter_cap = 63;      // derivative clipped to +-cap grey levels, in [1, 127]; 63 keeps the
                                // sub-pixel error of a slanted plane at 0.13 px (31: 0.15)
   int num_paths = 4;           // SGM: 4 = one top-down pass (rSGM), 8 = two passes
-  SearchMode search = SearchMode::kFull;  // full range, or a band around a half-size match
+  SearchMode search = SearchMode::kBand;  // band around a half-size match (about 1.4x faster), or full
   int p1 = -1;                 // penalty for a disparity step of 1; -1 = default of the cost
   int p2 = -1;                 // penalty for larger steps; -1 = default of the cost
   bool adaptive_p2 = false;    // P2 / (1 + |I(p) - I(p-r)| / p2_gradient_scale), never below P1 + 1
