@@ -76,7 +76,7 @@ void setupTriangle(const SceneMesh& mesh, uint32_t t, const std::vector<Eigen::V
   plane.d = plane.n.dot(v[0]);
   // Seen from behind (the winding's normal points away from the camera: d > 0), or edge-on (the
   // plane passes through the optical centre): covers no pixel.
-  if (!(plane.d < -1e-12 * plane.n.norm())) return;
+  if (!(plane.d < 0.0 && plane.d * plane.d > 1e-24 * plane.n.squaredNorm())) return;
   plane.n = -plane.n;
   plane.d = -plane.d;
   if (!all_in) {
@@ -95,9 +95,10 @@ void setupTriangle(const SceneMesh& mesh, uint32_t t, const std::vector<Eigen::V
     if (max_x < 0 || max_y < 0 || min_x > cam.width - 1 || min_y > cam.height - 1) return;
   }
   RasterTriangle r;
-  r.a = plane.n.x() / (cam.fx * plane.d);
-  r.b = plane.n.y() / (cam.fy * plane.d);
-  r.c = (plane.n.z() - plane.n.x() * cam.cx / cam.fx - plane.n.y() * cam.cy / cam.fy) / plane.d;
+  const double inverse_d = 1.0 / plane.d;  // one division per triangle
+  r.a = plane.n.x() * inverse_d / cam.fx;
+  r.b = plane.n.y() * inverse_d / cam.fy;
+  r.c = plane.n.z() * inverse_d - r.a * cam.cx - r.b * cam.cy;
   r.triangle = static_cast<int32_t>(t);
   for (int k = 1; k + 1 < count; ++k) {  // fan
     const int idx[3] = {0, k, k + 1};
