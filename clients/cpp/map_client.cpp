@@ -9,6 +9,7 @@
 #include "clients/cpp/batching.h"
 #include "clients/cpp/detail/client_impl.h"
 #include "clients/cpp/detail/wire.h"
+#include "proto/grpc_runtime.h"
 
 namespace cenote::client {
 
@@ -17,6 +18,7 @@ using detail::throwIfFailed;
 namespace {
 
 std::shared_ptr<grpc::Channel> makeChannel(const std::string& target, const ClientOptions& options) {
+  rpc::configureGrpcRuntime();
   if (options.tls_client_cert_pem.empty() != options.tls_client_key_pem.empty()) {
     throw std::invalid_argument("client TLS: give both a client certificate and its key, or neither");
   }
@@ -51,7 +53,9 @@ MapClient::MapClient(const std::string& target, const ClientOptions& options)
     : impl_(std::make_unique<Impl>(makeChannel(target, options), options)) {}
 
 MapClient::MapClient(std::shared_ptr<grpc::Channel> channel, const ClientOptions& options)
-    : impl_(std::make_unique<Impl>(std::move(channel), options)) {}
+    : impl_(std::make_unique<Impl>(std::move(channel), options)) {
+  rpc::configureGrpcRuntime();
+}
 
 MapClient::~MapClient() = default;
 MapClient::MapClient(MapClient&&) noexcept = default;
