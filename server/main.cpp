@@ -24,6 +24,7 @@
 #include "mapping/io/map_io.h"
 #include "pipeline/calibration/stereo_calibration.h"
 #include "pipeline/dataset/stereo_dataset.h"
+#include "proto/grpc_runtime.h"
 #include "server/admin_service.h"
 #include "server/ingest_service.h"
 #include "server/query_service.h"
@@ -95,12 +96,13 @@ int serve(const Options& o) {
   const sigset_t signals = blockShutdownSignals();
   const ServerSettings settings = settingsFrom(o);
   const std::string token = settings.server.token_file.empty() ? "" : readTokenFile(settings.server.token_file, "token file");
-  CallGuard guard{Authenticator(token)};
+  CallGuard guard{Authenticator(token), settings.server.handler_slice_ms};
   MapHostOptions host_options;
   host_options.max_subscriber_lag = static_cast<size_t>(settings.server.max_subscriber_lag);
   host_options.writer_nice = settings.server.ingest_nice;
   host_options.derived_nice = settings.server.derived_nice;
   host_options.derived_period_s = settings.server.derived_period_s;
+  host_options.derived_follow_s = settings.server.derived_follow_s;
   MapHost host(initialMap(o, settings), host_options);
   Snapshotter snapshots(host, settings.server.snapshot_dir, settings.server.frame_id, settings.server.snapshot_period_s);
   IngestService ingest(host, guard, settings, rectifierFrom(settings.server.calibration));
@@ -157,6 +159,7 @@ int serve(const Options& o) {
 }  // namespace cenote::server
 
 int main(int argc, char** argv) {
+  cenote::rpc::configureGrpcRuntime();
   cenote::server::Options o;
   CLI::App app{"cenote-server: the volumetric map as a gRPC service (proto/cenote/v1)"};
   app.add_option("--config", o.config, "YAML configuration (sections stereo, fusion, run, map, server)")

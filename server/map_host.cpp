@@ -72,8 +72,14 @@ uint64_t MapHost::batchesIntegrated() const {
   return batches_;
 }
 
+uint64_t MapHost::derivedUpdates() const {
+  std::lock_guard<std::mutex> lock(derived_mutex_);
+  return derived_updates_;
+}
+
 bool MapHost::waitForDerived(std::chrono::system_clock::time_point deadline) const {
   std::unique_lock<std::mutex> lock(derived_mutex_);
+  last_derived_query_ = Clock::now();
   const uint64_t target = published_changes_;
   if (derived_changes_ >= target) return true;
   ++waiting_queries_;
@@ -83,18 +89,24 @@ bool MapHost::waitForDerived(std::chrono::system_clock::time_point deadline) con
   return done;
 }
 
+bool MapHost::followingQueries(Clock::time_point now) const {
+  return last_derived_query_ &&
+         now - *last_derived_query_ <= std::chrono::duration<double>(options_.derived_follow_s);
+}
+
 void MapHost::derivedLoop() {
-  using Clock = std::chrono::steady_clock;
   setThreadNice(options_.derived_nice);
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.derived_period_s));
   Clock::time_point last_update = Clock::now();
   std::unique_lock<std::mutex> lock(derived_mutex_);
   while (true) {
     const auto due = [&] {
-      return stop_ || (derived_changes_ < published_changes_ &&
-                       (waiting_queries_ > 0 || Clock::now() >= last_update + period));
+      if (stop_) return true;
+      if (derived_changes_ >= published_changes_) return false;
+      const Clock::time_point now = Clock::now();
+      return waiting_queries_ > 0 || (followingQueries(now) && now >= last_update + period);
     };
-    if (derived_changes_ < published_changes_) {
+    if (derived_changes_ < published_changes_ && followingQueries(Clock::now())) {
       derived_cv_.wait_until(lock, last_update + period, due);
     } else {
       derived_cv_.wait(lock, due);
@@ -113,6 +125,7 @@ void MapHost::derivedLoop() {
     }
     lock.lock();
     derived_changes_ = changes;
+    ++derived_updates_;
     derived_cv_.notify_all();
   }
 }

@@ -5,11 +5,13 @@
 // Changes run one at a time on the map's writer thread (serial_worker.h), at a lower CPU priority
 // than the gRPC handlers: when the cores are busy, planners' short queries go first.
 // The distance field and the frontiers are brought up to date by a thread of their own, lower
-// still, from the accumulated deltas: at most every `derived_period_s` while the map changes, and
-// at once when a distance or frontier query is waiting. Ingest never waits for them, and a map
-// nobody asks distances of does not spend half the machine keeping them. Such a query first waits
-// (up to its deadline) until they include every change made before it arrived: a client reads its
-// own writes.
+// still, from the accumulated deltas: at once when a distance or frontier query is waiting, and
+// every `derived_period_s` while the map changes, as long as such a query came within the last
+// `derived_follow_s` (a planner asking every few seconds then finds them nearly current). Ingest
+// never waits for them, and a map nobody asks distances of spends no CPU on them: keeping them
+// current took a third of the server's CPU while ingesting 70k-point frames at 15 Hz (perf,
+// bench/server_bench). A distance or frontier query first waits (up to its deadline) until they
+// include every change made before it arrived: a client reads its own writes.
 // Units: metres, world frame, seconds.
 // Threads: changes from any thread (they queue for the writer thread); queries from any number of
 // threads (the map's own reader locks; see mapping/occupancy_map.h).
@@ -19,6 +21,7 @@
 #include <condition_variable>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "common/point_batch.h"
@@ -35,6 +38,7 @@ struct MapHostOptions {
   int writer_nice = 5;             // CPU priority of integration (0: as the handlers; 19: lowest)
   int derived_nice = 10;           // ... of the distance field and frontier updates
   double derived_period_s = 1.0;   // derived structures follow the map at least this often
+  double derived_follow_s = 30.0;  // ... while a distance / frontier query came this recently
 };
 
 class MapHost {
@@ -59,6 +63,8 @@ class MapHost {
   // @return false when `deadline` came first.
   bool waitForDerived(std::chrono::system_clock::time_point deadline) const;
   const mapping::DistanceField& distanceField() const { return *distance_; }
+  // Rounds of distance field and frontier updates done so far (each covers all changes pending).
+  uint64_t derivedUpdates() const;
   const mapping::FrontierMap& frontiers() const { return *frontiers_; }
 
  private:
@@ -77,8 +83,13 @@ class MapHost {
   mapping::MapDelta pending_;        // changes not yet in the derived structures
   uint64_t published_changes_ = 0;   // changes made
   uint64_t derived_changes_ = 0;     // changes the derived structures include
+  uint64_t derived_updates_ = 0;     // rounds of derived updates
   uint64_t batches_ = 0;
+  using Clock = std::chrono::steady_clock;
+  bool followingQueries(Clock::time_point now) const;
+
   mutable int waiting_queries_ = 0;  // distance / frontier queries waiting for the derived structures
+  mutable std::optional<Clock::time_point> last_derived_query_;  // the latest such query's arrival
   bool stop_ = false;
   std::thread derived_thread_;
   SerialWorker writer_;  // last: its queued changes finish before the rest goes

@@ -14,11 +14,9 @@
 #include <mutex>
 #include <thread>
 
-namespace cenote::server {
+#include "server/thread_scheduling.h"
 
-// Lowers the calling thread's CPU priority (Linux nice values are per thread; 0 leaves it).
-// Threads it creates afterwards (an OpenMP team) inherit it.
-void setThreadNice(int nice);
+namespace cenote::server {
 
 class SerialWorker {
  public:

@@ -1,0 +1,83 @@
+// MapHost's distance field and frontiers: brought up to date for a distance query (which reads its
+// own writes), followed periodically only while such queries keep coming.
+#include "server/map_host.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+namespace cenote::server {
+namespace {
+
+using namespace std::chrono_literals;
+
+// A 1 m x 1 m wall of points at x = 1 m seen from the origin (5 cm voxels: the wall's voxels have
+// their centres at x = 1.025 m).
+PointBatch wallBatch(double y_offset_m) {
+  PointBatch batch;
+  batch.origin = Eigen::Vector3d::Zero();
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j <= 20; ++j) batch.points.emplace_back(1.0f, static_cast<float>(y_offset_m - 0.5 + 0.05 * i),
+                                                           static_cast<float>(-0.5 + 0.05 * j));
+  return batch;
+}
+
+double distanceAt(const MapHost& host, const Eigen::Vector3d& p_m) {
+  return host.distanceField().query({p_m}).front().distance_m;
+}
+
+std::unique_ptr<MapHost> makeHost(double period_s, double follow_s) {
+  MapHostOptions options;
+  options.derived_period_s = period_s;
+  options.derived_follow_s = follow_s;
+  return std::make_unique<MapHost>(std::make_unique<mapping::OccupancyMap>(mapping::MapConfig{}), options);
+}
+
+// Polls (up to 10 s) until the host has done `rounds` derived updates.
+bool waitForRounds(const MapHost& host, uint64_t rounds) {
+  for (int i = 0; i < 1000 && host.derivedUpdates() < rounds; ++i) std::this_thread::sleep_for(10ms);
+  return host.derivedUpdates() >= rounds;
+}
+
+TEST(MapHostDerived, NothingIsDerivedUntilTheFirstDistanceQueryWhichSeesEveryChange) {
+  auto host = makeHost(0.02, 10.0);
+  for (int i = 0; i < 3; ++i) host->integrate(wallBatch(0.0));
+  std::this_thread::sleep_for(200ms);  // ten periods: a following host would have updated
+  EXPECT_EQ(host->derivedUpdates(), 0u);
+
+  ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
+  EXPECT_EQ(host->derivedUpdates(), 1u);
+  EXPECT_NEAR(distanceAt(*host, {0.5, 0.0, 0.0}), 0.525, 0.05);
+}
+
+TEST(MapHostDerived, WhileQueriesComeTheDerivedStructuresFollowTheMapWithoutBeingAsked) {
+  auto host = makeHost(0.02, 10.0);
+  host->integrate(wallBatch(0.0));
+  ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
+  ASSERT_EQ(host->derivedUpdates(), 1u);
+
+  // The wall grows sideways by 1 m; nobody asks, but a query came within derived_follow_s.
+  host->integrate(wallBatch(1.0));
+  ASSERT_TRUE(waitForRounds(*host, 2));
+  EXPECT_NEAR(distanceAt(*host, {0.5, 1.5, 0.0}), 0.525, 0.05);  // in front of the new part
+}
+
+TEST(MapHostDerived, AfterTheFollowWindowChangesWaitForTheNextQuery) {
+  auto host = makeHost(0.02, 0.1);
+  host->integrate(wallBatch(0.0));
+  ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
+  std::this_thread::sleep_for(300ms);  // the last query is now older than derived_follow_s
+
+  host->integrate(wallBatch(1.0));
+  std::this_thread::sleep_for(200ms);
+  EXPECT_EQ(host->derivedUpdates(), 1u);
+  EXPECT_GT(distanceAt(*host, {0.5, 1.5, 0.0}), 0.6);  // the field does not know the new part yet
+
+  ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
+  EXPECT_EQ(host->derivedUpdates(), 2u);
+  EXPECT_NEAR(distanceAt(*host, {0.5, 1.5, 0.0}), 0.525, 0.05);
+}
+
+}  // namespace
+}  // namespace cenote::server
