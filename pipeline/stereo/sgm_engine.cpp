@@ -857,6 +857,8 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   const uint16_t* const census_right_lo = b.census_reversed[0];
   const uint16_t* const census_right_hi = b.census_reversed[1];
   const int sad_shift = p.sad_shift;
+  const bool adaptive = p.adaptive_p2;
+  const VU16 p2_constant = hn::Set(d, static_cast<uint16_t>(p.p2));
   for (int i = 0; i < W; ++i) {
     const int x = dx > 0 ? i : W - 1 - i;
     const int start = starts[x];
@@ -893,12 +895,14 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     const uint16_t min_back = min_row_back[x - dx + 1], min_fwd = min_row_fwd[x + dx + 1];
     const VU16 min_vertical_v = hn::Set(d, min_vertical);
     const VU16 min_back_v = hn::Set(d, min_back), min_fwd_v = hn::Set(d, min_fwd);
-    const VU16 jump_along = hn::Add(along_min, hn::Set(d, pen.p2[std::abs(row[x] - row[x - dx])]));
-    const VU16 jump_vertical =
-        hn::Set(d, static_cast<uint16_t>(min_vertical + pen.p2[std::abs(row[x] - prev_row[x])]));
-    const VU16 jump_back =
-        hn::Set(d, static_cast<uint16_t>(min_back + pen.p2[std::abs(row[x] - prev_row[x - dx])]));
-    const VU16 jump_fwd = hn::Set(d, static_cast<uint16_t>(min_fwd + pen.p2[std::abs(row[x] - prev_row[x + dx])]));
+    // P2 per direction: one constant unless adapted to the intensity step.
+    auto penalty = [&](uint8_t a, uint8_t b2) HWY_ATTR {
+      return adaptive ? hn::Set(d, pen.p2[std::abs(a - b2)]) : p2_constant;
+    };
+    const VU16 jump_along = hn::Add(along_min, penalty(row[x], row[x - dx]));
+    const VU16 jump_vertical = hn::Add(min_vertical_v, penalty(row[x], prev_row[x]));
+    const VU16 jump_back = hn::Add(min_back_v, penalty(row[x], prev_row[x - dx]));
+    const VU16 jump_fwd = hn::Add(min_fwd_v, penalty(row[x], prev_row[x + dx]));
     const int slot = i % kWinnerBatch;
     band_first[slot] = start;
     uint16_t* const sums_out = output == RowOutput::kStoreSums
