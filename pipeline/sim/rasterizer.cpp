@@ -147,14 +147,14 @@ void drawTriangle(const RasterTriangle& tri, int row0, int row1, int width, floa
     for (int i = 0; i < 3; ++i) e[i] = e0[i] + ey[i] * py + ex[i] * x_begin;
     const double z_row = tri.b * py + tri.c;
     for (int px = x_begin; px <= x_end; ++px) {
-      if (e[0] >= -tol[0] && e[1] >= -tol[1] && e[2] >= -tol[2]) {
-        const auto inv_z = static_cast<float>(tri.a * px + z_row);
-        if (inv_z > inv_depth_row[px]) {
-          inv_depth_row[px] = inv_z;
-          id_row[px] = tri.triangle;
-          const double z = 1.0 / (tri.a * px + tri.b * py + tri.c);
-          depth_row[px] = z > 0 && std::isfinite(z) ? static_cast<float>(z) : std::numeric_limits<float>::infinity();
-        }
+      // One branch per pixel (inside and nearer), not four: which pixels pass is hard to predict.
+      const auto inv_z = static_cast<float>(tri.a * px + z_row);
+      const bool inside = (e[0] >= -tol[0]) & (e[1] >= -tol[1]) & (e[2] >= -tol[2]);
+      if (inside & (inv_z > inv_depth_row[px])) {
+        inv_depth_row[px] = inv_z;
+        id_row[px] = tri.triangle;
+        const double z = 1.0 / (tri.a * px + tri.b * py + tri.c);
+        depth_row[px] = z > 0 && std::isfinite(z) ? static_cast<float>(z) : std::numeric_limits<float>::infinity();
       }
       e[0] += ex[0];
       e[1] += ex[1];
