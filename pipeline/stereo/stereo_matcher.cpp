@@ -236,7 +236,6 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
 void halveImage(const cv::Mat& grey, cv::Mat& half) {
   half.create((grey.rows + 1) / 2, (grey.cols + 1) / 2, CV_8UC1);
   const int last_row = grey.rows - 1, last_column = grey.cols - 1;
-#pragma omp parallel for schedule(static)
   for (int y = 0; y < half.rows; ++y) {
     const uint8_t* top = grey.ptr<uint8_t>(2 * y);
     const uint8_t* bottom = grey.ptr<uint8_t>(std::min(2 * y + 1, last_row));
