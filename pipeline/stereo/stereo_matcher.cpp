@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 #include <vector>
 
 #include "common/error.h"
@@ -97,7 +99,7 @@ detail::SgmParams coarseParamsOf(const detail::SgmParams& full) {
   return p;
 }
 
-// Borders, prefilters and (census) transforms one grey pair for matching at its size.
+// Borders and prefilters one grey pair for matching at its size (census: censusTransforms()).
 void prepareLevel(MatchLevel& level, const StereoConfig& config, const cv::Mat& left, const cv::Mat& right) {
   detail::SgmParams& p = level.params;
   p.width = left.cols;
@@ -123,20 +125,30 @@ void prepareLevel(MatchLevel& level, const StereoConfig& config, const cv::Mat& 
   if (p.census) {
     level.census_left.create(p.height, p.width, CV_32SC1);
     level.census_right.create(p.height, p.width, CV_32SC1);
-    const std::ptrdiff_t cstride = static_cast<std::ptrdiff_t>(level.census_left.step[0] / 4);
-    const int parts = 4;
-#pragma omp parallel for schedule(static)
-    for (int s = 0; s < 2 * parts; ++s) {
-      const int part = s % parts;
-      const int y0 = part * p.height / parts, y1 = (part + 1) * p.height / parts;
-      const bool is_left = s < parts;
-      detail::censusTransform(is_left ? images.left : images.right, images.image_stride, p.width, y0, y1,
-                              p.window, (is_left ? level.census_left : level.census_right).ptr<uint32_t>(),
-                              cstride);
-    }
     images.census_left = level.census_left.ptr<uint32_t>();
     images.census_right = level.census_right.ptr<uint32_t>();
-    images.census_stride = cstride;
+    images.census_stride = static_cast<std::ptrdiff_t>(level.census_left.step[0] / 4);
+  }
+}
+
+// Census descriptors of both images of every level given, in one parallel region (each region
+// costs a hand-over to the other thread, which then spins waiting for the next).
+void censusTransforms(std::initializer_list<MatchLevel*> levels) {
+  constexpr int kParts = 4;  // row blocks per image
+  std::vector<std::pair<MatchLevel*, int>> jobs;  // (level, 0..2 kParts - 1: left parts, then right)
+  for (MatchLevel* level : levels) {
+    for (int j = 0; j < 2 * kParts; ++j) jobs.emplace_back(level, j);
+  }
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int i = 0; i < static_cast<int>(jobs.size()); ++i) {
+    MatchLevel& level = *jobs[i].first;
+    const detail::SgmParams& p = level.params;
+    const detail::SgmImages& images = level.images;
+    const int part = jobs[i].second % kParts;
+    const bool is_left = jobs[i].second < kParts;
+    const int y0 = part * p.height / kParts, y1 = (part + 1) * p.height / kParts;
+    detail::censusTransform(is_left ? images.left : images.right, images.image_stride, p.width, y0, y1, p.window,
+                            (is_left ? level.census_left : level.census_right).ptr<uint32_t>(), images.census_stride);
   }
 }
 
@@ -192,6 +204,13 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
     halveImage(left, impl.coarse_left);
     halveImage(right, impl.coarse_right);
     prepareLevel(impl.coarse, config_, impl.coarse_left, impl.coarse_right);
+  }
+  if (impl.full.params.census) {
+    if (band) {
+      censusTransforms({&impl.full, &impl.coarse});
+    } else {
+      censusTransforms({&impl.full});
+    }
   }
   const detail::SgmParams& p = impl.full.params;
   const detail::SgmParams& pc = impl.coarse.params;
