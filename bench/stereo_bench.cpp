@@ -105,7 +105,8 @@ int main(int argc, char** argv) {
   }
 
   std::printf("threads: %d, median of %d runs\n\n", threads, repeat);
-  std::printf("| input | disparities | method | ms/frame | Mcells/s | OpenCV 3WAY / this | CPU ms/frame | 3WAY / this (CPU) | best ms | 3WAY / this (best) |\n");
+  std::printf("| input | disparities | method | ms/frame | Mcells/s | OpenCV 3WAY / this | CPU ms/frame |"
+              " 3WAY / this (CPU) | best ms | 3WAY / this (best) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Input& in : inputs) {
     const double cells = static_cast<double>(in.left.total()) * in.disparities;
@@ -114,7 +115,8 @@ int main(int argc, char** argv) {
       Timing t;
     };
     std::vector<Row> rows;
-    auto ours = [&](const char* name, pipeline::MatchingCost cost, int window, int paths, pipeline::SearchMode search) {
+    auto ours = [&](const char* name, pipeline::MatchingCost cost, int window, int paths,
+                    pipeline::SearchMode search) {
       pipeline::StereoConfig c;
       c.search = search;
       c.num_disparities = in.disparities;
@@ -145,8 +147,9 @@ int main(int argc, char** argv) {
     const Timing three_way = rows.back().t;
     for (const Row& r : rows) {
       std::printf("| %s | %d | %s | %.1f | %.0f | %.2fx | %.1f | %.2fx | %.1f | %.2fx |\n", in.name.c_str(),
-                  in.disparities, r.name.c_str(), r.t.wall_ms, cells / (r.t.wall_ms * 1e3), three_way.wall_ms / r.t.wall_ms,
-                  r.t.cpu_ms, three_way.cpu_ms / r.t.cpu_ms, r.t.best_wall_ms, three_way.best_wall_ms / r.t.best_wall_ms);
+                  in.disparities, r.name.c_str(), r.t.wall_ms, cells / (r.t.wall_ms * 1e3),
+                  three_way.wall_ms / r.t.wall_ms, r.t.cpu_ms, three_way.cpu_ms / r.t.cpu_ms, r.t.best_wall_ms,
+                  three_way.best_wall_ms / r.t.best_wall_ms);
     }
   }
   return 0;

@@ -791,7 +791,8 @@ HWY_INLINE V shiftedBand(V prev, V sentinel, int shift, const uint16_t* iota) {
   constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
   if constexpr (kLanes == 32) {
-    const __m512i index = _mm512_add_epi16(_mm512_load_si512(iota), _mm512_set1_epi16(static_cast<int16_t>(shift + kOffset)));
+    const __m512i index =
+        _mm512_add_epi16(_mm512_load_si512(iota), _mm512_set1_epi16(static_cast<int16_t>(shift + kOffset)));
     // Lanes whose source index is outside [0, 32) (as unsigned) keep the sentinel.
     const __mmask32 inside = _mm512_cmplt_epu16_mask(index, _mm512_set1_epi16(32));
     return V{_mm512_mask_permutexvar_epi16(sentinel.raw, inside, index, prev.raw)};

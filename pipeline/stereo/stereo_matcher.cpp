@@ -99,23 +99,29 @@ detail::SgmParams coarseParamsOf(const detail::SgmParams& full) {
   return p;
 }
 
-// Borders and prefilters one grey pair for matching at its size (census: censusTransforms()).
-void prepareLevel(MatchLevel& level, const StereoConfig& config, const cv::Mat& left, const cv::Mat& right) {
-  detail::SgmParams& p = level.params;
-  p.width = left.cols;
-  p.height = left.rows;
+// Borders and prefilters one image of a pair for matching at its size (the left one also as
+// the guide of the adaptive P2). The two sides touch different members: they may run at once.
+void prepareSide(MatchLevel& level, const StereoConfig& config, const cv::Mat& image, bool is_left) {
   const int b = detail::kImageBorder;
-  const bool prefiltered = !p.census && config.prefilter != Prefilter::kNone;
-  cv::copyMakeBorder(left, level.guide_bordered, b, b, b, b, cv::BORDER_REPLICATE);
+  const bool prefiltered = !level.params.census && config.prefilter != Prefilter::kNone;
+  cv::Mat& bordered = is_left ? level.left_bordered : level.right_bordered;
+  if (is_left) cv::copyMakeBorder(image, level.guide_bordered, b, b, b, b, cv::BORDER_REPLICATE);
   if (prefiltered) {
-    cv::copyMakeBorder(prefilterForSad(left, config.prefilter, config.prefilter_cap), level.left_bordered, b, b, b,
-                       b, cv::BORDER_REPLICATE);
-    cv::copyMakeBorder(prefilterForSad(right, config.prefilter, config.prefilter_cap), level.right_bordered, b, b,
-                       b, b, cv::BORDER_REPLICATE);
+    cv::copyMakeBorder(prefilterForSad(image, config.prefilter, config.prefilter_cap), bordered, b, b, b, b,
+                       cv::BORDER_REPLICATE);
+  } else if (is_left) {
+    bordered = level.guide_bordered;
   } else {
-    level.left_bordered = level.guide_bordered;
-    cv::copyMakeBorder(right, level.right_bordered, b, b, b, b, cv::BORDER_REPLICATE);
+    cv::copyMakeBorder(image, bordered, b, b, b, b, cv::BORDER_REPLICATE);
   }
+}
+
+// The engine's views of a prepared level (and room for its census descriptors).
+void finishLevel(MatchLevel& level, cv::Size size) {
+  detail::SgmParams& p = level.params;
+  p.width = size.width;
+  p.height = size.height;
+  const int b = detail::kImageBorder;
   detail::SgmImages& images = level.images;
   images = detail::SgmImages{};
   images.guide = level.guide_bordered.ptr<uint8_t>(b) + b;
@@ -131,21 +137,19 @@ void prepareLevel(MatchLevel& level, const StereoConfig& config, const cv::Mat& 
   }
 }
 
-// Census descriptors of both images of every level given, in one parallel region (each region
-// costs a hand-over to the other thread, which then spins waiting for the next).
-void censusTransforms(std::initializer_list<MatchLevel*> levels) {
+// Census descriptors of both images of the levels, in row blocks shared by the threads of the
+// enclosing parallel region (an orphaned omp for: every thread of the region must call it).
+void censusTransforms(const std::vector<MatchLevel*>& levels) {
   constexpr int kParts = 4;  // row blocks per image
-  std::vector<std::pair<MatchLevel*, int>> jobs;  // (level, 0..2 kParts - 1: left parts, then right)
-  for (MatchLevel* level : levels) {
-    for (int j = 0; j < 2 * kParts; ++j) jobs.emplace_back(level, j);
-  }
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int i = 0; i < static_cast<int>(jobs.size()); ++i) {
-    MatchLevel& level = *jobs[i].first;
+  const int jobs = static_cast<int>(levels.size()) * 2 * kParts;
+#pragma omp for schedule(dynamic, 1)
+  for (int i = 0; i < jobs; ++i) {
+    MatchLevel& level = *levels[i / (2 * kParts)];
+    const int j = i % (2 * kParts);  // left parts, then right
     const detail::SgmParams& p = level.params;
     const detail::SgmImages& images = level.images;
-    const int part = jobs[i].second % kParts;
-    const bool is_left = jobs[i].second < kParts;
+    const int part = j % kParts;
+    const bool is_left = j < kParts;
     const int y0 = part * p.height / kParts, y1 = (part + 1) * p.height / kParts;
     detail::censusTransform(is_left ? images.left : images.right, images.image_stride, p.width, y0, y1, p.window,
                             (is_left ? level.census_left : level.census_right).ptr<uint32_t>(), images.census_stride);
@@ -199,21 +203,10 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
   }
   Impl& impl = *impl_;
   const bool band = config_.usesBand();
-  prepareLevel(impl.full, config_, left, right);
-  if (band) {
-    halveImage(left, impl.coarse_left);
-    halveImage(right, impl.coarse_right);
-    prepareLevel(impl.coarse, config_, impl.coarse_left, impl.coarse_right);
-  }
-  if (impl.full.params.census) {
-    if (band) {
-      censusTransforms({&impl.full, &impl.coarse});
-    } else {
-      censusTransforms({&impl.full});
-    }
-  }
-  const detail::SgmParams& p = impl.full.params;
+  detail::SgmParams& p = impl.full.params;
   const detail::SgmParams& pc = impl.coarse.params;
+  p.width = left.cols;
+  p.height = left.rows;
   DisparityMap result;
   const detail::SgmOutput output = outputOf(result, p);
   const int strips = std::min(config_.num_strips, p.height);
@@ -223,31 +216,56 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
     if (static_cast<int>(impl.coarse.workspaces.size()) < strips) impl.coarse.workspaces.resize(strips);
     if (static_cast<int>(impl.bands.size()) < strips) impl.bands.resize(strips);
   }
-  // One parallel region per frame: strips are equal in work but threads may not be equally free
-  // (dynamic schedule), and a strip never waits for another.
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int s = 0; s < strips; ++s) {
-    const int y0 = s * p.height / strips, y1 = (s + 1) * p.height / strips;
-    detail::SgmImages images = impl.full.images;
-    if (band) {
-      // Rows this strip reads (warm-up included), their coarse rows, and the coarse match of
-      // those with its own warm-up.
-      StripBands& sb = impl.bands[s];
-      const int fine_begin = std::max(0, y0 - overlap);
-      const int fine_end = p.eight_paths ? std::min(p.height, y1 + overlap) : y1;
-      const int coarse_begin = fine_begin / 2, coarse_end = (fine_end - 1) / 2 + 1;
-      DisparityMap coarse{sb.coarse_disparity, sb.coarse_confidence};
-      const detail::SgmOutput coarse_output = outputOf(coarse, pc);
-      sb.coarse_disparity = coarse.disparity;
-      sb.coarse_confidence = coarse.confidence;
-      detail::matchStrip(pc, impl.coarse.images, coarse_begin, coarse_end, (overlap + 1) / 2, impl.coarse.workspaces[s],
-                         coarse_output);
-      sb.band_start.create(p.height, p.width, CV_16SC1);
-      placeBands(sb.coarse_disparity, p, fine_begin, fine_end, sb.band_start);
-      images.band_start = sb.band_start.ptr<int16_t>();
-      images.band_stride = static_cast<std::ptrdiff_t>(sb.band_start.step[0] / sizeof(int16_t));
+  std::vector<MatchLevel*> census_levels;
+  if (p.census) census_levels.push_back(&impl.full);
+  if (p.census && band) census_levels.push_back(&impl.coarse);
+
+  // One parallel region per frame (each region hands work to the other thread, which spins
+  // between regions): the two images prepared side by side, the census descriptors, then the
+  // strips. Strips are equal in work but threads may not be equally free (dynamic schedule),
+  // and a strip never waits for another.
+#pragma omp parallel
+  {
+#pragma omp for schedule(static)
+    for (int side = 0; side < 2; ++side) {
+      const cv::Mat& image = side == 0 ? left : right;
+      prepareSide(impl.full, config_, image, side == 0);
+      if (band) {
+        cv::Mat& half = side == 0 ? impl.coarse_left : impl.coarse_right;
+        halveImage(image, half);
+        prepareSide(impl.coarse, config_, half, side == 0);
+      }
     }
-    detail::matchStrip(p, images, y0, y1, overlap, impl.full.workspaces[s], output);
+#pragma omp single
+    {
+      finishLevel(impl.full, left.size());
+      if (band) finishLevel(impl.coarse, impl.coarse_left.size());
+    }
+    if (!census_levels.empty()) censusTransforms(census_levels);
+#pragma omp for schedule(dynamic, 1)
+    for (int s = 0; s < strips; ++s) {
+      const int y0 = s * p.height / strips, y1 = (s + 1) * p.height / strips;
+      detail::SgmImages images = impl.full.images;
+      if (band) {
+        // Rows this strip reads (warm-up included), their coarse rows, and the coarse match of
+        // those with its own warm-up.
+        StripBands& sb = impl.bands[s];
+        const int fine_begin = std::max(0, y0 - overlap);
+        const int fine_end = p.eight_paths ? std::min(p.height, y1 + overlap) : y1;
+        const int coarse_begin = fine_begin / 2, coarse_end = (fine_end - 1) / 2 + 1;
+        DisparityMap coarse{sb.coarse_disparity, sb.coarse_confidence};
+        const detail::SgmOutput coarse_output = outputOf(coarse, pc);
+        sb.coarse_disparity = coarse.disparity;
+        sb.coarse_confidence = coarse.confidence;
+        detail::matchStrip(pc, impl.coarse.images, coarse_begin, coarse_end, (overlap + 1) / 2,
+                           impl.coarse.workspaces[s], coarse_output);
+        sb.band_start.create(p.height, p.width, CV_16SC1);
+        placeBands(sb.coarse_disparity, p, fine_begin, fine_end, sb.band_start);
+        images.band_start = sb.band_start.ptr<int16_t>();
+        images.band_stride = static_cast<std::ptrdiff_t>(sb.band_start.step[0] / sizeof(int16_t));
+      }
+      detail::matchStrip(p, images, y0, y1, overlap, impl.full.workspaces[s], output);
+    }
   }
   return result;
 }

@@ -33,7 +33,8 @@ BadPixelStats evaluate(const StereoPairWithTruth& pair, const StereoConfig& conf
   DisparityMap map = matcher.match(pair.left, pair.right);
   const BadPixelStats s = test::badPixels(map.disparity, pair);
   std::cout << pair.name << " " << toString(config.cost) << " " << config.window_px << "x" << config.window_px
-            << " " << config.num_paths << " paths, search " << toString(config.search) << ": bad-1 " << s.bad1 << " %, bad-2 " << s.bad2 << " %, density "
+            << " " << config.num_paths << " paths, search " << toString(config.search) << ": bad-1 " << s.bad1
+            << " %, bad-2 " << s.bad2 << " %, density "
             << s.density << " %\n";
   if (out) *out = std::move(map);
   return s;
