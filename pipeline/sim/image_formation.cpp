@@ -62,11 +62,9 @@ detail::TextureLayer textureLayer(const NoiseTexture& texture, double texel_m, f
   return layer;
 }
 
-}  // namespace
-
-cv::Mat renderRadiance(const SimScene& scene, const SurfaceTexture& texture, const PinholeCamera& cam,
-                       const Eigen::Isometry3d& T_world_cam, const VisibilityBuffer& vis,
-                       const Eigen::Isometry3d& T_world_light) {
+// What the shader needs for one camera image.
+detail::RadianceSetup radianceSetup(const SimScene& scene, const SurfaceTexture& texture, const PinholeCamera& cam,
+                                    const Eigen::Isometry3d& T_world_cam, const Eigen::Isometry3d& T_world_light) {
   const SceneLighting& light = scene.lighting;
   const Eigen::Vector3d origin = T_world_cam.translation();
   detail::RadianceSetup s;
@@ -102,6 +100,24 @@ cv::Mat renderRadiance(const SimScene& scene, const SurfaceTexture& texture, con
   s.surface_above_camera_m = static_cast<float>(light.surface_z_m - origin.z());
   s.ambient = light.ambient;
 
+  return s;
+}
+
+const std::vector<float>& gammaTable() {
+  static const std::vector<float> table = [] {
+    std::vector<float> t(kGammaLevels + 1);
+    for (int i = 0; i <= kGammaLevels; ++i) t[i] = 255.0f * std::pow(static_cast<float>(i) / kGammaLevels, 1.0f / 2.2f);
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace
+
+cv::Mat renderRadiance(const SimScene& scene, const SurfaceTexture& texture, const PinholeCamera& cam,
+                       const Eigen::Isometry3d& T_world_cam, const VisibilityBuffer& vis,
+                       const Eigen::Isometry3d& T_world_light) {
+  const detail::RadianceSetup s = radianceSetup(scene, texture, cam, T_world_cam, T_world_light);
   cv::Mat out(cam.height, cam.width, CV_32FC3);
 #pragma omp parallel for schedule(static)
   for (int y = 0; y < cam.height; ++y) {
@@ -110,13 +126,29 @@ cv::Mat renderRadiance(const SimScene& scene, const SurfaceTexture& texture, con
   return out;
 }
 
+cv::Mat renderImage(const SimScene& scene, const SurfaceTexture& texture, const PinholeCamera& cam,
+                    const Eigen::Isometry3d& T_world_cam, const VisibilityBuffer& vis,
+                    const Eigen::Isometry3d& T_world_light, float gain, float noise_sigma, uint64_t noise_seed) {
+  const detail::RadianceSetup s = radianceSetup(scene, texture, cam, T_world_cam, T_world_light);
+  const std::vector<float>& gamma = gammaTable();
+  cv::Mat out(cam.height, cam.width, CV_8UC3);
+  const int samples = 3 * cam.width;
+#pragma omp parallel
+  {
+    std::vector<float> radiance(static_cast<size_t>(samples));  // one row, stays in cache
+#pragma omp for schedule(static)
+    for (int y = 0; y < cam.height; ++y) {
+      detail::shadeRadianceRow(s, y, vis.triangle.ptr<int32_t>(y), vis.depth.ptr<float>(y), radiance.data());
+      detail::exposeRow(radiance.data(), samples, static_cast<uint32_t>(y) * static_cast<uint32_t>(samples), gain,
+                        noise_sigma, noise_seed, gamma.data(), kGammaLevels, out.ptr<uint8_t>(y));
+    }
+  }
+  return out;
+}
+
 cv::Mat exposeImage(const cv::Mat& radiance, float gain, float noise_sigma, uint64_t noise_seed) {
   if (radiance.type() != CV_32FC3) throw Error("exposeImage: radiance must be CV_32FC3");
-  static const std::vector<float> gamma = [] {
-    std::vector<float> table(kGammaLevels + 1);
-    for (int i = 0; i <= kGammaLevels; ++i) table[i] = 255.0f * std::pow(static_cast<float>(i) / kGammaLevels, 1.0f / 2.2f);
-    return table;
-  }();
+  const std::vector<float>& gamma = gammaTable();
   cv::Mat out(radiance.size(), CV_8UC3);
   const int samples = 3 * radiance.cols;
 #pragma omp parallel for schedule(static)

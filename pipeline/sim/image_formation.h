@@ -5,6 +5,7 @@
 //                      fading with depth), per-channel attenuation along the path, backscatter
 //                      (the model is in sim_scene.h, SceneLighting)
 //   exposeImage():     camera gain, gamma 1/2.2, seeded Gaussian sensor noise, 8-bit quantisation
+//   renderImage():     both at once, row by row
 // Units: metres, pixels; radiance is relative (exposeImage's gain maps it to [0, 1]).
 // Threads: OpenMP over rows; results are bit-identical whatever the thread count (noise comes from
 // a counter-based hash of seed and pixel, never from a shared generator).
@@ -46,6 +47,12 @@ Eigen::Array3f surfaceAlbedo(const SimScene& scene, const SurfaceTexture& textur
 cv::Mat renderRadiance(const SimScene& scene, const SurfaceTexture& texture, const PinholeCamera& camera,
                        const Eigen::Isometry3d& T_world_cam, const VisibilityBuffer& visibility,
                        const Eigen::Isometry3d& T_world_light);
+
+// exposeImage(renderRadiance(...), gain, noise_sigma, noise_seed), the same bytes, row by row: no
+// radiance image in memory (what the simulator records when the rig has no distortion).
+cv::Mat renderImage(const SimScene& scene, const SurfaceTexture& texture, const PinholeCamera& camera,
+                    const Eigen::Isometry3d& T_world_cam, const VisibilityBuffer& visibility,
+                    const Eigen::Isometry3d& T_world_light, float gain, float noise_sigma, uint64_t noise_seed);
 
 // @return CV_8UC3: round(255 * (gain * radiance)^(1/2.2) + noise_sigma * n), clipped to [0, 255],
 //         n approximately standard normal per pixel and channel (sensorNoise() of

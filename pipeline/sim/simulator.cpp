@@ -185,15 +185,26 @@ SimFrame Simulator::renderFrame(int index) const {
   frame.T_world_cam1 = frame.T_world_body * rig_.T_body_cam1;
   const auto seed = static_cast<uint64_t>(config_.seed);
   const auto sigma = static_cast<float>(config_.noise_sigma);
-  CameraImage left = renderCamera(frame.T_world_cam0, frame.T_world_cam0);
-  frame.left = exposeImage(left.radiance, gain_, sigma, hash64(seed, 0x5E45, index, 0));
-  frame.depth = left.visibility.depth;
-  frame.left_triangles = left.visibility.triangle;
-  left.radiance.release();
-  const CameraImage right = renderCamera(frame.T_world_cam1, frame.T_world_cam0);
-  frame.right = exposeImage(right.radiance, gain_ * static_cast<float>(config_.exposure_ratio), sigma,
-                            hash64(seed, 0x5E45, index, 1));
+  VisibilityBuffer left;
+  frame.left = recordCamera(frame.T_world_cam0, frame.T_world_cam0, gain_, sigma, hash64(seed, 0x5E45, index, 0), left);
+  frame.depth = left.depth;
+  frame.left_triangles = left.triangle;
+  VisibilityBuffer right;
+  frame.right = recordCamera(frame.T_world_cam1, frame.T_world_cam0, gain_ * static_cast<float>(config_.exposure_ratio),
+                             sigma, hash64(seed, 0x5E45, index, 1), right);
   return frame;
+}
+
+cv::Mat Simulator::recordCamera(const Eigen::Isometry3d& T_world_cam, const Eigen::Isometry3d& T_world_light, float gain,
+                                float noise_sigma, uint64_t noise_seed, VisibilityBuffer& visibility) const {
+  if (undistorted_rays_.empty()) {
+    visibility = rasterize(scene_.mesh, render_camera_, T_world_cam);
+    return renderImage(scene_, *texture_, render_camera_, T_world_cam, visibility, T_world_light, gain, noise_sigma,
+                       noise_seed);
+  }
+  CameraImage image = renderCamera(T_world_cam, T_world_light);
+  visibility = std::move(image.visibility);
+  return exposeImage(image.radiance, gain, noise_sigma, noise_seed);
 }
 
 StereoCalibration Simulator::calibration() const {

@@ -80,6 +80,10 @@ class Simulator {
   };
   // Visibility and radiance of one camera, through the distortion model when there is one.
   CameraImage renderCamera(const Eigen::Isometry3d& T_world_cam, const Eigen::Isometry3d& T_world_light) const;
+  // The recorded 8-bit image of one camera and its visibility (without distortion straight from
+  // the shader, row by row, with no radiance image in memory).
+  cv::Mat recordCamera(const Eigen::Isometry3d& T_world_cam, const Eigen::Isometry3d& T_world_light, float gain,
+                       float noise_sigma, uint64_t noise_seed, VisibilityBuffer& visibility) const;
 
   SimConfig config_;
   SimScene scene_;

@@ -88,6 +88,22 @@ TEST_P(ImageFormation, RadianceMatchesTheModelPerPixel) {
               checked);
 }
 
+TEST(Exposure, RenderImageIsExposeImageOfRenderRadiance) {
+  SimConfig config;
+  config.scene = SimSceneKind::kReef;
+  config.num_frames = 2;
+  config.width_px = 203;
+  config.height_px = 150;
+  const Simulator sim(config);
+  const Eigen::Isometry3d T = sim.T_world_cam0(0.0);
+  const VisibilityBuffer vis = rasterize(sim.scene().mesh, sim.rig().camera, T);
+  const cv::Mat radiance = renderRadiance(sim.scene(), sim.texture(), sim.rig().camera, T, vis, T);
+  const cv::Mat a = exposeImage(radiance, 1.3f, 2.0f, 77);
+  const cv::Mat b = renderImage(sim.scene(), sim.texture(), sim.rig().camera, T, vis, T, 1.3f, 2.0f, 77);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
+}
+
 TEST(Exposure, NoiseIsTheSensorNoiseWithTheConfiguredSigma) {
   const cv::Mat radiance(64, 101, CV_32FC3, cv::Scalar::all(0.25));
   constexpr float kSigma = 5.0f;
