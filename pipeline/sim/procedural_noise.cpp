@@ -69,6 +69,7 @@ NoiseTexture::NoiseTexture(int size, uint64_t seed) : size_(size) {
   // Level 0: octaves of period size, size/2, ..., 4 texels, amplitude falling slower than 1/f so
   // that fine detail (what stereo matches on) stays strong.
   std::vector<float> base(static_cast<size_t>(size) * size);
+#pragma omp parallel for schedule(static)  // each texel on its own: the same texture on any thread count
   for (int y = 0; y < size; ++y) {
     for (int x = 0; x < size; ++x) {
       double sum = 0.0, amplitude = 1.0;

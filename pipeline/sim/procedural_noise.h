@@ -6,7 +6,8 @@
 //                     each texel stores its 2 x 2 neighbourhood, so a bilinear tap is one 32-bit load
 //                     (or one SIMD gather lane: image_formation_kernels.cpp reads quads() directly)
 // Units: the caller's (noise is defined on a unit lattice; scale the input).
-// Threads: pure functions; a NoiseTexture is immutable after construction and may be shared.
+// Threads: pure functions; a NoiseTexture is immutable after construction and may be shared (its
+// constructor fills the texels on OpenMP threads, the same bits on any thread count).
 #pragma once
 
 #include <algorithm>

@@ -33,35 +33,62 @@ void MeshBuilder::closeChunk(uint32_t first_vertex, uint32_t first_triangle) {
 
 void MeshBuilder::addGrid(int nu, int nv, const std::function<Eigen::Vector3d(int, int)>& position,
                           const std::function<Material(int, int)>& material, bool wrap_u, int chunk_cells) {
+  // The chunks in order and where their vertices and triangles go; then positions and materials
+  // (pure functions of (i, j)) are evaluated in parallel, each chunk into its own ranges: the same
+  // mesh whatever the thread count.
+  struct Block {
+    int ci, cj, ni, nj;
+    uint32_t first_vertex, first_triangle;
+  };
+  std::vector<Block> blocks;
+  auto num_vertices = static_cast<uint32_t>(mesh_.vertices.size());
+  auto num_triangles = static_cast<uint32_t>(mesh_.triangles.size());
   for (int cj = 0; cj < nv; cj += chunk_cells) {
     for (int ci = 0; ci < nu; ci += chunk_cells) {
       const int ni = std::min(chunk_cells, nu - ci), nj = std::min(chunk_cells, nv - cj);
-      const auto first_vertex = static_cast<uint32_t>(mesh_.vertices.size());
-      const auto first_triangle = static_cast<uint32_t>(mesh_.triangles.size());
-      for (int j = 0; j <= nj; ++j) {
-        for (int i = 0; i <= ni; ++i) {
-          const int gi = (wrap_u && ci + i == nu) ? 0 : ci + i;
-          mesh_.vertices.push_back(position(gi, cj + j).cast<float>());
-        }
-      }
-      auto index = [&](int i, int j) { return first_vertex + static_cast<uint32_t>(j * (ni + 1) + i); };
-      for (int j = 0; j < nj; ++j) {
-        for (int i = 0; i < ni; ++i) {
-          const Material m = material(ci + i, cj + j);
-          // Alternate the diagonal so that the tessellation has no preferred direction.
-          if (((ci + i) + (cj + j)) % 2 == 0) {
-            mesh_.triangles.push_back({index(i, j), index(i + 1, j), index(i + 1, j + 1)});
-            mesh_.triangles.push_back({index(i, j), index(i + 1, j + 1), index(i, j + 1)});
-          } else {
-            mesh_.triangles.push_back({index(i, j), index(i + 1, j), index(i, j + 1)});
-            mesh_.triangles.push_back({index(i + 1, j), index(i + 1, j + 1), index(i, j + 1)});
-          }
-          mesh_.materials.push_back(m);
-          mesh_.materials.push_back(m);
-        }
-      }
-      closeChunk(first_vertex, first_triangle);
+      blocks.push_back({ci, cj, ni, nj, num_vertices, num_triangles});
+      num_vertices += static_cast<uint32_t>((ni + 1) * (nj + 1));
+      num_triangles += static_cast<uint32_t>(2 * ni * nj);
     }
+  }
+  mesh_.vertices.resize(num_vertices);
+  mesh_.triangles.resize(num_triangles);
+  mesh_.materials.resize(num_triangles);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int b = 0; b < static_cast<int>(blocks.size()); ++b) {
+    const Block& block = blocks[b];
+    const int ci = block.ci, cj = block.cj, ni = block.ni, nj = block.nj;
+    for (int j = 0; j <= nj; ++j) {
+      for (int i = 0; i <= ni; ++i) {
+        const int gi = (wrap_u && ci + i == nu) ? 0 : ci + i;
+        mesh_.vertices[block.first_vertex + static_cast<uint32_t>(j * (ni + 1) + i)] = position(gi, cj + j).cast<float>();
+      }
+    }
+    auto index = [&](int i, int j) { return block.first_vertex + static_cast<uint32_t>(j * (ni + 1) + i); };
+    uint32_t t = block.first_triangle;
+    for (int j = 0; j < nj; ++j) {
+      for (int i = 0; i < ni; ++i) {
+        const Material m = material(ci + i, cj + j);
+        // Alternate the diagonal so that the tessellation has no preferred direction.
+        if (((ci + i) + (cj + j)) % 2 == 0) {
+          mesh_.triangles[t] = {index(i, j), index(i + 1, j), index(i + 1, j + 1)};
+          mesh_.triangles[t + 1] = {index(i, j), index(i + 1, j + 1), index(i, j + 1)};
+        } else {
+          mesh_.triangles[t] = {index(i, j), index(i + 1, j), index(i, j + 1)};
+          mesh_.triangles[t + 1] = {index(i + 1, j), index(i + 1, j + 1), index(i, j + 1)};
+        }
+        mesh_.materials[t] = mesh_.materials[t + 1] = m;
+        t += 2;
+      }
+    }
+  }
+  for (const Block& block : blocks) {
+    MeshChunk chunk;
+    chunk.first_vertex = block.first_vertex;
+    chunk.num_vertices = static_cast<uint32_t>((block.ni + 1) * (block.nj + 1));
+    chunk.first_triangle = block.first_triangle;
+    chunk.num_triangles = static_cast<uint32_t>(2 * block.ni * block.nj);
+    mesh_.chunks.push_back(chunk);
   }
 }
 

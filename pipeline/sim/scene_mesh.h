@@ -4,7 +4,8 @@
 // ground truth of the simulator: rendered depth lies exactly on it.
 // Winding: every triangle's normal (v1 - v0) x (v2 - v0) points to the side a camera may see it
 // from (the rasteriser draws only that side); addGrid's normal is d/di x d/dj of the position.
-// Threads: a SceneMesh is built once (MeshBuilder) and then immutable; share it freely.
+// Threads: a SceneMesh is built once (MeshBuilder) and then immutable; share it freely. addGrid
+// evaluates its position and material functions on OpenMP threads: they must be pure.
 #pragma once
 
 #include <Eigen/Geometry>
