@@ -18,12 +18,26 @@ namespace cenote::mapping {
 namespace detail {
 
 using detail::ColorStore;
+using detail::LeafIndex;
+using detail::LeafRef;
 using detail::LogOddsTree;
 
 struct AccessorImpl {
-  explicit AccessorImpl(const MapImpl& impl) : log_odds(impl.log_odds->constTree()), color(&impl.color) {}
-  openvdb::tree::ValueAccessor<const LogOddsTree, false> log_odds;
+  explicit AccessorImpl(const MapImpl& impl) : leaves(&impl.leaf_index), color(&impl.color) {}
+  // The leaf holding ijk (nullptr: none); the last one is cached, as OpenVDB's accessors do
+  // (neighbouring lookups, as in a segment walk, mostly fall into the same block).
+  const LeafRef* leafAt(const VoxelIndex& ijk) {
+    const BlockIndex block = blockOf(ijk);
+    if (block != last_block) {
+      last_block = block;
+      last = leaves->find(block);
+    }
+    return last;
+  }
+  const LeafIndex* leaves;
   const ColorStore* color;
+  BlockIndex last_block = BlockIndex::Constant(std::numeric_limits<int>::min());  // beyond the index's range
+  const LeafRef* last = nullptr;
 };
 
 openvdb::math::Transform::Ptr makeTransform(double voxel_size_m) {
@@ -37,6 +51,8 @@ openvdb::math::Transform::Ptr makeTransform(double voxel_size_m) {
 namespace {
 
 using openvdb::Coord;
+using detail::LeafIndex;
+using detail::LeafRef;
 
 // Points and origins beyond this many voxels from 0 are rejected (packed block keys, int32 safety).
 constexpr double kMaxVoxelIndex = 1 << 23;
@@ -249,6 +265,7 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
       const BlockIndex& block = rays.block(b);
       const BlockMasks& masks = rays.masks(b);
       auto* leaf = acc.touchLeaf(coordOf(block * kBlockSide));
+      impl_->indexLeaf(*leaf);
       // Straight on the leaf's buffer and value mask (one 64-bit word = 64 voxels of one x slice).
       float* values = leaf->buffer().data();
       auto& known_mask = leaf->getValueMask();
@@ -333,6 +350,7 @@ MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere,
       if (!box.isEmpty()) noteChanged(delta, block, box, s);
     }
     openvdb::tools::pruneInactive(tree);
+    impl_->reindexLeaves();
   }
   impl_->color.eraseIf(removed);
   finishDelta(delta, s);
@@ -402,7 +420,8 @@ MapStats OccupancyMap::stats() const {
   }
   // Serial count: Grid::memUsage() runs a TBB reduction, whose (uninstrumented) worker threads
   // ThreadSanitizer reports as races; stats() is not a hot path.
-  out.memory_bytes = openvdb::tools::memUsage(impl_->log_odds->constTree(), false) + impl_->color.memoryBytes();
+  out.memory_bytes = openvdb::tools::memUsage(impl_->log_odds->constTree(), false) + impl_->color.memoryBytes() +
+                     impl_->leaf_index.memoryBytes();
   return out;
 }
 
@@ -413,18 +432,55 @@ OccupancyMap::ConstAccessor::~ConstAccessor() = default;
 OccupancyMap::ConstAccessor::ConstAccessor(ConstAccessor&&) noexcept = default;
 
 bool OccupancyMap::ConstAccessor::logOdds(const VoxelIndex& ijk, float& l) const {
-  return impl_->log_odds.probeValue(coordOf(ijk), l);
+  const LeafRef* leaf = impl_->leafAt(ijk);
+  return leaf != nullptr && leaf->logOdds(offsetInBlock(ijk), l);
 }
 
 VoxelState OccupancyMap::ConstAccessor::state(const VoxelIndex& ijk) const {
   float l;
-  if (!impl_->log_odds.probeValue(coordOf(ijk), l)) return VoxelState::kUnknown;
+  if (!logOdds(ijk, l)) return VoxelState::kUnknown;
   return map_->model_.isOccupied(l) ? VoxelState::kOccupied : VoxelState::kFree;
+}
+
+void OccupancyMap::ConstAccessor::logOdds(std::span<const VoxelIndex> ijk, std::span<float> l,
+                                          std::span<uint8_t> known) const {
+  // Groups of kGroup voxels in three passes: prefetch their table slots, then find their leaves
+  // and prefetch mask word and value, then read. Each pass issues kGroup independent loads whose
+  // cache misses overlap, where one lookup after another waits for each miss in turn.
+  constexpr size_t kGroup = 16;
+  const LeafIndex& index = *impl_->leaves;
+  const LeafRef* leaves[kGroup];
+  for (size_t begin = 0; begin < ijk.size(); begin += kGroup) {
+    const size_t n = std::min(kGroup, ijk.size() - begin);
+    for (size_t g = 0; g < n; ++g) index.prefetch(blockOf(ijk[begin + g]));
+    for (size_t g = 0; g < n; ++g) {
+      leaves[g] = index.find(blockOf(ijk[begin + g]));
+      if (leaves[g] != nullptr) leaves[g]->prefetch(offsetInBlock(ijk[begin + g]));
+    }
+    for (size_t g = 0; g < n; ++g) {
+      const size_t i = begin + g;
+      known[i] = leaves[g] != nullptr && leaves[g]->logOdds(offsetInBlock(ijk[i]), l[i]);
+    }
+  }
+}
+
+void OccupancyMap::ConstAccessor::states(std::span<const VoxelIndex> ijk, std::span<VoxelState> out) const {
+  constexpr size_t kChunk = 256;
+  float l[kChunk];
+  uint8_t known[kChunk];
+  for (size_t begin = 0; begin < ijk.size(); begin += kChunk) {
+    const size_t n = std::min(kChunk, ijk.size() - begin);
+    logOdds(ijk.subspan(begin, n), std::span<float>(l, n), std::span<uint8_t>(known, n));
+    for (size_t i = 0; i < n; ++i) {
+      out[begin + i] = !known[i] ? VoxelState::kUnknown
+                                 : (map_->model_.isOccupied(l[i]) ? VoxelState::kOccupied : VoxelState::kFree);
+    }
+  }
 }
 
 double OccupancyMap::ConstAccessor::probability(const VoxelIndex& ijk) const {
   float l;
-  if (!impl_->log_odds.probeValue(coordOf(ijk), l)) return 0.5;
+  if (!logOdds(ijk, l)) return 0.5;
   return mapping::probability(l);
 }
 
@@ -449,40 +505,32 @@ std::vector<BlockIndex> OccupancyMap::ConstAccessor::knownBlocks() const {
 }
 
 bool OccupancyMap::ConstAccessor::readBlock(const BlockIndex& block, BlockView& view) const {
-  view.known.fill(0);
-  const auto* leaf = impl_->log_odds.probeConstLeaf(coordOf(block * kBlockSide));
+  // The live tree holds no tiles (integration writes voxels, loading splits a file's tiles).
+  const LeafRef* leaf = impl_->leaves->find(block);
   if (leaf == nullptr) {
-    // A tile (only from loaded files) covers the whole block with one value.
-    float l;
-    if (!impl_->log_odds.probeValue(coordOf(block * kBlockSide), l)) return false;
-    view.known.fill(~0ull);
-    view.log_odds.fill(l);
-    return true;
+    view.known.fill(0);
+    return false;
   }
-  const auto& mask = leaf->getValueMask();
-  for (openvdb::Index w = 0; w < 8; ++w) view.known[w] = mask.template getWord<uint64_t>(w);
-  std::copy(leaf->buffer().data(), leaf->buffer().data() + kBlockVoxels, view.log_odds.begin());
-  return !mask.isOff();
+  uint64_t any = 0;
+  for (int w = 0; w < 8; ++w) {
+    view.known[w] = leaf->known[w];
+    any |= leaf->known[w];
+  }
+  std::copy(leaf->values, leaf->values + kBlockVoxels, view.log_odds.begin());
+  return any != 0;
 }
 
 bool OccupancyMap::ConstAccessor::readBlockMasks(const BlockIndex& block, std::array<uint64_t, 8>& known,
                                                  std::array<uint64_t, 8>& occupied) const {
   known.fill(0);
   occupied.fill(0);
-  const auto* leaf = impl_->log_odds.probeConstLeaf(coordOf(block * kBlockSide));
-  if (leaf == nullptr) {
-    float l;
-    if (!impl_->log_odds.probeValue(coordOf(block * kBlockSide), l)) return false;
-    known.fill(~0ull);
-    if (map_->model_.isOccupied(l)) occupied.fill(~0ull);
-    return true;
-  }
-  const auto& mask = leaf->getValueMask();
-  const float* values = leaf->buffer().data();
+  const LeafRef* leaf = impl_->leaves->find(block);
+  if (leaf == nullptr) return false;
+  const float* values = leaf->values;
   const float threshold = map_->model_.occupied;
   bool any = false;
   for (int w = 0; w < 8; ++w) {
-    known[w] = mask.template getWord<uint64_t>(w);
+    known[w] = leaf->known[w];
     any |= known[w] != 0;
     if (known[w] == 0) continue;
     uint64_t occ = 0;  // all 64 compared without branches; unknown ones are masked off below

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <memory>
 #include <shared_mutex>
+#include <span>
 #include <vector>
 
 #include "common/point_batch.h"
@@ -109,6 +110,11 @@ class OccupancyMap {
     // Log-odds of a voxel; false (and l untouched) when unknown.
     bool logOdds(const VoxelIndex& ijk, float& l) const;
     VoxelState state(const VoxelIndex& ijk) const;
+    // The same answers as logOdds() / state() voxel by voxel (known[i] = 0 and l[i] untouched where
+    // unknown), several times faster for scattered voxels: the lookups of a group are interleaved
+    // with software prefetches, so their cache misses overlap. Spans of equal size.
+    void logOdds(std::span<const VoxelIndex> ijk, std::span<float> l, std::span<uint8_t> known) const;
+    void states(std::span<const VoxelIndex> ijk, std::span<VoxelState> out) const;
     // Occupancy probability; 0.5 for unknown (check state() first).
     double probability(const VoxelIndex& ijk) const;
     // Mean colour of the points that hit the voxel; false when it has none.

@@ -11,6 +11,7 @@
 #include <shared_mutex>
 
 #include "mapping/detail/color_store.h"
+#include "mapping/detail/leaf_index.h"
 #include "mapping/integration/projective_batch.h"
 #include "mapping/integration/ray_batch.h"
 #include "mapping/occupancy_map.h"
@@ -38,11 +39,24 @@ using LogOddsGrid = openvdb::Grid<LogOddsTree>;
 struct MapImpl {
   LogOddsGrid::Ptr log_odds;  // active voxel = known; value = log-odds
   ColorStore color;           // where some point hit
+  LeafIndex leaf_index;       // block -> leaf of log_odds, for lookups; kept in step with the tree
   mutable detail::FairSharedMutex grid_mutex;
   std::mutex writer_mutex;
   std::atomic<uint64_t> version{0};
   RayBatch scratch;
   ProjectiveBatch projective_scratch;
+
+  // Adds (or refreshes) a leaf of log_odds in leaf_index. Precondition: LeafIndex::inRange(block).
+  void indexLeaf(LogOddsTree::LeafNodeType& leaf) {
+    const openvdb::Coord o = leaf.origin();
+    leaf_index.insert(BlockIndex(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift),
+                      LeafRef{leaf.buffer().data(), &leaf.getValueMask().template getWord<uint64_t>(0)});
+  }
+  // Rebuilds leaf_index after leaves were deleted, or the tree was filled another way.
+  void reindexLeaves() {
+    leaf_index.clear();
+    for (auto leaf = log_odds->tree().beginLeaf(); leaf; ++leaf) indexLeaf(*leaf);
+  }
 
   // Frees the trees' nodes serially: Tree's destructor frees them with a TBB parallel_for, whose
   // (uninstrumented) worker threads ThreadSanitizer reports as racing with ours.

@@ -72,8 +72,14 @@ void fromFileGrids(openvdb::FloatGrid& log_odds, openvdb::Int32Grid& color, deta
                    const std::string& path) {
   log_odds.tree().voxelizeActiveTiles(false);
   for (auto leaf = log_odds.tree().cbeginLeaf(); leaf; ++leaf) {
+    const Coord o = leaf->origin();
+    if (!detail::LeafIndex::inRange(BlockIndex(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift))) {
+      throw Error(path + ": voxel (" + std::to_string(o.x()) + ", " + std::to_string(o.y()) + ", " +
+                  std::to_string(o.z()) + ") lies beyond the 2^23 voxels per axis a map holds");
+    }
     impl.log_odds->tree().addLeaf(new openvdb::FloatTree::LeafNodeType(*leaf));
   }
+  impl.reindexLeaves();
   for (auto it = color.tree().cbeginValueOn(); it; ++it) {
     openvdb::CoordBBox box;
     it.getBoundingBox(box);
@@ -244,6 +250,7 @@ std::unique_ptr<OccupancyMap> fromOctree(const Tree& tree, const MapConfig& defa
       }
     }
   }
+  impl.reindexLeaves();
   return map;
 }
 

@@ -116,15 +116,23 @@ CollisionResult sweepCapsule(const OccupancyMap::ConstAccessor& acc, const Segme
 }  // namespace
 
 std::vector<VoxelQuery> queryVoxels(const OccupancyMap& map, const std::vector<Eigen::Vector3d>& points_m) {
-  std::vector<VoxelQuery> out(points_m.size());
-  const auto acc = map.constAccessor();
+  const size_t n = points_m.size();
+  std::vector<VoxelQuery> out(n);
   const double limit = 1e9 * map.voxelSize();
-  for (size_t i = 0; i < points_m.size(); ++i) {
-    if (!points_m[i].allFinite() || (points_m[i].array().abs() > limit).any()) continue;
-    float l;
-    if (!acc.logOdds(map.toIndex(points_m[i]), l)) continue;
-    out[i].state = map.model().isOccupied(l) ? VoxelState::kOccupied : VoxelState::kFree;
-    out[i].probability = probability(l);
+  // A voxel no map holds (its block lies beyond +-2^20) stands for points that cannot be looked up.
+  const VoxelIndex nowhere = VoxelIndex::Constant(std::numeric_limits<int>::max());
+  std::vector<VoxelIndex> ijk(n);
+  for (size_t i = 0; i < n; ++i) {
+    const bool valid = points_m[i].allFinite() && !(points_m[i].array().abs() > limit).any();
+    ijk[i] = valid ? map.toIndex(points_m[i]) : nowhere;
+  }
+  std::vector<float> l(n);
+  std::vector<uint8_t> known(n);
+  map.constAccessor().logOdds(ijk, l, known);  // batched: overlapping cache misses
+  for (size_t i = 0; i < n; ++i) {
+    if (!known[i]) continue;
+    out[i].state = map.model().isOccupied(l[i]) ? VoxelState::kOccupied : VoxelState::kFree;
+    out[i].probability = probability(l[i]);
   }
   return out;
 }

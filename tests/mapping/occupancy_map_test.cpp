@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 
 #include "common/error.h"
 #include "tests/mapping/support/analytic_scene.h"
@@ -279,6 +280,45 @@ TEST(OccupancyMap, ClearBoxSphereCropAndResetForgetVoxels) {
   map.reset();
   EXPECT_EQ(map.stats().free + map.stats().occupied, 0u);
   EXPECT_THROW(map.clearSphere(Eigen::Vector3d::Zero(), -1.0), Error);
+}
+
+TEST(OccupancyMap, BatchedLookupsAnswerAsSingleOnesAlsoAfterClearing) {
+  OccupancyMap map(smallConfig(0.1));
+  Scene scene;
+  scene.planes.push_back({Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)});
+  map.integrate(renderBatch(scene, PinholeCamera{}, lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(3, 0, 0)), 8.0));
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> coord(-40, 40);
+  std::vector<VoxelIndex> voxels;
+  for (int i = 0; i < 20000; ++i) voxels.emplace_back(coord(rng), coord(rng), coord(rng));
+  voxels.push_back(VoxelIndex::Constant(std::numeric_limits<int>::max()));  // beyond any map
+  voxels.push_back(VoxelIndex(1 << 24, 0, 0));
+  for (int round = 0; round < 2; ++round) {
+    size_t num_known = 0;
+    {
+      const auto acc = map.constAccessor();  // released before clearBox below, which waits for readers
+      std::vector<float> l(voxels.size(), -99.0f);
+      std::vector<uint8_t> known(voxels.size());
+      std::vector<VoxelState> states(voxels.size());
+      acc.logOdds(voxels, l, known);
+      acc.states(voxels, states);
+      for (size_t i = 0; i < voxels.size(); ++i) {
+        float single = -99.0f;
+        const bool single_known = acc.logOdds(voxels[i], single);
+        ASSERT_EQ(known[i] != 0, single_known) << "round " << round << ", voxel " << voxels[i].transpose();
+        EXPECT_EQ(l[i], single) << "round " << round << ", voxel " << voxels[i].transpose();
+        EXPECT_EQ(states[i], acc.state(voxels[i])) << "round " << round << ", voxel " << voxels[i].transpose();
+        num_known += single_known;
+      }
+    }
+    EXPECT_GT(num_known, 200u) << "round " << round;  // the random voxels do reach the known ones
+    if (round == 0) {
+      Aabb box;
+      box.min_m = Eigen::Vector3d(0.5, -1.5, -1.5);
+      box.max_m = Eigen::Vector3d(1.5, 1.5, 1.5);
+      map.clearBox(box);  // deletes leaves: the lookups' leaf index must follow
+    }
+  }
 }
 
 TEST(OccupancyMap, SameMapForAnyThreadCount) {
