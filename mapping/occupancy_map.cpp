@@ -10,6 +10,7 @@
 
 #include "common/error.h"
 #include "mapping/detail/map_impl.h"
+#include "mapping/detail/publish_word.h"
 #include "mapping/integration/depth_frame.h"
 #include "mapping/integration/voxel_ray.h"
 
@@ -273,20 +274,9 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
       for (int w = 0; w < 8; ++w) {
         uint64_t& known = known_mask.template getWord<uint64_t>(w);
         const uint64_t hits = masks.hit[w];
-        uint64_t bits = masks.free[w] | hits;
-        delta.voxels_updated += static_cast<uint64_t>(__builtin_popcountll(bits));
-        while (bits != 0) {
-          const int bit = __builtin_ctzll(bits);
-          bits &= bits - 1;
-          const uint64_t one = 1ull << bit;
-          float& value = values[w * 64 + bit];
-          const bool was_known = (known & one) != 0;
-          const float before = was_known ? value : 0.0f;
-          const float after = (hits & one) ? model_.applyHit(before) : model_.applyMiss(before);
-          if (was_known && after == before) continue;
-          value = after;
-          changed[w] |= one;
-        }
+        const uint64_t update = masks.free[w] | hits;
+        delta.voxels_updated += static_cast<uint64_t>(__builtin_popcountll(update));
+        changed[w] = detail::publishWord(values + w * 64, known, update, hits, model_);
         known |= changed[w];
       }
       const VoxelBox box = boxOfBits(block, changed);
@@ -302,9 +292,10 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
       std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
       for (size_t i = begin; i < end; ++i) {
         const EndpointColor& c = rays.colors()[i];
-        int32_t packed;
-        if (!colors.get(c.ijk, packed)) {
-          colors.set(c.ijk, detail::packColor(c.rgb, 1));
+        bool inserted;
+        int32_t& packed = colors.at(c.ijk, inserted);
+        if (inserted) {
+          packed = detail::packColor(c.rgb, 1);
           continue;
         }
         const int count = detail::colorCount(packed);
@@ -313,7 +304,7 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
         for (int k = 0; k < 3; ++k) {
           mean[k] = static_cast<uint8_t>((old[k] * count + c.rgb[k] + (count + 1) / 2) / (count + 1));
         }
-        colors.set(c.ijk, detail::packColor(mean, std::min(count + 1, 127)));
+        packed = detail::packColor(mean, std::min(count + 1, 127));
       }
     }
   }

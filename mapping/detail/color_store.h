@@ -22,30 +22,36 @@ namespace cenote::mapping::detail {
 // ascending offset order.
 struct BlockColors {
   std::array<uint64_t, 8> has{};
+  std::array<uint16_t, 8> before{};  // set bits in the words before each word (one popcount per rank)
   std::vector<int32_t> packed;
 
   // Index in `packed` of the voxel at `offset` (whether or not it has a colour).
   size_t rank(int offset) const {
     const int w = offset >> 6;
-    size_t r = 0;
-    for (int i = 0; i < w; ++i) r += static_cast<size_t>(__builtin_popcountll(has[i]));
-    return r + static_cast<size_t>(__builtin_popcountll(has[w] & ((1ull << (offset & 63)) - 1)));
+    return before[w] + static_cast<size_t>(__builtin_popcountll(has[w] & ((1ull << (offset & 63)) - 1)));
   }
   bool get(int offset, int32_t& value) const {
     if (((has[offset >> 6] >> (offset & 63)) & 1) == 0) return false;
     value = packed[rank(offset)];
     return true;
   }
-  void set(int offset, int32_t value) {
+  // The colour of the voxel at `offset`, inserted as 0 when absent (inserted set to true); valid
+  // until the next insertion.
+  int32_t& at(int offset, bool& inserted) {
     const size_t r = rank(offset);
-    uint64_t& word = has[offset >> 6];
+    const int w = offset >> 6;
     const uint64_t bit = 1ull << (offset & 63);
-    if (word & bit) {
-      packed[r] = value;
-      return;
+    inserted = (has[w] & bit) == 0;
+    if (inserted) {
+      has[w] |= bit;
+      for (int i = w + 1; i < 8; ++i) ++before[i];
+      packed.insert(packed.begin() + static_cast<std::ptrdiff_t>(r), 0);
     }
-    word |= bit;
-    packed.insert(packed.begin() + static_cast<std::ptrdiff_t>(r), value);
+    return packed[r];
+  }
+  void set(int offset, int32_t value) {
+    bool inserted;
+    at(offset, inserted) = value;
   }
 };
 
@@ -63,12 +69,17 @@ class ColorStore {
     const uint32_t slot = table_.find(packIndex(block));
     return slot != BlockTable::kNone && blocks_[slot].get(offsetInBlock(ijk), packed);
   }
+  // The colour of a voxel, inserted as 0 when absent (inserted set to true); valid until the next
+  // insertion. Precondition: inRange(blockOf(ijk)).
+  int32_t& at(const VoxelIndex& ijk, bool& inserted) {
+    const uint32_t slot = table_.findOrInsert(packIndex(blockOf(ijk)), inserted);
+    if (inserted) blocks_.emplace_back();
+    return blocks_[slot].at(offsetInBlock(ijk), inserted);
+  }
   // Precondition: inRange(blockOf(ijk)).
   void set(const VoxelIndex& ijk, int32_t packed) {
     bool inserted;
-    const uint32_t slot = table_.findOrInsert(packIndex(blockOf(ijk)), inserted);
-    if (inserted) blocks_.emplace_back();
-    blocks_[slot].set(offsetInBlock(ijk), packed);
+    at(ijk, inserted) = packed;
   }
 
   // visit(ijk, packed) for every coloured voxel, block by block in the order blocks got colours.

@@ -1,0 +1,59 @@
+// publish_word.h: one batch's log-odds updates applied to 64 voxels of a leaf at once (one 64-bit
+// word of its masks: x fixed, y * 8 + z), four voxels per SSE2 instruction.
+// Why: publishing went voxel by voxel (find the next set bit, branch on hit / known / changed),
+// ~15 instructions per updated voxel; a frame updates ~1M voxels, mostly in dense runs (2x2x2
+// cells of coarse clearing), so whole groups of four cost a few instructions each.
+// Exactly the scalar rule, with the same float operations in the same order (so the same bits):
+//   before = known ? value : 0;  after = hit ? model.applyHit(before) : model.applyMiss(before);
+//   written (and reported changed) where updated and (!known or after != before).
+// Units: log-odds (log_odds.h). Threads: a pure function of its arguments and the 64 values.
+#pragma once
+
+#include <emmintrin.h>
+
+#include <cstdint>
+
+#include "mapping/log_odds.h"
+
+namespace cenote::mapping::detail {
+
+// All-ones lanes for the set bits of a 4-bit group (bit i -> lane i).
+inline __m128 laneMask(unsigned bits4) {
+  alignas(16) static constexpr uint32_t kLanes[16][4] = {
+      {0, 0, 0, 0}, {~0u, 0, 0, 0}, {0, ~0u, 0, 0}, {~0u, ~0u, 0, 0},
+      {0, 0, ~0u, 0}, {~0u, 0, ~0u, 0}, {0, ~0u, ~0u, 0}, {~0u, ~0u, ~0u, 0},
+      {0, 0, 0, ~0u}, {~0u, 0, 0, ~0u}, {0, ~0u, 0, ~0u}, {~0u, ~0u, 0, ~0u},
+      {0, 0, ~0u, ~0u}, {~0u, 0, ~0u, ~0u}, {0, ~0u, ~0u, ~0u}, {~0u, ~0u, ~0u, ~0u}};
+  return _mm_load_ps(reinterpret_cast<const float*>(kLanes[bits4 & 15]));
+}
+
+inline __m128 select(__m128 mask, __m128 if_set, __m128 if_clear) {
+  return _mm_or_ps(_mm_and_ps(mask, if_set), _mm_andnot_ps(mask, if_clear));
+}
+
+// Applies the updates of one word to values[0..63]. update: voxels to update (free or hit);
+// hits: those hit (hit wins where both); known: observed before. @return the changed voxels.
+inline uint64_t publishWord(float* values, uint64_t known, uint64_t update, uint64_t hits, const LogOddsModel& model) {
+  const __m128 hit = _mm_set1_ps(model.hit), miss = _mm_set1_ps(model.miss);
+  const __m128 clamp_max = _mm_set1_ps(model.clamp_max), clamp_min = _mm_set1_ps(model.clamp_min);
+  uint64_t changed = 0;
+  for (int g = 0; g < 16 && (update >> (4 * g)) != 0; ++g) {
+    const unsigned to_update = static_cast<unsigned>(update >> (4 * g)) & 15;
+    if (to_update == 0) continue;
+    const __m128 is_known = laneMask(static_cast<unsigned>(known >> (4 * g)));
+    const __m128 is_hit = laneMask(static_cast<unsigned>(hits >> (4 * g)));
+    const __m128 value = _mm_loadu_ps(values + 4 * g);
+    const __m128 before = _mm_and_ps(is_known, value);  // +0 where unknown, as the scalar 0.0f
+    const __m128 plus_hit = _mm_add_ps(before, hit);
+    const __m128 plus_miss = _mm_add_ps(before, miss);
+    const __m128 after = select(is_hit, select(_mm_cmpgt_ps(plus_hit, clamp_max), clamp_max, plus_hit),
+                                select(_mm_cmplt_ps(plus_miss, clamp_min), clamp_min, plus_miss));
+    const __m128 differs = _mm_or_ps(_mm_cmpneq_ps(after, before), _mm_xor_ps(is_known, laneMask(15)));
+    const __m128 write = _mm_and_ps(laneMask(to_update), differs);
+    _mm_storeu_ps(values + 4 * g, select(write, after, value));
+    changed |= static_cast<uint64_t>(_mm_movemask_ps(write)) << (4 * g);
+  }
+  return changed;
+}
+
+}  // namespace cenote::mapping::detail
