@@ -31,6 +31,21 @@ PointBatch oneRay(const Eigen::Vector3d& origin, const Eigen::Vector3f& end) {
   return b;
 }
 
+TEST(MapDelta, MergeKeepsBlocksSortedAndUniqueAndAddsCounts) {
+  MapDelta a, b;
+  a.changed_blocks = {BlockIndex(-1, 0, 0), BlockIndex(0, 0, 0), BlockIndex(0, 2, 1)};
+  a.voxels_updated = 5;
+  b.changed_blocks = {BlockIndex(-2, 5, 5), BlockIndex(0, 0, 0), BlockIndex(0, 2, 0), BlockIndex(3, 0, 0)};
+  b.voxels_updated = 7;
+  a.merge(b);
+  const std::vector<BlockIndex> expected = {BlockIndex(-2, 5, 5), BlockIndex(-1, 0, 0), BlockIndex(0, 0, 0),
+                                            BlockIndex(0, 2, 0), BlockIndex(0, 2, 1), BlockIndex(3, 0, 0)};
+  EXPECT_EQ(a.changed_blocks, expected);
+  EXPECT_EQ(a.voxels_updated, 12u);
+  a.merge(MapDelta{});
+  EXPECT_EQ(a.changed_blocks, expected);
+}
+
 TEST(OccupancyMap, UnobservedVoxelIsUnknownNotFree) {
   OccupancyMap map(smallConfig());
   auto acc = map.constAccessor();
