@@ -1,0 +1,262 @@
+// sgm_band-inl.h: the coarse-to-fine band of the SGM engine (aggregateRowBand), compiled once per
+// instruction set as part of sgm_engine.cpp, which includes it inside its Highway namespace after
+// the helpers it shares with the full search (cost columns, path resets, winners, LR check): not a
+// standalone header. Every pixel searches kBandDisparities disparities from its own start.
+// No include guard: sgm_engine.cpp is compiled once per target (hwy/foreach_target.h) and includes
+// this file each time.
+
+// Coarse-to-fine band: every pixel searches kBandDisparities disparities from its own start
+// (SgmImages::band_start), so a path's predecessor may cover other disparities. Its costs are
+// read at the current pixel's start, shifted by the difference of the two starts; the lanes of a
+// path pixel past its band hold sentinels larger than any path cost plus P2 (so a disparity the
+// predecessor did not search counts as infinite), and a shift beyond the band reads sentinels only.
+
+// Predecessor shift, clamped to where only sentinels are read (the d - 1 / d + 1 loads reach one
+// lane further than the band on either side).
+HWY_INLINE int bandShift(int start, int start_prev) {
+  return std::clamp(start - start_prev, -(kBandDisparities + 1), kBandDisparities + 1);
+}
+
+// The along-row path starts fresh at the first pixel of every row: zero costs in the band.
+void resetAlongBand(const StripBuffers& b, uint16_t sentinel) {
+  for (uint16_t* pixel : {b.along[0], b.along[1]}) {
+    std::fill(pixel, pixel + 5 * kBandDisparities, sentinel);
+    std::fill(pixel + 2 * kBandDisparities, pixel + 3 * kBandDisparities, 0);
+  }
+}
+
+// The band of the previous pixel on the row (`prev`, lanes past it sentinels) as seen from a
+// band starting `shift` disparities later: lane i holds lane i + shift + kOffset of `prev`.
+// In registers: the previous pixel's path was just computed, and reloading it from memory at
+// another alignment would miss store-to-load forwarding.
+template <int kOffset, class V>
+HWY_INLINE V shiftedBand(V prev, V sentinel, int shift, const uint16_t* iota) {
+  constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+  if constexpr (kLanes == 32) {
+    const __m512i index =
+        _mm512_add_epi16(_mm512_load_si512(iota), _mm512_set1_epi16(static_cast<int16_t>(shift + kOffset)));
+    // Lanes whose source index is outside [0, 32) (as unsigned) keep the sentinel.
+    const __mmask32 inside = _mm512_cmplt_epu16_mask(index, _mm512_set1_epi16(32));
+    return V{_mm512_mask_permutexvar_epi16(sentinel.raw, inside, index, prev.raw)};
+  }
+#endif
+  (void)iota;
+  const DU16 d;
+  HWY_ALIGN uint16_t lanes[3 * kLanes];
+  hn::Store(sentinel, d, lanes);
+  hn::Store(prev, d, lanes + kLanes);
+  hn::Store(sentinel, d, lanes + 2 * kLanes);
+  const int at = std::clamp(shift + kOffset, -static_cast<int>(kLanes), static_cast<int>(kLanes));
+  return hn::LoadU(d, lanes + kLanes + at);
+}
+
+// One row of one pass, as aggregateRowFull(), over each pixel's band. kWindow: the SAD window
+// side, 0 for census.
+template <int kWindow>
+void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y,
+                      int dx, bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored,
+                      float* disparity, float* confidence) {
+  const DU16 d;
+  constexpr bool kCensus = kWindow == 0;
+  constexpr int kN = static_cast<int>(hn::MaxLanes(DU16()));
+  constexpr int kB = kBandDisparities;
+  constexpr int kVectors = kB / kN;
+  static_assert(kB % kN == 0, "the band must be a whole number of vectors");
+  const int Dp = b.padded, W = p.width;
+  constexpr int r = kWindow / 2;
+  const VU16 p1 = hn::Set(d, static_cast<uint16_t>(p.p1));
+  const uint16_t sentinel = static_cast<uint16_t>(p.max_cost + 2 * p.p2 + p.p1);
+  const VU16 sentinel_v = hn::Set(d, sentinel);
+  const VU16 worst_cost = hn::Set(d, static_cast<uint16_t>(p.max_cost));
+  const uint8_t* row = im.guide + y * im.image_stride;
+  const uint8_t* prev_row = im.guide + (y - dx) * im.image_stride;  // inside the image border
+  const int16_t* starts = im.band_start + y * im.band_stride;
+  const int16_t* prev_starts = first_row ? nullptr : im.band_start + (y - dx) * im.band_stride;
+  const CostSource src = beginCostRow(p, im, b, y, dx, dx, first_row);
+  if (output == RowOutput::kWinner && p.lr_check) {
+    std::fill(b.right_min, b.right_min + b.reversed_length, kNoCost);
+    std::fill(b.right_arg, b.right_arg + b.reversed_length, 0);
+  }
+  resetAlongBand(b, sentinel);
+  uint16_t* const along_buffer = b.along[0] + 2 * kB;  // the previous pixel's along path, when shifted
+  VU16 along[kVectors];
+  for (int j = 0; j < kVectors; ++j) along[j] = hn::Zero(d);
+  VU16 along_min = hn::Zero(d);
+  HWY_ALIGN int32_t band_first[kWinnerBatch];
+  // Everything the pixel loop reads, in locals: Highway's stores may alias anything, and the
+  // compiler would otherwise reload struct fields after every store.
+  constexpr int kStride = 3 * kB;  // StripBuffers::pixel_stride of the band
+  uint16_t* const path_vertical = b.pathPixel(b.path[0], 0);
+  const uint16_t* const path_back = b.pathPixel(b.path[1], 0);
+  uint16_t* const path_back_out = b.pathPixel(b.path[3], 0);
+  uint16_t* const path_fwd = b.pathPixel(b.path[2], 0);
+  uint16_t* const min_row_vertical = b.path_min[0];
+  const uint16_t* const min_row_back = b.path_min[1];
+  uint16_t* const min_row_fwd = b.path_min[2];
+  uint16_t* const min_row_back_out = b.path_min[3];
+  const uint16_t* const iota = b.iota;
+  uint16_t* const column_sum = b.column_sum;
+  uint16_t* const batch_sums = b.sums;
+  const uint16_t* const census_right_lo = b.census_reversed[0];
+  const uint16_t* const census_right_hi = b.census_reversed[1];
+  const int sad_shift = p.sad_shift;
+  const bool adaptive = p.adaptive_p2;
+  const VU16 p2_constant = hn::Set(d, static_cast<uint16_t>(p.p2));
+  for (int i = 0; i < W; ++i) {
+    const int x = dx > 0 ? i : W - 1 - i;
+    const int start = starts[x];
+    // Shifts of the predecessors; pixels off the image (and the first row) read zero costs at 0.
+    auto shiftFrom = [&](int xp) HWY_ATTR {
+      return (prev_starts == nullptr || xp < 0 || xp >= W) ? 0 : bandShift(start, prev_starts[xp]);
+    };
+    const int shift_along = i == 0 ? 0 : bandShift(start, starts[x - dx]);
+    const int shift_vertical = shiftFrom(x), shift_back = shiftFrom(x - dx), shift_fwd = shiftFrom(x + dx);
+
+    // SAD: the column one past the window ahead of x is brought to this row over the whole
+    // range (the pixels ahead may search other disparities), then the window sums of the band
+    // are added up. One column early: the band's unaligned loads of a column stored just before
+    // would miss store-to-load forwarding. beginCostRow() brought the first columns up to x0 + r.
+    const int ahead = x + dx * (r + 1);
+    if (src.update_columns && ahead >= 0 && ahead < W) {
+      const EnteringColumn column = enteringColumn(p, b, src, ahead);
+      for (int k = 0; k < Dp; k += kN) updateColumn(column, k);
+    }
+    const int valid_max = x - p.min_disparity;  // largest disparity index with a right pixel
+    const bool border = start + kB - 1 > valid_max;
+    const VU16 max_valid_k = hn::Set(d, static_cast<uint16_t>(valid_max < 0 ? 0 : valid_max));
+    const uint16_t census_lo = kCensus ? static_cast<uint16_t>(src.census_left[x] & 0xFFFF) : 0;
+    const uint16_t census_hi = kCensus ? static_cast<uint16_t>(src.census_left[x] >> 16) : 0;
+    const std::ptrdiff_t census_base = W - 1 - x + p.min_disparity + start;
+
+    uint16_t* const vertical = path_vertical + static_cast<std::ptrdiff_t>(x) * kStride;
+    const uint16_t* const vertical_in = vertical + shift_vertical;
+    const uint16_t* const back = path_back + static_cast<std::ptrdiff_t>(x - dx) * kStride + shift_back;
+    uint16_t* const back_out = path_back_out + static_cast<std::ptrdiff_t>(x) * kStride;
+    const uint16_t* const fwd = path_fwd + static_cast<std::ptrdiff_t>(x + dx) * kStride + shift_fwd;
+    uint16_t* const fwd_out = path_fwd + static_cast<std::ptrdiff_t>(x) * kStride;
+    const uint16_t min_vertical = min_row_vertical[x + 1];
+    const uint16_t min_back = min_row_back[x - dx + 1], min_fwd = min_row_fwd[x + dx + 1];
+    const VU16 min_vertical_v = hn::Set(d, min_vertical);
+    const VU16 min_back_v = hn::Set(d, min_back), min_fwd_v = hn::Set(d, min_fwd);
+    // P2 per direction: one constant unless adapted to the intensity step.
+    auto penalty = [&](uint8_t a, uint8_t b2) HWY_ATTR {
+      return adaptive ? hn::Set(d, pen.p2[std::abs(a - b2)]) : p2_constant;
+    };
+    const VU16 jump_along = hn::Add(along_min, penalty(row[x], row[x - dx]));
+    const VU16 jump_vertical = hn::Add(min_vertical_v, penalty(row[x], prev_row[x]));
+    const VU16 jump_back = hn::Add(min_back_v, penalty(row[x], prev_row[x - dx]));
+    const VU16 jump_fwd = hn::Add(min_fwd_v, penalty(row[x], prev_row[x + dx]));
+    const int slot = i % kWinnerBatch;
+    band_first[slot] = start;
+    uint16_t* const sums_out = output == RowOutput::kStoreSums
+                                   ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp
+                                   : batch_sums + slot * Dp;
+    const uint16_t* const sums_in = add_stored ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp : nullptr;
+    // The window's columns, clamped to the image, at the band's first disparity.
+    const uint16_t* columns[kCensus ? 1 : kWindow];
+    if constexpr (!kCensus) {
+      for (int c = -r; c <= r; ++c) {
+        columns[c + r] = column_sum + static_cast<std::ptrdiff_t>(clampColumn(x + c, W)) * Dp + start;
+      }
+    }
+    // The along-row predecessor when it searched another band: one vector is shifted in
+    // registers, several go through memory.
+    if (kVectors > 1 && shift_along != 0) {
+      for (int j = 0; j < kVectors; ++j) hn::Store(along[j], d, along_buffer + j * kN);
+    }
+
+    VU16 mins_along = sentinel_v, mins_vertical = sentinel_v, mins_back = sentinel_v, mins_fwd = sentinel_v;
+    VU16 best = hn::Set(d, kNoCost), best_index = hn::Zero(d), second_best = best;
+    VU16 along_new[kVectors], vertical_new[kVectors];
+    for (int j = 0; j < kVectors; ++j) {
+      const int k = j * kN;
+      VU16 cost;
+      if constexpr (kCensus) {
+        const VU16 lo = hn::Xor(hn::Set(d, census_lo), hn::LoadU(d, census_right_lo + census_base + k));
+        const VU16 hi = hn::Xor(hn::Set(d, census_hi), hn::LoadU(d, census_right_hi + census_base + k));
+        cost = hn::Add(hn::PopulationCount(lo), hn::PopulationCount(hi));
+      } else {
+        VU16 acc = hn::LoadU(d, columns[0] + k);
+        for (int c = 1; c < kWindow; ++c) acc = hn::Add(acc, hn::LoadU(d, columns[c] + k));
+        cost = hn::ShiftRightSame(acc, sad_shift);
+      }
+      if (border) {
+        // start + k + lane > x - min_d: no right pixel, largest cost.
+        const VU16 disparity_index = hn::Add(hn::Load(d, iota + k), hn::Set(d, static_cast<uint16_t>(start)));
+        const auto beyond = valid_max < 0 ? hn::FirstN(d, kN) : hn::Gt(disparity_index, max_valid_k);
+        cost = hn::IfThenElse(beyond, worst_cost, cost);
+      }
+      auto step = [&](VU16 same, VU16 neighbours, VU16 jump, VU16 min_prev) HWY_ATTR {
+        return hn::Add(cost, hn::Sub(hn::Min(hn::Min(same, hn::Add(neighbours, p1)), jump), min_prev));
+      };
+      VU16 along_same, along_neighbours;
+      if (shift_along == 0) {
+        const VU16 before = j > 0 ? along[j - 1] : sentinel_v;
+        const VU16 after = j + 1 < kVectors ? along[j + 1] : sentinel_v;
+        along_same = along[j];
+        along_neighbours = hn::Min(shiftInPrevious(before, along[j]), shiftInNext(along[j], after));
+      } else if constexpr (kVectors == 1) {
+        along_same = shiftedBand<0>(along[0], sentinel_v, shift_along, iota);
+        along_neighbours = hn::Min(shiftedBand<-1>(along[0], sentinel_v, shift_along, iota),
+                                   shiftedBand<1>(along[0], sentinel_v, shift_along, iota));
+      } else {
+        const uint16_t* a = along_buffer + shift_along + k;
+        along_same = hn::LoadU(d, a);
+        along_neighbours = hn::Min(hn::LoadU(d, a - 1), hn::LoadU(d, a + 1));
+      }
+      const VU16 l0 = step(along_same, along_neighbours, jump_along, along_min);
+      const VU16 l1 = step(hn::LoadU(d, vertical_in + k),
+                           hn::Min(hn::LoadU(d, vertical_in + k - 1), hn::LoadU(d, vertical_in + k + 1)),
+                           jump_vertical, min_vertical_v);
+      const VU16 l2 = step(hn::LoadU(d, back + k), hn::Min(hn::LoadU(d, back + k - 1), hn::LoadU(d, back + k + 1)),
+                           jump_back, min_back_v);
+      const VU16 l3 = step(hn::LoadU(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)),
+                           jump_fwd, min_fwd_v);
+      along_new[j] = l0;
+      vertical_new[j] = l1;  // stored after every vector has read the old values
+      hn::Store(l2, d, back_out + k);
+      hn::Store(l3, d, fwd_out + k);
+      mins_along = hn::Min(mins_along, l0);
+      mins_vertical = hn::Min(mins_vertical, l1);
+      mins_back = hn::Min(mins_back, l2);
+      mins_fwd = hn::Min(mins_fwd, l3);
+      VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
+      if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
+      hn::Store(sum, d, sums_out + k);
+      second_best = hn::Min(second_best, hn::Max(best, sum));
+      best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
+      best = hn::Min(best, sum);
+    }
+    for (int j = 0; j < kVectors; ++j) {
+      hn::Store(vertical_new[j], d, vertical + j * kN);
+      along[j] = along_new[j];
+    }
+    along_min = minLaneBroadcast(d, mins_along);
+    min_row_vertical[x + 1] = minLane(d, mins_vertical);
+    min_row_fwd[x + 1] = minLane(d, mins_fwd);
+    min_row_back_out[x + 1] = minLane(d, mins_back);
+    if (output == RowOutput::kWinner) {
+      const int N = kN;
+      hn::Store(best, d, b.batch_best + slot * N);
+      hn::Store(best_index, d, b.batch_index + slot * N);
+      hn::Store(second_best, d, b.batch_second + slot * N);
+      if (slot == kWinnerBatch - 1 || i == W - 1) {
+        WinnerBatch batch;
+        int xs[kWinnerBatch];
+        for (int j = 0; j <= slot; ++j) {
+          const int xj = dx > 0 ? i - slot + j : W - 1 - (i - slot + j);
+          xs[j] = xj;
+          uint16_t* sums = b.sums + j * Dp;
+          if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx, band_first[j], kB);
+          pickWinner(p, b, xj, sums, hn::Load(d, b.batch_best + j * N), hn::Load(d, b.batch_index + j * N),
+                     hn::Load(d, b.batch_second + j * N), batch, j, band_first[j], kB, kB);
+        }
+        finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
+      }
+    }
+  }
+  std::swap(b.path[1], b.path[3]);
+  std::swap(b.path_min[1], b.path_min[3]);
+  if (output == RowOutput::kWinner && p.lr_check) leftRightCheck(p, b, disparity, confidence);
+}
