@@ -26,7 +26,7 @@ struct MapConfig {
   int ray_stop_run = 16;              // a ray stops after this many voxels in a row already carved this
                                       // batch (integration/ray_batch.h); 0: march whole rays, voxel
                                       // sets identical to OctoMap's; in [0, 1000]
-  int publish_blocks = 256;           // blocks written per exclusive lock: readers wait at most for this
+  int publish_blocks = 64;            // blocks written per exclusive lock: readers wait at most for this
   int num_threads = 0;                // ray marching threads; 0 = OpenMP default. The map is the same
                                       // for any thread count (set union of the rays' voxels)
   double max_distance_m = 2.0;        // distance field: beyond this, distance() reports this, in (0, 100]

@@ -290,8 +290,10 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
   if (!rays.colors().empty()) {
     detail::ColorStore& colors = impl_->color;
     const size_t n = rays.colors().size();
-    for (size_t begin = 0; begin < n; begin += group * 64) {
-      const size_t end = std::min(n, begin + group * 64);
+    // 8 colours per block of a group: a colour costs about a tenth of a block's publishing (a
+    // hash probe), so a colour group holds the lock about as long as a block group.
+    for (size_t begin = 0; begin < n; begin += group * 8) {
+      const size_t end = std::min(n, begin + group * 8);
       std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
       for (size_t i = begin; i < end; ++i) {
         const EndpointColor& c = rays.colors()[i];
