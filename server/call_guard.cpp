@@ -1,7 +1,5 @@
 #include "server/call_guard.h"
 
-#include "server/thread_scheduling.h"
-
 namespace cenote::server {
 namespace {
 
@@ -46,13 +44,6 @@ MethodSummary MethodStats::summary(const std::string& method) const {
   s.p50_ms = latency_.percentile(0.5);
   s.p99_ms = latency_.percentile(0.99);
   return s;
-}
-
-void CallGuard::prepareThread() const {
-  thread_local bool prepared = false;  // gRPC's handler threads live as long as the server
-  if (prepared) return;
-  setThreadSlice(handler_slice_ms_);
-  prepared = true;
 }
 
 MethodStats& CallGuard::stats(const char* method) {

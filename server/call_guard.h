@@ -4,9 +4,7 @@
 //  - the deadline: a call whose deadline has already passed gets DEADLINE_EXCEEDED unrun;
 //  - errors: a StatusError keeps its code, a cenote::Error (bad input found by the map or the
 //    pipeline) becomes INVALID_ARGUMENT, anything else INTERNAL; the message always says what;
-//  - statistics: calls, errors and latency percentiles per method (Admin.GetStats);
-//  - scheduling: a handler thread asks for a short time slice the first time it runs a call
-//    (thread_scheduling.h), so queries that wake it preempt background work.
+//  - statistics: calls, errors and latency percentiles per method (Admin.GetStats).
 // Threads: run() from any number of handler threads at once.
 #pragma once
 
@@ -58,15 +56,12 @@ class MethodStats {
 
 class CallGuard {
  public:
-  // handler_slice_ms: the time slice handler threads ask for (0: the kernel's default).
-  explicit CallGuard(Authenticator auth, double handler_slice_ms = 0.0)
-      : auth_(std::move(auth)), handler_slice_ms_(handler_slice_ms) {}
+  explicit CallGuard(Authenticator auth) : auth_(std::move(auth)) {}
 
   // Runs `handler` (returning grpc::Status) for the call named `method` ("Query/GetVoxels").
   template <typename Handler>
   grpc::Status run(grpc::ServerContext* context, const char* method, Handler&& handler) {
     const auto start = std::chrono::steady_clock::now();
-    prepareThread();
     grpc::Status status = auth_.check(*context);
     if (status.ok() && context->deadline() < std::chrono::system_clock::now()) {
       status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, std::string(method) + ": deadline passed before the call ran");
@@ -92,10 +87,8 @@ class CallGuard {
 
  private:
   MethodStats& stats(const char* method);
-  void prepareThread() const;
 
   Authenticator auth_;
-  double handler_slice_ms_ = 0.0;
   mutable std::mutex mutex_;
   std::map<std::string, std::unique_ptr<MethodStats>> stats_;
 };

@@ -96,7 +96,7 @@ int serve(const Options& o) {
   const sigset_t signals = blockShutdownSignals();
   const ServerSettings settings = settingsFrom(o);
   const std::string token = settings.server.token_file.empty() ? "" : readTokenFile(settings.server.token_file, "token file");
-  CallGuard guard{Authenticator(token), settings.server.handler_slice_ms};
+  CallGuard guard{Authenticator(token)};
   MapHostOptions host_options;
   host_options.max_subscriber_lag = static_cast<size_t>(settings.server.max_subscriber_lag);
   host_options.writer_nice = settings.server.ingest_nice;

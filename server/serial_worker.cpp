@@ -1,6 +1,13 @@
 #include "server/serial_worker.h"
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 namespace cenote::server {
+
+void setThreadNice(int nice) {
+  if (nice != 0) setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), nice);
+}
 
 SerialWorker::SerialWorker(int nice) : thread_([this, nice] { loop(nice); }) {}
 

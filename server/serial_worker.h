@@ -14,9 +14,11 @@
 #include <mutex>
 #include <thread>
 
-#include "server/thread_scheduling.h"
-
 namespace cenote::server {
+
+// Lowers the calling thread's CPU priority (Linux nice values are per thread; 0 leaves it).
+// Threads it creates afterwards (an OpenMP team) inherit it.
+void setThreadNice(int nice);
 
 class SerialWorker {
  public:

@@ -18,8 +18,6 @@ std::vector<ConfigError> ServerConfig::validate() const {
                "must be in [1, 64]");
   errors.check(min_pollers >= 1 && min_pollers <= max_pollers, "min_pollers", min_pollers, "must be in [1, max_pollers]");
   errors.check(max_pollers >= 1 && max_pollers <= 1024, "max_pollers", max_pollers, "must be in [1, 1024]");
-  errors.check(handler_slice_ms == 0.0 || (handler_slice_ms >= 0.1 && handler_slice_ms <= 100.0), "handler_slice_ms",
-               handler_slice_ms, "must be 0 (the kernel's default) or in [0.1, 100]");
   errors.check(ingest_nice >= 0 && ingest_nice <= 19, "ingest_nice", ingest_nice, "must be in [0, 19]");
   errors.check(derived_nice >= 0 && derived_nice <= 19, "derived_nice", derived_nice, "must be in [0, 19]");
   errors.check(derived_period_s >= 0.0 && derived_period_s <= 3600.0, "derived_period_s", derived_period_s,
@@ -53,7 +51,6 @@ void ServerConfig::read(YamlSection& section) {
   section.read("ingest_nice", ingest_nice);
   section.read("derived_nice", derived_nice);
   section.read("derived_period_s", derived_period_s);
-  section.read("handler_slice_ms", handler_slice_ms);
   section.read("derived_follow_s", derived_follow_s);
   YamlSection l = section.section("limits");
   l.read("max_message_bytes", limits.max_message_bytes);

@@ -43,7 +43,6 @@ struct ServerConfig {
   int completion_queues = 1;                // gRPC's sync server: completion queues,
   int min_pollers = 2;                      //   and threads polling each (handlers run on them;
   int max_pollers = 4;                      //   more are made while calls wait)
-  double handler_slice_ms = 0.0;            // time slice of the gRPC handler threads (0: kernel's)
   int ingest_nice = 5;                      // CPU priority of integration below the query handlers
   int derived_nice = 10;                    // ... of the distance field and frontier updates
   double derived_period_s = 1.0;            // they follow the map at least this often (and at once
