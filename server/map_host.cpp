@@ -106,13 +106,16 @@ void MapHost::derivedLoop() {
       const Clock::time_point now = Clock::now();
       return waiting_queries_ > 0 || (followingQueries(now) && now >= last_update + period);
     };
-    if (derived_changes_ < published_changes_ && followingQueries(Clock::now())) {
-      derived_cv_.wait_until(lock, last_update + period, due);
-    } else {
-      derived_cv_.wait(lock, due);
+    // The kind of wait is chosen again at every wake-up: a change that arrives while following
+    // must be picked up when its period ends, not at the next change or query.
+    while (!due()) {
+      if (derived_changes_ < published_changes_ && followingQueries(Clock::now())) {
+        derived_cv_.wait_until(lock, last_update + period);
+      } else {
+        derived_cv_.wait(lock);
+      }
     }
     if (stop_) return;
-    if (!due()) continue;
     last_update = Clock::now();
     mapping::MapDelta delta;
     std::swap(delta, pending_);

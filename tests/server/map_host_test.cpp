@@ -52,7 +52,9 @@ TEST(MapHostDerived, NothingIsDerivedUntilTheFirstDistanceQueryWhichSeesEveryCha
 }
 
 TEST(MapHostDerived, WhileQueriesComeTheDerivedStructuresFollowTheMapWithoutBeingAsked) {
-  auto host = makeHost(0.02, 10.0);
+  // A period longer than an update: the change below arrives within it, so it is the end of the
+  // period (not the change itself) that must wake the derived thread.
+  auto host = makeHost(0.3, 10.0);
   host->integrate(wallBatch(0.0));
   ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
   ASSERT_EQ(host->derivedUpdates(), 1u);
