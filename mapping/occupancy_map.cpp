@@ -18,11 +18,6 @@ namespace cenote::mapping {
 
 namespace detail {
 
-using detail::ColorStore;
-using detail::LeafIndex;
-using detail::LeafRef;
-using detail::LogOddsTree;
-
 struct AccessorImpl {
   explicit AccessorImpl(const MapImpl& impl) : leaves(&impl.leaf_index), color(&impl.color) {}
   // The leaf holding ijk (nullptr: none); the last one is cached, as OpenVDB's accessors do
@@ -268,8 +263,12 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
     for (size_t b = begin; b < end; ++b) {
       const BlockIndex& block = rays.block(b);
       const BlockMasks& masks = rays.masks(b);
-      auto* leaf = acc.touchLeaf(coordOf(block * kBlockSide));
-      impl_->indexLeaf(*leaf);
+      const Coord origin = coordOf(block * kBlockSide);
+      auto* leaf = acc.probeLeaf(origin);
+      if (leaf == nullptr) {  // a new leaf: existing ones are indexed already and never move
+        leaf = acc.touchLeaf(origin);
+        impl_->indexLeaf(*leaf);
+      }
       // Straight on the leaf's buffer and value mask (one 64-bit word = 64 voxels of one x slice).
       float* values = leaf->buffer().data();
       auto& known_mask = leaf->getValueMask();

@@ -15,6 +15,12 @@ inline uint64_t packIndex(const Eigen::Vector3i& v) {
   return (static_cast<uint64_t>(v.x() + kBias) << 42) | (static_cast<uint64_t>(v.y() + kBias) << 21) |
          static_cast<uint64_t>(v.z() + kBias);
 }
+// Whether packIndex() can hold v: every coordinate within [-2^20, 2^20).
+inline bool inPackRange(const Eigen::Vector3i& v) {
+  constexpr uint32_t kBias = 1u << 20;
+  return ((static_cast<uint32_t>(v.x()) + kBias) | (static_cast<uint32_t>(v.y()) + kBias) |
+          (static_cast<uint32_t>(v.z()) + kBias)) >> 21 == 0;
+}
 inline Eigen::Vector3i unpackIndex(uint64_t key) {
   constexpr int64_t kBias = 1 << 20;
   constexpr uint64_t kMask = (1u << 21) - 1;

@@ -57,26 +57,20 @@ struct BlockColors {
 
 class ColorStore {
  public:
-  static bool inRange(const BlockIndex& b) {
-    constexpr uint32_t kBias = 1u << 20;
-    return ((static_cast<uint32_t>(b.x()) + kBias) | (static_cast<uint32_t>(b.y()) + kBias) |
-            (static_cast<uint32_t>(b.z()) + kBias)) >> 21 == 0;
-  }
-
   bool get(const VoxelIndex& ijk, int32_t& packed) const {
     const BlockIndex block = blockOf(ijk);
-    if (!inRange(block)) return false;
+    if (!inPackRange(block)) return false;
     const uint32_t slot = table_.find(packIndex(block));
     return slot != BlockTable::kNone && blocks_[slot].get(offsetInBlock(ijk), packed);
   }
   // The colour of a voxel, inserted as 0 when absent (inserted set to true); valid until the next
-  // insertion. Precondition: inRange(blockOf(ijk)).
+  // insertion. Precondition: inPackRange(blockOf(ijk)).
   int32_t& at(const VoxelIndex& ijk, bool& inserted) {
     const uint32_t slot = table_.findOrInsert(packIndex(blockOf(ijk)), inserted);
     if (inserted) blocks_.emplace_back();
     return blocks_[slot].at(offsetInBlock(ijk), inserted);
   }
-  // Precondition: inRange(blockOf(ijk)).
+  // Precondition: inPackRange(blockOf(ijk)).
   void set(const VoxelIndex& ijk, int32_t packed) {
     bool inserted;
     at(ijk, inserted) = packed;

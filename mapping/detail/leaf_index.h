@@ -38,15 +38,9 @@ class LeafIndex {
  public:
   LeafIndex() { rehash(kMinCapacity); }
 
-  static bool inRange(const BlockIndex& b) {
-    constexpr uint32_t kBias = 1u << 20;
-    return ((static_cast<uint32_t>(b.x()) + kBias) | (static_cast<uint32_t>(b.y()) + kBias) |
-            (static_cast<uint32_t>(b.z()) + kBias)) >> 21 == 0;
-  }
-
   // The leaf of a block; nullptr when the tree has none there.
   const LeafRef* find(const BlockIndex& b) const {
-    if (!inRange(b)) return nullptr;
+    if (!inPackRange(b)) return nullptr;
     const uint64_t key = packIndex(b);
     for (size_t i = bucket(key);; i = (i + 1) & mask_) {
       const Slot& slot = slots_[i];
@@ -56,10 +50,10 @@ class LeafIndex {
   }
   // Brings the block's first table slot into cache.
   void prefetch(const BlockIndex& b) const {
-    if (inRange(b)) __builtin_prefetch(&slots_[bucket(packIndex(b))]);
+    if (inPackRange(b)) __builtin_prefetch(&slots_[bucket(packIndex(b))]);
   }
 
-  // Adds or replaces a block's leaf. Precondition: inRange(b).
+  // Adds or replaces a block's leaf. Precondition: inPackRange(b).
   void insert(const BlockIndex& b, const LeafRef& ref) {
     const uint64_t key = packIndex(b);
     for (size_t i = bucket(key);; i = (i + 1) & mask_) {

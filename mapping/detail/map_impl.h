@@ -46,7 +46,7 @@ struct MapImpl {
   RayBatch scratch;
   ProjectiveBatch projective_scratch;
 
-  // Adds (or refreshes) a leaf of log_odds in leaf_index. Precondition: LeafIndex::inRange(block).
+  // Adds (or refreshes) a leaf of log_odds in leaf_index. Precondition: inPackRange(block).
   void indexLeaf(LogOddsTree::LeafNodeType& leaf) {
     const openvdb::Coord o = leaf.origin();
     leaf_index.insert(BlockIndex(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift),

@@ -73,7 +73,7 @@ void fromFileGrids(openvdb::FloatGrid& log_odds, openvdb::Int32Grid& color, deta
   log_odds.tree().voxelizeActiveTiles(false);
   for (auto leaf = log_odds.tree().cbeginLeaf(); leaf; ++leaf) {
     const Coord o = leaf->origin();
-    if (!detail::LeafIndex::inRange(BlockIndex(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift))) {
+    if (!detail::inPackRange(BlockIndex(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift))) {
       throw Error(path + ": voxel (" + std::to_string(o.x()) + ", " + std::to_string(o.y()) + ", " +
                   std::to_string(o.z()) + ") lies beyond the 2^23 voxels per axis a map holds");
     }
@@ -85,7 +85,7 @@ void fromFileGrids(openvdb::FloatGrid& log_odds, openvdb::Int32Grid& color, deta
     it.getBoundingBox(box);
     for (auto xyz = box.begin(); xyz; ++xyz) {
       const VoxelIndex ijk((*xyz).x(), (*xyz).y(), (*xyz).z());
-      if (!detail::ColorStore::inRange(blockOf(ijk))) {
+      if (!detail::inPackRange(blockOf(ijk))) {
         throw Error(path + ": coloured voxel (" + std::to_string(ijk.x()) + ", " + std::to_string(ijk.y()) + ", " +
                     std::to_string(ijk.z()) + ") lies beyond the 2^23 voxels per axis a map holds");
       }
