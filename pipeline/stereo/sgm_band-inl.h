@@ -242,17 +242,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       hn::Store(best_index, d, b.batch_index + slot * N);
       hn::Store(second_best, d, b.batch_second + slot * N);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
-        WinnerBatch batch;
-        int xs[kWinnerBatch];
-        for (int j = 0; j <= slot; ++j) {
-          const int xj = dx > 0 ? i - slot + j : W - 1 - (i - slot + j);
-          xs[j] = xj;
-          uint16_t* sums = b.sums + j * Dp;
-          if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx, band_first[j], kB);
-          pickWinner(p, b, xj, sums, hn::Load(d, b.batch_best + j * N), hn::Load(d, b.batch_index + j * N),
-                     hn::Load(d, b.batch_second + j * N), batch, j, band_first[j], kB, kB);
-        }
-        finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
+        flushWinnerBatch(p, b, i, slot, dx, N, band_first, kB, kB, disparity, confidence);
       }
     }
   }

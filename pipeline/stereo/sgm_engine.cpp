@@ -546,6 +546,28 @@ void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const 
 }
 
 // Marks pixels whose right-image winner disagrees by more than lr_max_diff.
+// Winners of the pixels whose best / index / second-best vectors are stored in batch slots
+// 0..slot (slot being row position i of the row swept along dx; N lanes per stored vector). Pixel
+// j's sums are at b.sums + j * b.padded and hold disparities [first[j], first[j] + D) with stride
+// Dp (first null: every pixel from 0).
+HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int i, int slot, int dx, int N,
+                                 const int32_t* first, int D, int Dp, float* disparity, float* confidence) {
+  const DU16 d;
+  WinnerBatch batch;
+  int xs[kWinnerBatch];
+  for (int j = 0; j <= slot; ++j) {
+    const int xj = dx > 0 ? i - slot + j : p.width - 1 - (i - slot + j);
+    xs[j] = xj;
+    uint16_t* sums = b.sums + j * b.padded;
+    const int first_j = first != nullptr ? first[j] : 0;
+    // The right image's minimum first: pickWinner() masks lanes of the sums.
+    if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx, first_j, Dp);
+    pickWinner(p, b, xj, sums, hn::Load(d, b.batch_best + j * N), hn::Load(d, b.batch_index + j * N),
+               hn::Load(d, b.batch_second + j * N), batch, j, first_j, D, Dp);
+  }
+  finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
+}
+
 void leftRightCheck(const SgmParams& p, const StripBuffers& b, float* disparity, float* confidence) {
   for (int x = 0; x < p.width; ++x) {
     const int k = b.winner[x];
@@ -739,18 +761,7 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       hn::Store(best_index, d, b.batch_index + slot * N);
       hn::Store(second_best, d, b.batch_second + slot * N);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
-        WinnerBatch batch;
-        int xs[kWinnerBatch];
-        for (int j = 0; j <= slot; ++j) {
-          const int xj = dx > 0 ? i - slot + j : W - 1 - (i - slot + j);
-          xs[j] = xj;
-          uint16_t* sums = b.sums + j * Dp;
-          // The right image's minimum first: pickWinner() masks lanes of the sums.
-          if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx, 0, Dp);
-          pickWinner(p, b, xj, sums, hn::Load(d, b.batch_best + j * N), hn::Load(d, b.batch_index + j * N),
-                     hn::Load(d, b.batch_second + j * N), batch, j, 0, D, Dp);
-        }
-        finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
+        flushWinnerBatch(p, b, i, slot, dx, N, nullptr, D, Dp, disparity, confidence);
       }
     }
   }
