@@ -226,11 +226,7 @@ int main(int argc, char** argv) {
   size_t projective_free = 0;
   {
     const std::vector<DepthFrame> depth_frames = makeDepthFrames(view);
-    MapConfig config;
-    config.voxel_size_m = voxel_m;
-    config.max_range_m = max_range_m;
-    config.num_threads = threads;
-    OccupancyMap projected(config);
+    OccupancyMap projected(live_config);
     projected.integrateDepth(depth_frames[0]);  // warm-up, as above
     projected.reset();
     const auto t0 = Clock::now();

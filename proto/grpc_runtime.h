@@ -1,5 +1,7 @@
 // grpc_runtime.h: process-wide settings of the gRPC runtime that cenote's server and C++ clients
-// share. Call configureGrpcRuntime() before the first server or channel is created.
+// share. cenote-server calls configureGrpcRuntime() first thing, MapClient on construction; it
+// takes effect for every lock taken afterwards, so calling it late (after a channel of the
+// caller's own exists) is harmless.
 // Threads: safe from any thread, any number of times.
 #pragma once
 
