@@ -14,6 +14,7 @@
 
 #include <CLI/CLI.hpp>
 #include <csignal>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -26,6 +27,7 @@
 #include "pipeline/dataset/stereo_dataset.h"
 #include "proto/grpc_runtime.h"
 #include "server/admin_service.h"
+#include "server/cpu_scheduling.h"
 #include "server/ingest_service.h"
 #include "server/query_service.h"
 #include "server/updates_service.h"
@@ -97,13 +99,11 @@ int serve(const Options& o) {
   const ServerSettings settings = settingsFrom(o);
   const std::string token = settings.server.token_file.empty() ? "" : readTokenFile(settings.server.token_file, "token file");
   CallGuard guard{Authenticator(token)};
-  MapHostOptions host_options;
-  host_options.max_subscriber_lag = static_cast<size_t>(settings.server.max_subscriber_lag);
-  host_options.writer_nice = settings.server.ingest_nice;
-  host_options.derived_nice = settings.server.derived_nice;
-  host_options.derived_period_s = settings.server.derived_period_s;
-  host_options.derived_follow_s = settings.server.derived_follow_s;
-  MapHost host(initialMap(o, settings), host_options);
+  if (!setProcessTimeSlice(settings.server.time_slice_ms)) {
+    std::fprintf(stderr, "cenote-server: the kernel refused server.time_slice_ms %g; running with its default\n",
+                 settings.server.time_slice_ms);
+  }
+  MapHost host(initialMap(o, settings), settings.server.host);
   Snapshotter snapshots(host, settings.server.snapshot_dir, settings.server.frame_id, settings.server.snapshot_period_s);
   IngestService ingest(host, guard, settings, rectifierFrom(settings.server.calibration));
   QueryService query(host, guard, settings.server, settings.server.frame_id);

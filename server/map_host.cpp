@@ -1,5 +1,7 @@
 #include "server/map_host.h"
 
+#include "server/cpu_scheduling.h"
+
 namespace cenote::server {
 
 MapHost::MapHost(std::unique_ptr<mapping::OccupancyMap> map, const MapHostOptions& options)
@@ -8,7 +10,7 @@ MapHost::MapHost(std::unique_ptr<mapping::OccupancyMap> map, const MapHostOption
       frontiers_(std::make_unique<mapping::FrontierMap>(*map_)),
       feed_(options.max_subscriber_lag),
       options_(options),
-      writer_(options.writer_nice) {
+      writer_(options.ingest_nice) {
   // A loaded map: derive everything once before serving (stats() walks the grid: ask once).
   const mapping::MapStats loaded = map_->stats();
   if (loaded.occupied + loaded.free > 0) {

@@ -29,17 +29,10 @@
 #include "mapping/frontier/frontier_map.h"
 #include "mapping/occupancy_map.h"
 #include "server/change_feed.h"
+#include "server/map_host_options.h"
 #include "server/serial_worker.h"
 
 namespace cenote::server {
-
-struct MapHostOptions {
-  size_t max_subscriber_lag = 64;  // ChangeFeed
-  int writer_nice = 5;             // CPU priority of integration (0: as the handlers; 19: lowest)
-  int derived_nice = 10;           // ... of the distance field and frontier updates
-  double derived_period_s = 1.0;   // derived structures follow the map at least this often
-  double derived_follow_s = 30.0;  // ... while a distance / frontier query came this recently
-};
 
 class MapHost {
  public:

@@ -1,13 +1,8 @@
 #include "server/serial_worker.h"
 
-#include <sys/resource.h>
-#include <unistd.h>
+#include "server/cpu_scheduling.h"
 
 namespace cenote::server {
-
-void setThreadNice(int nice) {
-  if (nice != 0) setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), nice);
-}
 
 SerialWorker::SerialWorker(int nice) : thread_([this, nice] { loop(nice); }) {}
 

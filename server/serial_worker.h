@@ -16,10 +16,6 @@
 
 namespace cenote::server {
 
-// Lowers the calling thread's CPU priority (Linux nice values are per thread; 0 leaves it).
-// Threads it creates afterwards (an OpenMP team) inherit it.
-void setThreadNice(int nice);
-
 class SerialWorker {
  public:
   explicit SerialWorker(int nice);

@@ -13,16 +13,19 @@ std::vector<ConfigError> ServerConfig::validate() const {
   errors.check(pose_history_s > 0.0, "pose_history_s", pose_history_s, "must be > 0");
   errors.check(max_frame_streams >= 1 && max_frame_streams <= 64, "max_frame_streams", max_frame_streams,
                "must be in [1, 64]");
-  errors.check(max_subscriber_lag >= 1, "max_subscriber_lag", max_subscriber_lag, "must be >= 1");
+  errors.check(host.max_subscriber_lag >= 1, "max_subscriber_lag", host.max_subscriber_lag, "must be >= 1");
   errors.check(completion_queues >= 1 && completion_queues <= 64, "completion_queues", completion_queues,
                "must be in [1, 64]");
   errors.check(min_pollers >= 1 && min_pollers <= max_pollers, "min_pollers", min_pollers, "must be in [1, max_pollers]");
   errors.check(max_pollers >= 1 && max_pollers <= 1024, "max_pollers", max_pollers, "must be in [1, 1024]");
-  errors.check(ingest_nice >= 0 && ingest_nice <= 19, "ingest_nice", ingest_nice, "must be in [0, 19]");
-  errors.check(derived_nice >= 0 && derived_nice <= 19, "derived_nice", derived_nice, "must be in [0, 19]");
-  errors.check(derived_period_s >= 0.0 && derived_period_s <= 3600.0, "derived_period_s", derived_period_s,
-               "must be in [0, 3600]");
-  errors.check(derived_follow_s >= 0.0, "derived_follow_s", derived_follow_s, "must be >= 0");
+  errors.check(time_slice_ms == 0.0 || (time_slice_ms >= 0.1 && time_slice_ms <= 100.0), "time_slice_ms",
+               time_slice_ms, "must be 0 (kernel default) or in [0.1, 100]");
+  errors.check(host.ingest_nice >= 0 && host.ingest_nice <= 19, "ingest_nice", host.ingest_nice, "must be in [0, 19]");
+  errors.check(host.derived_nice >= 0 && host.derived_nice <= 19, "derived_nice", host.derived_nice,
+               "must be in [0, 19]");
+  errors.check(host.derived_period_s >= 0.0 && host.derived_period_s <= 3600.0, "derived_period_s",
+               host.derived_period_s, "must be in [0, 3600]");
+  errors.check(host.derived_follow_s >= 0.0, "derived_follow_s", host.derived_follow_s, "must be >= 0");
   errors.check(limits.max_message_bytes >= 1 << 20 && limits.max_message_bytes <= (int64_t{1} << 31) - 1,
                "limits.max_message_bytes", limits.max_message_bytes, "must be in [1 MiB, 2 GiB)");
   errors.check(limits.max_batch >= 1, "limits.max_batch", limits.max_batch, "must be >= 1");
@@ -44,14 +47,15 @@ void ServerConfig::read(YamlSection& section) {
   section.read("pose_wait_s", pose_wait_s);
   section.read("pose_history_s", pose_history_s);
   section.read("max_frame_streams", max_frame_streams);
-  section.read("max_subscriber_lag", max_subscriber_lag);
+  section.read("max_subscriber_lag", host.max_subscriber_lag);
   section.read("completion_queues", completion_queues);
   section.read("min_pollers", min_pollers);
   section.read("max_pollers", max_pollers);
-  section.read("ingest_nice", ingest_nice);
-  section.read("derived_nice", derived_nice);
-  section.read("derived_period_s", derived_period_s);
-  section.read("derived_follow_s", derived_follow_s);
+  section.read("time_slice_ms", time_slice_ms);
+  section.read("ingest_nice", host.ingest_nice);
+  section.read("derived_nice", host.derived_nice);
+  section.read("derived_period_s", host.derived_period_s);
+  section.read("derived_follow_s", host.derived_follow_s);
   YamlSection l = section.section("limits");
   l.read("max_message_bytes", limits.max_message_bytes);
   l.read("max_batch", limits.max_batch);

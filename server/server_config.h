@@ -10,6 +10,7 @@
 
 #include "common/config_error.h"
 #include "mapping/map_config.h"
+#include "server/map_host_options.h"
 #include "pipeline/runner/run_config.h"
 
 namespace cenote {
@@ -39,16 +40,13 @@ struct ServerConfig {
   double pose_wait_s = 1.0;                 // a frame without pose waits this long for a later pose
   double pose_history_s = 60.0;             // poses older than this (before the newest) are dropped
   int max_frame_streams = 2;                // concurrent StreamFrames calls (each runs a pipeline)
-  int max_subscriber_lag = 64;              // changes queued per subscriber before it is resynced
   int completion_queues = 1;                // gRPC's sync server: completion queues,
   int min_pollers = 2;                      //   and threads polling each (handlers run on them;
   int max_pollers = 4;                      //   more are made while calls wait)
-  int ingest_nice = 5;                      // CPU priority of integration below the query handlers
-  int derived_nice = 10;                    // ... of the distance field and frontier updates
-  double derived_period_s = 1.0;            // they follow the map at least this often (and at once
-                                            // when a distance / frontier query waits); 0: every change
-  double derived_follow_s = 30.0;           // ... while such a query came in the last this many
-                                            // seconds; otherwise they catch up on the next one
+  double time_slice_ms = 0.1;               // CPU time slice of every server thread (cpu_scheduling.h);
+                                            // 0: the kernel's default
+  MapHostOptions host;                      // keys max_subscriber_lag, ingest_nice, derived_nice,
+                                            // derived_period_s, derived_follow_s
   RequestLimits limits;
 
   std::vector<ConfigError> validate() const;

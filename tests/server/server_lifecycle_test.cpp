@@ -106,11 +106,12 @@ TEST(ServerLifecycle, BadStartupInputIsRefusedWithAMessageNamingIt) {
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("server.listne"), std::string::npos) << text;
 
-  std::ofstream(dir / "range.yaml") << "map:\n  voxel_size_m: -1\nserver:\n  max_frame_streams: 0\n";
+  std::ofstream(dir / "range.yaml") << "map:\n  voxel_size_m: -1\nserver:\n  max_frame_streams: 0\n  time_slice_ms: 0.05\n";
   std::tie(status, text) = runToExit("--config " + (dir / "range.yaml").string());
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("map.voxel_size_m"), std::string::npos) << text;
   EXPECT_NE(text.find("server.max_frame_streams"), std::string::npos) << text;
+  EXPECT_NE(text.find("server.time_slice_ms"), std::string::npos) << text;
 
   std::tie(status, text) = runToExit("--listen 127.0.0.1:0 --load " + (dir / "missing.vdb").string());
   EXPECT_EQ(status, 1);
