@@ -300,6 +300,9 @@ class MapClient:
         msg.orientation.x, msg.orientation.y, msg.orientation.z, msg.orientation.w = (float(v) for v in q)
 
     def _stream(self, method, stub_method, requests, ack_of, timeout_s):
+        # No default deadline, unlike unary calls: a stream lasts as long as its input (a whole
+        # dive's frames), which the client cannot know; the caller bounds it with timeout_s.
+        # A server that goes away closes the connection, which ends the stream with UNAVAILABLE.
         try:
             replies = stub_method(requests, timeout=timeout_s, metadata=self._metadata)
             return [ack_of(r) for r in replies]
