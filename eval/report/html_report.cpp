@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/text_file.h"
 #include "eval/report/metrics_json.h"
 #include "pipeline/image/image_io.h"
 
@@ -36,13 +37,6 @@ std::string escape(const std::string& text) {
     }
   }
   return out;
-}
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 std::string imgTag(const std::string& png_bytes, const std::string& alt) {
@@ -91,7 +85,7 @@ std::string timingSection(const fs::path& dir) {
   if (!fs::exists(path)) return html + missing("No report.json in this folder (written by cenote run).");
   Json j;
   try {
-    j = Json::parse(readFile(path));
+    j = Json::parse(readTextFile(path.string(), "report"));
   } catch (const std::exception& e) {
     return html + missing(path.string() + ": not valid JSON (" + e.what() + ")");
   }
@@ -161,7 +155,7 @@ std::string metricsSection(const fs::path& dir) {
   for (const fs::path& f : files) {
     Json j;
     try {
-      j = Json::parse(readFile(f));
+      j = Json::parse(readTextFile(f.string(), "metrics file"));
     } catch (const std::exception& e) {
       html += missing(f.string() + ": not valid JSON, skipped");
       continue;
@@ -186,7 +180,7 @@ std::string plotsSection(const fs::path& dir) {
   if (pngs.empty()) return html + missing("No plots (cenote eval ... --plot DIR/plots) in this folder.");
   html += "<div class=\"plots\">\n";
   for (const fs::path& p : pngs) {
-    html += "<figure>" + imgTag(readFile(p), p.filename().string()) + "<figcaption>" +
+    html += "<figure>" + imgTag(readTextFile(p.string(), "plot"), p.filename().string()) + "<figcaption>" +
             escape(fs::relative(p, dir).string()) + "</figcaption></figure>\n";
   }
   return html + "</div>\n";

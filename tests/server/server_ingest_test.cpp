@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/text_file.h"
 #include "mapping/io/map_io.h"
 #include "pipeline/dataset/stereo_dataset.h"
 #include "pipeline/runner/runner.h"
@@ -21,13 +22,6 @@ namespace {
 namespace fs = std::filesystem;
 using client::test::ServerProcess;
 using client::test::ServerProcessOptions;
-
-std::string readBytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
 
 void run(const std::string& command) {
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
@@ -49,8 +43,8 @@ v1::StereoFrame diveFrame(const std::string& dir, const pipeline::StereoDataset&
   v1::StereoFrame frame;
   frame.set_timestamp_s(dataset.timestamp(i));
   const std::string name = dataset.frameName(i) + ".png";
-  frame.mutable_left()->set_encoded(readBytes(fs::path(dir) / "dive/mav0/cam0/data" / name));
-  frame.mutable_right()->set_encoded(readBytes(fs::path(dir) / "dive/mav0/cam1/data" / name));
+  frame.mutable_left()->set_encoded(readTextFile((fs::path(dir) / "dive/mav0/cam0/data" / name).string(), "left image"));
+  frame.mutable_right()->set_encoded(readTextFile((fs::path(dir) / "dive/mav0/cam1/data" / name).string(), "right image"));
   if (with_pose) toWire(Eigen::Isometry3d::Identity(), frame.mutable_pose());
   return frame;
 }

@@ -10,18 +10,12 @@
 #include <sstream>
 
 #include "clients/cpp/map_client.h"
+#include "common/text_file.h"
 #include "tests/clients/cpp/server_process.h"
 #include "tests/clients/cpp/wall_scene.h"
 
 namespace cenote::client::test {
 namespace {
-
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 class MapClientTlsTest : public ::testing::Test {
  protected:
@@ -40,8 +34,8 @@ class MapClientTlsTest : public ::testing::Test {
   void TearDown() override {
     if (!dir_.empty()) std::filesystem::remove_all(dir_);
   }
-  std::string pem(const std::string& name) const { return readFile(dir_ + "/" + name + ".pem"); }
-  std::string key(const std::string& name) const { return readFile(dir_ + "/" + name + ".key"); }
+  std::string pem(const std::string& name) const { return readTextFile(dir_ + "/" + name + ".pem", "test certificate"); }
+  std::string key(const std::string& name) const { return readTextFile(dir_ + "/" + name + ".key", "test key"); }
 
   // A call that must fail before reaching the service.
   static void expectUnavailable(MapClient& map, const char* what) {
