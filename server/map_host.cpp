@@ -21,6 +21,9 @@ MapHost::MapHost(std::unique_ptr<mapping::OccupancyMap> map, const MapHostOption
 }
 
 MapHost::~MapHost() {
+  // Changes still queued reach the map, the feed and the derived structures while they all
+  // exist; then the derived thread stops and subscribers see the feed end.
+  writer_.finish();
   {
     std::lock_guard<std::mutex> lock(derived_mutex_);
     stop_ = true;

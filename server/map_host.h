@@ -85,7 +85,7 @@ class MapHost {
   mutable std::optional<Clock::time_point> last_derived_query_;  // the latest such query's arrival
   bool stop_ = false;
   std::thread derived_thread_;
-  SerialWorker writer_;  // last: its queued changes finish before the rest goes
+  SerialWorker writer_;  // ~MapHost finishes its queued changes first
 };
 
 }  // namespace cenote::server

@@ -6,13 +6,15 @@ namespace cenote::server {
 
 SerialWorker::SerialWorker(int nice) : thread_([this, nice] { loop(nice); }) {}
 
-SerialWorker::~SerialWorker() {
+SerialWorker::~SerialWorker() { finish(); }
+
+void SerialWorker::finish() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stop_ = true;
   }
   ready_.notify_all();
-  thread_.join();
+  if (thread_.joinable()) thread_.join();
 }
 
 void SerialWorker::submit(std::function<void()> job) {

@@ -19,7 +19,11 @@ namespace cenote::server {
 class SerialWorker {
  public:
   explicit SerialWorker(int nice);
-  ~SerialWorker();  // finishes the queued jobs, then joins
+  ~SerialWorker();  // finish()
+
+  // Runs the jobs queued so far, then ends the thread; run() must not be called after it.
+  // Idempotent.
+  void finish();
   SerialWorker(const SerialWorker&) = delete;
   SerialWorker& operator=(const SerialWorker&) = delete;
 
