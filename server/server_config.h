@@ -42,7 +42,7 @@ struct ServerConfig {
   int max_frame_streams = 2;                // concurrent StreamFrames calls (each runs a pipeline)
   int completion_queues = 1;                // gRPC's sync server: completion queues,
   int min_pollers = 2;                      //   and threads polling each (handlers run on them;
-  int max_pollers = 4;                      //   more are made while calls wait)
+  int max_pollers = 16;                     //   more are made while calls wait; see server/main.cpp)
   double time_slice_ms = 0.1;               // CPU time slice of every server thread (cpu_scheduling.h);
                                             // 0: the kernel's default
   MapHostOptions host;                      // keys max_subscriber_lag, ingest_nice, derived_nice,
