@@ -39,9 +39,9 @@ class LeafIndex {
   LeafIndex() { rehash(kMinCapacity); }
 
   // The leaf of a block; nullptr when the tree has none there.
-  const LeafRef* find(const BlockIndex& b) const {
-    if (!inPackRange(b)) return nullptr;
-    const uint64_t key = packIndex(b);
+  const LeafRef* find(const BlockIndex& b) const { return inPackRange(b) ? find(packIndex(b)) : nullptr; }
+  // The same by packIndex(b).
+  const LeafRef* find(uint64_t key) const {
     for (size_t i = bucket(key);; i = (i + 1) & mask_) {
       const Slot& slot = slots_[i];
       if (slot.key == key) return &slot.ref;
