@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
-#include <tuple>
 
 #include "common/error.h"
 #include "mapping/detail/map_impl.h"
@@ -110,12 +109,27 @@ VoxelBox boxOfBits(const BlockIndex& block, const std::array<uint64_t, 8>& bits)
 // 128^3 voxels) visits its leaves, which knownBlocks() kept before the map's tree got smaller
 // internal nodes: node origins lexicographically, then children x-major inside each node. Keeps
 // every consumer's block order (and so its results, e.g. frontier cluster numbering) unchanged.
-bool floatTreeOrder(const BlockIndex& a, const BlockIndex& b) {
-  auto key = [](const BlockIndex& v) {
-    return std::make_tuple(v.x() >> 9, v.y() >> 9, v.z() >> 9, (v.x() >> 4) & 31, (v.y() >> 4) & 31, (v.z() >> 4) & 31,
-                           v.x() & 15, v.y() & 15, v.z() & 15);
-  };
-  return key(a) < key(b);
+// As one integer per block, sorted once (a block lies within +-2^20 on each axis, so x >> 9 within
+// +-2^11): the top-level node's x, y, z (12 bits each, biased), then the 16^3 node's child index
+// (5 bits per axis), then the leaf's (4 bits per axis); 63 bits.
+uint64_t floatTreeOrderKey(const BlockIndex& b) {
+  constexpr int64_t kBias = 1 << 11;
+  uint64_t key = 0;
+  for (int k = 0; k < 3; ++k) key = (key << 12) | static_cast<uint64_t>((b[k] >> 9) + kBias);
+  for (int k = 0; k < 3; ++k) key = (key << 5) | static_cast<uint64_t>((b[k] >> 4) & 31);
+  for (int k = 0; k < 3; ++k) key = (key << 4) | static_cast<uint64_t>(b[k] & 15);
+  return key;
+}
+BlockIndex blockOfFloatTreeOrderKey(uint64_t key) {
+  constexpr int64_t kBias = 1 << 11;
+  BlockIndex b;
+  for (int k = 0; k < 3; ++k) {
+    const int64_t top = static_cast<int64_t>((key >> (51 - 12 * k)) & 4095) - kBias;
+    const int64_t node = static_cast<int64_t>((key >> (22 - 5 * k)) & 31);
+    const int64_t leaf = static_cast<int64_t>((key >> (8 - 4 * k)) & 15);
+    b[k] = static_cast<int>(top * 512 + node * 16 + leaf);
+  }
+  return b;
 }
 
 void finishDelta(MapDelta& delta, double s) {
@@ -494,15 +508,17 @@ bool OccupancyMap::ConstAccessor::color(const VoxelIndex& ijk, std::array<uint8_
 }
 
 std::vector<BlockIndex> OccupancyMap::ConstAccessor::knownBlocks() const {
-  std::vector<BlockIndex> blocks;
   const auto& tree = map_->impl_->log_odds->constTree();
-  blocks.reserve(tree.leafCount());
+  std::vector<uint64_t> keys;
+  keys.reserve(tree.leafCount());
   for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
     if (leaf->isEmpty()) continue;
     const Coord o = leaf->origin();
-    blocks.emplace_back(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift);
+    keys.push_back(floatTreeOrderKey(BlockIndex(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift)));
   }
-  std::sort(blocks.begin(), blocks.end(), floatTreeOrder);
+  std::sort(keys.begin(), keys.end());
+  std::vector<BlockIndex> blocks(keys.size());
+  std::transform(keys.begin(), keys.end(), blocks.begin(), blockOfFloatTreeOrderKey);
   return blocks;
 }
 
