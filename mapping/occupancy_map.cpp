@@ -349,11 +349,13 @@ MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere,
     return (everywhere || candidates.contains(ijk)) && remove(voxelCentre(ijk, s));
   };
   auto& tree = impl_->log_odds->tree();
-  {
-    for (auto leaf = tree.beginLeaf(); leaf; ++leaf) {
-      if (!everywhere && !region.hasOverlap(leaf->getNodeBoundingBox())) continue;
-      const Coord origin = leaf->origin();
-      const BlockIndex block(origin.x() >> kBlockShift, origin.y() >> kBlockShift, origin.z() >> kBlockShift);
+  // Leaves left without a known voxel (also any a loaded file brought) are the ones pruneInactive
+  // deletes: only they leave the leaf index; the other leaves stay where they are.
+  std::vector<BlockIndex> emptied;
+  for (auto leaf = tree.beginLeaf(); leaf; ++leaf) {
+    const Coord origin = leaf->origin();
+    const BlockIndex block(origin.x() >> kBlockShift, origin.y() >> kBlockShift, origin.z() >> kBlockShift);
+    if (everywhere || region.hasOverlap(leaf->getNodeBoundingBox())) {
       VoxelBox box;
       for (auto it = leaf->beginValueOn(); it; ++it) {
         const Coord xyz = it.getCoord();
@@ -365,10 +367,13 @@ MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere,
       }
       if (!box.isEmpty()) noteChanged(delta, block, box, s);
     }
-    openvdb::tools::pruneInactive(tree);
-    impl_->reindexLeaves();
+    if (leaf->isEmpty()) emptied.push_back(block);
   }
-  impl_->color.eraseIf(removed);
+  openvdb::tools::pruneInactive(tree);
+  for (const BlockIndex& block : emptied) impl_->leaf_index.erase(block);
+  const VoxelBox candidate_blocks{blockOf(candidates.min), blockOf(candidates.max)};
+  impl_->color.eraseIf([&](const BlockIndex& block) { return everywhere || candidate_blocks.contains(block); },
+                       removed);
   finishDelta(delta, s);
   impl_->version.fetch_add(1);
   return delta;
