@@ -36,6 +36,12 @@ struct AccessorImpl {
     }
     return last;
   }
+  // Log-odds of a voxel; false when unknown. Here, not in ConstAccessor::logOdds, so that state()
+  // inlines it too (a call and a float through the stack per lookup otherwise).
+  bool logOdds(const VoxelIndex& ijk, float& l) {
+    const LeafRef* leaf = leafAt(ijk);
+    return leaf != nullptr && leaf->logOdds(offsetInBlock(ijk), l);
+  }
   const LeafIndex* leaves;
   const ColorStore* color;
   uint64_t last_key = ~0ull;  // no block packs to all ones
@@ -452,14 +458,11 @@ OccupancyMap::ConstAccessor::ConstAccessor(const OccupancyMap& map)
 OccupancyMap::ConstAccessor::~ConstAccessor() = default;
 OccupancyMap::ConstAccessor::ConstAccessor(ConstAccessor&&) noexcept = default;
 
-bool OccupancyMap::ConstAccessor::logOdds(const VoxelIndex& ijk, float& l) const {
-  const LeafRef* leaf = impl_->leafAt(ijk);
-  return leaf != nullptr && leaf->logOdds(offsetInBlock(ijk), l);
-}
+bool OccupancyMap::ConstAccessor::logOdds(const VoxelIndex& ijk, float& l) const { return impl_->logOdds(ijk, l); }
 
 VoxelState OccupancyMap::ConstAccessor::state(const VoxelIndex& ijk) const {
   float l;
-  if (!logOdds(ijk, l)) return VoxelState::kUnknown;
+  if (!impl_->logOdds(ijk, l)) return VoxelState::kUnknown;
   return map_->model_.isOccupied(l) ? VoxelState::kOccupied : VoxelState::kFree;
 }
 
