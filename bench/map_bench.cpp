@@ -5,11 +5,14 @@
 // voxel lookups per second (one thread), 10 m segment checks, and OctoMap's search() / castRay()
 // beside them. Prints a Markdown table for docs/PERFORMANCE.md.
 //   map_bench [--frames 10] [--threads 2] [--voxel 0.05] [--integrate-only 1] [--updates-only 1]
-//             [--distance 0] [--lookups-only 1]
+//             [--distance 0] [--lookups-only 1] [--clears-only 1]
 // --integrate-only: integrates the frames into our map only (for perf / callgrind), prints ms/frame.
 // --lookups-only: integrates the frames, then times the same random lookups as the full run, single
 // calls and batched alternating, five rounds each (medians, wall and thread CPU time), and says
 // where the probes fall (absent block, unknown, free, occupied).
+// --clears-only: integrates the frames, then times knownBlocks(), 20 clearBox and 20 clearSphere
+// calls (boxes and spheres of 0.5-2 m along the path; process CPU, medians of 5 fresh maps), with a
+// fingerprint of every known voxel's state and colour afterwards to compare versions.
 // --updates-only: integrates the frames and times only the frontier and distance field updates
 // (wall and thread CPU time, medians after the first frame), with a fingerprint of the clusters to
 // compare versions; --distance 0 leaves the distance field out (profile frontiers alone).
@@ -236,6 +239,49 @@ void reportLookups(const OccupancyMap& map) {
               absent / n, by_state[0] / n, by_state[1] / n, by_state[2] / n);
 }
 
+// --clears-only: see the header comment.
+void reportClears(const std::vector<PointBatch>& frames, const MapConfig& config) {
+  auto processCpuMs = [] {
+    timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);  // pruneInactive runs on TBB's threads too
+    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+  };
+  std::vector<double> known_ms, box_ms, sphere_ms;
+  uint64_t fingerprint = 14695981039346656037ull;
+  for (int round = 0; round < 5; ++round) {
+    OccupancyMap map(config);
+    for (const auto& f : frames) map.integrate(f);
+    double c = processCpuMs();
+    for (int k = 0; k < 20; ++k) map.constAccessor().knownBlocks();
+    known_ms.push_back((processCpuMs() - c) / 20);
+    c = processCpuMs();
+    for (int k = 0; k < 20; ++k) {
+      Aabb box;
+      box.min_m = Eigen::Vector3d(2.0 + 0.3 * k, -0.5, -3.0);
+      box.max_m = box.min_m + Eigen::Vector3d(0.5, 1.0, 2.0);
+      map.clearBox(box);
+    }
+    box_ms.push_back((processCpuMs() - c) / 20);
+    c = processCpuMs();
+    for (int k = 0; k < 20; ++k) map.clearSphere(Eigen::Vector3d(1.0 + 0.4 * k, 2.0, -2.0), 0.4);
+    sphere_ms.push_back((processCpuMs() - c) / 20);
+    if (round > 0) continue;
+    const auto acc = map.constAccessor();
+    for (const BlockIndex& block : acc.knownBlocks()) {
+      for (int offset = 0; offset < kBlockVoxels; ++offset) {
+        const VoxelIndex ijk = voxelOfOffset(block, offset);
+        std::array<uint8_t, 3> rgb{};
+        const bool coloured = acc.color(ijk, rgb);
+        const uint64_t v = static_cast<uint64_t>(acc.state(ijk)) | coloured << 2 | rgb[0] << 3 | rgb[1] << 11 | rgb[2] << 19;
+        fingerprint = (fingerprint ^ v) * 1099511628211ull;
+      }
+    }
+  }
+  std::printf("knownBlocks %.3f ms, clearBox %.3f ms, clearSphere %.3f ms (process CPU, medians of 5 maps); "
+              "states and colours after the clears: fingerprint %016llx\n",
+              median(known_ms), median(box_ms), median(sphere_ms), static_cast<unsigned long long>(fingerprint));
+}
+
 octomap::Pointcloud toOctomap(const PointBatch& batch) {
   octomap::Pointcloud cloud;
   cloud.reserve(batch.size());
@@ -248,11 +294,12 @@ octomap::Pointcloud toOctomap(const PointBatch& batch) {
 int main(int argc, char** argv) {
   int num_frames = 10, threads = 2;
   double voxel_m = 0.05;
-  bool integrate_only = false, updates_only = false, lookups_only = false, with_distance = true;
+  bool integrate_only = false, updates_only = false, lookups_only = false, clears_only = false, with_distance = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--integrate-only")) integrate_only = std::atoi(argv[i + 1]) != 0;
     if (!std::strcmp(argv[i], "--updates-only")) updates_only = std::atoi(argv[i + 1]) != 0;
     if (!std::strcmp(argv[i], "--lookups-only")) lookups_only = std::atoi(argv[i + 1]) != 0;
+    if (!std::strcmp(argv[i], "--clears-only")) clears_only = std::atoi(argv[i + 1]) != 0;
     if (!std::strcmp(argv[i], "--distance")) with_distance = std::atoi(argv[i + 1]) != 0;
     if (!std::strcmp(argv[i], "--frames")) num_frames = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
@@ -268,6 +315,10 @@ int main(int argc, char** argv) {
   live_config.voxel_size_m = voxel_m;
   live_config.max_range_m = max_range_m;
   live_config.num_threads = threads;
+  if (clears_only) {
+    reportClears(frames, live_config);
+    return 0;
+  }
   if (updates_only) {
     const UpdateTimes u = timeUpdates(frames, live_config, with_distance);
     std::printf("frontier update: %.2f ms/frame median wall, %.2f ms CPU (mean with the first frame %.2f wall); "
