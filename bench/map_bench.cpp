@@ -5,8 +5,14 @@
 // voxel lookups per second (one thread), 10 m segment checks, and OctoMap's search() / castRay()
 // beside them. Prints a Markdown table for docs/PERFORMANCE.md.
 //   map_bench [--frames 10] [--threads 2] [--voxel 0.05] [--integrate-only 1] [--updates-only 1]
-//             [--distance 0]
+//             [--distance 0] [--lookups-only 1] [--clears-only 1]
 // --integrate-only: integrates the frames into our map only (for perf / callgrind), prints ms/frame.
+// --lookups-only: integrates the frames, then times the same random lookups as the full run, single
+// calls and batched alternating, five rounds each (medians, wall and thread CPU time), and says
+// where the probes fall (absent block, unknown, free, occupied).
+// --clears-only: integrates the frames, then times knownBlocks(), 20 clearBox and 20 clearSphere
+// calls (boxes and spheres of 0.5-2 m along the path; process CPU, medians of 5 fresh maps), with a
+// fingerprint of every known voxel's state and colour afterwards to compare versions.
 // --updates-only: integrates the frames and times only the frontier and distance field updates
 // (wall and thread CPU time, medians after the first frame), with a fingerprint of the clusters to
 // compare versions; --distance 0 leaves the distance field out (profile frontiers alone).
@@ -146,6 +152,136 @@ UpdateTimes timeUpdates(const std::vector<PointBatch>& frames, const MapConfig& 
   return out;
 }
 
+// Random points inside the map's bounds: the probes of the lookup rows.
+std::vector<Eigen::Vector3d> lookupProbes(const MapStats& stats, std::mt19937& rng) {
+  std::vector<Eigen::Vector3d> probes(2'000'000);
+  for (auto& p : probes) {
+    for (int k = 0; k < 3; ++k) {
+      p[k] = std::uniform_real_distribution<double>(stats.bounds_m.min_m[k], stats.bounds_m.max_m[k])(rng);
+    }
+  }
+  return probes;
+}
+
+struct LookupTimes {
+  double per_s = 0.0, cpu_per_s = 0.0;  // lookups per second of wall and of thread CPU time
+  size_t occupied_seen = 0;
+};
+
+// One call per probe (ConstAccessor::state), toIndex inside the timed loop.
+LookupTimes timeSingleLookups(const OccupancyMap& map, const std::vector<Eigen::Vector3d>& probes) {
+  LookupTimes out;
+  const auto t = Clock::now();
+  const double c = threadCpuMs();
+  {
+    const auto acc = map.constAccessor();
+    for (const auto& p : probes) out.occupied_seen += acc.state(map.toIndex(p)) == VoxelState::kOccupied;
+  }
+  out.cpu_per_s = probes.size() / ((threadCpuMs() - c) / 1000.0);
+  out.per_s = probes.size() / (msSince(t) / 1000.0);
+  return out;
+}
+
+// The same probes through the batched lookup (ConstAccessor::states, as queryVoxels uses it), 4096
+// at a time; toIndex inside the timed loop as above.
+LookupTimes timeBatchedLookups(const OccupancyMap& map, const std::vector<Eigen::Vector3d>& probes) {
+  LookupTimes out;
+  const auto t = Clock::now();
+  const double c = threadCpuMs();
+  {
+    const auto acc = map.constAccessor();
+    constexpr size_t kBatch = 4096;
+    std::vector<VoxelIndex> ijk(kBatch);
+    std::vector<VoxelState> states(kBatch);
+    for (size_t begin = 0; begin < probes.size(); begin += kBatch) {
+      const size_t n = std::min(kBatch, probes.size() - begin);
+      for (size_t i = 0; i < n; ++i) ijk[i] = map.toIndex(probes[begin + i]);
+      acc.states(std::span<const VoxelIndex>(ijk.data(), n), std::span<VoxelState>(states.data(), n));
+      for (size_t i = 0; i < n; ++i) out.occupied_seen += states[i] == VoxelState::kOccupied;
+    }
+  }
+  out.cpu_per_s = probes.size() / ((threadCpuMs() - c) / 1000.0);
+  out.per_s = probes.size() / (msSince(t) / 1000.0);
+  return out;
+}
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// --lookups-only: five rounds of single and batched lookups, alternating, on one map.
+void reportLookups(const OccupancyMap& map) {
+  std::mt19937 rng(5);
+  const std::vector<Eigen::Vector3d> probes = lookupProbes(map.stats(), rng);
+  std::vector<double> single, single_cpu, batched, batched_cpu;
+  for (int round = 0; round < 5; ++round) {
+    const LookupTimes s = timeSingleLookups(map, probes), b = timeBatchedLookups(map, probes);
+    single.push_back(s.per_s / 1e6), single_cpu.push_back(s.cpu_per_s / 1e6);
+    batched.push_back(b.per_s / 1e6), batched_cpu.push_back(b.cpu_per_s / 1e6);
+  }
+  size_t absent = 0, by_state[3] = {0, 0, 0};
+  {
+    const auto acc = map.constAccessor();
+    BlockView view;
+    for (const auto& p : probes) {
+      const VoxelIndex ijk = map.toIndex(p);
+      absent += !acc.readBlock(blockOf(ijk), view);
+      ++by_state[static_cast<int>(acc.state(ijk))];
+    }
+  }
+  std::printf("single voxel lookups: %.1f M/s median wall, %.1f M/s of thread CPU (5 rounds)\n", median(single),
+              median(single_cpu));
+  std::printf("batched lookups (4096): %.1f M/s median wall, %.1f M/s of thread CPU (5 rounds)\n", median(batched),
+              median(batched_cpu));
+  const double n = static_cast<double>(probes.size()) / 100.0;
+  std::printf("probes: %.1f %% in blocks without known voxels; %.1f %% unknown, %.1f %% free, %.1f %% occupied\n",
+              absent / n, by_state[0] / n, by_state[1] / n, by_state[2] / n);
+}
+
+// --clears-only: see the header comment.
+void reportClears(const std::vector<PointBatch>& frames, const MapConfig& config) {
+  auto processCpuMs = [] {
+    timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);  // pruneInactive runs on TBB's threads too
+    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+  };
+  std::vector<double> known_ms, box_ms, sphere_ms;
+  uint64_t fingerprint = 14695981039346656037ull;
+  for (int round = 0; round < 5; ++round) {
+    OccupancyMap map(config);
+    for (const auto& f : frames) map.integrate(f);
+    double c = processCpuMs();
+    for (int k = 0; k < 20; ++k) map.constAccessor().knownBlocks();
+    known_ms.push_back((processCpuMs() - c) / 20);
+    c = processCpuMs();
+    for (int k = 0; k < 20; ++k) {
+      Aabb box;
+      box.min_m = Eigen::Vector3d(2.0 + 0.3 * k, -0.5, -3.0);
+      box.max_m = box.min_m + Eigen::Vector3d(0.5, 1.0, 2.0);
+      map.clearBox(box);
+    }
+    box_ms.push_back((processCpuMs() - c) / 20);
+    c = processCpuMs();
+    for (int k = 0; k < 20; ++k) map.clearSphere(Eigen::Vector3d(1.0 + 0.4 * k, 2.0, -2.0), 0.4);
+    sphere_ms.push_back((processCpuMs() - c) / 20);
+    if (round > 0) continue;
+    const auto acc = map.constAccessor();
+    for (const BlockIndex& block : acc.knownBlocks()) {
+      for (int offset = 0; offset < kBlockVoxels; ++offset) {
+        const VoxelIndex ijk = voxelOfOffset(block, offset);
+        std::array<uint8_t, 3> rgb{};
+        const bool coloured = acc.color(ijk, rgb);
+        const uint64_t v = static_cast<uint64_t>(acc.state(ijk)) | coloured << 2 | rgb[0] << 3 | rgb[1] << 11 | rgb[2] << 19;
+        fingerprint = (fingerprint ^ v) * 1099511628211ull;
+      }
+    }
+  }
+  std::printf("knownBlocks %.3f ms, clearBox %.3f ms, clearSphere %.3f ms (process CPU, medians of 5 maps); "
+              "states and colours after the clears: fingerprint %016llx\n",
+              median(known_ms), median(box_ms), median(sphere_ms), static_cast<unsigned long long>(fingerprint));
+}
+
 octomap::Pointcloud toOctomap(const PointBatch& batch) {
   octomap::Pointcloud cloud;
   cloud.reserve(batch.size());
@@ -158,10 +294,12 @@ octomap::Pointcloud toOctomap(const PointBatch& batch) {
 int main(int argc, char** argv) {
   int num_frames = 10, threads = 2;
   double voxel_m = 0.05;
-  bool integrate_only = false, updates_only = false, with_distance = true;
+  bool integrate_only = false, updates_only = false, lookups_only = false, clears_only = false, with_distance = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--integrate-only")) integrate_only = std::atoi(argv[i + 1]) != 0;
     if (!std::strcmp(argv[i], "--updates-only")) updates_only = std::atoi(argv[i + 1]) != 0;
+    if (!std::strcmp(argv[i], "--lookups-only")) lookups_only = std::atoi(argv[i + 1]) != 0;
+    if (!std::strcmp(argv[i], "--clears-only")) clears_only = std::atoi(argv[i + 1]) != 0;
     if (!std::strcmp(argv[i], "--distance")) with_distance = std::atoi(argv[i + 1]) != 0;
     if (!std::strcmp(argv[i], "--frames")) num_frames = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
@@ -177,6 +315,10 @@ int main(int argc, char** argv) {
   live_config.voxel_size_m = voxel_m;
   live_config.max_range_m = max_range_m;
   live_config.num_threads = threads;
+  if (clears_only) {
+    reportClears(frames, live_config);
+    return 0;
+  }
   if (updates_only) {
     const UpdateTimes u = timeUpdates(frames, live_config, with_distance);
     std::printf("frontier update: %.2f ms/frame median wall, %.2f ms CPU (mean with the first frame %.2f wall); "
@@ -218,6 +360,10 @@ int main(int argc, char** argv) {
                 static_cast<unsigned long long>(stats.occupied), static_cast<unsigned long long>(stats.free));
     return 0;
   }
+  if (lookups_only) {
+    reportLookups(*integrateOurs(threads, ours_ms));
+    return 0;
+  }
   integrateOurs(1, ours_1t_ms);
   const auto map = integrateOurs(threads, ours_ms);
 
@@ -255,38 +401,13 @@ int main(int argc, char** argv) {
 
   // Lookups: random voxels inside the map's bounds, one thread.
   std::mt19937 rng(5);
-  std::vector<Eigen::Vector3d> probes(2'000'000);
-  for (auto& p : probes) {
-    for (int k = 0; k < 3; ++k) {
-      p[k] = std::uniform_real_distribution<double>(stats.bounds_m.min_m[k], stats.bounds_m.max_m[k])(rng);
-    }
-  }
-  size_t occupied_seen = 0;
+  const std::vector<Eigen::Vector3d> probes = lookupProbes(stats, rng);
+  const LookupTimes single_lookups = timeSingleLookups(*map, probes);
+  const LookupTimes batched_lookups = timeBatchedLookups(*map, probes);
+  const double ours_lookups = single_lookups.per_s, ours_batched_lookups = batched_lookups.per_s;
+  const size_t occupied_seen = single_lookups.occupied_seen, occupied_seen_batched = batched_lookups.occupied_seen;
   auto t1 = Clock::now();
-  {
-    const auto acc = map->constAccessor();
-    for (const auto& p : probes) occupied_seen += acc.state(map->toIndex(p)) == VoxelState::kOccupied;
-  }
-  const double ours_lookups = probes.size() / (msSince(t1) / 1000.0);
-  // The same probes through the batched lookup (ConstAccessor::states, as queryVoxels uses it),
-  // 4096 at a time; toIndex inside the timed loop as above.
-  size_t occupied_seen_batched = 0;
-  t1 = Clock::now();
-  {
-    const auto acc = map->constAccessor();
-    constexpr size_t kBatch = 4096;
-    std::vector<VoxelIndex> ijk(kBatch);
-    std::vector<VoxelState> states(kBatch);
-    for (size_t begin = 0; begin < probes.size(); begin += kBatch) {
-      const size_t n = std::min(kBatch, probes.size() - begin);
-      for (size_t i = 0; i < n; ++i) ijk[i] = map->toIndex(probes[begin + i]);
-      acc.states(std::span<const VoxelIndex>(ijk.data(), n), std::span<VoxelState>(states.data(), n));
-      for (size_t i = 0; i < n; ++i) occupied_seen_batched += states[i] == VoxelState::kOccupied;
-    }
-  }
-  const double ours_batched_lookups = probes.size() / (msSince(t1) / 1000.0);
   size_t octo_occupied = 0;
-  t1 = Clock::now();
   for (const auto& p : probes) {
     const auto* node = tree.search(p.x(), p.y(), p.z());
     octo_occupied += node != nullptr && tree.isNodeOccupied(node);

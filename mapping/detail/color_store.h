@@ -53,6 +53,24 @@ struct BlockColors {
     bool inserted;
     at(offset, inserted) = value;
   }
+  // Removes the colours of the voxels for which remove(ijk) is true (ijk: voxelOfOffset(block, .)).
+  template <typename Remove>
+  void eraseIf(const BlockIndex& block, Remove&& remove) {
+    size_t kept = 0, i = 0;
+    for (int w = 0; w < 8; ++w) {
+      before[w] = static_cast<uint16_t>(kept);
+      for (uint64_t bits = has[w]; bits != 0; bits &= bits - 1, ++i) {
+        const int bit = __builtin_ctzll(bits);
+        if (remove(voxelOfOffset(block, w * 64 + bit))) {
+          has[w] &= ~(1ull << bit);
+        } else {
+          packed[kept++] = packed[i];
+        }
+      }
+    }
+    packed.resize(kept);
+    if (kept == 0) packed.shrink_to_fit();
+  }
 };
 
 class ColorStore {
@@ -90,13 +108,24 @@ class ColorStore {
       }
     }
   }
-  // Removes the colours of the voxels for which remove(ijk) is true (rebuilds the store).
-  template <typename Remove>
-  void eraseIf(Remove&& remove) {
+  // Removes the colours of the voxels for which remove(ijk) is true, looking only into the blocks
+  // for which may_hold(block) is true. Blocks left without colours keep their entry (the table
+  // cannot delete) until they are more than half of all: then the store is rebuilt without them,
+  // so clearing and cropping over a long mission keep its memory bounded.
+  template <typename MayHold, typename Remove>
+  void eraseIf(MayHold&& may_hold, Remove&& remove) {
+    size_t empty = 0;
+    for (size_t slot = 0; slot < blocks_.size(); ++slot) {
+      BlockColors& colors = blocks_[slot];
+      if (!colors.packed.empty()) {
+        const BlockIndex block = unpackIndex(table_.keyOf(static_cast<uint32_t>(slot)));
+        if (may_hold(block)) colors.eraseIf(block, remove);
+      }
+      empty += colors.packed.empty();
+    }
+    if (empty * 2 <= blocks_.size()) return;
     ColorStore kept;
-    forEach([&](const VoxelIndex& ijk, int32_t packed) {
-      if (!remove(ijk)) kept.set(ijk, packed);
-    });
+    forEach([&](const VoxelIndex& ijk, int32_t packed) { kept.set(ijk, packed); });
     *this = std::move(kept);
   }
   void clear() { *this = ColorStore(); }

@@ -7,7 +7,7 @@
 // Indices: voxel_types.h. Blocks must lie within +-2^20 on each axis to be inserted (voxels within
 // +-2^23: what OccupancyMap accepts); find() reports blocks beyond absent.
 // Threads: none; OccupancyMap guards it with its grid mutex, like the tree. Entries point into the
-// tree's leaves: rebuild (or insert) after anything that creates or deletes leaves.
+// tree's leaves: insert (or erase) with every leaf the tree gains (or loses), or rebuild.
 #pragma once
 
 #include <cstdint>
@@ -39,9 +39,9 @@ class LeafIndex {
   LeafIndex() { rehash(kMinCapacity); }
 
   // The leaf of a block; nullptr when the tree has none there.
-  const LeafRef* find(const BlockIndex& b) const {
-    if (!inPackRange(b)) return nullptr;
-    const uint64_t key = packIndex(b);
+  const LeafRef* find(const BlockIndex& b) const { return inPackRange(b) ? find(packIndex(b)) : nullptr; }
+  // The same by packIndex(b).
+  const LeafRef* find(uint64_t key) const {
     for (size_t i = bucket(key);; i = (i + 1) & mask_) {
       const Slot& slot = slots_[i];
       if (slot.key == key) return &slot.ref;
@@ -67,6 +67,26 @@ class LeafIndex {
     if ((size_ + 1) * 2 > slots_.size()) rehash(slots_.size() * 2);
     place(Slot{key, ref});
     ++size_;
+  }
+  // Removes a block's entry (none: nothing happens). Backward-shift deletion: the entries after it
+  // in its probe run move up where their own probe path allows, so find() needs no tombstones.
+  void erase(const BlockIndex& b) {
+    if (!inPackRange(b)) return;
+    const uint64_t key = packIndex(b);
+    size_t hole = bucket(key);
+    while (slots_[hole].key != key) {
+      if (slots_[hole].key == kEmpty) return;
+      hole = (hole + 1) & mask_;
+    }
+    for (size_t i = (hole + 1) & mask_; slots_[i].key != kEmpty; i = (i + 1) & mask_) {
+      // The entry at i may fill the hole when the hole lies on its probe path: home .. i.
+      if (((i - bucket(slots_[i].key)) & mask_) >= ((i - hole) & mask_)) {
+        slots_[hole] = slots_[i];
+        hole = i;
+      }
+    }
+    slots_[hole] = Slot{};
+    --size_;
   }
   void clear() {
     slots_.clear();
