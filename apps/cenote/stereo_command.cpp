@@ -114,7 +114,7 @@ void registerStereoCommand(CLI::App& app) {
   cmd->add_option("--cost", options->cost, "Matching cost")->check(CLI::IsMember({"sad", "census"}));
   cmd->add_option("--window", options->window, "Cost window side (SAD 1..9 odd, census 3 or 5)");
   cmd->add_option("--paths", options->paths, "SGM paths")->check(CLI::IsMember({4, 8}));
-  cmd->add_option("--search", options->search, "Disparities searched: full range, or a band around a half-size match")
+  cmd->add_option("--search", options->search, "Disparities searched: full range, or a band around a match of the shrunk pair")
       ->check(CLI::IsMember({"full", "band"}));
   cmd->add_flag("--lr-check", options->lr_check, "Left-right consistency check");
   cmd->add_option("--focal-px", options->focal_px, "Focal length for depth without --calib");

@@ -48,16 +48,16 @@ struct MatchLevel {
   detail::SgmImages images;                      // views of the above
 };
 
-// Coarse to fine, per strip: the strip's own half-size match (so that a strip never waits for
+// Coarse to fine, per strip: the strip's own coarse match (so that a strip never waits for
 // another) and the bands placed from it; full image size, only the strip's rows written.
 struct StripBands {
-  cv::Mat coarse_disparity, coarse_confidence;  // CV_32F, half size
+  cv::Mat coarse_disparity, coarse_confidence;  // CV_32F, the coarse size
   cv::Mat band_start;                           // CV_16S: first disparity index searched per pixel
 };
 
 struct StereoMatcher::Impl {
   MatchLevel full;
-  MatchLevel coarse;     // coarse to fine only: the pair halved in size
+  MatchLevel coarse;     // coarse to fine only: the pair shrunk by coarse_scale
   cv::Mat coarse_left, coarse_right;
   std::vector<StripBands> bands;  // one per strip
 };
@@ -83,19 +83,6 @@ detail::SgmParams paramsOf(const StereoConfig& config) {
   p.invalidate_truncated = config.invalidate_truncated;
   p.lr_max_diff = config.lr_max_diff_px;
   p.min_confidence = static_cast<float>(config.min_confidence);
-  return p;
-}
-
-// The half-size match that places the bands: disparities halved (the range rounded outwards),
-// integer winners only, no checks that would leave pixels without a band.
-detail::SgmParams coarseParamsOf(const detail::SgmParams& full) {
-  detail::SgmParams p = full;
-  p.min_disparity = full.min_disparity / 2;
-  p.num_disparities = (full.min_disparity + full.num_disparities + 1) / 2 - p.min_disparity;
-  p.subpixel = false;
-  p.lr_check = false;
-  p.invalidate_truncated = false;
-  p.min_confidence = 0.0f;
   return p;
 }
 
@@ -166,20 +153,19 @@ detail::SgmOutput outputOf(DisparityMap& map, const detail::SgmParams& p) {
   return output;
 }
 
-// First disparity index of each pixel's band, rows [y0, y1): kBandDisparities centred on twice
-// the coarse disparity of the pixel's coarse pixel (index 0 where that has none), kept inside
-// [0, D) and, where the image border cuts the range, on the disparities that have a right pixel.
-void placeBands(const cv::Mat& coarse_disparity, const detail::SgmParams& full, int y0, int y1, cv::Mat& band_start) {
-  const int width = kBandDisparities, D = full.num_disparities;
+// First disparity index of each pixel's band (StereoConfig::bandStart), rows [y0, y1) of a
+// full-size image `width` pixels wide.
+void placeBands(const cv::Mat& coarse_disparity, const StereoConfig& config, int width, int y0, int y1,
+                cv::Mat& band_start) {
+  const int scale = config.coarse_scale;
   for (int y = y0; y < y1; ++y) {
-    const float* coarse = coarse_disparity.ptr<float>(y / 2);
     int16_t* out = band_start.ptr<int16_t>(y);
-    for (int x = 0; x < full.width; ++x) {
-      const float dc = coarse[x / 2];
-      const int centre = std::isfinite(dc) ? 2 * static_cast<int>(dc) - full.min_disparity : 0;
-      const int lo = std::clamp(centre - width / 2, 0, D - width);
-      out[x] = static_cast<int16_t>(std::min(lo, std::max(0, x - full.min_disparity + 1 - width)));
+    if (y > y0 && y % scale != 0) {  // the rows of one coarse row share their bands
+      std::copy_n(band_start.ptr<int16_t>(y - 1), width, out);
+      continue;
     }
+    const float* coarse = coarse_disparity.ptr<float>(y / scale);
+    for (int x = 0; x < width; ++x) out[x] = static_cast<int16_t>(config.bandStart(coarse[x / scale], x));
   }
 }
 
@@ -188,7 +174,7 @@ void placeBands(const cv::Mat& coarse_disparity, const detail::SgmParams& full, 
 StereoMatcher::StereoMatcher(const StereoConfig& config) : config_(config), impl_(std::make_unique<Impl>()) {
   throwIfInvalid(config_.validate(), "stereo configuration");
   impl_->full.params = paramsOf(config_);
-  impl_->coarse.params = coarseParamsOf(impl_->full.params);
+  impl_->coarse.params = paramsOf(config_.coarseConfig());
 }
 
 StereoMatcher::~StereoMatcher() = default;
@@ -231,9 +217,9 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
       const cv::Mat& image = side == 0 ? left : right;
       prepareSide(impl.full, config_, image, side == 0);
       if (band) {
-        cv::Mat& half = side == 0 ? impl.coarse_left : impl.coarse_right;
-        halveImage(image, half);
-        prepareSide(impl.coarse, config_, half, side == 0);
+        cv::Mat& coarse = side == 0 ? impl.coarse_left : impl.coarse_right;
+        shrinkImage(image, config_.coarse_scale, coarse);
+        prepareSide(impl.coarse, config_, coarse, side == 0);
       }
     }
 #pragma omp single
@@ -250,17 +236,18 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
         // Rows this strip reads (warm-up included), their coarse rows, and the coarse match of
         // those with its own warm-up.
         StripBands& sb = impl.bands[s];
+        const int scale = config_.coarse_scale;
         const int fine_begin = std::max(0, y0 - overlap);
         const int fine_end = p.eight_paths ? std::min(p.height, y1 + overlap) : y1;
-        const int coarse_begin = fine_begin / 2, coarse_end = (fine_end - 1) / 2 + 1;
+        const int coarse_begin = fine_begin / scale, coarse_end = (fine_end - 1) / scale + 1;
         DisparityMap coarse{sb.coarse_disparity, sb.coarse_confidence};
         const detail::SgmOutput coarse_output = outputOf(coarse, pc);
         sb.coarse_disparity = coarse.disparity;
         sb.coarse_confidence = coarse.confidence;
-        detail::matchStrip(pc, impl.coarse.images, coarse_begin, coarse_end, (overlap + 1) / 2,
+        detail::matchStrip(pc, impl.coarse.images, coarse_begin, coarse_end, (overlap + scale - 1) / scale,
                            impl.coarse.workspaces[s], coarse_output);
         sb.band_start.create(p.height, p.width, CV_16SC1);
-        placeBands(sb.coarse_disparity, p, fine_begin, fine_end, sb.band_start);
+        placeBands(sb.coarse_disparity, config_, p.width, fine_begin, fine_end, sb.band_start);
         images.band_start = sb.band_start.ptr<int16_t>();
         images.band_stride = static_cast<std::ptrdiff_t>(sb.band_start.step[0] / sizeof(int16_t));
       }
@@ -268,6 +255,21 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
     }
   }
   return result;
+}
+
+void shrinkImage(const cv::Mat& grey, int scale, cv::Mat& out) {
+  if (scale <= 1) {
+    grey.copyTo(out);
+    return;
+  }
+  cv::Mat half;
+  halveImage(grey, half);
+  for (int s = scale / 2; s > 1; s /= 2) {
+    cv::Mat next;
+    halveImage(half, next);
+    half = next;
+  }
+  out = half;
 }
 
 void halveImage(const cv::Mat& grey, cv::Mat& half) {
