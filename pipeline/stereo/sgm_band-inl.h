@@ -90,7 +90,8 @@ BandSadWindow<kWindow> bandSadWindow(const SgmParams& p, const SgmImages& im, co
 
 // Sums over the window rows of |left - right| at column c, for disparity indices [first, first + n)
 // written to out[0, n): n covers the bands of pixels c - r .. c + r (those inside the image),
-// whose windows hold column c. Returns `first`.
+// whose windows hold column c, and is at least kBandDisparities + one vector (see below; out has
+// room for that). Returns `first`.
 template <int kWindow>
 HWY_INLINE int bandColumn(const SgmParams& p, const BandSadWindow<kWindow>& window, const int16_t* starts, int c,
                           uint16_t* out) {
@@ -99,21 +100,28 @@ HWY_INLINE int bandColumn(const SgmParams& p, const BandSadWindow<kWindow>& wind
   constexpr int r = kWindow / 2;
   constexpr int kN = static_cast<int>(hn::MaxLanes(DU16()));
   int lo = starts[c], hi = lo;
-  for (int x = std::max(0, c - r); x <= std::min(p.width - 1, c + r); ++x) {
-    lo = std::min<int>(lo, starts[x]);
-    hi = std::max<int>(hi, starts[x]);
+  for (int j = -r; j <= r; ++j) {  // clamped to the image: a pixel twice changes nothing
+    const int start = starts[clampColumn(c + j, p.width)];
+    lo = std::min(lo, start);
+    hi = std::max(hi, start);
   }
+  // The band and one more vector always (neighbouring bands usually differ by a few disparities;
+  // a loop count of one or two vectors would mispredict), more in a loop only where they differ
+  // by more than a vector.
+  constexpr int kAlways = kBandDisparities + kN;
   const int n = hi - lo + kBandDisparities;
   const std::ptrdiff_t at = p.width - 1 - c + p.min_disparity + lo;  // reversedAt(), from lo
   hn::Vec<decltype(di)> left[kWindow];
   for (int i = 0; i < kWindow; ++i) left[i] = hn::Set(di, window.left[i][c]);
-  for (int k = 0; k < n; k += kN) {
+  auto vector = [&](int k) HWY_ATTR __attribute__((always_inline)) {
     auto sum = hn::Abs(hn::Sub(left[0], hn::LoadU(di, window.right[0] + at + k)));
     for (int i = 1; i < kWindow; ++i) {
       sum = hn::Add(sum, hn::Abs(hn::Sub(left[i], hn::LoadU(di, window.right[i] + at + k))));
     }
     hn::Store(hn::BitCast(d, sum), d, out + k);
-  }
+  };
+  for (int k = 0; k < kAlways; k += kN) vector(k);
+  for (int k = kAlways; k < n; k += kN) vector(k);
   return lo;
 }
 

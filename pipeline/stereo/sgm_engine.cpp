@@ -193,7 +193,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   const std::size_t path_row = (W + 2) * b.pixel_stride + 2 * b.lead;
   const std::size_t along = std::max<std::size_t>(Dp + 2 * N, 5 * kBandDisparities);
   const bool band_sad = band && !p.census;
-  b.band_column_stride = static_cast<int>(alignUp(Dp, 64));
+  b.band_column_stride = static_cast<int>(alignUp(Dp + N, 64));  // at least a band and a vector
   const std::size_t sad = p.census ? 0
                           : band_sad ? p.window * rev + (p.window + 1) * b.band_column_stride
                                      : W * Dp + (W * Dp * p.window + 1) / 2;

@@ -169,6 +169,26 @@ void placeBands(const cv::Mat& coarse_disparity, const StereoConfig& config, int
   }
 }
 
+// First rows of `strips` strips of an image `height` rows high, and `height` at the end. Every
+// strip gets the same number of rows to match, its warm-up rows included (`overlap` above every
+// strip but the first, and with 8 paths below every strip but the last), so that a thread with the
+// first strip does not wait for one with a warm-up. Depends on the image and the settings only,
+// never on the thread count. At least one row per strip (strips <= height).
+std::vector<int> stripBoundaries(int strips, int height, int overlap, bool eight_paths) {
+  std::vector<int> begin(strips + 1, 0);
+  begin[strips] = height;
+  const int sides = eight_paths ? 2 : 1;  // warm-ups per boundary between strips
+  const double rows_per_strip = (height + static_cast<double>(sides) * (strips - 1) * overlap) / strips;
+  for (int s = 1; s < strips; ++s) {
+    // Warm-ups of strips 0 .. s - 1: a top one for each but the first, and with 8 paths a bottom one
+    // for each.
+    const int warmups_before = sides * s - 1;
+    const int y = static_cast<int>(std::lround(s * rows_per_strip - warmups_before * overlap));
+    begin[s] = std::clamp(y, begin[s - 1] + 1, height - (strips - s));
+  }
+  return begin;
+}
+
 }  // namespace
 
 StereoMatcher::StereoMatcher(const StereoConfig& config) : config_(config), impl_(std::make_unique<Impl>()) {
@@ -196,6 +216,7 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
   DisparityMap result;
   const detail::SgmOutput output = outputOf(result, p);
   const int strips = std::min(config_.num_strips, p.height);
+  const std::vector<int> strip_begin = stripBoundaries(strips, p.height, config_.strip_overlap_px, p.eight_paths);
   const int overlap = config_.strip_overlap_px;
   if (static_cast<int>(impl.full.workspaces.size()) < strips) impl.full.workspaces.resize(strips);
   if (band) {
@@ -208,8 +229,8 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
 
   // One parallel region per frame (each region hands work to the other thread, which spins
   // between regions): the two images prepared side by side, the census descriptors, then the
-  // strips. Strips are equal in work but threads may not be equally free (dynamic schedule),
-  // and a strip never waits for another.
+  // strips. Strips are equal in work (stripBoundaries) but threads may not be equally free
+  // (dynamic schedule), and a strip never waits for another.
 #pragma omp parallel
   {
 #pragma omp for schedule(static)
@@ -230,7 +251,7 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
     if (!census_levels.empty()) censusTransforms(census_levels);
 #pragma omp for schedule(dynamic, 1)
     for (int s = 0; s < strips; ++s) {
-      const int y0 = s * p.height / strips, y1 = (s + 1) * p.height / strips;
+      const int y0 = strip_begin[s], y1 = strip_begin[s + 1];
       detail::SgmImages images = impl.full.images;
       if (band) {
         // Rows this strip reads (warm-up included), their coarse rows, and the coarse match of
