@@ -78,6 +78,7 @@ void run(const StereoOptions& o) {
   if (o.repeat > 0) {
     std::vector<double> ms;
     for (int i = 0; i < o.repeat; ++i) {
+      result = {};  // released first, as a consumer would: the matcher then reuses its memory
       const auto start = std::chrono::steady_clock::now();
       result = matcher.match(left, right);
       ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());

@@ -318,9 +318,11 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
       if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
       hn::Store(sum, d, sums_out + k);
-      second_best = hn::Min(second_best, hn::Max(best, sum));
-      best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
-      best = hn::Min(best, sum);
+      if constexpr (kVectors > 1) {  // one vector: flushWinnerBatch() takes them from the sums
+        second_best = hn::Min(second_best, hn::Max(best, sum));
+        best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
+        best = hn::Min(best, sum);
+      }
     }
     for (int j = 0; j < kVectors; ++j) {
       hn::Store(vertical_new[j], d, vertical + j * kN);
@@ -332,9 +334,11 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     min_row_back_out[x + 1] = minLane(d, mins_back);
     if (output == RowOutput::kWinner) {
       const int N = kN;
-      hn::Store(best, d, b.batch_best + slot * N);
-      hn::Store(best_index, d, b.batch_index + slot * N);
-      hn::Store(second_best, d, b.batch_second + slot * N);
+      if constexpr (kVectors > 1) {
+        hn::Store(best, d, b.batch_best + slot * N);
+        hn::Store(best_index, d, b.batch_index + slot * N);
+        hn::Store(second_best, d, b.batch_second + slot * N);
+      }
       if (slot == kWinnerBatch - 1 || i == W - 1) {
         flushWinnerBatch(p, b, i, slot, dx, N, band_first, kB, kB, disparity, confidence);
       }

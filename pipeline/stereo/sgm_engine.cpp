@@ -571,7 +571,9 @@ void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const 
 // Winners of the pixels whose best / index / second-best vectors are stored in batch slots
 // 0..slot (slot being row position i of the row swept along dx; N lanes per stored vector). Pixel
 // j's sums are at b.sums + j * b.padded and hold disparities [first[j], first[j] + D) with stride
-// Dp (first null: every pixel from 0).
+// Dp (first null: every pixel from 0). With one vector of sums (Dp == N) the stored vectors are
+// not read (the kernels may skip them): the sums are their own lane-wise minimum, lane k holds
+// disparity k, and no lane has a second value.
 HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int i, int slot, int dx, int N,
                                  const int32_t* first, int D, int Dp, float* disparity, float* confidence) {
   const DU16 d;
@@ -584,8 +586,11 @@ HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int 
     const int first_j = first != nullptr ? first[j] : 0;
     // The right image's minimum first: pickWinner() masks lanes of the sums.
     if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx, first_j, Dp);
-    pickWinner(p, b, xj, sums, hn::Load(d, b.batch_best + j * N), hn::Load(d, b.batch_index + j * N),
-               hn::Load(d, b.batch_second + j * N), batch, j, first_j, D, Dp);
+    const bool one_vector = Dp == N;
+    const VU16 best = hn::Load(d, one_vector ? sums : b.batch_best + j * N);
+    const VU16 best_index = hn::Load(d, one_vector ? b.iota : b.batch_index + j * N);
+    const VU16 second_best = one_vector ? hn::Set(d, kNoCost) : hn::Load(d, b.batch_second + j * N);
+    pickWinner(p, b, xj, sums, best, best_index, second_best, batch, j, first_j, D, Dp);
   }
   finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
 }

@@ -60,6 +60,7 @@ struct StereoMatcher::Impl {
   MatchLevel coarse;     // coarse to fine only: the pair shrunk by coarse_scale
   cv::Mat coarse_left, coarse_right;
   std::vector<StripBands> bands;  // one per strip
+  DisparityMap result;            // the last frame's result, shared with the caller
 };
 
 namespace {
@@ -143,6 +144,14 @@ void censusTransforms(const std::vector<MatchLevel*>& levels) {
   }
 }
 
+// The memory of this frame's result: the last frame's (`kept`) when the caller no longer holds
+// any of it, so that a frame does not fault in 4 MB of fresh pages at 800x600; else new memory.
+DisparityMap resultBuffers(DisparityMap& kept) {
+  auto onlyHere = [](const cv::Mat& m) { return m.u != nullptr && m.u->refcount == 1; };
+  if (!onlyHere(kept.disparity) || !onlyHere(kept.confidence)) kept = DisparityMap{};
+  return kept;
+}
+
 detail::SgmOutput outputOf(DisparityMap& map, const detail::SgmParams& p) {
   map.disparity.create(p.height, p.width, CV_32FC1);
   map.confidence.create(p.height, p.width, CV_32FC1);
@@ -213,8 +222,9 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
   const detail::SgmParams& pc = impl.coarse.params;
   p.width = left.cols;
   p.height = left.rows;
-  DisparityMap result;
+  DisparityMap result = resultBuffers(impl.result);
   const detail::SgmOutput output = outputOf(result, p);
+  impl.result = result;
   const int strips = std::min(config_.num_strips, p.height);
   const std::vector<int> strip_begin = stripBoundaries(strips, p.height, config_.strip_overlap_px, p.eight_paths);
   const int overlap = config_.strip_overlap_px;

@@ -17,7 +17,8 @@
 //
 // Threads: match() uses OpenMP over a fixed number of horizontal strips; the result is
 // bit-identical for any thread count. One StereoMatcher must not be used from two threads at once
-// (it owns its working memory, allocated at the first frame and reused).
+// (it owns its working memory, allocated at the first frame and reused). A result's images are
+// reused by a later match() only once every cv::Mat of the caller that shares them is gone.
 #pragma once
 
 #include <memory>
