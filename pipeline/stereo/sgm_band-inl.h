@@ -311,10 +311,17 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       vertical_new[j] = l1;  // stored after every vector has read the old values
       hn::Store(l2, d, back_out + k);
       hn::Store(l3, d, fwd_out + k);
-      mins_along = hn::Min(mins_along, l0);
-      mins_vertical = hn::Min(mins_vertical, l1);
-      mins_back = hn::Min(mins_back, l2);
-      mins_fwd = hn::Min(mins_fwd, l3);
+      if constexpr (kVectors == 1) {  // the path costs themselves (the along path waits for its minimum)
+        mins_along = l0;
+        mins_vertical = l1;
+        mins_back = l2;
+        mins_fwd = l3;
+      } else {
+        mins_along = hn::Min(mins_along, l0);
+        mins_vertical = hn::Min(mins_vertical, l1);
+        mins_back = hn::Min(mins_back, l2);
+        mins_fwd = hn::Min(mins_fwd, l3);
+      }
       VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
       if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
       hn::Store(sum, d, sums_out + k);
