@@ -78,6 +78,7 @@ void run(const StereoOptions& o) {
   if (o.repeat > 0) {
     std::vector<double> ms;
     for (int i = 0; i < o.repeat; ++i) {
+      result = {};  // released first, as a consumer would: the matcher then reuses its memory
       const auto start = std::chrono::steady_clock::now();
       result = matcher.match(left, right);
       ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
@@ -114,7 +115,7 @@ void registerStereoCommand(CLI::App& app) {
   cmd->add_option("--cost", options->cost, "Matching cost")->check(CLI::IsMember({"sad", "census"}));
   cmd->add_option("--window", options->window, "Cost window side (SAD 1..9 odd, census 3 or 5)");
   cmd->add_option("--paths", options->paths, "SGM paths")->check(CLI::IsMember({4, 8}));
-  cmd->add_option("--search", options->search, "Disparities searched: full range, or a band around a half-size match")
+  cmd->add_option("--search", options->search, "Disparities searched: full range, or a band around a match of the shrunk pair")
       ->check(CLI::IsMember({"full", "band"}));
   cmd->add_flag("--lr-check", options->lr_check, "Left-right consistency check");
   cmd->add_option("--focal-px", options->focal_px, "Focal length for depth without --calib");

@@ -51,6 +51,80 @@ HWY_INLINE V shiftedBand(V prev, V sentinel, int shift, const uint16_t* iota) {
   return hn::LoadU(d, lanes + kLanes + at);
 }
 
+// Band SAD. The full search keeps running column sums over the whole range; here a column's
+// sums over the window rows are computed afresh from the window's right rows (kept reversed and
+// widened to 16 bits), over the union of the bands of the pixels whose window holds the column
+// only (usually one or two bands instead of the whole range).
+
+// The window's right rows around row y: all of them at the first row of a pass, else the one
+// entering the window along dy (ring slot by image row, as the full search's column ring).
+template <int kWindow>
+void beginBandSadRow(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y, int dy, bool first_row) {
+  constexpr int r = kWindow / 2;
+  const int first = first_row ? y - r : y + dy * r;
+  const int last = first_row ? y + r : first;
+  for (int yy = first; yy <= last; ++yy) {
+    reverseRow(im.right + clampRow(yy, p.height) * im.image_stride, p.width, b.reversed_length,
+               b.band_rows + static_cast<std::ptrdiff_t>(ringSlot(yy, kWindow)) * b.reversed_length);
+  }
+}
+
+// The rows of the window around row y: left as the cost compares them, right reversed and widened
+// (the ring of beginBandSadRow()).
+template <int kWindow>
+struct BandSadWindow {
+  const uint8_t* left[kWindow];
+  const int16_t* right[kWindow];
+};
+
+template <int kWindow>
+BandSadWindow<kWindow> bandSadWindow(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y) {
+  BandSadWindow<kWindow> w;
+  for (int i = 0; i < kWindow; ++i) {
+    const int yy = y - kWindow / 2 + i;
+    w.left[i] = im.left + clampRow(yy, p.height) * im.image_stride;
+    w.right[i] = reinterpret_cast<const int16_t*>(b.band_rows) + ringSlot(yy, kWindow) * b.reversed_length;
+  }
+  return w;
+}
+
+// Sums over the window rows of |left - right| at column c, for disparity indices [first, first + n)
+// written to out[0, n): n covers the bands of pixels c - r .. c + r (those inside the image),
+// whose windows hold column c, and is at least kBandDisparities + one vector (see below; out has
+// room for that). Returns `first`.
+template <int kWindow>
+HWY_INLINE int bandColumn(const SgmParams& p, const BandSadWindow<kWindow>& window, const int16_t* starts, int c,
+                          uint16_t* out) {
+  const DU16 d;
+  const hn::RebindToSigned<DU16> di;
+  constexpr int r = kWindow / 2;
+  constexpr int kN = static_cast<int>(hn::MaxLanes(DU16()));
+  int lo = starts[c], hi = lo;
+  for (int j = -r; j <= r; ++j) {  // clamped to the image: a pixel twice changes nothing
+    const int start = starts[clampColumn(c + j, p.width)];
+    lo = std::min(lo, start);
+    hi = std::max(hi, start);
+  }
+  // The band and one more vector always (neighbouring bands usually differ by a few disparities;
+  // a loop count of one or two vectors would mispredict), more in a loop only where they differ
+  // by more than a vector.
+  constexpr int kAlways = kBandDisparities + kN;
+  const int n = hi - lo + kBandDisparities;
+  const std::ptrdiff_t at = p.width - 1 - c + p.min_disparity + lo;  // reversedAt(), from lo
+  hn::Vec<decltype(di)> left[kWindow];
+  for (int i = 0; i < kWindow; ++i) left[i] = hn::Set(di, window.left[i][c]);
+  auto vector = [&](int k) HWY_ATTR __attribute__((always_inline)) {
+    auto sum = hn::Abs(hn::Sub(left[0], hn::LoadU(di, window.right[0] + at + k)));
+    for (int i = 1; i < kWindow; ++i) {
+      sum = hn::Add(sum, hn::Abs(hn::Sub(left[i], hn::LoadU(di, window.right[i] + at + k))));
+    }
+    hn::Store(hn::BitCast(d, sum), d, out + k);
+  };
+  for (int k = 0; k < kAlways; k += kN) vector(k);
+  for (int k = kAlways; k < n; k += kN) vector(k);
+  return lo;
+}
+
 // One row of one pass, as aggregateRowFull(), over each pixel's band. kWindow: the SAD window
 // side, 0 for census.
 template <int kWindow>
@@ -66,14 +140,19 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   const int Dp = b.padded, W = p.width;
   constexpr int r = kWindow / 2;
   const VU16 p1 = hn::Set(d, static_cast<uint16_t>(p.p1));
-  const uint16_t sentinel = static_cast<uint16_t>(p.max_cost + 2 * p.p2 + p.p1);
+  const uint16_t sentinel = pathSentinel(p, true);
   const VU16 sentinel_v = hn::Set(d, sentinel);
   const VU16 worst_cost = hn::Set(d, static_cast<uint16_t>(p.max_cost));
   const uint8_t* row = im.guide + y * im.image_stride;
   const uint8_t* prev_row = im.guide + (y - dx) * im.image_stride;  // inside the image border
   const int16_t* starts = im.band_start + y * im.band_stride;
   const int16_t* prev_starts = first_row ? nullptr : im.band_start + (y - dx) * im.band_stride;
-  const CostSource src = beginCostRow(p, im, b, y, dx, dx, first_row);
+  CostSource src;
+  if constexpr (kCensus) {
+    src = beginCostRow(p, im, b, y, dx, dx, first_row);
+  } else {
+    beginBandSadRow<kWindow>(p, im, b, y, dx, first_row);
+  }
   if (output == RowOutput::kWinner && p.lr_check) {
     std::fill(b.right_min, b.right_min + b.reversed_length, kNoCost);
     std::fill(b.right_arg, b.right_arg + b.reversed_length, 0);
@@ -96,7 +175,24 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   uint16_t* const min_row_fwd = b.path_min[2];
   uint16_t* const min_row_back_out = b.path_min[3];
   const uint16_t* const iota = b.iota;
-  uint16_t* const column_sum = b.column_sum;
+  // Band SAD: columns of window sums, slot c % (kWindow + 1), holding disparities from
+  // column_first[slot]. Those of the first pixel's window first, then each pixel computes the one
+  // past its window (a column early: the unaligned loads of a column just stored would miss
+  // store-to-load forwarding).
+  constexpr int kColumnSlots = kWindow + 1;
+  int column_first[kColumnSlots] = {};
+  auto columnSlot = [&](int c) HWY_ATTR {
+    return b.band_columns + static_cast<std::ptrdiff_t>(c % kColumnSlots) * b.band_column_stride;
+  };
+  BandSadWindow<kCensus ? 1 : kWindow> window{};
+  if constexpr (!kCensus) {
+    window = bandSadWindow<kWindow>(p, im, b, y);
+    const int x0 = dx > 0 ? 0 : W - 1;
+    for (int j = 0; j <= r; ++j) {
+      const int c = x0 + dx * j;
+      if (c >= 0 && c < W) column_first[c % kColumnSlots] = bandColumn<kWindow>(p, window, starts, c, columnSlot(c));
+    }
+  }
   uint16_t* const batch_sums = b.sums;
   const uint16_t* const census_right_lo = b.census_reversed[0];
   const uint16_t* const census_right_hi = b.census_reversed[1];
@@ -113,14 +209,11 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     const int shift_along = i == 0 ? 0 : bandShift(start, starts[x - dx]);
     const int shift_vertical = shiftFrom(x), shift_back = shiftFrom(x - dx), shift_fwd = shiftFrom(x + dx);
 
-    // SAD: the column one past the window ahead of x is brought to this row over the whole
-    // range (the pixels ahead may search other disparities), then the window sums of the band
-    // are added up. One column early: the band's unaligned loads of a column stored just before
-    // would miss store-to-load forwarding. beginCostRow() brought the first columns up to x0 + r.
-    const int ahead = x + dx * (r + 1);
-    if (src.update_columns && ahead >= 0 && ahead < W) {
-      const EnteringColumn column = enteringColumn(p, b, src, ahead);
-      for (int k = 0; k < Dp; k += kN) updateColumn(column, k);
+    if constexpr (!kCensus) {
+      const int ahead = x + dx * (r + 1);
+      if (ahead >= 0 && ahead < W) {
+        column_first[ahead % kColumnSlots] = bandColumn<kWindow>(p, window, starts, ahead, columnSlot(ahead));
+      }
     }
     const int valid_max = x - p.min_disparity;  // largest disparity index with a right pixel
     const bool border = start + kB - 1 > valid_max;
@@ -157,7 +250,8 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     const uint16_t* columns[kCensus ? 1 : kWindow];
     if constexpr (!kCensus) {
       for (int c = -r; c <= r; ++c) {
-        columns[c + r] = column_sum + static_cast<std::ptrdiff_t>(clampColumn(x + c, W)) * Dp + start;
+        const int column = clampColumn(x + c, W);
+        columns[c + r] = columnSlot(column) + (start - column_first[column % kColumnSlots]);
       }
     }
     // The along-row predecessor when it searched another band: one vector is shifted in
@@ -217,16 +311,25 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       vertical_new[j] = l1;  // stored after every vector has read the old values
       hn::Store(l2, d, back_out + k);
       hn::Store(l3, d, fwd_out + k);
-      mins_along = hn::Min(mins_along, l0);
-      mins_vertical = hn::Min(mins_vertical, l1);
-      mins_back = hn::Min(mins_back, l2);
-      mins_fwd = hn::Min(mins_fwd, l3);
+      if constexpr (kVectors == 1) {  // the path costs themselves (the along path waits for its minimum)
+        mins_along = l0;
+        mins_vertical = l1;
+        mins_back = l2;
+        mins_fwd = l3;
+      } else {
+        mins_along = hn::Min(mins_along, l0);
+        mins_vertical = hn::Min(mins_vertical, l1);
+        mins_back = hn::Min(mins_back, l2);
+        mins_fwd = hn::Min(mins_fwd, l3);
+      }
       VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
       if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
       hn::Store(sum, d, sums_out + k);
-      second_best = hn::Min(second_best, hn::Max(best, sum));
-      best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
-      best = hn::Min(best, sum);
+      if constexpr (kVectors > 1) {  // one vector: flushWinnerBatch() takes them from the sums
+        second_best = hn::Min(second_best, hn::Max(best, sum));
+        best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
+        best = hn::Min(best, sum);
+      }
     }
     for (int j = 0; j < kVectors; ++j) {
       hn::Store(vertical_new[j], d, vertical + j * kN);
@@ -238,9 +341,11 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     min_row_back_out[x + 1] = minLane(d, mins_back);
     if (output == RowOutput::kWinner) {
       const int N = kN;
-      hn::Store(best, d, b.batch_best + slot * N);
-      hn::Store(best_index, d, b.batch_index + slot * N);
-      hn::Store(second_best, d, b.batch_second + slot * N);
+      if constexpr (kVectors > 1) {
+        hn::Store(best, d, b.batch_best + slot * N);
+        hn::Store(best_index, d, b.batch_index + slot * N);
+        hn::Store(second_best, d, b.batch_second + slot * N);
+      }
       if (slot == kWinnerBatch - 1 || i == W - 1) {
         flushWinnerBatch(p, b, i, slot, dx, N, band_first, kB, kB, disparity, confidence);
       }

@@ -152,6 +152,12 @@ struct StripBuffers {
   uint16_t* along[2] = {};     // [N sentinels][Dp][N sentinels]: previous and current pixel
   uint16_t* column_sum = nullptr;  // SAD: [x][Dp] sums over the window rows
   uint8_t* ring = nullptr;         // SAD: window rows of [x][Dp] absolute differences
+  // Band SAD (instead of column_sum and ring): the window's right rows reversed and widened
+  // ([window][reversed_length], slot by image row), and window + 1 columns of sums over those
+  // rows ([window + 1][band_column_stride], slot by image column), see sgm_band-inl.h.
+  uint16_t* band_rows = nullptr;
+  uint16_t* band_columns = nullptr;
+  int band_column_stride = 0;
   uint16_t* running = nullptr;     // SAD: Dp, running horizontal window sum
   uint16_t* sums = nullptr;        // [kWinnerBatch][Dp]: path sums of the pixels awaiting their winner
   uint16_t* batch_best = nullptr;  // [kWinnerBatch][N]: lane-wise minimum of each pixel's sums
@@ -186,7 +192,11 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   const std::size_t rev = b.reversed_length;
   const std::size_t path_row = (W + 2) * b.pixel_stride + 2 * b.lead;
   const std::size_t along = std::max<std::size_t>(Dp + 2 * N, 5 * kBandDisparities);
-  const std::size_t sad = p.census ? 0 : W * Dp + (W * Dp * p.window + 1) / 2;
+  const bool band_sad = band && !p.census;
+  b.band_column_stride = static_cast<int>(alignUp(Dp + N, 64));  // at least a band and a vector
+  const std::size_t sad = p.census ? 0
+                          : band_sad ? p.window * rev + (p.window + 1) * b.band_column_stride
+                                     : W * Dp + (W * Dp * p.window + 1) / 2;
   // Every piece is rounded up to 64 elements by take(); 32 pieces at most.
   const std::size_t total = 4 * (path_row + W + 2) + 2 * along + sad + 2 * Dp +
                             kWinnerBatch * (Dp + 3 * N) + 2 * rev + W +
@@ -207,7 +217,10 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   }
   b.along[0] = take(along);
   b.along[1] = take(along);
-  if (!p.census) {
+  if (band_sad) {
+    b.band_rows = take(p.window * rev);
+    b.band_columns = take((p.window + 1) * b.band_column_stride);
+  } else if (!p.census) {
     b.column_sum = take(W * Dp);
     b.ring = reinterpret_cast<uint8_t*>(take((W * Dp * p.window + 1) / 2));  // window rows of bytes
   }
@@ -236,9 +249,9 @@ int ringSlot(int y, int window) { return ((y % window) + window) % window; }
 
 // Right image row reversed: reversed[j] = row[W - 1 - j], so that the right pixels x - k of one
 // left pixel x are contiguous in k. Left of the image the row repeats its first pixel (those
-// disparities are masked out of the cost).
-template <typename T>
-void reverseRow(const T* row, int width, int length, T* reversed) {
+// disparities are masked out of the cost). `Out` may be wider than `In`.
+template <typename In, typename Out>
+void reverseRow(const In* row, int width, int length, Out* reversed) {
   for (int j = 0; j < width; ++j) reversed[j] = row[width - 1 - j];
   for (int j = width; j < length; ++j) reversed[j] = row[0];
 }
@@ -369,6 +382,15 @@ CostSource beginCostRow(const SgmParams& p, const SgmImages& im, const StripBuff
 
 // ---------------------------------------------------------------------------------------------
 // Aggregation along the paths, and the winner.
+
+// The path cost of a disparity a path pixel does not hold (lanes past D; in the band, outside the
+// pixel's band): it loses against every real predecessor even after + P1. Path costs are at most
+// max_cost + P2; in the band the minimum of a predecessor may be up to max_cost + P2 as well (a
+// pixel's band may miss its predecessor's entirely), so the sentinel must also lose against
+// min + P2 there.
+uint16_t pathSentinel(const SgmParams& p, bool band) {
+  return static_cast<uint16_t>(p.max_cost + (band ? 2 : 1) * p.p2 + p.p1);
+}
 
 // Every path row to "no predecessor": zero costs (so that a path starts with L = C), sentinels in
 // the lanes past D.
@@ -549,7 +571,9 @@ void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const 
 // Winners of the pixels whose best / index / second-best vectors are stored in batch slots
 // 0..slot (slot being row position i of the row swept along dx; N lanes per stored vector). Pixel
 // j's sums are at b.sums + j * b.padded and hold disparities [first[j], first[j] + D) with stride
-// Dp (first null: every pixel from 0).
+// Dp (first null: every pixel from 0). With one vector of sums (Dp == N) the stored vectors are
+// not read (the kernels may skip them): the sums are their own lane-wise minimum, lane k holds
+// disparity k, and no lane has a second value.
 HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int i, int slot, int dx, int N,
                                  const int32_t* first, int D, int Dp, float* disparity, float* confidence) {
   const DU16 d;
@@ -562,8 +586,11 @@ HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int 
     const int first_j = first != nullptr ? first[j] : 0;
     // The right image's minimum first: pickWinner() masks lanes of the sums.
     if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx, first_j, Dp);
-    pickWinner(p, b, xj, sums, hn::Load(d, b.batch_best + j * N), hn::Load(d, b.batch_index + j * N),
-               hn::Load(d, b.batch_second + j * N), batch, j, first_j, D, Dp);
+    const bool one_vector = Dp == N;
+    const VU16 best = hn::Load(d, one_vector ? sums : b.batch_best + j * N);
+    const VU16 best_index = hn::Load(d, one_vector ? b.iota : b.batch_index + j * N);
+    const VU16 second_best = one_vector ? hn::Set(d, kNoCost) : hn::Load(d, b.batch_second + j * N);
+    pickWinner(p, b, xj, sums, best, best_index, second_best, batch, j, first_j, D, Dp);
   }
   finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
 }
@@ -599,7 +626,7 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   const DU16 d;
   const int N = b.lanes, Dp = b.padded, W = p.width, D = p.num_disparities, r = p.window / 2;
   const VU16 p1 = hn::Set(d, static_cast<uint16_t>(p.p1));
-  const uint16_t sentinel = static_cast<uint16_t>(p.max_cost + p.p2 + p.p1);
+  const uint16_t sentinel = pathSentinel(p, false);
   const VU16 sentinel_v = hn::Set(d, sentinel);
   const VU16 worst_cost = hn::Set(d, static_cast<uint16_t>(p.max_cost));
   const auto last_mask = hn::FirstN(d, D - (Dp - N));  // data lanes of the last vector
@@ -780,9 +807,7 @@ void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int 
   const bool band = im.band_start != nullptr;
   StripBuffers b = carveBuffers(p, ws, band);
   const PenaltyTable pen = makePenaltyTable(p);
-  // Band: a predecessor's disparity outside its band must lose even against min + P2 (min <=
-  // max_cost + P2 there, since a pixel's band may miss its predecessor's entirely).
-  const uint16_t sentinel = static_cast<uint16_t>(p.max_cost + (band ? 2 : 1) * p.p2 + p.p1);
+  const uint16_t sentinel = pathSentinel(p, band);
   auto aggregateRow = &aggregateRowFull;
   if (band) {
     switch (p.census ? 0 : p.window) {

@@ -13,6 +13,20 @@ int censusBits(int window_px) { return window_px * window_px - 1; }
 
 bool StereoConfig::usesBand() const { return search == SearchMode::kBand && num_disparities > kBandDisparities; }
 
+StereoConfig StereoConfig::coarseConfig() const {
+  StereoConfig coarse = *this;
+  coarse.search = SearchMode::kFull;
+  coarse.min_disparity_px = min_disparity_px / coarse_scale;
+  coarse.num_disparities = (min_disparity_px + num_disparities + coarse_scale - 1) / coarse_scale - coarse.min_disparity_px;
+  coarse.subpixel = false;
+  coarse.lr_check = false;
+  coarse.invalidate_truncated = false;
+  coarse.min_confidence = 0.0;
+  coarse.p1 = effectiveP1();
+  coarse.p2 = effectiveP2();
+  return coarse;
+}
+
 int StereoConfig::sadPixelRange() const { return prefilter == Prefilter::kSobelX ? 2 * prefilter_cap : 255; }
 
 int StereoConfig::sadShift() const {
@@ -58,6 +72,7 @@ std::vector<ConfigError> StereoConfig::validate() const {
   }
   errors.check(prefilter_cap >= 1 && prefilter_cap <= 127, "prefilter_cap", prefilter_cap, "must be in [1, 127]");
   errors.check(num_paths == 4 || num_paths == 8, "num_paths", num_paths, "must be 4 or 8");
+  errors.check(coarse_scale == 2 || coarse_scale == 4, "coarse_scale", coarse_scale, "must be 2 or 4");
   errors.check(p1 >= -1, "p1", p1, "must be >= 0 (or -1 for the default)");
   errors.check(p2 >= -1, "p2", p2, "must be >= 0 (or -1 for the default)");
   const bool window_ok = window_px >= 1 && window_px <= 9 && prefilter_cap >= 1 && prefilter_cap <= 127;
@@ -93,6 +108,7 @@ void StereoConfig::read(YamlSection& section) {
   std::string search_name = toString(search);
   section.read("search", search_name);
   search = parseSearchMode(search_name);
+  section.read("coarse_scale", coarse_scale);
   section.read("p1", p1);
   section.read("p2", p2);
   section.read("adaptive_p2", adaptive_p2);

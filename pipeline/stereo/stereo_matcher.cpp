@@ -48,18 +48,19 @@ struct MatchLevel {
   detail::SgmImages images;                      // views of the above
 };
 
-// Coarse to fine, per strip: the strip's own half-size match (so that a strip never waits for
+// Coarse to fine, per strip: the strip's own coarse match (so that a strip never waits for
 // another) and the bands placed from it; full image size, only the strip's rows written.
 struct StripBands {
-  cv::Mat coarse_disparity, coarse_confidence;  // CV_32F, half size
+  cv::Mat coarse_disparity, coarse_confidence;  // CV_32F, the coarse size
   cv::Mat band_start;                           // CV_16S: first disparity index searched per pixel
 };
 
 struct StereoMatcher::Impl {
   MatchLevel full;
-  MatchLevel coarse;     // coarse to fine only: the pair halved in size
+  MatchLevel coarse;     // coarse to fine only: the pair shrunk by coarse_scale
   cv::Mat coarse_left, coarse_right;
   std::vector<StripBands> bands;  // one per strip
+  DisparityMap result;            // the last frame's result, shared with the caller
 };
 
 namespace {
@@ -83,19 +84,6 @@ detail::SgmParams paramsOf(const StereoConfig& config) {
   p.invalidate_truncated = config.invalidate_truncated;
   p.lr_max_diff = config.lr_max_diff_px;
   p.min_confidence = static_cast<float>(config.min_confidence);
-  return p;
-}
-
-// The half-size match that places the bands: disparities halved (the range rounded outwards),
-// integer winners only, no checks that would leave pixels without a band.
-detail::SgmParams coarseParamsOf(const detail::SgmParams& full) {
-  detail::SgmParams p = full;
-  p.min_disparity = full.min_disparity / 2;
-  p.num_disparities = (full.min_disparity + full.num_disparities + 1) / 2 - p.min_disparity;
-  p.subpixel = false;
-  p.lr_check = false;
-  p.invalidate_truncated = false;
-  p.min_confidence = 0.0f;
   return p;
 }
 
@@ -156,6 +144,14 @@ void censusTransforms(const std::vector<MatchLevel*>& levels) {
   }
 }
 
+// The memory of this frame's result: the last frame's (`kept`) when the caller no longer holds
+// any of it, so that a frame does not fault in 4 MB of fresh pages at 800x600; else new memory.
+DisparityMap resultBuffers(DisparityMap& kept) {
+  auto onlyHere = [](const cv::Mat& m) { return m.u != nullptr && m.u->refcount == 1; };
+  if (!onlyHere(kept.disparity) || !onlyHere(kept.confidence)) kept = DisparityMap{};
+  return kept;
+}
+
 detail::SgmOutput outputOf(DisparityMap& map, const detail::SgmParams& p) {
   map.disparity.create(p.height, p.width, CV_32FC1);
   map.confidence.create(p.height, p.width, CV_32FC1);
@@ -166,21 +162,40 @@ detail::SgmOutput outputOf(DisparityMap& map, const detail::SgmParams& p) {
   return output;
 }
 
-// First disparity index of each pixel's band, rows [y0, y1): kBandDisparities centred on twice
-// the coarse disparity of the pixel's coarse pixel (index 0 where that has none), kept inside
-// [0, D) and, where the image border cuts the range, on the disparities that have a right pixel.
-void placeBands(const cv::Mat& coarse_disparity, const detail::SgmParams& full, int y0, int y1, cv::Mat& band_start) {
-  const int width = kBandDisparities, D = full.num_disparities;
+// First disparity index of each pixel's band (StereoConfig::bandStart), rows [y0, y1) of a
+// full-size image `width` pixels wide.
+void placeBands(const cv::Mat& coarse_disparity, const StereoConfig& config, int width, int y0, int y1,
+                cv::Mat& band_start) {
+  const int scale = config.coarse_scale;
   for (int y = y0; y < y1; ++y) {
-    const float* coarse = coarse_disparity.ptr<float>(y / 2);
     int16_t* out = band_start.ptr<int16_t>(y);
-    for (int x = 0; x < full.width; ++x) {
-      const float dc = coarse[x / 2];
-      const int centre = std::isfinite(dc) ? 2 * static_cast<int>(dc) - full.min_disparity : 0;
-      const int lo = std::clamp(centre - width / 2, 0, D - width);
-      out[x] = static_cast<int16_t>(std::min(lo, std::max(0, x - full.min_disparity + 1 - width)));
+    if (y > y0 && y % scale != 0) {  // the rows of one coarse row share their bands
+      std::copy_n(band_start.ptr<int16_t>(y - 1), width, out);
+      continue;
     }
+    const float* coarse = coarse_disparity.ptr<float>(y / scale);
+    for (int x = 0; x < width; ++x) out[x] = static_cast<int16_t>(config.bandStart(coarse[x / scale], x));
   }
+}
+
+// First rows of `strips` strips of an image `height` rows high, and `height` at the end. Every
+// strip gets the same number of rows to match, its warm-up rows included (`overlap` above every
+// strip but the first, and with 8 paths below every strip but the last), so that a thread with the
+// first strip does not wait for one with a warm-up. Depends on the image and the settings only,
+// never on the thread count. At least one row per strip (strips <= height).
+std::vector<int> stripBoundaries(int strips, int height, int overlap, bool eight_paths) {
+  std::vector<int> begin(strips + 1, 0);
+  begin[strips] = height;
+  const int sides = eight_paths ? 2 : 1;  // warm-ups per boundary between strips
+  const double rows_per_strip = (height + static_cast<double>(sides) * (strips - 1) * overlap) / strips;
+  for (int s = 1; s < strips; ++s) {
+    // Warm-ups of strips 0 .. s - 1: a top one for each but the first, and with 8 paths a bottom one
+    // for each.
+    const int warmups_before = sides * s - 1;
+    const int y = static_cast<int>(std::lround(s * rows_per_strip - warmups_before * overlap));
+    begin[s] = std::clamp(y, begin[s - 1] + 1, height - (strips - s));
+  }
+  return begin;
 }
 
 }  // namespace
@@ -188,7 +203,7 @@ void placeBands(const cv::Mat& coarse_disparity, const detail::SgmParams& full, 
 StereoMatcher::StereoMatcher(const StereoConfig& config) : config_(config), impl_(std::make_unique<Impl>()) {
   throwIfInvalid(config_.validate(), "stereo configuration");
   impl_->full.params = paramsOf(config_);
-  impl_->coarse.params = coarseParamsOf(impl_->full.params);
+  impl_->coarse.params = paramsOf(config_.coarseConfig());
 }
 
 StereoMatcher::~StereoMatcher() = default;
@@ -207,9 +222,11 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
   const detail::SgmParams& pc = impl.coarse.params;
   p.width = left.cols;
   p.height = left.rows;
-  DisparityMap result;
+  DisparityMap result = resultBuffers(impl.result);
   const detail::SgmOutput output = outputOf(result, p);
+  impl.result = result;
   const int strips = std::min(config_.num_strips, p.height);
+  const std::vector<int> strip_begin = stripBoundaries(strips, p.height, config_.strip_overlap_px, p.eight_paths);
   const int overlap = config_.strip_overlap_px;
   if (static_cast<int>(impl.full.workspaces.size()) < strips) impl.full.workspaces.resize(strips);
   if (band) {
@@ -222,8 +239,8 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
 
   // One parallel region per frame (each region hands work to the other thread, which spins
   // between regions): the two images prepared side by side, the census descriptors, then the
-  // strips. Strips are equal in work but threads may not be equally free (dynamic schedule),
-  // and a strip never waits for another.
+  // strips. Strips are equal in work (stripBoundaries) but threads may not be equally free
+  // (dynamic schedule), and a strip never waits for another.
 #pragma omp parallel
   {
 #pragma omp for schedule(static)
@@ -231,9 +248,9 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
       const cv::Mat& image = side == 0 ? left : right;
       prepareSide(impl.full, config_, image, side == 0);
       if (band) {
-        cv::Mat& half = side == 0 ? impl.coarse_left : impl.coarse_right;
-        halveImage(image, half);
-        prepareSide(impl.coarse, config_, half, side == 0);
+        cv::Mat& coarse = side == 0 ? impl.coarse_left : impl.coarse_right;
+        shrinkImage(image, config_.coarse_scale, coarse);
+        prepareSide(impl.coarse, config_, coarse, side == 0);
       }
     }
 #pragma omp single
@@ -244,23 +261,24 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
     if (!census_levels.empty()) censusTransforms(census_levels);
 #pragma omp for schedule(dynamic, 1)
     for (int s = 0; s < strips; ++s) {
-      const int y0 = s * p.height / strips, y1 = (s + 1) * p.height / strips;
+      const int y0 = strip_begin[s], y1 = strip_begin[s + 1];
       detail::SgmImages images = impl.full.images;
       if (band) {
         // Rows this strip reads (warm-up included), their coarse rows, and the coarse match of
         // those with its own warm-up.
         StripBands& sb = impl.bands[s];
+        const int scale = config_.coarse_scale;
         const int fine_begin = std::max(0, y0 - overlap);
         const int fine_end = p.eight_paths ? std::min(p.height, y1 + overlap) : y1;
-        const int coarse_begin = fine_begin / 2, coarse_end = (fine_end - 1) / 2 + 1;
+        const int coarse_begin = fine_begin / scale, coarse_end = (fine_end - 1) / scale + 1;
         DisparityMap coarse{sb.coarse_disparity, sb.coarse_confidence};
         const detail::SgmOutput coarse_output = outputOf(coarse, pc);
         sb.coarse_disparity = coarse.disparity;
         sb.coarse_confidence = coarse.confidence;
-        detail::matchStrip(pc, impl.coarse.images, coarse_begin, coarse_end, (overlap + 1) / 2,
+        detail::matchStrip(pc, impl.coarse.images, coarse_begin, coarse_end, (overlap + scale - 1) / scale,
                            impl.coarse.workspaces[s], coarse_output);
         sb.band_start.create(p.height, p.width, CV_16SC1);
-        placeBands(sb.coarse_disparity, p, fine_begin, fine_end, sb.band_start);
+        placeBands(sb.coarse_disparity, config_, p.width, fine_begin, fine_end, sb.band_start);
         images.band_start = sb.band_start.ptr<int16_t>();
         images.band_stride = static_cast<std::ptrdiff_t>(sb.band_start.step[0] / sizeof(int16_t));
       }
@@ -268,6 +286,21 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
     }
   }
   return result;
+}
+
+void shrinkImage(const cv::Mat& grey, int scale, cv::Mat& out) {
+  if (scale <= 1) {
+    grey.copyTo(out);
+    return;
+  }
+  cv::Mat half;
+  halveImage(grey, half);
+  for (int s = scale / 2; s > 1; s /= 2) {
+    cv::Mat next;
+    halveImage(half, next);
+    half = next;
+  }
+  out = half;
 }
 
 void halveImage(const cv::Mat& grey, cv::Mat& half) {

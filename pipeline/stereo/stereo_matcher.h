@@ -9,15 +9,16 @@
 //                smallest is nearly always the winner's neighbour and says little about ambiguity
 //                (measured on cones in tests/pipeline/stereo/middlebury_test.cpp)
 //   search:      every disparity of the range, or (SearchMode::kBand) coarse to fine: the pair
-//                halved and matched over the halved range, then kBandDisparities per pixel around
-//                twice its coarse disparity (about 1.4x less CPU at 800x600x112; accuracy in
-//                tests/pipeline/stereo/middlebury_test.cpp)
+//                shrunk by coarse_scale and matched over the shrunk range, then kBandDisparities
+//                per pixel around coarse_scale times its coarse disparity (about 1.7x less CPU at
+//                800x600x112; accuracy in tests/pipeline/stereo/middlebury_test.cpp)
 //   validity:    +inf disparity where the pixel has no right match, fails the optional
 //                left-right check, or falls below min_confidence
 //
 // Threads: match() uses OpenMP over a fixed number of horizontal strips; the result is
 // bit-identical for any thread count. One StereoMatcher must not be used from two threads at once
-// (it owns its working memory, allocated at the first frame and reused).
+// (it owns its working memory, allocated at the first frame and reused). A result's images are
+// reused by a later match() only once every cv::Mat of the caller that shares them is gone.
 #pragma once
 
 #include <memory>
@@ -52,8 +53,10 @@ class StereoMatcher {
 cv::Mat prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap);
 
 // The 2x2 mean of `grey` (CV_8UC1), rounded: (a + b + c + d + 2) / 4; an odd last row or column
-// averages with itself. Size ((cols + 1) / 2, (rows + 1) / 2). The coarse level of SearchMode::kBand.
+// averages with itself. Size ((cols + 1) / 2, (rows + 1) / 2).
 void halveImage(const cv::Mat& grey, cv::Mat& half);
+// `grey` halved log2(scale) times (scale a power of two): the coarse level of SearchMode::kBand.
+void shrinkImage(const cv::Mat& grey, int scale, cv::Mat& out);
 
 // Z = f * b / d per pixel; +inf where the disparity is invalid or not positive.
 // @param focal_px rectified focal length, @param baseline_m stereo baseline.

@@ -33,7 +33,9 @@ BadPixelStats evaluate(const StereoPairWithTruth& pair, const StereoConfig& conf
   DisparityMap map = matcher.match(pair.left, pair.right);
   const BadPixelStats s = test::badPixels(map.disparity, pair);
   std::cout << pair.name << " " << toString(config.cost) << " " << config.window_px << "x" << config.window_px
-            << " " << config.num_paths << " paths, search " << toString(config.search) << ": bad-1 " << s.bad1
+            << " " << config.num_paths << " paths, search " << toString(config.search)
+            << (config.usesBand() ? " coarse_scale " + std::to_string(config.coarse_scale) : std::string())
+            << ": bad-1 " << s.bad1
             << " %, bad-2 " << s.bad2 << " %, density "
             << s.density << " %\n";
   if (out) *out = std::move(map);
@@ -192,6 +194,12 @@ TEST(MiddleburyCones, BandSearchMeetsTheFullSearchThresholds) {
   EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kCensus, 5, 4, SearchMode::kBand)).bad1, 5.5);
   EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kFull)).bad1, 10.0);
   EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kCensus, 5, 4, SearchMode::kFull)).bad1, 5.5);
+  // The other coarse scale (the default is 4: quarter size).
+  for (const MatchingCost cost : {MatchingCost::kSad, MatchingCost::kCensus}) {
+    StereoConfig half = configFor(*pair, cost, cost == MatchingCost::kSad ? 3 : 5, 4, SearchMode::kBand);
+    half.coarse_scale = 2;
+    EXPECT_LE(evaluate(*pair, half).bad1, cost == MatchingCost::kSad ? 10.0 : 5.5);
+  }
 }
 
 TEST(MiddleburyCloth3, BandAndFullSearchBad2NoWorseThanOpenCvSgbm) {

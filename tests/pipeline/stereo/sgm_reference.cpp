@@ -115,44 +115,21 @@ void aggregate(const Volume& cost, const cv::Mat& L, const StereoConfig& c, cons
   }
 }
 
-// The 2x2 mean of the image (rounded; an odd last row or column averages with itself).
-cv::Mat halve(const cv::Mat& grey) {
-  cv::Mat out((grey.rows + 1) / 2, (grey.cols + 1) / 2, CV_8U);
-  for (int y = 0; y < out.rows; ++y) {
-    for (int x = 0; x < out.cols; ++x) {
-      const int sum = pixel(grey, 2 * x, 2 * y) + pixel(grey, 2 * x + 1, 2 * y) + pixel(grey, 2 * x, 2 * y + 1) +
-                      pixel(grey, 2 * x + 1, 2 * y + 1);
-      out.at<uint8_t>(y, x) = static_cast<uint8_t>((sum + 2) / 4);
-    }
-  }
-  return out;
-}
-
 pipeline::DisparityMap match(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c, const Bands& bands);
 
-// Coarse to fine: the half-size match (integer disparities, no checks) centres each pixel's band
-// on twice its coarse disparity, kept inside the range and, where the image border cuts the
-// range, on the disparities that have a right pixel.
-Bands bandsFromHalfSize(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c) {
-  StereoConfig coarse = c;
-  coarse.min_disparity_px = c.min_disparity_px / 2;
-  coarse.num_disparities = (c.min_disparity_px + c.num_disparities + 1) / 2 - coarse.min_disparity_px;
-  coarse.subpixel = false;
-  coarse.lr_check = false;
-  coarse.invalidate_truncated = false;
-  coarse.min_confidence = 0.0;
-  coarse.p1 = c.effectiveP1();
-  coarse.p2 = c.effectiveP2();
-  const cv::Mat coarse_disparity = match(halve(L), halve(R), coarse, Bands{{}, coarse.num_disparities}).disparity;
-  const int width = pipeline::kBandDisparities, D = c.num_disparities;
-  Bands bands{cv::Mat(L.size(), CV_32S), width};
+// Coarse to fine: the match of the shrunk pair (StereoConfig::coarseConfig, shrinkImage) places
+// each pixel's band (StereoConfig::bandStart). These shared helpers are plain scalar code; the
+// coarse match itself is this file's own.
+Bands bandsFromCoarseMatch(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c) {
+  const StereoConfig coarse = c.coarseConfig();
+  cv::Mat coarse_left, coarse_right;
+  pipeline::shrinkImage(L, c.coarse_scale, coarse_left);
+  pipeline::shrinkImage(R, c.coarse_scale, coarse_right);
+  const cv::Mat coarse_disparity = match(coarse_left, coarse_right, coarse, Bands{{}, coarse.num_disparities}).disparity;
+  Bands bands{cv::Mat(L.size(), CV_32S), pipeline::kBandDisparities};
   for (int y = 0; y < L.rows; ++y) {
     for (int x = 0; x < L.cols; ++x) {
-      const float dc = coarse_disparity.at<float>(y / 2, x / 2);
-      const int centre = std::isfinite(dc) ? 2 * static_cast<int>(dc) - c.min_disparity_px : 0;
-      int lo = std::clamp(centre - width / 2, 0, D - width);
-      lo = std::min(lo, std::max(0, x - c.min_disparity_px + 1 - width));
-      bands.start.at<int>(y, x) = lo;
+      bands.start.at<int>(y, x) = c.bandStart(coarse_disparity.at<float>(y / c.coarse_scale, x / c.coarse_scale), x);
     }
   }
   return bands;
@@ -230,7 +207,7 @@ pipeline::DisparityMap match(const cv::Mat& L, const cv::Mat& R, const StereoCon
 }  // namespace
 
 pipeline::DisparityMap referenceSgm(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c) {
-  if (c.usesBand()) return match(L, R, c, bandsFromHalfSize(L, R, c));
+  if (c.usesBand()) return match(L, R, c, bandsFromCoarseMatch(L, R, c));
   return match(L, R, c, Bands{{}, c.num_disparities});
 }
 

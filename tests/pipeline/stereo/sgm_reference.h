@@ -1,7 +1,7 @@
 // sgm_reference.h: a plain scalar semi-global matcher that stores the whole cost volume, written
 // for clarity, not speed. With one strip the SIMD engine must reproduce it bit for bit, in both
-// search modes (SearchMode::kBand: the half-size match, then each pixel's band of disparities with
-// infinite path costs outside it).
+// search modes (SearchMode::kBand: the match of the shrunk pair, then each pixel's band of
+// disparities with infinite path costs outside it).
 #pragma once
 
 #include "pipeline/frame/frames.h"

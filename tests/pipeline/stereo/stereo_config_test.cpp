@@ -109,6 +109,27 @@ TEST(StereoConfig, ReadsSearchModeAndRejectsUnknownName) {
   }
 }
 
+TEST(StereoConfig, CoarseScaleIsTwoOrFourAndShrinksTheRangeOutwards) {
+  YamlSection yaml(YAML::Load("{coarse_scale: 2}"), "stereo", "c.yaml");
+  StereoConfig c;
+  c.read(yaml);
+  yaml.finish();
+  EXPECT_EQ(c.coarse_scale, 2);
+  c.coarse_scale = 3;
+  EXPECT_EQ(errorsOf(c), "stereo.coarse_scale = 3: must be 2 or 4");
+  c.coarse_scale = 4;
+  c.min_disparity_px = 9;
+  c.num_disparities = 112;  // [9, 121) -> [2, 31)
+  const StereoConfig coarse = c.coarseConfig();
+  EXPECT_EQ(coarse.min_disparity_px, 2);
+  EXPECT_EQ(coarse.num_disparities, 29);
+  EXPECT_EQ(coarse.search, SearchMode::kFull);
+  // Band centred on 4 * 20 = 80, i.e. index 71: starts 16 lower; none: 0; cut by the border.
+  EXPECT_EQ(c.bandStart(20.0f, 400), 55);
+  EXPECT_EQ(c.bandStart(INFINITY, 400), 0);
+  EXPECT_EQ(c.bandStart(20.0f, 50), 50 - 9 + 1 - kBandDisparities);
+}
+
 TEST(StereoConfig, ConstructingAMatcherWithAnInvalidConfigThrowsWithEveryRule) {
   StereoConfig c;
   c.num_disparities = 7;

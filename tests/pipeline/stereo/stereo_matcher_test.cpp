@@ -91,6 +91,7 @@ struct ReferenceCase {
   Prefilter prefilter = Prefilter::kSobelX;
   SearchMode search = SearchMode::kFull;
   int disparities = 48;
+  int coarse_scale = StereoConfig().coarse_scale;
 };
 
 class MatchesScalarReference : public ::testing::TestWithParam<ReferenceCase> {};
@@ -112,6 +113,7 @@ TEST_P(MatchesScalarReference, BitForBitWithOneStrip) {
   config.num_paths = rc.paths;
   config.num_disparities = rc.disparities;
   config.search = rc.search;
+  config.coarse_scale = rc.coarse_scale;
   config.min_disparity_px = rc.min_disparity;
   config.adaptive_p2 = rc.adaptive;
   config.lr_check = rc.lr;
@@ -145,6 +147,10 @@ INSTANTIATE_TEST_SUITE_P(
                                     Prefilter::kSobelX, SearchMode::kBand},
                       ReferenceCase{"band_sad3_80_disparities", MatchingCost::kSad, 3, 4, 0, false, false, false,
                                     Prefilter::kSobelX, SearchMode::kBand, 80},
+                      ReferenceCase{"band_sad3_half_size_coarse", MatchingCost::kSad, 3, 4, 0, false, false, false,
+                                    Prefilter::kSobelX, SearchMode::kBand, 80, 2},
+                      ReferenceCase{"band_sad3_half_size_coarse_min_disparity", MatchingCost::kSad, 3, 8, 9, false,
+                                    true, false, Prefilter::kSobelX, SearchMode::kBand, 48, 2},
                       ReferenceCase{"band_census5_4paths", MatchingCost::kCensus, 5, 4, 0, false, false, false,
                                     Prefilter::kSobelX, SearchMode::kBand},
                       ReferenceCase{"band_sad5_8paths", MatchingCost::kSad, 5, 8, 0, false, false, false,
