@@ -29,6 +29,18 @@ double tiledNoise2(double x, double y, int period, uint64_t seed) {
   return a + (b - a) * ty;
 }
 
+// detail::kLog2Poly's approximation of log2(x), x > 0.
+float fastLog2(float x) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof(bits));
+  const float exponent = static_cast<float>(static_cast<int>(bits >> 23) - 127);
+  bits = (bits & 0x007FFFFF) | 0x3F800000;
+  float m;
+  std::memcpy(&m, &bits, sizeof(m));
+  using detail::kLog2Poly;
+  return exponent + (kLog2Poly[0] * m + kLog2Poly[1]) * m + kLog2Poly[2];
+}
+
 }  // namespace
 
 double valueNoise3(double x, double y, double z, uint64_t seed) {
@@ -116,6 +128,38 @@ NoiseTexture::NoiseTexture(int size, uint64_t seed) : size_(size) {
     store(down, n);
     up = std::move(down);
   }
+}
+
+float NoiseTexture::bilinear(int level, float u, float v) const {
+  const int n = size_ >> level;
+  const float scale = std::ldexp(1.0f, -level);
+  // Texel centres of level k sit at (i + 0.5) * 2^k - 0.5 in level-0 coordinates.
+  const float x = (u + 0.5f) * scale - 0.5f, y = (v + 0.5f) * scale - 0.5f;
+  const float fx = std::floor(x), fy = std::floor(y);
+  const float tx = x - fx, ty = y - fy;
+  const int mask = n - 1;
+  const int x0 = static_cast<int>(fx) & mask, y0 = static_cast<int>(fy) & mask;
+  const uint32_t q = quads_[static_cast<size_t>(level_offsets_[level]) + static_cast<size_t>(y0 * n + x0)];
+  const auto t00 = static_cast<float>(q & 0xFF), t10 = static_cast<float>((q >> 8) & 0xFF);
+  const auto t01 = static_cast<float>((q >> 16) & 0xFF), t11 = static_cast<float>(q >> 24);
+  const float a = t00 + (t10 - t00) * tx;
+  const float b = t01 + (t11 - t01) * tx;
+  return (a + (b - a) * ty) * (1.0f / 255.0f);
+}
+
+float NoiseTexture::sample(float u, float v, float footprint_texels) const {
+  // Keep texture coordinates small so that float keeps sub-texel precision far from the origin.
+  // (u * inverse_period is u / period to the bit: the period is a power of two.)
+  const auto period = static_cast<float>(size_);
+  const float inverse_period = std::ldexp(1.0f, -size_log2_);
+  u -= period * std::floor(u * inverse_period);
+  v -= period * std::floor(v * inverse_period);
+  if (footprint_texels <= 1.0f) return bilinear(0, u, v);
+  const float lod = std::min(fastLog2(footprint_texels), static_cast<float>(levels() - 1) - 1e-3f);
+  const int level = static_cast<int>(lod);
+  const float t = lod - static_cast<float>(level);
+  const float a = bilinear(level, u, v);
+  return a + (bilinear(level + 1, u, v) - a) * t;
 }
 
 }  // namespace cenote::pipeline

@@ -60,18 +60,26 @@ void setupTriangle(const SceneMesh& mesh, uint32_t t, const std::vector<Eigen::V
   double px[4], py[4];
   int count = 3;
   if (all_in) {
-    // Off the image: rejected before the plane (the usual case in a chunk at the edge of the view).
     for (int k = 0; k < 3; ++k) {
       px[k] = screen[i[k]].x();
       py[k] = screen[i[k]].y();
     }
-    // Also rejected: no pixel centre within the bounds (a triangle smaller than a pixel, between
-    // centres), which drawTriangle would skip anyway.
-    const double min_x = std::min({px[0], px[1], px[2]}), max_x = std::max({px[0], px[1], px[2]});
-    const double min_y = std::min({py[0], py[1], py[2]}), max_y = std::max({py[0], py[1], py[2]});
-    if (max_x < 0 || max_y < 0 || min_x > cam.width - 1 || min_y > cam.height - 1) return;
-    if (std::ceil(min_x) > std::floor(max_x) || std::ceil(min_y) > std::floor(max_y)) return;
+  } else {
+    std::array<Eigen::Vector3d, 4> poly;
+    count = clipNear(v, near, poly);
+    if (count < 3) return;
+    for (int k = 0; k < count; ++k) {
+      px[k] = cam.fx * poly[k].x() / poly[k].z() + cam.cx;
+      py[k] = cam.fy * poly[k].y() / poly[k].z() + cam.cy;
+    }
   }
+  // Rejected before the plane: off the image (the usual case in a chunk at the edge of the view),
+  // or no pixel centre within the bounds (smaller than a pixel, between centres), which
+  // drawTriangle would skip anyway.
+  const double min_x = *std::min_element(px, px + count), max_x = *std::max_element(px, px + count);
+  const double min_y = *std::min_element(py, py + count), max_y = *std::max_element(py, py + count);
+  if (max_x < 0 || max_y < 0 || min_x > cam.width - 1 || min_y > cam.height - 1) return;
+  if (std::ceil(min_x) > std::floor(max_x) || std::ceil(min_y) > std::floor(max_y)) return;
   Plane plane{(v[1] - v[0]).cross(v[2] - v[0]), 0.0};
   plane.d = plane.n.dot(v[0]);
   // Seen from behind (the winding's normal points away from the camera: d > 0), or edge-on (the
@@ -79,21 +87,6 @@ void setupTriangle(const SceneMesh& mesh, uint32_t t, const std::vector<Eigen::V
   if (!(plane.d < 0.0 && plane.d * plane.d > 1e-24 * plane.n.squaredNorm())) return;
   plane.n = -plane.n;
   plane.d = -plane.d;
-  if (!all_in) {
-    std::array<Eigen::Vector3d, 4> poly;
-    count = clipNear(v, near, poly);
-    if (count < 3) return;
-    double min_x = 1e300, max_x = -1e300, min_y = 1e300, max_y = -1e300;
-    for (int k = 0; k < count; ++k) {
-      px[k] = cam.fx * poly[k].x() / poly[k].z() + cam.cx;
-      py[k] = cam.fy * poly[k].y() / poly[k].z() + cam.cy;
-      min_x = std::min(min_x, px[k]);
-      max_x = std::max(max_x, px[k]);
-      min_y = std::min(min_y, py[k]);
-      max_y = std::max(max_y, py[k]);
-    }
-    if (max_x < 0 || max_y < 0 || min_x > cam.width - 1 || min_y > cam.height - 1) return;
-  }
   RasterTriangle r;
   const double inverse_d = 1.0 / plane.d;  // one division per triangle
   r.a = plane.n.x() * inverse_d / cam.fx;

@@ -21,13 +21,14 @@ Eigen::Vector3f SceneMesh::maxCorner() const {
   return m;
 }
 
-void MeshBuilder::closeChunk(uint32_t first_vertex, uint32_t first_triangle) {
+void MeshBuilder::addChunk(uint32_t first_vertex, uint32_t num_vertices, uint32_t first_triangle,
+                           uint32_t num_triangles) {
+  if (num_triangles == 0) return;
   MeshChunk chunk;
   chunk.first_vertex = first_vertex;
-  chunk.num_vertices = static_cast<uint32_t>(mesh_.vertices.size()) - first_vertex;
+  chunk.num_vertices = num_vertices;
   chunk.first_triangle = first_triangle;
-  chunk.num_triangles = static_cast<uint32_t>(mesh_.triangles.size()) - first_triangle;
-  if (chunk.num_triangles == 0) return;
+  chunk.num_triangles = num_triangles;
   mesh_.chunks.push_back(chunk);
 }
 
@@ -83,12 +84,8 @@ void MeshBuilder::addGrid(int nu, int nv, const std::function<Eigen::Vector3d(in
     }
   }
   for (const Block& block : blocks) {
-    MeshChunk chunk;
-    chunk.first_vertex = block.first_vertex;
-    chunk.num_vertices = static_cast<uint32_t>((block.ni + 1) * (block.nj + 1));
-    chunk.first_triangle = block.first_triangle;
-    chunk.num_triangles = static_cast<uint32_t>(2 * block.ni * block.nj);
-    mesh_.chunks.push_back(chunk);
+    addChunk(block.first_vertex, static_cast<uint32_t>((block.ni + 1) * (block.nj + 1)), block.first_triangle,
+             static_cast<uint32_t>(2 * block.ni * block.nj));
   }
 }
 
@@ -101,7 +98,8 @@ void MeshBuilder::addConvexPolygon(const std::vector<Eigen::Vector3d>& polygon, 
     mesh_.triangles.push_back({first_vertex, first_vertex + i, first_vertex + i + 1});
     mesh_.materials.push_back(material);
   }
-  closeChunk(first_vertex, first_triangle);
+  addChunk(first_vertex, static_cast<uint32_t>(polygon.size()), first_triangle,
+           static_cast<uint32_t>(polygon.size() - 2));
 }
 
 void MeshBuilder::addQuad(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
