@@ -16,6 +16,7 @@ namespace {
 constexpr int kBands = 24;  // fixed work split of the image rows (not the thread count)
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 constexpr double kMaxDepth = std::numeric_limits<double>::max();  // z <= this: finite (and not NaN)
+constexpr int kNarrowRowPixels = 4;  // triangles at most this wide are drawn without a branch per pixel
 
 // One screen-space triangle to draw, with the inverse-depth plane of its mesh triangle.
 struct RasterTriangle {
@@ -137,10 +138,64 @@ inline float select(uint32_t keep, float old, float value) {
   return out;
 }
 
+// Exact depth of `tri` at pixel (px, py) (double, from the inverse-depth plane); +inf where the
+// plane gives none.
+inline float depthAt(const RasterTriangle& tri, int px, int py) {
+  const double z = 1.0 / (tri.a * px + tri.b * py + tri.c);
+  return z > 0 && z <= kMaxDepth ? static_cast<float>(z) : kInfinity;
+}
+
+// Edge functions of a triangle with positive area: edge i runs from vertex i to vertex i + 1 and
+// e_i(x, y) = e0 + ey y + ex x; inside is e >= -tol (a hair outside the edge, so that rounding
+// never opens a crack between neighbours; the z-test settles the overlap).
+struct Edges {
+  double ex[3], ey[3], e0[3], tol[3];
+};
+
+// The pixels of rows [y_begin, y_end] x [x_begin, x_end] inside `tri` and nearer than the
+// inverse-depth buffer take its index and depth. kBranchless: no branch per pixel, the depth
+// divided out for every pixel (on rows of a few pixels, which pixels pass is unpredictable and a
+// mispredicted branch costs more); otherwise a branch, and the division for winners only (on
+// wide rows inside and outside come in long, predictable runs). Both give the same values.
+template <bool kBranchless>
+void drawRows(const RasterTriangle& tri, const Edges& edges, int y_begin, int y_end, int x_begin, int x_end, int row0,
+              int width, float* inv_depth, int32_t* ids, float* depth) {
+  const double* ex = edges.ex;
+  const double* tol = edges.tol;
+  for (int py = y_begin; py <= y_end; ++py) {
+    const size_t row = static_cast<size_t>(py - row0) * width;
+    float* inv_depth_row = inv_depth + row;
+    int32_t* id_row = ids + row;
+    float* depth_row = depth + row;
+    double e[3];
+    for (int i = 0; i < 3; ++i) e[i] = edges.e0[i] + edges.ey[i] * py + ex[i] * x_begin;
+    const double z_row = tri.b * py + tri.c;
+    for (int px = x_begin; px <= x_end; ++px) {
+      const auto inv_z = static_cast<float>(tri.a * px + z_row);
+      const bool inside = (e[0] >= -tol[0]) & (e[1] >= -tol[1]) & (e[2] >= -tol[2]);
+      const bool wins = inside & (inv_z > inv_depth_row[px]);
+      if constexpr (kBranchless) {
+        const float depth_m = depthAt(tri, px, py);
+        const uint32_t keep = wins ? 0u : ~0u;  // bit masks: stores the compiler cannot turn into a branch
+        inv_depth_row[px] = select(keep, inv_depth_row[px], inv_z);
+        depth_row[px] = select(keep, depth_row[px], depth_m);
+        id_row[px] = static_cast<int32_t>((static_cast<uint32_t>(id_row[px]) & keep) |
+                                          (static_cast<uint32_t>(tri.triangle) & ~keep));
+      } else if (wins) {
+        inv_depth_row[px] = inv_z;
+        id_row[px] = tri.triangle;
+        depth_row[px] = depthAt(tri, px, py);
+      }
+      e[0] += ex[0];
+      e[1] += ex[1];
+      e[2] += ex[2];
+    }
+  }
+}
+
 // Draws `tri` into rows [row0, row1): the z-test on the band's inverse-depth buffer (row-major,
 // `width` wide, row0 first); a pixel the triangle wins gets its mesh index and its exact depth
-// (double, from the inverse-depth plane) in `ids` and `depth` (same layout), so nothing needs to
-// look the winner up again.
+// in `ids` and `depth` (same layout), so nothing needs to look the winner up again.
 void drawTriangle(const RasterTriangle& tri, int row0, int row1, int width, float* inv_depth, int32_t* ids,
                   float* depth) {
   double x[3] = {tri.x[0], tri.x[1], tri.x[2]}, y[3] = {tri.y[0], tri.y[1], tri.y[2]};
@@ -155,41 +210,18 @@ void drawTriangle(const RasterTriangle& tri, int row0, int row1, int width, floa
   const int x_begin = std::max(0, static_cast<int>(std::ceil(std::min({x[0], x[1], x[2]}))));
   const int x_end = std::min(width - 1, static_cast<int>(std::floor(std::max({x[0], x[1], x[2]}))));
   if (y_begin > y_end || x_begin > x_end) return;
-  // Edge i runs from vertex i to vertex i + 1; inside is e >= -tolerance (a hair outside the edge, so
-  // that rounding never opens a crack between neighbours; the z-test settles the overlap).
-  double ex[3], ey[3], e0[3], tol[3];
+  Edges edges;
   for (int i = 0; i < 3; ++i) {
     const int j = (i + 1) % 3;
-    ex[i] = -(y[j] - y[i]);  // de/dx
-    ey[i] = x[j] - x[i];     // de/dy
-    e0[i] = -(ex[i] * x[i] + ey[i] * y[i]);
-    tol[i] = 1e-7 * (std::abs(ex[i]) + std::abs(ey[i]));
+    edges.ex[i] = -(y[j] - y[i]);
+    edges.ey[i] = x[j] - x[i];
+    edges.e0[i] = -(edges.ex[i] * x[i] + edges.ey[i] * y[i]);
+    edges.tol[i] = 1e-7 * (std::abs(edges.ex[i]) + std::abs(edges.ey[i]));
   }
-  for (int py = y_begin; py <= y_end; ++py) {
-    const size_t row = static_cast<size_t>(py - row0) * width;
-    float* inv_depth_row = inv_depth + row;
-    int32_t* id_row = ids + row;
-    float* depth_row = depth + row;
-    double e[3];
-    for (int i = 0; i < 3; ++i) e[i] = e0[i] + ey[i] * py + ex[i] * x_begin;
-    const double z_row = tri.b * py + tri.c;
-    for (int px = x_begin; px <= x_end; ++px) {
-      // No branch: which pixels pass (inside and nearer) is hard to predict, and on triangles of a
-      // few pixels a mispredicted branch costs more than the division for every pixel tested.
-      const auto inv_z = static_cast<float>(tri.a * px + z_row);
-      const bool inside = (e[0] >= -tol[0]) & (e[1] >= -tol[1]) & (e[2] >= -tol[2]);
-      const bool wins = inside & (inv_z > inv_depth_row[px]);
-      const double z = 1.0 / (tri.a * px + tri.b * py + tri.c);
-      const float depth_m = z > 0 && z <= kMaxDepth ? static_cast<float>(z) : kInfinity;
-      const uint32_t keep = wins ? 0u : ~0u;  // bit masks: stores the compiler cannot turn into a branch
-      inv_depth_row[px] = select(keep, inv_depth_row[px], inv_z);
-      depth_row[px] = select(keep, depth_row[px], depth_m);
-      id_row[px] = static_cast<int32_t>((static_cast<uint32_t>(id_row[px]) & keep) |
-                                        (static_cast<uint32_t>(tri.triangle) & ~keep));
-      e[0] += ex[0];
-      e[1] += ex[1];
-      e[2] += ex[2];
-    }
+  if (x_end - x_begin < kNarrowRowPixels) {
+    drawRows<true>(tri, edges, y_begin, y_end, x_begin, x_end, row0, width, inv_depth, ids, depth);
+  } else {
+    drawRows<false>(tri, edges, y_begin, y_end, x_begin, x_end, row0, width, inv_depth, ids, depth);
   }
 }
 
