@@ -1,6 +1,8 @@
 // image_io.h: reading and writing the image files of the pipeline.
 //   PFM: float32 maps (Middlebury's format: rows bottom to top, little-endian, +inf = invalid).
-//   PNG/JPG: 8-bit images through OpenCV, with errors that name the file and the problem.
+//   PNG/JPG: 8-bit images through OpenCV, with errors that name the file and the problem; PNGs of
+//            8-bit grey, BGR, BGRA and 16-bit grey are read and written by png_decoder.h and
+//            png_encoder.h (the same pixels, several times faster).
 // Writes go to a temporary file renamed into place, so a crash never leaves half a file.
 #pragma once
 

@@ -45,13 +45,14 @@ HWY_INLINE VF fastExp(DF df, VF x) {
   return hn::Mul(p, hn::BitCast(df, exponent));
 }
 
-// log2(x) for x > 0, as detail::fastLog2 (procedural_noise.h).
+// log2(x) for x > 0: detail::kLog2Poly (procedural_noise.h).
 HWY_INLINE VF fastLog2(DF df, VF x) {
   const DI di;
   const VI bits = hn::BitCast(di, x);
   const VF exponent = hn::ConvertTo(df, hn::Sub(hn::ShiftRight<23>(bits), hn::Set(di, 127)));
   const VF m = hn::BitCast(df, hn::Or(hn::And(bits, hn::Set(di, 0x007FFFFF)), hn::Set(di, 0x3F800000)));
-  const VF poly = hn::MulAdd(hn::MulAdd(hn::Set(df, -0.33985f), m, hn::Set(df, 2.01955f)), m, hn::Set(df, -1.6797f));
+  const VF poly = hn::MulAdd(hn::MulAdd(hn::Set(df, kLog2Poly[0]), m, hn::Set(df, kLog2Poly[1])), m,
+                             hn::Set(df, kLog2Poly[2]));
   return hn::Add(exponent, poly);
 }
 

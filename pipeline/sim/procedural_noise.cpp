@@ -15,18 +15,45 @@ inline double lattice(int64_t x, int64_t y, int64_t z, uint64_t seed) {
   return hashToUnit(hash64(static_cast<uint64_t>(x), static_cast<uint64_t>(y), static_cast<uint64_t>(z), seed)) * 2.0 - 1.0;
 }
 
-// Tileable 2D value noise of period `period` lattice cells.
-double tiledNoise2(double x, double y, int period, uint64_t seed) {
+// The lattice of one tileable 2D value noise: period x period values, computed once per octave
+// (four hashes per texel and octave were most of building a texture). period: a power of two.
+class TiledLattice {
+ public:
+  TiledLattice(int period, uint64_t seed) : period_(period), values_(static_cast<size_t>(period) * period) {
+    for (int j = 0; j < period; ++j) {
+      for (int i = 0; i < period; ++i) values_[static_cast<size_t>(j) * period + i] = lattice(i, j, period, seed);
+    }
+  }
+  // The value at lattice point (i, j), wrapping (i & (period - 1) is i mod period, negative i too).
+  double at(int i, int j) const {
+    return values_[static_cast<size_t>(j & (period_ - 1)) * period_ + static_cast<size_t>(i & (period_ - 1))];
+  }
+
+ private:
+  int period_;
+  std::vector<double> values_;
+};
+
+// Tileable 2D value noise on `lattice` (quintic interpolation between lattice points).
+double tiledNoise2(double x, double y, const TiledLattice& lattice) {
   const double fx = std::floor(x), fy = std::floor(y);
   const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
   const double tx = quintic(x - fx), ty = quintic(y - fy);
-  auto at = [&](int i, int j) {
-    const int wi = ((i % period) + period) % period, wj = ((j % period) + period) % period;
-    return lattice(wi, wj, period, seed);
-  };
-  const double a = at(ix, iy) + (at(ix + 1, iy) - at(ix, iy)) * tx;
-  const double b = at(ix, iy + 1) + (at(ix + 1, iy + 1) - at(ix, iy + 1)) * tx;
+  const double a = lattice.at(ix, iy) + (lattice.at(ix + 1, iy) - lattice.at(ix, iy)) * tx;
+  const double b = lattice.at(ix, iy + 1) + (lattice.at(ix + 1, iy + 1) - lattice.at(ix, iy + 1)) * tx;
   return a + (b - a) * ty;
+}
+
+// detail::kLog2Poly's approximation of log2(x), x > 0.
+float fastLog2(float x) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof(bits));
+  const float exponent = static_cast<float>(static_cast<int>(bits >> 23) - 127);
+  bits = (bits & 0x007FFFFF) | 0x3F800000;
+  float m;
+  std::memcpy(&m, &bits, sizeof(m));
+  using detail::kLog2Poly;
+  return exponent + (kLog2Poly[0] * m + kLog2Poly[1]) * m + kLog2Poly[2];
 }
 
 }  // namespace
@@ -68,6 +95,8 @@ NoiseTexture::NoiseTexture(int size, uint64_t seed) : size_(size) {
   while ((1 << size_log2_) < size) ++size_log2_;
   // Level 0: octaves of period size, size/2, ..., 4 texels, amplitude falling slower than 1/f so
   // that fine detail (what stereo matches on) stays strong.
+  std::vector<TiledLattice> octaves;
+  for (int cells = 1, o = 0; size / cells >= 4; cells *= 2, ++o) octaves.emplace_back(cells, seed + 31 * o);
   std::vector<float> base(static_cast<size_t>(size) * size);
 #pragma omp parallel for schedule(static)  // each texel on its own: the same texture on any thread count
   for (int y = 0; y < size; ++y) {
@@ -75,7 +104,7 @@ NoiseTexture::NoiseTexture(int size, uint64_t seed) : size_(size) {
       double sum = 0.0, amplitude = 1.0;
       for (int cells = 1, o = 0; size / cells >= 4; cells *= 2, ++o) {
         const double scale = static_cast<double>(cells) / size;
-        sum += amplitude * tiledNoise2(x * scale, y * scale, cells, seed + 31 * o);
+        sum += amplitude * tiledNoise2(x * scale, y * scale, octaves[o]);
         amplitude *= 0.72;
       }
       base[static_cast<size_t>(y) * size + x] = static_cast<float>(sum);
@@ -116,6 +145,38 @@ NoiseTexture::NoiseTexture(int size, uint64_t seed) : size_(size) {
     store(down, n);
     up = std::move(down);
   }
+}
+
+float NoiseTexture::bilinear(int level, float u, float v) const {
+  const int n = size_ >> level;
+  const float scale = std::ldexp(1.0f, -level);
+  // Texel centres of level k sit at (i + 0.5) * 2^k - 0.5 in level-0 coordinates.
+  const float x = (u + 0.5f) * scale - 0.5f, y = (v + 0.5f) * scale - 0.5f;
+  const float fx = std::floor(x), fy = std::floor(y);
+  const float tx = x - fx, ty = y - fy;
+  const int mask = n - 1;
+  const int x0 = static_cast<int>(fx) & mask, y0 = static_cast<int>(fy) & mask;
+  const uint32_t q = quads_[static_cast<size_t>(level_offsets_[level]) + static_cast<size_t>(y0 * n + x0)];
+  const auto t00 = static_cast<float>(q & 0xFF), t10 = static_cast<float>((q >> 8) & 0xFF);
+  const auto t01 = static_cast<float>((q >> 16) & 0xFF), t11 = static_cast<float>(q >> 24);
+  const float a = t00 + (t10 - t00) * tx;
+  const float b = t01 + (t11 - t01) * tx;
+  return (a + (b - a) * ty) * (1.0f / 255.0f);
+}
+
+float NoiseTexture::sample(float u, float v, float footprint_texels) const {
+  // Keep texture coordinates small so that float keeps sub-texel precision far from the origin.
+  // (u * inverse_period is u / period to the bit: the period is a power of two.)
+  const auto period = static_cast<float>(size_);
+  const float inverse_period = std::ldexp(1.0f, -size_log2_);
+  u -= period * std::floor(u * inverse_period);
+  v -= period * std::floor(v * inverse_period);
+  if (footprint_texels <= 1.0f) return bilinear(0, u, v);
+  const float lod = std::min(fastLog2(footprint_texels), static_cast<float>(levels() - 1) - 1e-3f);
+  const int level = static_cast<int>(lod);
+  const float t = lod - static_cast<float>(level);
+  const float a = bilinear(level, u, v);
+  return a + (bilinear(level + 1, u, v) - a) * t;
 }
 
 }  // namespace cenote::pipeline

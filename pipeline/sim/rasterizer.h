@@ -9,9 +9,11 @@
 // hull, up from the floors; a back face is always hidden behind a front face, so culling it
 // changes no pixel). Ties keep the triangle that comes first in the mesh.
 // Units: pixels, metres. Frames: camera x right, y down, z forward; T_world_cam maps camera to world.
-// Threads: OpenMP over mesh chunks and over fixed horizontal bands of the image; the output is
-// bit-identical whatever the thread count (each band is drawn by one thread in mesh order). Calls
-// from several threads at once are safe: the scratch buffers a call reuses are per calling thread.
+// Threads: OpenMP over mesh chunks and over fixed horizontal bands of the image; called from
+// inside a parallel region (or with one thread) it draws each triangle as soon as it is set up.
+// The output is bit-identical whatever the thread count (each pixel sees its triangles in mesh
+// order). Calls from several threads at once are safe: the scratch buffers a call reuses are per
+// calling thread.
 #pragma once
 
 #include <Eigen/Geometry>

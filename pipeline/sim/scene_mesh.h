@@ -71,7 +71,8 @@ class MeshBuilder {
   SceneMesh finish();
 
  private:
-  void closeChunk(uint32_t first_vertex, uint32_t first_triangle);
+  // A chunk of the given vertex and triangle ranges (none when it has no triangle).
+  void addChunk(uint32_t first_vertex, uint32_t num_vertices, uint32_t first_triangle, uint32_t num_triangles);
   SceneMesh mesh_;
 };
 

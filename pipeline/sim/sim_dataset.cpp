@@ -117,37 +117,56 @@ void writeGroundTruth(const Simulator& sim, const fs::path& dir) {
   writeText(dir / "groundtruth" / "body.tum", tum.str());
 }
 
+// sampleSurface()'s points of mesh triangle t, appended.
+void sampleTriangle(const Simulator& sim, size_t t, double spacing_m, std::vector<Eigen::Vector3f>& points,
+                    std::vector<std::array<uint8_t, 3>>& colors) {
+  const SceneMesh& mesh = sim.scene().mesh;
+  const auto& tri = mesh.triangles[t];
+  const Eigen::Vector3f a = mesh.vertices[tri[0]], b = mesh.vertices[tri[1]], c = mesh.vertices[tri[2]];
+  // k x k points: about one per spacing^2 of area, and no gap longer than 2 spacings along an edge.
+  const float longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  const double area = 0.5 * (b - a).cross(c - a).norm();
+  const int k = std::max({1, static_cast<int>(std::lround(std::sqrt(area) / spacing_m)),
+                          static_cast<int>(std::ceil(longest / (2.0 * spacing_m)))});
+  auto add = [&](float u, float v) {
+    const Eigen::Vector3f p = a + u * (b - a) + v * (c - a);
+    const Eigen::Array3f albedo =
+        surfaceAlbedo(sim.scene(), sim.texture(), p, static_cast<int>(t), static_cast<float>(spacing_m));
+    std::array<uint8_t, 3> rgb;
+    for (int ch = 0; ch < 3; ++ch) {
+      rgb[ch] = static_cast<uint8_t>(std::lround(255.0f * std::pow(std::clamp(albedo[2 - ch], 0.0f, 1.0f), 1.0f / 2.2f)));
+    }
+    points.push_back(p);
+    colors.push_back(rgb);
+  };
+  for (int i = 0; i < k; ++i) {
+    for (int j = 0; i + j < k; ++j) {
+      add((i + 1.0f / 3.0f) / k, (j + 1.0f / 3.0f) / k);
+      if (i + j + 2 <= k) add((i + 2.0f / 3.0f) / k, (j + 2.0f / 3.0f) / k);
+    }
+  }
+}
+
 }  // namespace
 
 void sampleSurface(const Simulator& sim, const std::vector<uint8_t>& seen, double spacing_m,
                    std::vector<Eigen::Vector3f>& points, std::vector<std::array<uint8_t, 3>>& colors) {
-  const SceneMesh& mesh = sim.scene().mesh;
-  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-    if (!seen[t]) continue;
-    const auto& tri = mesh.triangles[t];
-    const Eigen::Vector3f a = mesh.vertices[tri[0]], b = mesh.vertices[tri[1]], c = mesh.vertices[tri[2]];
-    // k x k points: about one per spacing^2 of area, and no gap longer than 2 spacings along an edge.
-    const float longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-    const double area = 0.5 * (b - a).cross(c - a).norm();
-    const int k = std::max({1, static_cast<int>(std::lround(std::sqrt(area) / spacing_m)),
-                            static_cast<int>(std::ceil(longest / (2.0 * spacing_m)))});
-    auto add = [&](float u, float v) {
-      const Eigen::Vector3f p = a + u * (b - a) + v * (c - a);
-      const Eigen::Array3f albedo = surfaceAlbedo(sim.scene(), sim.texture(), p, static_cast<int>(t),
-                                                  static_cast<float>(spacing_m));
-      std::array<uint8_t, 3> rgb;
-      for (int ch = 0; ch < 3; ++ch) {
-        rgb[ch] = static_cast<uint8_t>(std::lround(255.0f * std::pow(std::clamp(albedo[2 - ch], 0.0f, 1.0f), 1.0f / 2.2f)));
-      }
-      points.push_back(p);
-      colors.push_back(rgb);
-    };
-    for (int i = 0; i < k; ++i) {
-      for (int j = 0; i + j < k; ++j) {
-        add((i + 1.0f / 3.0f) / k, (j + 1.0f / 3.0f) / k);
-        if (i + j + 2 <= k) add((i + 2.0f / 3.0f) / k, (j + 2.0f / 3.0f) / k);
-      }
+  // Runs of triangles on the OpenMP threads, joined in mesh order: the same points in the same
+  // order whatever the thread count.
+  constexpr size_t kRun = 4096;
+  const size_t num_triangles = sim.scene().mesh.triangles.size();
+  const auto runs = static_cast<int>((num_triangles + kRun - 1) / kRun);
+  std::vector<std::vector<Eigen::Vector3f>> run_points(runs);
+  std::vector<std::vector<std::array<uint8_t, 3>>> run_colors(runs);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int r = 0; r < runs; ++r) {
+    for (size_t t = r * kRun; t < std::min(num_triangles, (r + 1) * kRun); ++t) {
+      if (seen[t]) sampleTriangle(sim, t, spacing_m, run_points[r], run_colors[r]);
     }
+  }
+  for (int r = 0; r < runs; ++r) {
+    points.insert(points.end(), run_points[r].begin(), run_points[r].end());
+    colors.insert(colors.end(), run_colors[r].begin(), run_colors[r].end());
   }
 }
 

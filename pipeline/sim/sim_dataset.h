@@ -38,7 +38,8 @@ SimDatasetSummary writeSimDataset(const Simulator& sim, const std::string& out_d
                                   const std::function<void(int)>& progress = {});
 
 // Points on the given mesh triangles, about spacing_m apart (k x k sub-triangle centroids per
-// triangle, k ~ sqrt(area) / spacing), with RGB colours of the surface albedo.
+// triangle, k ~ sqrt(area) / spacing), with RGB colours of the surface albedo, in mesh order.
+// Threads: OpenMP over runs of triangles; the same result on any thread count.
 void sampleSurface(const Simulator& sim, const std::vector<uint8_t>& triangle_seen, double spacing_m,
                    std::vector<Eigen::Vector3f>& points, std::vector<std::array<uint8_t, 3>>& colors);
 
