@@ -15,9 +15,7 @@ namespace {
 
 using Mask = detail::BlockMask;  // one bit per voxel of a block, bit offsetInBlock(ijk)
 using detail::FrontierVoxel;
-
-const BlockIndex kBlockFaces[6] = {BlockIndex(1, 0, 0),  BlockIndex(-1, 0, 0), BlockIndex(0, 1, 0),
-                                   BlockIndex(0, -1, 0), BlockIndex(0, 0, 1),  BlockIndex(0, 0, -1)};
+using detail::kFaceOffsets;  // a voxel's face neighbours; the same offsets give a block's
 
 // The 26 neighbour blocks' offsets.
 const std::array<BlockIndex, 26> kNeighbourBlocks = [] {
@@ -118,9 +116,10 @@ class MaskCache {
 };
 
 // Frontier voxels of a block: free (known, not occupied) with an unknown face neighbour; and for
-// each, its unknown faces (bit i: detail::kFaceOffsets[i]). Words are x slices (word = x), bits y * 8 + z; a
+// each, its unknown faces (bit i: kFaceOffsets[i]). Words are x slices (word = x), bits y * 8 + z; a
 // neighbour across the block's face comes from the neighbouring block's facing layer.
 Mask frontierMask(MaskCache& masks, const BlockIndex& b, std::array<uint8_t, kBlockVoxels>& faces) {
+  constexpr uint64_t kZ0 = detail::kLowBitOfEachByte, kZ7 = detail::kHighBitOfEachByte;
   Mask free_bits;
   const Mask& k = masks.known(b);
   bool any = false;
@@ -130,15 +129,14 @@ Mask frontierMask(MaskCache& masks, const BlockIndex& b, std::array<uint8_t, kBl
   }
   Mask out{};
   if (!any) return out;
-  const Mask& kxp = masks.known(b + kBlockFaces[0]);
-  const Mask& kxm = masks.known(b + kBlockFaces[1]);
-  const Mask& kyp = masks.known(b + kBlockFaces[2]);
-  const Mask& kym = masks.known(b + kBlockFaces[3]);
-  const Mask& kzp = masks.known(b + kBlockFaces[4]);
-  const Mask& kzm = masks.known(b + kBlockFaces[5]);
-  constexpr uint64_t kZ0 = 0x0101010101010101ull, kZ7 = kZ0 << 7;
+  const Mask& kxp = masks.known(b + kFaceOffsets[0]);
+  const Mask& kxm = masks.known(b + kFaceOffsets[1]);
+  const Mask& kyp = masks.known(b + kFaceOffsets[2]);
+  const Mask& kym = masks.known(b + kFaceOffsets[3]);
+  const Mask& kzp = masks.known(b + kFaceOffsets[4]);
+  const Mask& kzm = masks.known(b + kFaceOffsets[5]);
   for (int w = 0; w < 8; ++w) {
-    // Known bits of each face neighbour, in the order of detail::kFaceOffsets.
+    // Known bits of each face neighbour, in the order of kFaceOffsets.
     const uint64_t known_at[6] = {
         w < 7 ? k[w + 1] : kxp[0],
         w > 0 ? k[w - 1] : kxm[7],
@@ -219,8 +217,9 @@ struct FrontierMap::Impl {
     return m;
   }
 
-  // Takes the component `id` apart: its pieces become unassigned, its clusters go.
-  void dissolve(uint32_t id, std::vector<uint32_t>* unassigned_blocks) {
+  // Takes the component `id` apart: its pieces become unassigned (their blocks are appended to
+  // unassigned_blocks), its clusters go.
+  void dissolve(uint32_t id, std::vector<uint32_t>& unassigned_blocks) {
     auto it = components.find(id);
     if (it == components.end()) return;
     for (uint32_t slot : it->second.blocks) {
@@ -228,7 +227,7 @@ struct FrontierMap::Impl {
       for (Piece& p : fb.pieces) {
         if (p.component == id) p.component = 0;
       }
-      if (unassigned_blocks != nullptr) unassigned_blocks->push_back(slot);
+      unassigned_blocks.push_back(slot);
     }
     components.erase(it);
   }
@@ -256,7 +255,7 @@ struct FrontierMap::Impl {
       before.known = masks.known(b);
       before.occupied = masks.occupied(b);
       addBlock(b);
-      for (const BlockIndex& f : kBlockFaces) addBlock(b + f);
+      for (const BlockIndex& f : kFaceOffsets) addBlock(b + f);
     }
     // 2. New frontier masks. A block whose frontier voxels or their faces changed loses its
     // pieces, and the components they belonged to are taken apart (a removed voxel may split one,
@@ -285,7 +284,7 @@ struct FrontierMap::Impl {
     }
     std::sort(dirty.begin(), dirty.end());
     dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
-    for (uint32_t id : dirty) dissolve(id, &relabel);
+    for (uint32_t id : dirty) dissolve(id, relabel);
     // 3. Pieces of the unassigned voxels of each block, a union-find node each.
     sets.clear();
     nodes.clear();
