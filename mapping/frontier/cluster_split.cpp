@@ -11,21 +11,50 @@ namespace {
 
 using Int128 = __int128;
 
+// Sums of small non-negative terms, several at once: 12-bit fields in a 64-bit word, added with
+// one integer add (no field may reach 2^12).
+constexpr int kFieldBits = 12;
+constexpr uint64_t kFieldMask = (1u << kFieldBits) - 1;
+constexpr int field(uint64_t packed, int j) { return static_cast<int>((packed >> (kFieldBits * j)) & kFieldMask); }
+
 // Integer direction into the unknown of each face set (bit i: kFaceOffsets[i]; opposite faces
-// cancel) and its squared norm, 0..3.
+// cancel) and its squared norm, 0..3. packed_dir: the same as Moments::dir of one voxel, 1 added
+// to each of its 9 entries (so that no field is negative): entry 3 (k - 1) + i in field (entry %
+// 5) of word (entry / 5); summed over at most 512 voxels each field stays below 2^12.
 struct FaceTable {
   int8_t d[64][3];
   int8_t norm2[64];
+  uint64_t packed_dir[64][2];
   FaceTable() {
     for (int f = 0; f < 64; ++f) {
       d[f][0] = static_cast<int8_t>((f & 1) - ((f >> 1) & 1));
       d[f][1] = static_cast<int8_t>(((f >> 2) & 1) - ((f >> 3) & 1));
       d[f][2] = static_cast<int8_t>(((f >> 4) & 1) - ((f >> 5) & 1));
       norm2[f] = static_cast<int8_t>(d[f][0] * d[f][0] + d[f][1] * d[f][1] + d[f][2] * d[f][2]);
+      packed_dir[f][0] = packed_dir[f][1] = 0;
+      for (int entry = 0; entry < 9; ++entry) {
+        const int k = entry / 3 + 1, i = entry % 3;
+        const uint64_t value = 1 + (norm2[f] == k ? d[f][i] : 0);
+        packed_dir[f][entry / 5] |= value << (kFieldBits * (entry % 5));
+      }
     }
   }
 };
 const FaceTable kFaceTable;
+
+// y, z, y^2, z^2 and y z of each bit y * 8 + z of a block's word, in fields 0..4: summed over the
+// word's 64 bits each stays below 64 * 49 < 2^12.
+struct SliceTerms {
+  uint64_t packed[64];
+  SliceTerms() {
+    for (uint64_t o = 0; o < 64; ++o) {
+      const uint64_t y = o >> 3, z = o & 7;
+      packed[o] = y | z << kFieldBits | (y * y) << (2 * kFieldBits) | (z * z) << (3 * kFieldBits) |
+                  (y * z) << (4 * kFieldBits);
+    }
+  }
+};
+const SliceTerms kSliceTerms;
 
 // Moments of a set of voxels, coordinates relative to the component's reference voxel (so that
 // sums stay small); exact, so they add and subtract in any order. Wide: the type of the sums of
@@ -68,6 +97,25 @@ struct Moments {
     }
     extendBox(v);
   }
+  // Adds a run whose voxels lie at d + (its relative coordinates): the sums shifted by d, exactly
+  // (sum (d + l)(d + l)^T = sum l l^T + d sum l^T + sum l d^T + n d d^T).
+  void mergeRun(const RunMoments& r, const int64_t d[3]) {
+    const int64_t rn = r.n;
+    n += rn;
+    for (int i = 0; i < 3; ++i) sum[i] += r.sum[i] + rn * d[i];
+    constexpr int kI[6] = {0, 1, 2, 0, 0, 1}, kJ[6] = {0, 1, 2, 1, 2, 2};  // sum2's order
+    for (int k = 0; k < 6; ++k) {
+      const int i = kI[k], j = kJ[k];
+      // |each term| <= 2^9 * 2^21 * 2^21 for a block's run within the map's +-2^20: int64 is exact.
+      sum2[k] += Wide(int64_t{r.sum2[k]} + d[i] * r.sum[j] + d[j] * r.sum[i] + rn * d[i] * d[j]);
+    }
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 3; ++i) dir[k][i] += r.dir[k][i];
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = std::min(lo[i], static_cast<int32_t>(d[i] + r.lo[i]));
+      hi[i] = std::max(hi[i], static_cast<int32_t>(d[i] + r.hi[i]));
+    }
+  }
   void merge(const Moments& o) {
     n += o.n;
     for (int i = 0; i < 3; ++i) sum[i] += o.sum[i];
@@ -109,30 +157,33 @@ struct Plane {
            static_cast<double>(n * r[2] - sum[2]) * axis.z();
   }
   // -1 when side() < 0 for every voxel of the box, +1 when side() >= 0 for every one, else 0. The
-  // side is linear, so its extremes are at the corners; the margin covers rounding (relative
-  // 1e-9, where a double's is 1e-16), so the answer is the one side() gives voxel by voxel.
+  // side is linear, so its extremes are at the two corners picked per axis by the sign of the axis
+  // component; the margin covers rounding (relative 1e-9, where a double's is 1e-16), so the answer
+  // is the one side() gives voxel by voxel.
   template <typename M>
   int classify(const M& box) const {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo, scale = 0.0;
-    for (int c = 0; c < 8; ++c) {
-      const int32_t r[3] = {(c & 1) ? box.hi[0] : box.lo[0], (c & 2) ? box.hi[1] : box.lo[1],
-                            (c & 4) ? box.hi[2] : box.lo[2]};
-      const double s = side(r);
-      lo = std::min(lo, s);
-      hi = std::max(hi, s);
-      for (int i = 0; i < 3; ++i) scale = std::max(scale, std::abs(static_cast<double>(n * r[i] - sum[i])));
+    int32_t low[3], high[3];
+    double scale = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const bool rising = axis[i] >= 0.0;
+      low[i] = rising ? box.lo[i] : box.hi[i];
+      high[i] = rising ? box.hi[i] : box.lo[i];
+      scale = std::max(scale, std::max(std::abs(static_cast<double>(n * box.lo[i] - sum[i])),
+                                       std::abs(static_cast<double>(n * box.hi[i] - sum[i]))));
     }
     const double margin = 1e-9 * 3.0 * scale;
-    if (hi < -margin) return -1;
-    if (lo > margin) return 1;
+    if (side(high) < -margin) return -1;
+    if (side(low) > margin) return 1;
     return 0;
   }
 };
 
-// A run of voxels of the array, with its moments.
+// Voxels [begin, end) of the listed voxels, or the voxels of a block run not listed yet; with
+// their moments.
 template <typename Wide>
 struct Chunk {
   uint32_t begin = 0, end = 0;
+  int32_t run = -1;  // >= 0: the run's index, its voxels not listed yet
   Moments<Wide> m;
 };
 
@@ -142,9 +193,10 @@ class Splitter {
   using M = Moments<Wide>;
   using C = Chunk<Wide>;
 
-  Splitter(FrontierVoxel* voxels, const SplitParams& params, const VoxelIndex& ref, uint64_t& next_id,
-           std::vector<FrontierCluster>& out)
-      : voxels_(voxels), params_(params), ref_(ref), next_id_(next_id), out_(out) {}
+  // runs: those chunks with run >= 0 refer to (may be null when there are none).
+  Splitter(std::vector<FrontierVoxel>& voxels, const std::vector<BlockRun>* runs, const SplitParams& params,
+           const VoxelIndex& ref, uint64_t& next_id, std::vector<FrontierCluster>& out)
+      : voxels_(voxels), runs_(runs), params_(params), ref_(ref), next_id_(next_id), out_(out) {}
 
   void rel(const FrontierVoxel& v, int32_t r[3]) const {
     for (int i = 0; i < 3; ++i) r[i] = v.ijk[i] - ref_[i];
@@ -197,10 +249,13 @@ class Splitter {
   }
 
  private:
-  // Cuts one chunk by the plane, voxel by voxel, in place: ca the low side, cb the rest.
-  void cut(const C& c, const Plane& plane, C& ca, C& cb) {
-    FrontierVoxel* i = voxels_ + c.begin;
-    FrontierVoxel* j = voxels_ + c.end;
+  // Cuts one chunk by the plane, voxel by voxel, in place (a run's voxels are listed first): ca
+  // the low side, cb the rest.
+  void cut(C c, const Plane& plane, C& ca, C& cb) {
+    if (c.run >= 0) list(c);
+    FrontierVoxel* const first = voxels_.data();
+    FrontierVoxel* i = first + c.begin;
+    FrontierVoxel* j = first + c.end;
     while (i < j) {
       int32_t r[3];
       rel(*i, r);
@@ -212,7 +267,7 @@ class Splitter {
         std::swap(*i, *--j);
       }
     }
-    const uint32_t mid = static_cast<uint32_t>(i - voxels_);
+    const uint32_t mid = static_cast<uint32_t>(i - first);
     ca.begin = c.begin;
     ca.end = mid;
     cb.begin = mid;
@@ -222,6 +277,20 @@ class Splitter {
     cb.m.subtractSums(ca.m);
     std::copy(box.lo, box.lo + 3, cb.m.lo);
     std::copy(box.hi, box.hi + 3, cb.m.hi);
+  }
+
+  // Appends the voxels of the chunk's run to the list; the chunk becomes that range.
+  void list(C& c) {
+    const BlockRun& run = (*runs_)[c.run];
+    c.begin = static_cast<uint32_t>(voxels_.size());
+    for (int w = 0; w < 8; ++w) {
+      for (uint64_t rest = (*run.bits)[w]; rest != 0; rest &= rest - 1) {
+        const int o = w * 64 + __builtin_ctzll(rest);
+        voxels_.push_back({voxelOfOffset(run.block, o), (*run.faces)[o]});
+      }
+    }
+    c.end = static_cast<uint32_t>(voxels_.size());
+    c.run = -1;
   }
 
   void emit(const M& m) {
@@ -241,65 +310,148 @@ class Splitter {
     out_.push_back(c);
   }
 
-  FrontierVoxel* voxels_;
+  std::vector<FrontierVoxel>& voxels_;
+  const std::vector<BlockRun>* runs_;
   const SplitParams& params_;
   const VoxelIndex ref_;
   uint64_t& next_id_;
   std::vector<FrontierCluster>& out_;
 };
 
+// One chunk per run, its moments shifted from the run's block to `ref`; no voxel listed yet.
 template <typename Wide>
-void splitWith(std::vector<FrontierVoxel>& voxels, const std::vector<uint32_t>& chunk_ends, const SplitParams& params,
-               const VoxelIndex& ref, uint64_t& next_id, std::vector<FrontierCluster>& out) {
-  Splitter<Wide> splitter(voxels.data(), params, ref, next_id, out);
+void splitWith(const std::vector<BlockRun>& runs, const SplitParams& params, const VoxelIndex& ref, uint64_t& next_id,
+               std::vector<FrontierVoxel>& scratch, std::vector<FrontierCluster>& out) {
+  scratch.clear();
+  Splitter<Wide> splitter(scratch, &runs, params, ref, next_id, out);
   std::vector<Chunk<Wide>> chunks;
+  chunks.reserve(runs.size());
   Moments<Wide> all;
-  uint32_t begin = 0;
-  for (uint32_t end : chunk_ends) {
-    if (end <= begin) continue;
+  for (size_t r = 0; r < runs.size(); ++r) {
+    const BlockRun& run = runs[r];
+    if (run.moments->n == 0) continue;
     Chunk<Wide> c;
-    c.begin = begin;
-    c.end = end;
-    for (uint32_t k = begin; k < end; ++k) {
-      int32_t r[3];
-      splitter.rel(voxels[k], r);
-      c.m.add(r, voxels[k].faces);
-    }
+    c.run = static_cast<int32_t>(r);
+    const VoxelIndex origin = run.block * kBlockSide;
+    const int64_t d[3] = {int64_t{origin.x()} - ref.x(), int64_t{origin.y()} - ref.y(), int64_t{origin.z()} - ref.z()};
+    c.m.mergeRun(*run.moments, d);
     all.merge(c.m);
     chunks.push_back(c);
-    begin = end;
   }
   splitter.split(chunks, all);
 }
 
+// The whole component as one chunk, its moments summed voxel by voxel.
+template <typename Wide>
+void splitWith(std::vector<FrontierVoxel>& voxels, const SplitParams& params, const VoxelIndex& ref,
+               uint64_t& next_id, std::vector<FrontierCluster>& out) {
+  Splitter<Wide> splitter(voxels, nullptr, params, ref, next_id, out);
+  std::vector<Chunk<Wide>> chunks(1);
+  chunks[0].end = static_cast<uint32_t>(voxels.size());
+  for (const FrontierVoxel& v : voxels) {
+    int32_t r[3];
+    splitter.rel(v, r);
+    chunks[0].m.add(r, v.faces);
+  }
+  const Moments<Wide> all = chunks[0].m;
+  splitter.split(chunks, all);
+}
+
+// |sums of products| <= n * extent^2; extent < 2^22 and n < 2^32, so Int128 never overflows.
+bool sumsFitInt64(size_t num_voxels, int64_t extent) {
+  return static_cast<double>(num_voxels) * static_cast<double>(extent) * static_cast<double>(extent) < 0x1p62;
+}
+
 }  // namespace
 
-void splitComponent(std::vector<FrontierVoxel>& voxels, const std::vector<uint32_t>& chunk_ends,
-                    const SplitParams& params, uint64_t& next_id, std::vector<FrontierCluster>& out) {
+RunMoments blockRunMoments(const BlockMask& bits, const std::array<uint8_t, kBlockVoxels>& faces) {
+  RunMoments m;
+  uint64_t dir[2] = {0, 0};  // FaceTable::packed_dir summed
+  uint64_t all = 0;          // the yz-pattern of every x slice
+  bool first = true;
+  for (int x = 0; x < 8; ++x) {
+    if (bits[x] == 0) continue;
+    // The x slice (word x, bit y * 8 + z): its count and packed sums, then weighted by x.
+    int count = 0;
+    uint64_t terms = 0;
+    for (uint64_t rest = bits[x]; rest != 0; rest &= rest - 1) {
+      const int o = __builtin_ctzll(rest);
+      ++count;
+      terms += kSliceTerms.packed[o];
+      const int f = faces[x * 64 + o] & 63;
+      dir[0] += kFaceTable.packed_dir[f][0];
+      dir[1] += kFaceTable.packed_dir[f][1];
+    }
+    const int sy = field(terms, 0), sz = field(terms, 1);
+    m.n += count;
+    m.sum[0] += x * count;
+    m.sum[1] += sy;
+    m.sum[2] += sz;
+    m.sum2[0] += x * x * count;
+    m.sum2[1] += field(terms, 2);
+    m.sum2[2] += field(terms, 3);
+    m.sum2[3] += x * sy;
+    m.sum2[4] += x * sz;
+    m.sum2[5] += field(terms, 4);
+    all |= bits[x];
+    if (first) m.lo[0] = static_cast<int8_t>(x);
+    m.hi[0] = static_cast<int8_t>(x);
+    first = false;
+  }
+  for (int entry = 0; entry < 9; ++entry) m.dir[entry / 3][entry % 3] = field(dir[entry / 5], entry % 5) - m.n;
+  if (all == 0) return m;
+  // y: the non-zero bytes of `all`; z: the bits of its bytes OR-ed together.
+  uint64_t rows = 0;
+  for (int y = 0; y < 8; ++y) rows |= static_cast<uint64_t>(((all >> (8 * y)) & 0xFF) != 0) << y;
+  uint64_t columns = all | (all >> 32);
+  columns |= columns >> 16;
+  columns |= columns >> 8;
+  columns &= 0xFF;
+  m.lo[1] = static_cast<int8_t>(__builtin_ctzll(rows));
+  m.hi[1] = static_cast<int8_t>(63 - __builtin_clzll(rows));
+  m.lo[2] = static_cast<int8_t>(__builtin_ctzll(columns));
+  m.hi[2] = static_cast<int8_t>(63 - __builtin_clzll(columns));
+  return m;
+}
+
+void splitComponent(const std::vector<BlockRun>& runs, const SplitParams& params, uint64_t& next_id,
+                    std::vector<FrontierVoxel>& scratch, std::vector<FrontierCluster>& out) {
+  int64_t n = 0;
+  for (const BlockRun& run : runs) n += run.moments->n;
+  if (n == 0 || n < params.min_voxels) return;
+  // The same reference and extent as from the voxels, from the runs' boxes.
+  VoxelIndex ref = VoxelIndex::Constant(std::numeric_limits<int>::max());
+  for (const BlockRun& run : runs) {
+    if (run.moments->n == 0) continue;
+    for (int i = 0; i < 3; ++i) ref[i] = std::min(ref[i], run.block[i] * kBlockSide + run.moments->lo[i]);
+  }
+  int64_t extent = 0;
+  for (const BlockRun& run : runs) {
+    if (run.moments->n == 0) continue;
+    for (int i = 0; i < 3; ++i) {
+      extent = std::max<int64_t>(extent, run.block[i] * kBlockSide + run.moments->hi[i] - ref[i]);
+    }
+  }
+  if (sumsFitInt64(static_cast<size_t>(n), extent)) {
+    splitWith<int64_t>(runs, params, ref, next_id, scratch, out);
+  } else {
+    splitWith<Int128>(runs, params, ref, next_id, scratch, out);
+  }
+}
+
+void splitComponent(std::vector<FrontierVoxel>& voxels, const SplitParams& params, uint64_t& next_id,
+                    std::vector<FrontierCluster>& out) {
   if (voxels.empty() || static_cast<int64_t>(voxels.size()) < params.min_voxels) return;
   // Reference: the component's lowest corner, which does not depend on the voxels' order.
   VoxelIndex ref = voxels.front().ijk;
   for (const FrontierVoxel& v : voxels) ref = ref.cwiseMin(v.ijk);
   int64_t extent = 0;
   for (const FrontierVoxel& v : voxels) extent = std::max<int64_t>(extent, (v.ijk - ref).maxCoeff());
-  std::vector<uint32_t> whole;
-  const std::vector<uint32_t>* ends = &chunk_ends;
-  if (chunk_ends.empty() || chunk_ends.back() != voxels.size()) {
-    whole.assign(1, static_cast<uint32_t>(voxels.size()));
-    ends = &whole;
-  }
-  // |sums of products| <= n * extent^2; extent < 2^22 and n < 2^32, so Int128 never overflows.
-  const bool fits_int64 = static_cast<double>(voxels.size()) * static_cast<double>(extent) * extent < 0x1p62;
-  if (fits_int64) {
-    splitWith<int64_t>(voxels, *ends, params, ref, next_id, out);
+  if (sumsFitInt64(voxels.size(), extent)) {
+    splitWith<int64_t>(voxels, params, ref, next_id, out);
   } else {
-    splitWith<Int128>(voxels, *ends, params, ref, next_id, out);
+    splitWith<Int128>(voxels, params, ref, next_id, out);
   }
-}
-
-void splitComponent(std::vector<FrontierVoxel>& voxels, const SplitParams& params, uint64_t& next_id,
-                    std::vector<FrontierCluster>& out) {
-  splitComponent(voxels, {}, params, next_id, out);
 }
 
 }  // namespace cenote::mapping::detail

@@ -31,9 +31,10 @@ const std::array<BlockIndex, 26> kNeighbourBlocks = [] {
 // A 26-connected piece of one block's frontier, and the component it belongs to.
 struct Piece {
   Mask bits{};
-  detail::FaceLayers layers;  // of bits
-  uint32_t component = 0;     // 0: not yet assigned (during an update)
-  uint32_t node = 0;          // its union-find node during an update
+  detail::FaceLayers layers;   // of bits
+  detail::RunMoments moments;  // of bits
+  uint32_t component = 0;      // 0: not yet assigned (during an update)
+  uint32_t node = 0;           // its union-find node during an update
 };
 
 // Frontier bits of one block, their unknown faces, and their pieces.
@@ -85,56 +86,67 @@ class UnionFind {
   std::vector<uint32_t> parent_;
 };
 
-// Known / occupied masks of the map's blocks, read once per update through the accessor.
+// Known / occupied masks of blocks during one update. A block some delta named comes from its
+// snapshot: the update has just refreshed the snapshots of its own changed blocks, and a block no
+// delta named since changed nothing (every change comes with a delta, given in order). Any other
+// block is read from the map, once.
 class MaskCache {
  public:
-  explicit MaskCache(const OccupancyMap::ConstAccessor& acc) : acc_(acc) {}
-  const Mask& known(const BlockIndex& b) { return entry(b).known; }
-  const Mask& occupied(const BlockIndex& b) { return entry(b).occupied; }
-
- private:
-  struct Entry {
-    Mask known, occupied;
-  };
-  Entry& entry(const BlockIndex& b) {
+  MaskCache(const OccupancyMap::ConstAccessor& acc, const detail::BlockTable& snapshot_table,
+            const std::deque<StateSnapshot>& snapshots)
+      : acc_(acc), snapshot_table_(snapshot_table), snapshots_(snapshots) {}
+  // Valid for the whole update.
+  const StateSnapshot& of(const BlockIndex& b) {
     if (last_ != nullptr && b == last_block_) return *last_;
-    bool inserted;
-    const uint32_t slot = table_.findOrInsert(detail::packIndex(b), inserted);
-    if (inserted) {
-      entries_.emplace_back();
-      acc_.readBlockMasks(b, entries_.back().known, entries_.back().occupied);
+    const uint64_t key = detail::packIndex(b);
+    const uint32_t snapshot = snapshot_table_.find(key);
+    if (snapshot != detail::BlockTable::kNone) {
+      last_ = &snapshots_[snapshot];
+    } else {
+      bool inserted;
+      const uint32_t slot = table_.findOrInsert(key, inserted);
+      if (inserted) {
+        entries_.emplace_back();
+        acc_.readBlockMasks(b, entries_.back().known, entries_.back().occupied);
+      }
+      last_ = &entries_[slot];
     }
     last_block_ = b;
-    last_ = &entries_[slot];
     return *last_;
   }
+
+ private:
   const OccupancyMap::ConstAccessor& acc_;
-  detail::BlockTable table_;
-  std::deque<Entry> entries_;  // references stay valid as it grows
+  const detail::BlockTable& snapshot_table_;
+  const std::deque<StateSnapshot>& snapshots_;
+  detail::BlockTable table_;           // blocks read from the map -> index in entries_
+  std::deque<StateSnapshot> entries_;  // references stay valid as it grows
   BlockIndex last_block_;
-  Entry* last_ = nullptr;
+  const StateSnapshot* last_ = nullptr;
 };
 
 // Frontier voxels of a block: free (known, not occupied) with an unknown face neighbour; and for
-// each, its unknown faces (bit i: kFaceOffsets[i]). Words are x slices (word = x), bits y * 8 + z; a
-// neighbour across the block's face comes from the neighbouring block's facing layer.
+// each, its unknown faces (bit i: kFaceOffsets[i]) OR-ed into `faces`, which must be zero on entry.
+// Words are x slices (word = x), bits y * 8 + z; a neighbour across the block's face comes from
+// the neighbouring block's facing layer.
 Mask frontierMask(MaskCache& masks, const BlockIndex& b, std::array<uint8_t, kBlockVoxels>& faces) {
   constexpr uint64_t kZ0 = detail::kLowBitOfEachByte, kZ7 = detail::kHighBitOfEachByte;
   Mask free_bits;
-  const Mask& k = masks.known(b);
+  const StateSnapshot& states = masks.of(b);
+  const Mask& k = states.known;
   bool any = false;
   for (int w = 0; w < 8; ++w) {
-    free_bits[w] = k[w] & ~masks.occupied(b)[w];
+    free_bits[w] = k[w] & ~states.occupied[w];
     any |= free_bits[w] != 0;
   }
   Mask out{};
   if (!any) return out;
-  const Mask& kxp = masks.known(b + kFaceOffsets[0]);
-  const Mask& kxm = masks.known(b + kFaceOffsets[1]);
-  const Mask& kyp = masks.known(b + kFaceOffsets[2]);
-  const Mask& kym = masks.known(b + kFaceOffsets[3]);
-  const Mask& kzp = masks.known(b + kFaceOffsets[4]);
-  const Mask& kzm = masks.known(b + kFaceOffsets[5]);
+  const Mask& kxp = masks.of(b + kFaceOffsets[0]).known;
+  const Mask& kxm = masks.of(b + kFaceOffsets[1]).known;
+  const Mask& kyp = masks.of(b + kFaceOffsets[2]).known;
+  const Mask& kym = masks.of(b + kFaceOffsets[3]).known;
+  const Mask& kzp = masks.of(b + kFaceOffsets[4]).known;
+  const Mask& kzm = masks.of(b + kFaceOffsets[5]).known;
   for (int w = 0; w < 8; ++w) {
     // Known bits of each face neighbour, in the order of kFaceOffsets.
     const uint64_t known_at[6] = {
@@ -146,13 +158,11 @@ Mask frontierMask(MaskCache& masks, const BlockIndex& b, std::array<uint8_t, kBl
         ((k[w] << 1) & ~kZ0) | ((kzm[w] & kZ7) >> 7),
     };
     out[w] = free_bits[w] & ~(known_at[0] & known_at[1] & known_at[2] & known_at[3] & known_at[4] & known_at[5]);
-    uint64_t bits = out[w];
-    while (bits != 0) {
-      const int bit = __builtin_ctzll(bits);
-      bits &= bits - 1;
-      uint8_t f = 0;
-      for (int i = 0; i < 6; ++i) f |= static_cast<uint8_t>(((~known_at[i] >> bit) & 1) << i);
-      faces[w * 64 + bit] = f;
+    // Face by face: a frontier voxel has one or two unknown faces, rarely six.
+    for (int i = 0; i < 6; ++i) {
+      for (uint64_t bits = out[w] & ~known_at[i]; bits != 0; bits &= bits - 1) {
+        faces[w * 64 + __builtin_ctzll(bits)] |= static_cast<uint8_t>(1 << i);
+      }
     }
   }
   return out;
@@ -178,8 +188,8 @@ struct FrontierMap::Impl {
   UnionFind sets;
   std::vector<std::pair<uint32_t, uint32_t>> nodes;  // union-find node -> (block slot, piece index)
   std::vector<Mask> new_pieces;
-  std::vector<FrontierVoxel> voxels;
-  std::vector<uint32_t> piece_ends;  // end of each piece's voxels in `voxels`
+  std::vector<detail::BlockRun> runs;  // a component's pieces
+  std::vector<FrontierVoxel> voxels;   // splitComponent's scratch
 
   uint32_t findSlot(const BlockIndex& b) const { return table.find(detail::packIndex(b)); }
   uint32_t getSlot(const BlockIndex& b) {
@@ -236,7 +246,6 @@ struct FrontierMap::Impl {
   // boundary voxels see the changed ones); re-labels the components whose voxels changed.
   void apply(const OccupancyMap& map, const std::vector<BlockIndex>& changed) {
     const auto acc = map.constAccessor();
-    MaskCache masks(acc);
     ++update_number;
     // 1. The region: changed blocks and their face neighbours, each once.
     detail::BlockTable seen;
@@ -246,17 +255,19 @@ struct FrontierMap::Impl {
       seen.findOrInsert(detail::packIndex(b), inserted);
       if (inserted) region.push_back(b);
     };
+    StateSnapshot current;
     for (const BlockIndex& b : changed) {
       bool inserted;
       const uint32_t slot = state_table.findOrInsert(detail::packIndex(b), inserted);
       if (inserted) states.emplace_back();
       StateSnapshot& before = states[slot];
-      if (before.known == masks.known(b) && before.occupied == masks.occupied(b)) continue;
-      before.known = masks.known(b);
-      before.occupied = masks.occupied(b);
+      acc.readBlockMasks(b, current.known, current.occupied);
+      if (before.known == current.known && before.occupied == current.occupied) continue;
+      before = current;
       addBlock(b);
       for (const BlockIndex& f : kFaceOffsets) addBlock(b + f);
     }
+    MaskCache masks(acc, state_table, states);
     // 2. New frontier masks. A block whose frontier voxels or their faces changed loses its
     // pieces, and the components they belonged to are taken apart (a removed voxel may split one,
     // a changed face turns its direction).
@@ -304,6 +315,7 @@ struct FrontierMap::Impl {
         Piece p;
         p.bits = bits;
         p.layers = detail::faceLayers(bits);
+        p.moments = detail::blockRunMoments(bits, fb.faces);
         fb.pieces.push_back(p);
       }
       for (uint32_t i = 0; i < fb.pieces.size(); ++i) {
@@ -354,25 +366,15 @@ struct FrontierMap::Impl {
       Component& comp = components[id];
       std::sort(comp.blocks.begin(), comp.blocks.end());
       comp.blocks.erase(std::unique(comp.blocks.begin(), comp.blocks.end()), comp.blocks.end());
-      voxels.clear();
-      piece_ends.clear();
+      runs.clear();
       for (uint32_t slot : comp.blocks) {
         const FrontierBlock& fb = *blocks[slot];
         for (const Piece& p : fb.pieces) {
-          if (p.component != id) continue;
-          for (int w = 0; w < 8; ++w) {
-            uint64_t bits = p.bits[w];
-            while (bits != 0) {
-              const int o = w * 64 + __builtin_ctzll(bits);
-              bits &= bits - 1;
-              voxels.push_back({voxelOfOffset(fb.index, o), fb.faces[o]});
-            }
-          }
-          piece_ends.push_back(static_cast<uint32_t>(voxels.size()));
+          if (p.component == id) runs.push_back({fb.index, &p.bits, &fb.faces, &p.moments});
         }
       }
       const detail::SplitParams params{s, max_extent_m, min_voxels};
-      detail::splitComponent(voxels, piece_ends, params, next_cluster, comp.clusters);
+      detail::splitComponent(runs, params, next_cluster, voxels, comp.clusters);
     }
   }
 
