@@ -6,6 +6,8 @@
 #include <limits>
 #include <utility>
 
+#include "mapping/detail/block_table.h"
+
 namespace cenote::mapping::detail {
 namespace {
 
@@ -70,32 +72,11 @@ struct Moments {
   int32_t hi[3] = {std::numeric_limits<int32_t>::min(), std::numeric_limits<int32_t>::min(),
                    std::numeric_limits<int32_t>::min()};
 
-  void extendBox(const int32_t v[3]) {
-    for (int i = 0; i < 3; ++i) {
-      lo[i] = std::min(lo[i], v[i]);
-      hi[i] = std::max(hi[i], v[i]);
-    }
-  }
   void extendBox(const Moments& o) {
     for (int i = 0; i < 3; ++i) {
       lo[i] = std::min(lo[i], o.lo[i]);
       hi[i] = std::max(hi[i], o.hi[i]);
     }
-  }
-  void add(const int32_t v[3], uint8_t faces) {
-    ++n;
-    for (int i = 0; i < 3; ++i) sum[i] += v[i];
-    sum2[0] += static_cast<int64_t>(v[0]) * v[0];
-    sum2[1] += static_cast<int64_t>(v[1]) * v[1];
-    sum2[2] += static_cast<int64_t>(v[2]) * v[2];
-    sum2[3] += static_cast<int64_t>(v[0]) * v[1];
-    sum2[4] += static_cast<int64_t>(v[0]) * v[2];
-    sum2[5] += static_cast<int64_t>(v[1]) * v[2];
-    const int f = faces & 63;
-    if (const int k = kFaceTable.norm2[f]; k > 0) {
-      for (int i = 0; i < 3; ++i) dir[k - 1][i] += kFaceTable.d[f][i];
-    }
-    extendBox(v);
   }
   // Adds a run whose voxels lie at d + (its relative coordinates): the sums shifted by d, exactly
   // (sum (d + l)(d + l)^T = sum l l^T + d sum l^T + sum l d^T + n d d^T).
@@ -178,59 +159,97 @@ struct Plane {
   }
 };
 
-// Voxels [begin, end) of the listed voxels, or the voxels of a block run not listed yet; with
-// their moments.
+// Voxels of one block run (a sub-mask of the run's voxels), with their moments.
 template <typename Wide>
 struct Chunk {
-  uint32_t begin = 0, end = 0;
-  int32_t run = -1;  // >= 0: the run's index, its voxels not listed yet
+  uint32_t run = 0;  // index in the runs: the block and its faces
+  BlockMask bits{};
   Moments<Wide> m;
 };
+
+// The bounding box of a block's voxels `bits` (not empty), in-block coordinates.
+void boxOf(const BlockMask& bits, int8_t lo[3], int8_t hi[3]) {
+  uint64_t all = 0;  // the yz-pattern of every x slice
+  lo[0] = -1;
+  for (int x = 0; x < 8; ++x) {
+    if (bits[x] == 0) continue;
+    if (lo[0] < 0) lo[0] = static_cast<int8_t>(x);
+    hi[0] = static_cast<int8_t>(x);
+    all |= bits[x];
+  }
+  // y: the non-zero bytes of `all`; z: the bits of its bytes OR-ed together.
+  uint64_t rows = 0;
+  for (int y = 0; y < 8; ++y) rows |= static_cast<uint64_t>(((all >> (8 * y)) & 0xFF) != 0) << y;
+  uint64_t columns = all | (all >> 32);
+  columns |= columns >> 16;
+  columns |= columns >> 8;
+  columns &= 0xFF;
+  lo[1] = static_cast<int8_t>(__builtin_ctzll(rows));
+  hi[1] = static_cast<int8_t>(63 - __builtin_clzll(rows));
+  lo[2] = static_cast<int8_t>(__builtin_ctzll(columns));
+  hi[2] = static_cast<int8_t>(63 - __builtin_clzll(columns));
+}
 
 template <typename Wide>
 class Splitter {
  public:
   using M = Moments<Wide>;
   using C = Chunk<Wide>;
+  static constexpr uint32_t kNone = ~0u;
 
-  // runs: those chunks with run >= 0 refer to (may be null when there are none).
-  Splitter(std::vector<FrontierVoxel>& voxels, const std::vector<BlockRun>* runs, const SplitParams& params,
-           const VoxelIndex& ref, uint64_t& next_id, std::vector<FrontierCluster>& out)
-      : voxels_(voxels), runs_(runs), params_(params), ref_(ref), next_id_(next_id), out_(out) {}
+  Splitter(const std::vector<BlockRun>& runs, const SplitParams& params, const VoxelIndex& ref, uint64_t& next_id,
+           std::vector<FrontierCluster>& out)
+      : runs_(runs), params_(params), ref_(ref), next_id_(next_id), out_(out) {}
 
-  void rel(const FrontierVoxel& v, int32_t r[3]) const {
-    for (int i = 0; i < 3; ++i) r[i] = v.ijk[i] - ref_[i];
+  // Splits the voxels of all runs, one chunk per run to start with.
+  void splitAll() {
+    std::vector<uint32_t> ids;
+    M all;
+    for (uint32_t r = 0; r < runs_.size(); ++r) {
+      if (runs_[r].moments->n == 0) continue;
+      C c;
+      c.run = r;
+      c.bits = *runs_[r].bits;
+      int64_t d[3];
+      offset(r, d);
+      c.m.mergeRun(*runs_[r].moments, d);
+      all.merge(c.m);
+      ids.push_back(static_cast<uint32_t>(chunks_.size()));
+      chunks_.push_back(c);
+    }
+    split(ids, all);
   }
 
-  // Splits the set made of `chunks` (moments m) across its main axis until small enough. Chunks
-  // wholly on one side of a plane go there whole; only those it cuts are split voxel by voxel.
-  void split(std::vector<C>& chunks, const M& m) {
+ private:
+  // Splits the set made of chunks `ids` (moments m) across its main axis until small enough.
+  // Chunks wholly on one side of a plane go there whole; only those it cuts are split voxel by
+  // voxel.
+  void split(std::vector<uint32_t>& ids, const M& m) {
     if (m.n < params_.min_voxels) return;
     int32_t extent_voxels = 0;
     for (int i = 0; i < 3; ++i) extent_voxels = std::max(extent_voxels, m.hi[i] - m.lo[i] + 1);
     if (extent_voxels * params_.voxel_size_m > params_.max_extent_m && m.n >= 2) {
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m.scaledCovariance());
       const Plane plane{m.n, {m.sum[0], m.sum[1], m.sum[2]}, eig.eigenvectors().col(2)};
-      std::vector<C> low, high;
+      std::vector<uint32_t> low, high;
       M a, b_box;
-      for (const C& c : chunks) {
-        const int where = plane.classify(c.m);
+      for (const uint32_t id : ids) {
+        const int where = plane.classify(chunks_[id].m);
         if (where < 0) {
-          a.merge(c.m);
-          low.push_back(c);
+          a.merge(chunks_[id].m);
+          low.push_back(id);
         } else if (where > 0) {
-          b_box.extendBox(c.m);
-          high.push_back(c);
+          b_box.extendBox(chunks_[id].m);
+          high.push_back(id);
         } else {
-          C ca, cb;
-          cut(c, plane, ca, cb);
-          if (ca.m.n > 0) {
-            a.merge(ca.m);
-            low.push_back(ca);
+          const auto [ia, ib] = cut(id, plane);
+          if (ia != kNone) {
+            a.merge(chunks_[ia].m);
+            low.push_back(ia);
           }
-          if (cb.m.n > 0) {
-            b_box.extendBox(cb.m);
-            high.push_back(cb);
+          if (ib != kNone) {
+            b_box.extendBox(chunks_[ib].m);
+            high.push_back(ib);
           }
         }
       }
@@ -239,7 +258,7 @@ class Splitter {
         b.subtractSums(a);
         std::copy(b_box.lo, b_box.lo + 3, b.lo);
         std::copy(b_box.hi, b_box.hi + 3, b.hi);
-        chunks = std::vector<C>();
+        ids = std::vector<uint32_t>();
         split(low, a);
         split(high, b);
         return;
@@ -248,49 +267,50 @@ class Splitter {
     emit(m);
   }
 
- private:
-  // Cuts one chunk by the plane, voxel by voxel, in place (a run's voxels are listed first): ca
-  // the low side, cb the rest.
-  void cut(C c, const Plane& plane, C& ca, C& cb) {
-    if (c.run >= 0) list(c);
-    FrontierVoxel* const first = voxels_.data();
-    FrontierVoxel* i = first + c.begin;
-    FrontierVoxel* j = first + c.end;
-    while (i < j) {
-      int32_t r[3];
-      rel(*i, r);
-      if (plane.side(r) < 0.0) {
-        ca.m.add(r, i->faces);
-        ++i;
-      } else {
-        cb.m.extendBox(r);
-        std::swap(*i, *--j);
-      }
-    }
-    const uint32_t mid = static_cast<uint32_t>(i - first);
-    ca.begin = c.begin;
-    ca.end = mid;
-    cb.begin = mid;
-    cb.end = c.end;
-    const M box = cb.m;
-    cb.m = c.m;
-    cb.m.subtractSums(ca.m);
-    std::copy(box.lo, box.lo + 3, cb.m.lo);
-    std::copy(box.hi, box.hi + 3, cb.m.hi);
+  // The block's first voxel relative to the reference.
+  void offset(uint32_t run, int64_t d[3]) const {
+    for (int i = 0; i < 3; ++i) d[i] = int64_t{runs_[run].block[i]} * kBlockSide - ref_[i];
   }
 
-  // Appends the voxels of the chunk's run to the list; the chunk becomes that range.
-  void list(C& c) {
-    const BlockRun& run = (*runs_)[c.run];
-    c.begin = static_cast<uint32_t>(voxels_.size());
-    for (int w = 0; w < 8; ++w) {
-      for (uint64_t rest = (*run.bits)[w]; rest != 0; rest &= rest - 1) {
-        const int o = w * 64 + __builtin_ctzll(rest);
-        voxels_.push_back({voxelOfOffset(run.block, o), (*run.faces)[o]});
+  // Cuts chunk `id` by the plane, voxel by voxel: appends its low side (side() < 0) and the rest
+  // as new chunks, returned (kNone where empty).
+  std::pair<uint32_t, uint32_t> cut(uint32_t id, const Plane& plane) {
+    const C c = chunks_[id];
+    const BlockRun& run = runs_[c.run];
+    int64_t d[3];
+    offset(c.run, d);
+    BlockMask low{}, high{};
+    for (int x = 0; x < 8; ++x) {
+      for (uint64_t rest = c.bits[x]; rest != 0; rest &= rest - 1) {
+        const int o = __builtin_ctzll(rest);
+        const int32_t r[3] = {static_cast<int32_t>(d[0] + x), static_cast<int32_t>(d[1] + (o >> 3)),
+                              static_cast<int32_t>(d[2] + (o & 7))};
+        (plane.side(r) < 0.0 ? low : high)[x] |= rest & (~rest + 1);
       }
     }
-    c.end = static_cast<uint32_t>(voxels_.size());
-    c.run = -1;
+    C ca, cb;
+    ca.run = cb.run = c.run;
+    ca.bits = low;
+    cb.bits = high;
+    ca.m.mergeRun(blockRunMoments(low, *run.faces), d);
+    cb.m = c.m;
+    cb.m.subtractSums(ca.m);
+    std::pair<uint32_t, uint32_t> out(kNone, kNone);
+    if (ca.m.n > 0) {
+      out.first = static_cast<uint32_t>(chunks_.size());
+      chunks_.push_back(ca);
+    }
+    if (cb.m.n > 0) {
+      int8_t lo[3], hi[3];
+      boxOf(high, lo, hi);
+      for (int i = 0; i < 3; ++i) {
+        cb.m.lo[i] = static_cast<int32_t>(d[i] + lo[i]);
+        cb.m.hi[i] = static_cast<int32_t>(d[i] + hi[i]);
+      }
+      out.second = static_cast<uint32_t>(chunks_.size());
+      chunks_.push_back(cb);
+    }
+    return out;
   }
 
   void emit(const M& m) {
@@ -310,55 +330,16 @@ class Splitter {
     out_.push_back(c);
   }
 
-  std::vector<FrontierVoxel>& voxels_;
-  const std::vector<BlockRun>* runs_;
+  const std::vector<BlockRun>& runs_;
   const SplitParams& params_;
   const VoxelIndex ref_;
   uint64_t& next_id_;
   std::vector<FrontierCluster>& out_;
+  std::vector<C> chunks_;  // the runs' chunks, then the parts of every cut one
 };
 
-// One chunk per run, its moments shifted from the run's block to `ref`; no voxel listed yet.
-template <typename Wide>
-void splitWith(const std::vector<BlockRun>& runs, const SplitParams& params, const VoxelIndex& ref, uint64_t& next_id,
-               std::vector<FrontierVoxel>& scratch, std::vector<FrontierCluster>& out) {
-  scratch.clear();
-  Splitter<Wide> splitter(scratch, &runs, params, ref, next_id, out);
-  std::vector<Chunk<Wide>> chunks;
-  chunks.reserve(runs.size());
-  Moments<Wide> all;
-  for (size_t r = 0; r < runs.size(); ++r) {
-    const BlockRun& run = runs[r];
-    if (run.moments->n == 0) continue;
-    Chunk<Wide> c;
-    c.run = static_cast<int32_t>(r);
-    const VoxelIndex origin = run.block * kBlockSide;
-    const int64_t d[3] = {int64_t{origin.x()} - ref.x(), int64_t{origin.y()} - ref.y(), int64_t{origin.z()} - ref.z()};
-    c.m.mergeRun(*run.moments, d);
-    all.merge(c.m);
-    chunks.push_back(c);
-  }
-  splitter.split(chunks, all);
-}
-
-// The whole component as one chunk, its moments summed voxel by voxel.
-template <typename Wide>
-void splitWith(std::vector<FrontierVoxel>& voxels, const SplitParams& params, const VoxelIndex& ref,
-               uint64_t& next_id, std::vector<FrontierCluster>& out) {
-  Splitter<Wide> splitter(voxels, nullptr, params, ref, next_id, out);
-  std::vector<Chunk<Wide>> chunks(1);
-  chunks[0].end = static_cast<uint32_t>(voxels.size());
-  for (const FrontierVoxel& v : voxels) {
-    int32_t r[3];
-    splitter.rel(v, r);
-    chunks[0].m.add(r, v.faces);
-  }
-  const Moments<Wide> all = chunks[0].m;
-  splitter.split(chunks, all);
-}
-
 // |sums of products| <= n * extent^2; extent < 2^22 and n < 2^32, so Int128 never overflows.
-bool sumsFitInt64(size_t num_voxels, int64_t extent) {
+bool sumsFitInt64(int64_t num_voxels, int64_t extent) {
   return static_cast<double>(num_voxels) * static_cast<double>(extent) * static_cast<double>(extent) < 0x1p62;
 }
 
@@ -367,8 +348,6 @@ bool sumsFitInt64(size_t num_voxels, int64_t extent) {
 RunMoments blockRunMoments(const BlockMask& bits, const std::array<uint8_t, kBlockVoxels>& faces) {
   RunMoments m;
   uint64_t dir[2] = {0, 0};  // FaceTable::packed_dir summed
-  uint64_t all = 0;          // the yz-pattern of every x slice
-  bool first = true;
   for (int x = 0; x < 8; ++x) {
     if (bits[x] == 0) continue;
     // The x slice (word x, bit y * 8 + z): its count and packed sums, then weighted by x.
@@ -393,33 +372,18 @@ RunMoments blockRunMoments(const BlockMask& bits, const std::array<uint8_t, kBlo
     m.sum2[3] += x * sy;
     m.sum2[4] += x * sz;
     m.sum2[5] += field(terms, 4);
-    all |= bits[x];
-    if (first) m.lo[0] = static_cast<int8_t>(x);
-    m.hi[0] = static_cast<int8_t>(x);
-    first = false;
   }
   for (int entry = 0; entry < 9; ++entry) m.dir[entry / 3][entry % 3] = field(dir[entry / 5], entry % 5) - m.n;
-  if (all == 0) return m;
-  // y: the non-zero bytes of `all`; z: the bits of its bytes OR-ed together.
-  uint64_t rows = 0;
-  for (int y = 0; y < 8; ++y) rows |= static_cast<uint64_t>(((all >> (8 * y)) & 0xFF) != 0) << y;
-  uint64_t columns = all | (all >> 32);
-  columns |= columns >> 16;
-  columns |= columns >> 8;
-  columns &= 0xFF;
-  m.lo[1] = static_cast<int8_t>(__builtin_ctzll(rows));
-  m.hi[1] = static_cast<int8_t>(63 - __builtin_clzll(rows));
-  m.lo[2] = static_cast<int8_t>(__builtin_ctzll(columns));
-  m.hi[2] = static_cast<int8_t>(63 - __builtin_clzll(columns));
+  if (m.n > 0) boxOf(bits, m.lo, m.hi);
   return m;
 }
 
 void splitComponent(const std::vector<BlockRun>& runs, const SplitParams& params, uint64_t& next_id,
-                    std::vector<FrontierVoxel>& scratch, std::vector<FrontierCluster>& out) {
+                    std::vector<FrontierCluster>& out) {
   int64_t n = 0;
   for (const BlockRun& run : runs) n += run.moments->n;
   if (n == 0 || n < params.min_voxels) return;
-  // The same reference and extent as from the voxels, from the runs' boxes.
+  // Reference: the component's lowest corner, which does not depend on the voxels' order.
   VoxelIndex ref = VoxelIndex::Constant(std::numeric_limits<int>::max());
   for (const BlockRun& run : runs) {
     if (run.moments->n == 0) continue;
@@ -432,26 +396,36 @@ void splitComponent(const std::vector<BlockRun>& runs, const SplitParams& params
       extent = std::max<int64_t>(extent, run.block[i] * kBlockSide + run.moments->hi[i] - ref[i]);
     }
   }
-  if (sumsFitInt64(static_cast<size_t>(n), extent)) {
-    splitWith<int64_t>(runs, params, ref, next_id, scratch, out);
+  if (sumsFitInt64(n, extent)) {
+    Splitter<int64_t>(runs, params, ref, next_id, out).splitAll();
   } else {
-    splitWith<Int128>(runs, params, ref, next_id, scratch, out);
+    Splitter<Int128>(runs, params, ref, next_id, out).splitAll();
   }
 }
 
-void splitComponent(std::vector<FrontierVoxel>& voxels, const SplitParams& params, uint64_t& next_id,
+void splitComponent(const std::vector<FrontierVoxel>& voxels, const SplitParams& params, uint64_t& next_id,
                     std::vector<FrontierCluster>& out) {
-  if (voxels.empty() || static_cast<int64_t>(voxels.size()) < params.min_voxels) return;
-  // Reference: the component's lowest corner, which does not depend on the voxels' order.
-  VoxelIndex ref = voxels.front().ijk;
-  for (const FrontierVoxel& v : voxels) ref = ref.cwiseMin(v.ijk);
-  int64_t extent = 0;
-  for (const FrontierVoxel& v : voxels) extent = std::max<int64_t>(extent, (v.ijk - ref).maxCoeff());
-  if (sumsFitInt64(voxels.size(), extent)) {
-    splitWith<int64_t>(voxels, params, ref, next_id, out);
-  } else {
-    splitWith<Int128>(voxels, params, ref, next_id, out);
+  // One run per block, blocks in ascending packed order.
+  std::vector<uint64_t> keys;
+  for (const FrontierVoxel& v : voxels) keys.push_back(packIndex(blockOf(v.ijk)));
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<BlockMask> bits(keys.size(), BlockMask{});
+  std::vector<std::array<uint8_t, kBlockVoxels>> faces(keys.size());
+  for (auto& f : faces) f.fill(0);
+  for (const FrontierVoxel& v : voxels) {
+    const size_t i = std::lower_bound(keys.begin(), keys.end(), packIndex(blockOf(v.ijk))) - keys.begin();
+    const int o = offsetInBlock(v.ijk);
+    bits[i][o >> 6] |= 1ull << (o & 63);
+    faces[i][o] = v.faces;
   }
+  std::vector<RunMoments> moments(keys.size());
+  std::vector<BlockRun> runs(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i) {
+    moments[i] = blockRunMoments(bits[i], faces[i]);
+    runs[i] = {unpackIndex(keys[i]), &bits[i], &faces[i], &moments[i]};
+  }
+  splitComponent(runs, params, next_id, out);
 }
 
 }  // namespace cenote::mapping::detail

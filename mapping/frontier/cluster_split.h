@@ -57,15 +57,15 @@ struct BlockRun {
   const RunMoments* moments = nullptr;                       // blockRunMoments(*bits, *faces)
 };
 
-// Appends the clusters of `voxels` (one connected component) to `out`, ids taken from next_id
-// (incremented per cluster, in a fixed order for a given set of voxels). `voxels` is reordered.
-// Indices must lie within +-2^20 (the map's limit). Empty input: no cluster.
-void splitComponent(std::vector<FrontierVoxel>& voxels, const SplitParams& params, uint64_t& next_id,
+// Appends the clusters of `voxels` (distinct voxels, one connected component) to `out`, ids taken
+// from next_id (incremented per cluster, in a fixed order for a given set of voxels). Indices must
+// lie within +-2^20 (the map's limit). Empty input: no cluster.
+void splitComponent(const std::vector<FrontierVoxel>& voxels, const SplitParams& params, uint64_t& next_id,
                     std::vector<FrontierCluster>& out);
-// The same clusters for the voxels of `runs` (one connected component), faster: a run wholly on
-// one side of a splitting plane moves as a whole, by its moments; only the runs a plane cuts are
-// listed voxel by voxel, into `scratch` (working space, its contents replaced).
+// The same for the voxels of `runs` (one connected component, each voxel in one run), without
+// listing them: a run wholly on one side of a splitting plane moves as a whole, by its moments;
+// only the runs a plane cuts are gone through voxel by voxel.
 void splitComponent(const std::vector<BlockRun>& runs, const SplitParams& params, uint64_t& next_id,
-                    std::vector<FrontierVoxel>& scratch, std::vector<FrontierCluster>& out);
+                    std::vector<FrontierCluster>& out);
 
 }  // namespace cenote::mapping::detail

@@ -14,7 +14,6 @@ namespace cenote::mapping {
 namespace {
 
 using Mask = detail::BlockMask;  // one bit per voxel of a block, bit offsetInBlock(ijk)
-using detail::FrontierVoxel;
 using detail::kFaceOffsets;  // a voxel's face neighbours; the same offsets give a block's
 
 // The 26 neighbour blocks' offsets.
@@ -189,7 +188,6 @@ struct FrontierMap::Impl {
   std::vector<std::pair<uint32_t, uint32_t>> nodes;  // union-find node -> (block slot, piece index)
   std::vector<Mask> new_pieces;
   std::vector<detail::BlockRun> runs;  // a component's pieces
-  std::vector<FrontierVoxel> voxels;   // splitComponent's scratch
 
   uint32_t findSlot(const BlockIndex& b) const { return table.find(detail::packIndex(b)); }
   uint32_t getSlot(const BlockIndex& b) {
@@ -374,7 +372,7 @@ struct FrontierMap::Impl {
         }
       }
       const detail::SplitParams params{s, max_extent_m, min_voxels};
-      detail::splitComponent(runs, params, next_cluster, voxels, comp.clusters);
+      detail::splitComponent(runs, params, next_cluster, comp.clusters);
     }
   }
 
