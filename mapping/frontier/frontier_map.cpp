@@ -43,6 +43,7 @@ struct FrontierBlock {
   std::array<uint8_t, kBlockVoxels> faces{};  // unknown face neighbours where frontier, else 0
   std::vector<Piece> pieces;
   uint32_t mark = 0;  // update number that last queued it for labelling
+  std::array<uint32_t, 26> around;  // slots of the kNeighbourBlocks, BlockTable::kNone where none
 };
 
 // A connected component of the frontier: the blocks holding its pieces, and its clusters.
@@ -91,9 +92,12 @@ class UnionFind {
 // block is read from the map, once.
 class MaskCache {
  public:
+  // table: scratch kept for its capacity (cleared here).
   MaskCache(const OccupancyMap::ConstAccessor& acc, const detail::BlockTable& snapshot_table,
-            const std::deque<StateSnapshot>& snapshots)
-      : acc_(acc), snapshot_table_(snapshot_table), snapshots_(snapshots) {}
+            const std::deque<StateSnapshot>& snapshots, detail::BlockTable& table)
+      : acc_(acc), snapshot_table_(snapshot_table), snapshots_(snapshots), table_(table) {
+    table_.clear();
+  }
   // Valid for the whole update.
   const StateSnapshot& of(const BlockIndex& b) {
     if (last_ != nullptr && b == last_block_) return *last_;
@@ -118,7 +122,7 @@ class MaskCache {
   const OccupancyMap::ConstAccessor& acc_;
   const detail::BlockTable& snapshot_table_;
   const std::deque<StateSnapshot>& snapshots_;
-  detail::BlockTable table_;           // blocks read from the map -> index in entries_
+  detail::BlockTable& table_;          // blocks read from the map -> index in entries_
   std::deque<StateSnapshot> entries_;  // references stay valid as it grows
   BlockIndex last_block_;
   const StateSnapshot* last_ = nullptr;
@@ -188,6 +192,7 @@ struct FrontierMap::Impl {
   std::vector<std::pair<uint32_t, uint32_t>> nodes;  // union-find node -> (block slot, piece index)
   std::vector<Mask> new_pieces;
   std::vector<detail::BlockRun> runs;  // a component's pieces
+  detail::BlockTable region_table, read_table;
 
   uint32_t findSlot(const BlockIndex& b) const { return table.find(detail::packIndex(b)); }
   uint32_t getSlot(const BlockIndex& b) {
@@ -195,7 +200,13 @@ struct FrontierMap::Impl {
     const uint32_t slot = table.findOrInsert(detail::packIndex(b), inserted);
     if (inserted) {
       blocks.push_back(std::make_unique<FrontierBlock>());
-      blocks.back()->index = b;
+      FrontierBlock& fb = *blocks.back();
+      fb.index = b;
+      // kNeighbourBlocks is symmetric: offset 25 - n is the opposite of offset n.
+      for (int n = 0; n < 26; ++n) {
+        fb.around[n] = findSlot(b + kNeighbourBlocks[n]);
+        if (fb.around[n] != detail::BlockTable::kNone) blocks[fb.around[n]]->around[25 - n] = slot;
+      }
     }
     return slot;
   }
@@ -246,11 +257,11 @@ struct FrontierMap::Impl {
     const auto acc = map.constAccessor();
     ++update_number;
     // 1. The region: changed blocks and their face neighbours, each once.
-    detail::BlockTable seen;
+    region_table.clear();
     std::vector<BlockIndex> region;
     auto addBlock = [&](const BlockIndex& b) {
       bool inserted;
-      seen.findOrInsert(detail::packIndex(b), inserted);
+      region_table.findOrInsert(detail::packIndex(b), inserted);
       if (inserted) region.push_back(b);
     };
     StateSnapshot current;
@@ -265,7 +276,7 @@ struct FrontierMap::Impl {
       addBlock(b);
       for (const BlockIndex& f : kFaceOffsets) addBlock(b + f);
     }
-    MaskCache masks(acc, state_table, states);
+    MaskCache masks(acc, state_table, states, read_table);
     // 2. New frontier masks. A block whose frontier voxels or their faces changed loses its
     // pieces, and the components they belonged to are taken apart (a removed voxel may split one,
     // a changed face turns its direction).
@@ -326,9 +337,7 @@ struct FrontierMap::Impl {
     // unassigned one is merged with it: that component is taken apart, its pieces joined at once
     // (they are connected).
     for (uint32_t slot : queued) {
-      const BlockIndex b = blocks[slot]->index;
-      std::array<uint32_t, 26> around;
-      for (int n = 0; n < 26; ++n) around[n] = findSlot(b + kNeighbourBlocks[n]);
+      const std::array<uint32_t, 26> around = blocks[slot]->around;
       for (uint32_t i = 0; i < blocks[slot]->pieces.size(); ++i) {
         const Piece& p = blocks[slot]->pieces[i];
         if (p.component != 0) continue;
