@@ -5,34 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 
 #include "mapping/integration/voxel_ray.h"
 
 namespace cenote::mapping {
 namespace {
-
-// One chunk's block masks, found by block index through an open-addressing table.
-class MaskWriter {
- public:
-  MaskWriter(detail::BlockTable& table, std::vector<BlockMasks>& masks) : table_(table), masks_(masks) {}
-
-  // The masks of a block, created empty when new. The pointer is valid until the next call.
-  BlockMasks* masksOf(const BlockIndex& b) {
-    bool inserted;
-    const uint32_t slot = table_.findOrInsert(detail::packIndex(b), inserted);
-    if (inserted) masks_.emplace_back();
-    return &masks_[slot];
-  }
-  void setHit(const VoxelIndex& ijk) {
-    const int o = offsetInBlock(ijk);
-    masksOf(blockOf(ijk))->hit[o >> 6] |= 1ull << (o & 63);
-  }
-
- private:
-  detail::BlockTable& table_;
-  std::vector<BlockMasks>& masks_;
-};
 
 // The grid a ray is marched on: cells of 2^(3 - kShift) voxels per side, 2^kShift per block side
 // (kShift 3: voxels; 2: the 2x2x2-voxel cells of coarse clearing, 5.; cell c holds voxels 2c and
@@ -61,7 +38,7 @@ struct CellGrid {
 // Returns false when the visitor stopped the walk.
 template <int kShift, typename Visit>
 bool march(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double cell_m, bool include_end,
-           MaskWriter& writer, Visit visit) {
+           BatchUpdates& writer, Visit visit) {
   using Grid = CellGrid<kShift>;
   const VoxelIndex key_start = toVoxel(start_m, cell_m);
   const VoxelIndex key_end = toVoxel(end_m, cell_m);
@@ -185,38 +162,6 @@ struct CarveCellsUntilRun {
 
 }  // namespace
 
-namespace {
-
-// Unique endpoint voxels of points [begin, end) with their colour sums, into one chunk's scratch.
-// Neighbouring pixels mostly fall into the same voxel (6 pixels per 5 cm voxel at 5 m): the last
-// voxel's slot is kept, which skips most hash lookups.
-void collectEndpoints(const PointBatch& batch, size_t begin, size_t end, double voxel_size_m, RayBatch::Chunk& chunk) {
-  const bool colored = batch.hasColor();
-  VoxelIndex last_ijk(std::numeric_limits<int>::min(), 0, 0);
-  uint32_t slot = 0;
-  for (size_t i = begin; i < end; ++i) {
-    const VoxelIndex ijk = toVoxel(batch.points[i].cast<double>(), voxel_size_m);
-    if (ijk != last_ijk) {
-      bool inserted;
-      slot = chunk.endpoint_table.findOrInsert(detail::packIndex(ijk), inserted);
-      last_ijk = ijk;
-      if (inserted) {
-        chunk.endpoints.push_back(ijk);
-        if (colored) chunk.color_sums.push_back({0, 0, 0, 0});
-      }
-    }
-    if (colored) {
-      auto& sum = chunk.color_sums[slot];
-      sum[0] += batch.colors[i][0];
-      sum[1] += batch.colors[i][1];
-      sum[2] += batch.colors[i][2];
-      sum[3] += 1;
-    }
-  }
-}
-
-}  // namespace
-
 void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads, int stop_run) {
   const bool exact = stop_run <= 0;
   // 1. A fixed number of chunks of consecutive points (image bands), each deduplicated and marched
@@ -231,14 +176,14 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
   for (int c = 0; c < num_chunks; ++c) {
     Chunk& chunk = chunks_[c];
-    chunk.table.clear();
-    chunk.masks.clear();
-    chunk.endpoint_table.clear();
+    chunk.updates.clearMasks();
     chunk.endpoints.clear();
-    chunk.color_sums.clear();
-    collectEndpoints(batch, n * c / num_chunks, n * (c + 1) / num_chunks, voxel_size_m, chunk);
-    MaskWriter writer(chunk.table, chunk.masks);
-    for (const VoxelIndex& endpoint : chunk.endpoints) {
+    for (size_t i = n * c / num_chunks; i < n * (c + 1) / num_chunks; ++i) {
+      chunk.endpoints.add(toVoxel(batch.points[i].cast<double>(), voxel_size_m),
+                          batch.hasColor() ? batch.colors[i].data() : nullptr);
+    }
+    BatchUpdates& writer = chunk.updates;
+    for (const VoxelIndex& endpoint : chunk.endpoints.voxels()) {
       const Eigen::Vector3d end = voxelCentre(endpoint, voxel_size_m);
       const Eigen::Vector3d ray = end - origin;
       const double range = ray.norm();
@@ -264,61 +209,20 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
     }
   }
   num_rays_ = 0;
-  for (int c = 0; c < num_chunks; ++c) num_rays_ += chunks_[c].endpoints.size();
+  for (int c = 0; c < num_chunks; ++c) num_rays_ += chunks_[c].endpoints.voxels().size();
 
-  // 2. Union of the chunks' masks into chunk 0's table.
-  Chunk& first = chunks_[0];
-  for (int c = 1; c < num_chunks; ++c) {
-    Chunk& other = chunks_[c];
-    for (uint32_t b = 0; b < other.table.size(); ++b) {
-      bool inserted;
-      const uint32_t slot = first.table.findOrInsert(other.table.keyOf(b), inserted);
-      if (inserted) first.masks.emplace_back();
-      for (int w = 0; w < 8; ++w) {
-        first.masks[slot].free[w] |= other.masks[b].free[w];
-        first.masks[slot].hit[w] |= other.masks[b].hit[w];
-      }
-    }
-  }
-  masks_.swap(first.masks);
-  first.masks.clear();
-  for (BlockMasks& m : masks_) {
-    for (int w = 0; w < 8; ++w) m.free[w] &= ~m.hit[w];
-  }
-  order_.resize(masks_.size());
-  std::iota(order_.begin(), order_.end(), 0u);
-  std::sort(order_.begin(), order_.end(),
-            [&](uint32_t a, uint32_t b) { return first.table.keyOf(a) < first.table.keyOf(b); });
-  blocks_.resize(order_.size());
-  for (size_t i = 0; i < order_.size(); ++i) blocks_[i] = detail::unpackIndex(first.table.keyOf(order_[i]));
+  // 2. Union of the chunks' masks, taken over from chunk 0.
+  for (int c = 1; c < num_chunks; ++c) chunks_[0].updates.unite(chunks_[c].updates);
+  swapMasks(chunks_[0].updates);
 
   // 3. Mean colours of the hit voxels, over all chunks (an endpoint voxel may span two bands).
-  colors_.clear();
-  if (!batch.hasColor()) return;
-  endpoint_table_.clear();
   endpoints_.clear();
-  color_sums_.clear();
-  for (int c = 0; c < num_chunks; ++c) {
-    const Chunk& chunk = chunks_[c];
-    for (size_t e = 0; e < chunk.endpoints.size(); ++e) {
-      bool inserted;
-      const uint32_t slot = endpoint_table_.findOrInsert(detail::packIndex(chunk.endpoints[e]), inserted);
-      if (inserted) {
-        endpoints_.push_back(chunk.endpoints[e]);
-        color_sums_.push_back({0, 0, 0, 0});
-      }
-      for (int k = 0; k < 4; ++k) color_sums_[slot][k] += chunk.color_sums[e][k];
-    }
+  if (batch.hasColor()) {
+    for (int c = 0; c < num_chunks; ++c) endpoints_.merge(chunks_[c].endpoints);
   }
-  for (size_t i = 0; i < endpoints_.size(); ++i) {
-    const auto& sum = color_sums_[i];
-    const Eigen::Vector3d end = voxelCentre(endpoints_[i], voxel_size_m);
-    if (limited && (end - origin).norm() > max_range_m) continue;
-    const uint32_t c = sum[3];
-    colors_.push_back({endpoints_[i],
-                       {static_cast<uint8_t>((sum[0] + c / 2) / c), static_cast<uint8_t>((sum[1] + c / 2) / c),
-                        static_cast<uint8_t>((sum[2] + c / 2) / c)}});
-  }
+  finish(endpoints_, batch.hasColor(), [&](const VoxelIndex& ijk) {
+    return !limited || (voxelCentre(ijk, voxel_size_m) - origin).norm() <= max_range_m;
+  });
 }
 
 }  // namespace cenote::mapping
