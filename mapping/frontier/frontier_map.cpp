@@ -256,13 +256,20 @@ struct FrontierMap::Impl {
   void apply(const OccupancyMap& map, const std::vector<BlockIndex>& changed) {
     const auto acc = map.constAccessor();
     ++update_number;
-    // 1. The region: changed blocks and their face neighbours, each once.
+    // 1. The region: changed blocks and their face neighbours, each once. Only those whose
+    // states changed, or whose neighbour's facing layer of known voxels changed, can have a new
+    // frontier (the others are listed all the same: the order of the region fixes new ids).
     region_table.clear();
     std::vector<BlockIndex> region;
-    auto addBlock = [&](const BlockIndex& b) {
+    std::vector<uint8_t> inputs_changed;  // per region block
+    auto addBlock = [&](const BlockIndex& b, bool changed_inputs) {
       bool inserted;
-      region_table.findOrInsert(detail::packIndex(b), inserted);
-      if (inserted) region.push_back(b);
+      const uint32_t slot = region_table.findOrInsert(detail::packIndex(b), inserted);
+      if (inserted) {
+        region.push_back(b);
+        inputs_changed.push_back(0);
+      }
+      inputs_changed[slot] |= static_cast<uint8_t>(changed_inputs);
     };
     StateSnapshot current;
     for (const BlockIndex& b : changed) {
@@ -272,9 +279,12 @@ struct FrontierMap::Impl {
       StateSnapshot& before = states[slot];
       acc.readBlockMasks(b, current.known, current.occupied);
       if (before.known == current.known && before.occupied == current.occupied) continue;
+      // Face layer i of a block is the one its neighbour kFaceOffsets[i] sees.
+      const detail::FaceLayers old_layers = detail::faceLayers(before.known);
+      const detail::FaceLayers new_layers = detail::faceLayers(current.known);
       before = current;
-      addBlock(b);
-      for (const BlockIndex& f : kFaceOffsets) addBlock(b + f);
+      addBlock(b, true);
+      for (int i = 0; i < 6; ++i) addBlock(b + kFaceOffsets[i], old_layers.layer[i] != new_layers.layer[i]);
     }
     MaskCache masks(acc, state_table, states, read_table);
     // 2. New frontier masks. A block whose frontier voxels or their faces changed loses its
@@ -283,7 +293,9 @@ struct FrontierMap::Impl {
     std::vector<uint32_t> relabel;  // blocks with unassigned frontier voxels
     std::vector<uint32_t> dirty;
     std::array<uint8_t, kBlockVoxels> faces;
-    for (const BlockIndex& b : region) {
+    for (size_t r = 0; r < region.size(); ++r) {
+      if (!inputs_changed[r]) continue;
+      const BlockIndex& b = region[r];
       const Mask now = frontierInRoi(masks, b, faces);
       uint32_t slot = findSlot(b);
       if (slot == detail::BlockTable::kNone) {
