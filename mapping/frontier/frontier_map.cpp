@@ -28,22 +28,25 @@ const std::array<BlockIndex, 26> kNeighbourBlocks = [] {
 }();
 
 // A 26-connected piece of one block's frontier, and the component it belongs to.
+// Fields in the order of use: joining reads the first cache line only, splitting the rest too.
 struct Piece {
-  Mask bits{};
-  detail::FaceLayers layers;   // of bits
-  detail::RunMoments moments;  // of bits
   uint32_t component = 0;      // 0: not yet assigned (during an update)
   uint32_t node = 0;           // its union-find node during an update
+  detail::FaceLayers layers;   // of bits
+  Mask bits{};
+  detail::RunMoments moments;  // of bits
 };
 
 // Frontier bits of one block, their unknown faces, and their pieces.
+// The small fields every step reads first, the faces (read where the frontier changed or a
+// plane cuts a piece) last.
 struct FrontierBlock {
   BlockIndex index;
+  uint32_t mark = 0;  // update number that last queued it for labelling
+  std::vector<Piece> pieces;
+  std::array<uint32_t, 26> around;  // slots of the kNeighbourBlocks, BlockTable::kNone where none
   Mask frontier{};
   std::array<uint8_t, kBlockVoxels> faces{};  // unknown face neighbours where frontier, else 0
-  std::vector<Piece> pieces;
-  uint32_t mark = 0;  // update number that last queued it for labelling
-  std::array<uint32_t, 26> around;  // slots of the kNeighbourBlocks, BlockTable::kNone where none
 };
 
 // A connected component of the frontier: the blocks holding its pieces, and its clusters.
