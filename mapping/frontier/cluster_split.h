@@ -7,9 +7,11 @@
 // Units: voxel indices in, metres out (voxel_size_m); world frame. Threads: a plain function.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
+#include "mapping/frontier/frontier_bits.h"
 #include "mapping/frontier/frontier_map.h"
 #include "mapping/voxel_types.h"
 
@@ -30,15 +32,40 @@ struct SplitParams {
   int min_voxels = 10;        // >= 1
 };
 
-// Appends the clusters of `voxels` (one connected component) to `out`, ids taken from next_id
-// (incremented per cluster, in a fixed order for a given set of voxels). `voxels` is reordered.
-// Indices must lie within +-2^20 (the map's limit). Empty input: no cluster.
-void splitComponent(std::vector<FrontierVoxel>& voxels, const SplitParams& params, uint64_t& next_id,
+// Exact moments of a run of frontier voxels within one block (e.g. one piece), coordinates
+// relative to the block's first voxel (0..7): everything the split needs of a run that no plane
+// cuts, so that a run kept from an earlier update is not summed again voxel by voxel.
+struct RunMoments {
+  int32_t n = 0;
+  int32_t sum[3] = {0, 0, 0};
+  int32_t sum2[6] = {0, 0, 0, 0, 0, 0};  // xx, yy, zz, xy, xz, yz
+  int32_t dir[3][3] = {};                // dir[k - 1]: sum of the integer face directions of squared norm k
+  int8_t lo[3] = {0, 0, 0};              // bounding box, valid when n > 0
+  int8_t hi[3] = {0, 0, 0};
+};
+
+// The moments of the voxels `bits` of a block (BlockMask layout), each with its unknown faces
+// faces[offsetInBlock] (bit i: kFaceOffsets[i]).
+RunMoments blockRunMoments(const BlockMask& bits, const std::array<uint8_t, kBlockVoxels>& faces);
+
+// A run of a component's voxels inside one block (e.g. one piece of the block's frontier). The
+// pointers must stay valid during the call.
+struct BlockRun {
+  BlockIndex block = BlockIndex::Zero();
+  const BlockMask* bits = nullptr;                           // the run's voxels
+  const std::array<uint8_t, kBlockVoxels>* faces = nullptr;  // unknown faces of the block's voxels
+  const RunMoments* moments = nullptr;                       // blockRunMoments(*bits, *faces)
+};
+
+// Appends the clusters of `voxels` (distinct voxels, one connected component) to `out`, ids taken
+// from next_id (incremented per cluster, in a fixed order for a given set of voxels). Indices must
+// lie within +-2^20 (the map's limit). Empty input: no cluster.
+void splitComponent(const std::vector<FrontierVoxel>& voxels, const SplitParams& params, uint64_t& next_id,
                     std::vector<FrontierCluster>& out);
-// The same clusters, faster when `voxels` comes in compact runs (e.g. one block's piece each):
-// chunk_ends holds the end index of each run, ascending, the last voxels.size(). A run wholly on
-// one side of a splitting plane moves as a whole; only runs the plane cuts are split voxel by voxel.
-void splitComponent(std::vector<FrontierVoxel>& voxels, const std::vector<uint32_t>& chunk_ends,
-                    const SplitParams& params, uint64_t& next_id, std::vector<FrontierCluster>& out);
+// The same for the voxels of `runs` (one connected component, each voxel in one run), without
+// listing them: a run wholly on one side of a splitting plane moves as a whole, by its moments;
+// only the runs a plane cuts are gone through voxel by voxel.
+void splitComponent(const std::vector<BlockRun>& runs, const SplitParams& params, uint64_t& next_id,
+                    std::vector<FrontierCluster>& out);
 
 }  // namespace cenote::mapping::detail

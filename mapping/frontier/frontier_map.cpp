@@ -14,10 +14,7 @@ namespace cenote::mapping {
 namespace {
 
 using Mask = detail::BlockMask;  // one bit per voxel of a block, bit offsetInBlock(ijk)
-using detail::FrontierVoxel;
-
-const BlockIndex kBlockFaces[6] = {BlockIndex(1, 0, 0),  BlockIndex(-1, 0, 0), BlockIndex(0, 1, 0),
-                                   BlockIndex(0, -1, 0), BlockIndex(0, 0, 1),  BlockIndex(0, 0, -1)};
+using detail::kFaceOffsets;  // a voxel's face neighbours; the same offsets give a block's
 
 // The 26 neighbour blocks' offsets.
 const std::array<BlockIndex, 26> kNeighbourBlocks = [] {
@@ -31,20 +28,25 @@ const std::array<BlockIndex, 26> kNeighbourBlocks = [] {
 }();
 
 // A 26-connected piece of one block's frontier, and the component it belongs to.
+// Fields in the order of use: joining reads the first cache line only, splitting the rest too.
 struct Piece {
+  uint32_t component = 0;      // 0: not yet assigned (during an update)
+  uint32_t node = 0;           // its union-find node during an update
+  detail::FaceLayers layers;   // of bits
   Mask bits{};
-  detail::FaceLayers layers;  // of bits
-  uint32_t component = 0;     // 0: not yet assigned (during an update)
-  uint32_t node = 0;          // its union-find node during an update
+  detail::RunMoments moments;  // of bits
 };
 
 // Frontier bits of one block, their unknown faces, and their pieces.
+// The small fields every step reads first, the faces (read where the frontier changed or a
+// plane cuts a piece) last.
 struct FrontierBlock {
   BlockIndex index;
+  uint32_t mark = 0;  // update number that last queued it for labelling
+  std::vector<Piece> pieces;
+  std::array<uint32_t, 26> around;  // slots of the kNeighbourBlocks, BlockTable::kNone where none
   Mask frontier{};
   std::array<uint8_t, kBlockVoxels> faces{};  // unknown face neighbours where frontier, else 0
-  std::vector<Piece> pieces;
-  uint32_t mark = 0;  // update number that last queued it for labelling
 };
 
 // A connected component of the frontier: the blocks holding its pieces, and its clusters.
@@ -87,58 +89,72 @@ class UnionFind {
   std::vector<uint32_t> parent_;
 };
 
-// Known / occupied masks of the map's blocks, read once per update through the accessor.
+// Known / occupied masks of blocks during one update. A block some delta named comes from its
+// snapshot: the update has just refreshed the snapshots of its own changed blocks, and a block no
+// delta named since changed nothing (every change comes with a delta, given in order). Any other
+// block is read from the map, once.
 class MaskCache {
  public:
-  explicit MaskCache(const OccupancyMap::ConstAccessor& acc) : acc_(acc) {}
-  const Mask& known(const BlockIndex& b) { return entry(b).known; }
-  const Mask& occupied(const BlockIndex& b) { return entry(b).occupied; }
-
- private:
-  struct Entry {
-    Mask known, occupied;
-  };
-  Entry& entry(const BlockIndex& b) {
+  // table: scratch kept for its capacity (cleared here).
+  MaskCache(const OccupancyMap::ConstAccessor& acc, const detail::BlockTable& snapshot_table,
+            const std::deque<StateSnapshot>& snapshots, detail::BlockTable& table)
+      : acc_(acc), snapshot_table_(snapshot_table), snapshots_(snapshots), table_(table) {
+    table_.clear();
+  }
+  // Valid for the whole update.
+  const StateSnapshot& of(const BlockIndex& b) {
     if (last_ != nullptr && b == last_block_) return *last_;
-    bool inserted;
-    const uint32_t slot = table_.findOrInsert(detail::packIndex(b), inserted);
-    if (inserted) {
-      entries_.emplace_back();
-      acc_.readBlockMasks(b, entries_.back().known, entries_.back().occupied);
+    const uint64_t key = detail::packIndex(b);
+    const uint32_t snapshot = snapshot_table_.find(key);
+    if (snapshot != detail::BlockTable::kNone) {
+      last_ = &snapshots_[snapshot];
+    } else {
+      bool inserted;
+      const uint32_t slot = table_.findOrInsert(key, inserted);
+      if (inserted) {
+        entries_.emplace_back();
+        acc_.readBlockMasks(b, entries_.back().known, entries_.back().occupied);
+      }
+      last_ = &entries_[slot];
     }
     last_block_ = b;
-    last_ = &entries_[slot];
     return *last_;
   }
+
+ private:
   const OccupancyMap::ConstAccessor& acc_;
-  detail::BlockTable table_;
-  std::deque<Entry> entries_;  // references stay valid as it grows
+  const detail::BlockTable& snapshot_table_;
+  const std::deque<StateSnapshot>& snapshots_;
+  detail::BlockTable& table_;          // blocks read from the map -> index in entries_
+  std::deque<StateSnapshot> entries_;  // references stay valid as it grows
   BlockIndex last_block_;
-  Entry* last_ = nullptr;
+  const StateSnapshot* last_ = nullptr;
 };
 
 // Frontier voxels of a block: free (known, not occupied) with an unknown face neighbour; and for
-// each, its unknown faces (bit i: detail::kFaceOffsets[i]). Words are x slices (word = x), bits y * 8 + z; a
-// neighbour across the block's face comes from the neighbouring block's facing layer.
+// each, its unknown faces (bit i: kFaceOffsets[i]) OR-ed into `faces`, which must be zero on entry.
+// Words are x slices (word = x), bits y * 8 + z; a neighbour across the block's face comes from
+// the neighbouring block's facing layer.
 Mask frontierMask(MaskCache& masks, const BlockIndex& b, std::array<uint8_t, kBlockVoxels>& faces) {
+  constexpr uint64_t kZ0 = detail::kLowBitOfEachByte, kZ7 = detail::kHighBitOfEachByte;
   Mask free_bits;
-  const Mask& k = masks.known(b);
+  const StateSnapshot& states = masks.of(b);
+  const Mask& k = states.known;
   bool any = false;
   for (int w = 0; w < 8; ++w) {
-    free_bits[w] = k[w] & ~masks.occupied(b)[w];
+    free_bits[w] = k[w] & ~states.occupied[w];
     any |= free_bits[w] != 0;
   }
   Mask out{};
   if (!any) return out;
-  const Mask& kxp = masks.known(b + kBlockFaces[0]);
-  const Mask& kxm = masks.known(b + kBlockFaces[1]);
-  const Mask& kyp = masks.known(b + kBlockFaces[2]);
-  const Mask& kym = masks.known(b + kBlockFaces[3]);
-  const Mask& kzp = masks.known(b + kBlockFaces[4]);
-  const Mask& kzm = masks.known(b + kBlockFaces[5]);
-  constexpr uint64_t kZ0 = 0x0101010101010101ull, kZ7 = kZ0 << 7;
+  const Mask& kxp = masks.of(b + kFaceOffsets[0]).known;
+  const Mask& kxm = masks.of(b + kFaceOffsets[1]).known;
+  const Mask& kyp = masks.of(b + kFaceOffsets[2]).known;
+  const Mask& kym = masks.of(b + kFaceOffsets[3]).known;
+  const Mask& kzp = masks.of(b + kFaceOffsets[4]).known;
+  const Mask& kzm = masks.of(b + kFaceOffsets[5]).known;
   for (int w = 0; w < 8; ++w) {
-    // Known bits of each face neighbour, in the order of detail::kFaceOffsets.
+    // Known bits of each face neighbour, in the order of kFaceOffsets.
     const uint64_t known_at[6] = {
         w < 7 ? k[w + 1] : kxp[0],
         w > 0 ? k[w - 1] : kxm[7],
@@ -148,13 +164,11 @@ Mask frontierMask(MaskCache& masks, const BlockIndex& b, std::array<uint8_t, kBl
         ((k[w] << 1) & ~kZ0) | ((kzm[w] & kZ7) >> 7),
     };
     out[w] = free_bits[w] & ~(known_at[0] & known_at[1] & known_at[2] & known_at[3] & known_at[4] & known_at[5]);
-    uint64_t bits = out[w];
-    while (bits != 0) {
-      const int bit = __builtin_ctzll(bits);
-      bits &= bits - 1;
-      uint8_t f = 0;
-      for (int i = 0; i < 6; ++i) f |= static_cast<uint8_t>(((~known_at[i] >> bit) & 1) << i);
-      faces[w * 64 + bit] = f;
+    // Face by face: a frontier voxel has one or two unknown faces, rarely six.
+    for (int i = 0; i < 6; ++i) {
+      for (uint64_t bits = out[w] & ~known_at[i]; bits != 0; bits &= bits - 1) {
+        faces[w * 64 + __builtin_ctzll(bits)] |= static_cast<uint8_t>(1 << i);
+      }
     }
   }
   return out;
@@ -180,8 +194,8 @@ struct FrontierMap::Impl {
   UnionFind sets;
   std::vector<std::pair<uint32_t, uint32_t>> nodes;  // union-find node -> (block slot, piece index)
   std::vector<Mask> new_pieces;
-  std::vector<FrontierVoxel> voxels;
-  std::vector<uint32_t> piece_ends;  // end of each piece's voxels in `voxels`
+  std::vector<detail::BlockRun> runs;  // a component's pieces
+  detail::BlockTable region_table, read_table;
 
   uint32_t findSlot(const BlockIndex& b) const { return table.find(detail::packIndex(b)); }
   uint32_t getSlot(const BlockIndex& b) {
@@ -189,7 +203,13 @@ struct FrontierMap::Impl {
     const uint32_t slot = table.findOrInsert(detail::packIndex(b), inserted);
     if (inserted) {
       blocks.push_back(std::make_unique<FrontierBlock>());
-      blocks.back()->index = b;
+      FrontierBlock& fb = *blocks.back();
+      fb.index = b;
+      // kNeighbourBlocks is symmetric: offset 25 - n is the opposite of offset n.
+      for (int n = 0; n < 26; ++n) {
+        fb.around[n] = findSlot(b + kNeighbourBlocks[n]);
+        if (fb.around[n] != detail::BlockTable::kNone) blocks[fb.around[n]]->around[25 - n] = slot;
+      }
     }
     return slot;
   }
@@ -219,8 +239,9 @@ struct FrontierMap::Impl {
     return m;
   }
 
-  // Takes the component `id` apart: its pieces become unassigned, its clusters go.
-  void dissolve(uint32_t id, std::vector<uint32_t>* unassigned_blocks) {
+  // Takes the component `id` apart: its pieces become unassigned (their blocks are appended to
+  // unassigned_blocks), its clusters go.
+  void dissolve(uint32_t id, std::vector<uint32_t>& unassigned_blocks) {
     auto it = components.find(id);
     if (it == components.end()) return;
     for (uint32_t slot : it->second.blocks) {
@@ -228,7 +249,7 @@ struct FrontierMap::Impl {
       for (Piece& p : fb.pieces) {
         if (p.component == id) p.component = 0;
       }
-      if (unassigned_blocks != nullptr) unassigned_blocks->push_back(slot);
+      unassigned_blocks.push_back(slot);
     }
     components.erase(it);
   }
@@ -237,34 +258,47 @@ struct FrontierMap::Impl {
   // boundary voxels see the changed ones); re-labels the components whose voxels changed.
   void apply(const OccupancyMap& map, const std::vector<BlockIndex>& changed) {
     const auto acc = map.constAccessor();
-    MaskCache masks(acc);
     ++update_number;
-    // 1. The region: changed blocks and their face neighbours, each once.
-    detail::BlockTable seen;
+    // 1. The region: changed blocks and their face neighbours, each once. Only those whose
+    // states changed, or whose neighbour's facing layer of known voxels changed, can have a new
+    // frontier (the others are listed all the same: the order of the region fixes new ids).
+    region_table.clear();
     std::vector<BlockIndex> region;
-    auto addBlock = [&](const BlockIndex& b) {
+    std::vector<uint8_t> inputs_changed;  // per region block
+    auto addBlock = [&](const BlockIndex& b, bool changed_inputs) {
       bool inserted;
-      seen.findOrInsert(detail::packIndex(b), inserted);
-      if (inserted) region.push_back(b);
+      const uint32_t slot = region_table.findOrInsert(detail::packIndex(b), inserted);
+      if (inserted) {
+        region.push_back(b);
+        inputs_changed.push_back(0);
+      }
+      inputs_changed[slot] |= static_cast<uint8_t>(changed_inputs);
     };
+    StateSnapshot current;
     for (const BlockIndex& b : changed) {
       bool inserted;
       const uint32_t slot = state_table.findOrInsert(detail::packIndex(b), inserted);
       if (inserted) states.emplace_back();
       StateSnapshot& before = states[slot];
-      if (before.known == masks.known(b) && before.occupied == masks.occupied(b)) continue;
-      before.known = masks.known(b);
-      before.occupied = masks.occupied(b);
-      addBlock(b);
-      for (const BlockIndex& f : kBlockFaces) addBlock(b + f);
+      acc.readBlockMasks(b, current.known, current.occupied);
+      if (before.known == current.known && before.occupied == current.occupied) continue;
+      // Face layer i of a block is the one its neighbour kFaceOffsets[i] sees.
+      const detail::FaceLayers old_layers = detail::faceLayers(before.known);
+      const detail::FaceLayers new_layers = detail::faceLayers(current.known);
+      before = current;
+      addBlock(b, true);
+      for (int i = 0; i < 6; ++i) addBlock(b + kFaceOffsets[i], old_layers.layer[i] != new_layers.layer[i]);
     }
+    MaskCache masks(acc, state_table, states, read_table);
     // 2. New frontier masks. A block whose frontier voxels or their faces changed loses its
     // pieces, and the components they belonged to are taken apart (a removed voxel may split one,
     // a changed face turns its direction).
     std::vector<uint32_t> relabel;  // blocks with unassigned frontier voxels
     std::vector<uint32_t> dirty;
     std::array<uint8_t, kBlockVoxels> faces;
-    for (const BlockIndex& b : region) {
+    for (size_t r = 0; r < region.size(); ++r) {
+      if (!inputs_changed[r]) continue;
+      const BlockIndex& b = region[r];
       const Mask now = frontierInRoi(masks, b, faces);
       uint32_t slot = findSlot(b);
       if (slot == detail::BlockTable::kNone) {
@@ -285,7 +319,7 @@ struct FrontierMap::Impl {
     }
     std::sort(dirty.begin(), dirty.end());
     dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
-    for (uint32_t id : dirty) dissolve(id, &relabel);
+    for (uint32_t id : dirty) dissolve(id, relabel);
     // 3. Pieces of the unassigned voxels of each block, a union-find node each.
     sets.clear();
     nodes.clear();
@@ -305,6 +339,7 @@ struct FrontierMap::Impl {
         Piece p;
         p.bits = bits;
         p.layers = detail::faceLayers(bits);
+        p.moments = detail::blockRunMoments(bits, fb.faces);
         fb.pieces.push_back(p);
       }
       for (uint32_t i = 0; i < fb.pieces.size(); ++i) {
@@ -317,9 +352,7 @@ struct FrontierMap::Impl {
     // unassigned one is merged with it: that component is taken apart, its pieces joined at once
     // (they are connected).
     for (uint32_t slot : queued) {
-      const BlockIndex b = blocks[slot]->index;
-      std::array<uint32_t, 26> around;
-      for (int n = 0; n < 26; ++n) around[n] = findSlot(b + kNeighbourBlocks[n]);
+      const std::array<uint32_t, 26> around = blocks[slot]->around;
       for (uint32_t i = 0; i < blocks[slot]->pieces.size(); ++i) {
         const Piece& p = blocks[slot]->pieces[i];
         if (p.component != 0) continue;
@@ -355,25 +388,15 @@ struct FrontierMap::Impl {
       Component& comp = components[id];
       std::sort(comp.blocks.begin(), comp.blocks.end());
       comp.blocks.erase(std::unique(comp.blocks.begin(), comp.blocks.end()), comp.blocks.end());
-      voxels.clear();
-      piece_ends.clear();
+      runs.clear();
       for (uint32_t slot : comp.blocks) {
         const FrontierBlock& fb = *blocks[slot];
         for (const Piece& p : fb.pieces) {
-          if (p.component != id) continue;
-          for (int w = 0; w < 8; ++w) {
-            uint64_t bits = p.bits[w];
-            while (bits != 0) {
-              const int o = w * 64 + __builtin_ctzll(bits);
-              bits &= bits - 1;
-              voxels.push_back({voxelOfOffset(fb.index, o), fb.faces[o]});
-            }
-          }
-          piece_ends.push_back(static_cast<uint32_t>(voxels.size()));
+          if (p.component == id) runs.push_back({fb.index, &p.bits, &fb.faces, &p.moments});
         }
       }
       const detail::SplitParams params{s, max_extent_m, min_voxels};
-      detail::splitComponent(voxels, piece_ends, params, next_cluster, comp.clusters);
+      detail::splitComponent(runs, params, next_cluster, comp.clusters);
     }
   }
 

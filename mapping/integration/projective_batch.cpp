@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 
 #include "mapping/integration/voxel_ray.h"
 
@@ -31,15 +30,10 @@ void ProjectiveBatch::build(const DepthFrame& f, double s, double max_range_m, i
 
   // 1. Hits: the voxel of every back-projected point within range, with colour sums (last voxel
   // cached: neighbouring pixels mostly share one).
-  table_.clear();
-  masks_.clear();
-  endpoint_table_.clear();
+  clearMasks();
   endpoints_.clear();
-  color_sums_.clear();
   num_hits_ = 0;
   double max_depth = 0.0;
-  VoxelIndex last(std::numeric_limits<int>::min(), 0, 0);
-  uint32_t slot = 0;
   for (int v = 0; v < f.height; ++v) {
     for (int u = 0; u < f.width; ++u) {
       const size_t i = static_cast<size_t>(v) * f.width + u;
@@ -49,20 +43,7 @@ void ProjectiveBatch::build(const DepthFrame& f, double s, double max_range_m, i
       const Eigen::Vector3d p_cam(d * (u - f.cx) / f.fx, d * (v - f.cy) / f.fy, d);
       if (limited && p_cam.norm() > max_range_m) continue;
       ++num_hits_;
-      const VoxelIndex ijk = toVoxel(f.T_world_cam * p_cam, s);
-      if (ijk != last) {
-        bool inserted;
-        slot = endpoint_table_.findOrInsert(detail::packIndex(ijk), inserted);
-        if (inserted) {
-          endpoints_.push_back(ijk);
-          color_sums_.push_back({0, 0, 0, 0});
-        }
-        last = ijk;
-      }
-      if (f.hasColor()) {
-        for (int k = 0; k < 3; ++k) color_sums_[slot][k] += f.colors[i][k];
-        color_sums_[slot][3] += 1;
-      }
+      endpoints_.add(toVoxel(f.T_world_cam * p_cam, s), f.hasColor() ? f.colors[i].data() : nullptr);
     }
   }
 
@@ -127,41 +108,14 @@ void ProjectiveBatch::build(const DepthFrame& f, double s, double max_range_m, i
     }
   }
 
-  // 4. Free blocks and hit voxels into one table; occupied wins.
+  // 4. Free blocks and hit voxels into one table; occupied wins; mean colours of the hit voxels.
   for (size_t b = 0; b < candidates_.size(); ++b) {
     const BlockMasks& m = candidate_masks_[b];
     if (std::all_of(m.free.begin(), m.free.end(), [](uint64_t w) { return w == 0; })) continue;
-    bool inserted;
-    const uint32_t at = table_.findOrInsert(detail::packIndex(candidates_[b]), inserted);
-    if (inserted) masks_.emplace_back();
-    masks_[at].free = m.free;
+    masksOf(candidates_[b])->free = m.free;
   }
-  for (const VoxelIndex& ijk : endpoints_) {
-    bool inserted;
-    const uint32_t at = table_.findOrInsert(detail::packIndex(blockOf(ijk)), inserted);
-    if (inserted) masks_.emplace_back();
-    const int o = offsetInBlock(ijk);
-    masks_[at].hit[o >> 6] |= 1ull << (o & 63);
-  }
-  for (BlockMasks& m : masks_) {
-    for (int w = 0; w < 8; ++w) m.free[w] &= ~m.hit[w];
-  }
-  order_.resize(masks_.size());
-  std::iota(order_.begin(), order_.end(), 0u);
-  std::sort(order_.begin(), order_.end(), [&](uint32_t a, uint32_t b) { return table_.keyOf(a) < table_.keyOf(b); });
-  blocks_.resize(order_.size());
-  for (size_t i = 0; i < order_.size(); ++i) blocks_[i] = detail::unpackIndex(table_.keyOf(order_[i]));
-
-  // 5. Mean colours of the hit voxels.
-  colors_.clear();
-  if (!f.hasColor()) return;
-  for (size_t i = 0; i < endpoints_.size(); ++i) {
-    const auto& sum = color_sums_[i];
-    const uint32_t c = sum[3];
-    colors_.push_back({endpoints_[i],
-                       {static_cast<uint8_t>((sum[0] + c / 2) / c), static_cast<uint8_t>((sum[1] + c / 2) / c),
-                        static_cast<uint8_t>((sum[2] + c / 2) / c)}});
-  }
+  for (const VoxelIndex& ijk : endpoints_.voxels()) setHit(ijk);
+  finish(endpoints_, f.hasColor(), [](const VoxelIndex&) { return true; });
 }
 
 }  // namespace cenote::mapping

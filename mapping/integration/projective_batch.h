@@ -23,40 +23,29 @@
 #include <cstdint>
 #include <vector>
 
-#include "mapping/detail/block_table.h"
+#include "mapping/integration/batch_updates.h"
 #include "mapping/integration/depth_frame.h"
-#include "mapping/integration/ray_batch.h"
+#include "mapping/integration/endpoint_set.h"
 #include "mapping/voxel_types.h"
 
 namespace cenote::mapping {
 
-class ProjectiveBatch {
+// The updates (BatchUpdates: block masks, colours) of a depth frame, by projection.
+class ProjectiveBatch : public BatchUpdates {
  public:
   // Computes the updates of `frame`, which must already be checked (sizes, finite pose, fx, fy > 0).
   // max_range_m <= 0: unlimited.
   void build(const DepthFrame& frame, double voxel_size_m, double max_range_m, int num_threads);
 
-  // Touched blocks in ascending packed order, with their masks (as RayBatch).
-  size_t numBlocks() const { return blocks_.size(); }
-  const BlockIndex& block(size_t i) const { return blocks_[i]; }
-  const BlockMasks& masks(size_t i) const { return masks_[order_[i]]; }
-  const std::vector<EndpointColor>& colors() const { return colors_; }
   // Pixels with a depth within range (their hits were recorded).
   size_t numRays() const { return num_hits_; }
   // Frustum blocks whose voxels were projected (for benchmarks).
   size_t numFrustumBlocks() const { return num_frustum_blocks_; }
 
  private:
-  detail::BlockTable table_;  // block -> slot in masks_
-  std::vector<BlockMasks> masks_;
-  detail::BlockTable endpoint_table_;
-  std::vector<VoxelIndex> endpoints_;
-  std::vector<std::array<uint32_t, 4>> color_sums_;
+  EndpointSet endpoints_;  // hit voxels with their colour sums
   std::vector<BlockIndex> candidates_;
   std::vector<BlockMasks> candidate_masks_;
-  std::vector<BlockIndex> blocks_;
-  std::vector<uint32_t> order_;
-  std::vector<EndpointColor> colors_;
   size_t num_hits_ = 0;
   size_t num_frustum_blocks_ = 0;
 };

@@ -5,143 +5,53 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 
 #include "mapping/integration/voxel_ray.h"
 
 namespace cenote::mapping {
 namespace {
 
-// One chunk's block masks, found by block index through an open-addressing table.
-class MaskWriter {
- public:
-  MaskWriter(detail::BlockTable& table, std::vector<BlockMasks>& masks) : table_(table), masks_(masks) {}
-
-  // The masks of a block, created empty when new. The pointer is valid until the next call.
-  BlockMasks* masksOf(const BlockIndex& b) {
-    bool inserted;
-    const uint32_t slot = table_.findOrInsert(detail::packIndex(b), inserted);
-    if (inserted) masks_.emplace_back();
-    return &masks_[slot];
+// The grid a ray is marched on: cells of 2^(3 - kShift) voxels per side, 2^kShift per block side
+// (kShift 3: voxels; 2: the 2x2x2-voxel cells of coarse clearing, 5.; cell c holds voxels 2c and
+// 2c + 1 on each axis). A cell is 2^(3 - kShift) consecutive words of its block's free mask (x)
+// with the same bit pattern (y, z) in each.
+template <int kShift>
+struct CellGrid {
+  static_assert(kShift == 2 || kShift == 3);
+  static constexpr int kInBlock = (1 << kShift) - 1;  // mask of an in-block cell coordinate
+  static BlockIndex blockOf(const VoxelIndex& c) {
+    return BlockIndex(c.x() >> kShift, c.y() >> kShift, c.z() >> kShift);
   }
-  void setHit(const VoxelIndex& ijk) {
-    const int o = offsetInBlock(ijk);
-    masksOf(blockOf(ijk))->hit[o >> 6] |= 1ull << (o & 63);
+  static uint64_t* words(BlockMasks* masks, int lx) { return masks->free.data() + (lx << (3 - kShift)); }
+  static uint64_t pattern(int ly, int lz) {
+    if constexpr (kShift == 3) return 1ull << ((ly << 3) | lz);
+    return 0x303ull << ((ly << 4) | (lz << 1));
   }
-
- private:
-  detail::BlockTable& table_;
-  std::vector<BlockMasks>& masks_;
 };
 
-// The voxels of walkVoxels(start_m, end_m, voxel_size_m, include_end) (voxel_ray.h): the same
-// voxels in the same order, with the same tie rules, so that ray_stop_run 0 stays OctoMap's voxel
-// set. Made for the hot loop: the state stays in registers, and the current block's masks are
-// looked up only when the walk crosses into another block (about every 8 steps).
-// Visit: bool operator()(uint64_t& free_word, uint64_t bit), false to stop. Returns false when
-// the visitor stopped the walk.
-template <typename Visit>
-bool marchFree(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double voxel_size_m, bool include_end,
-               MaskWriter& writer, Visit visit) {
-  const VoxelIndex key_start = toVoxel(start_m, voxel_size_m);
-  const VoxelIndex key_end = toVoxel(end_m, voxel_size_m);
-  auto visitVoxel = [&](const VoxelIndex& ijk) {
-    const int o = offsetInBlock(ijk);
-    return visit(writer.masksOf(blockOf(ijk))->free[o >> 6], 1ull << (o & 63));
-  };
-  if (key_start == key_end) return include_end ? visitVoxel(key_end) : true;
-  Eigen::Vector3d direction = end_m - start_m;
-  const double length = direction.norm();
-  direction /= length;
-  int step[3];
-  double t_max[3], t_delta[3];
-  for (int i = 0; i < 3; ++i) {
-    step[i] = direction[i] > 0.0 ? 1 : (direction[i] < 0.0 ? -1 : 0);
-    if (step[i] != 0) {
-      const double border = (key_start[i] + 0.5) * voxel_size_m + step[i] * voxel_size_m * 0.5;
-      t_max[i] = (border - start_m[i]) / direction[i];
-      t_delta[i] = voxel_size_m / std::fabs(direction[i]);
-    } else {
-      t_max[i] = std::numeric_limits<double>::max();
-      t_delta[i] = 0.0;  // never stepped: t_max stays at max
-    }
-  }
-  // In-block coordinates (0..7) and the block; a step that wraps an in-block coordinate moves to
-  // the neighbouring block.
-  int lx = key_start.x() & 7, ly = key_start.y() & 7, lz = key_start.z() & 7;
-  BlockIndex block = blockOf(key_start);
-  double tx = t_max[0], ty = t_max[1], tz = t_max[2];
-  const double dx = t_delta[0], dy = t_delta[1], dz = t_delta[2];
-  const int sx = step[0], sy = step[1], sz = step[2];
-  BlockMasks* masks = writer.masksOf(block);
-  uint64_t* words = masks->free.data();
-  if (!visit(words[lx], 1ull << ((ly << 3) | lz))) return false;
-  // Each step moves one voxel towards the end voxel on one axis, so the walk can be in the end
-  // voxel only after exactly this many steps (and never, if rounding made an axis overshoot).
-  const long steps_to_end = (key_end - key_start).cwiseAbs().sum();
-  const long max_steps = 3 * static_cast<long>(length / voxel_size_m) + 6;
-  for (long n = 1; n <= max_steps; ++n) {
-    // walkVoxels' choice: x if t_x < t_y and t_x < t_z; else y if t_y < t_z; else z.
-    bool crossed;
-    if (tx < ty && tx < tz) {
-      lx += sx;
-      tx += dx;
-      crossed = (lx & ~7) != 0;
-      if (crossed) {
-        block.x() += sx;
-        lx &= 7;
-      }
-    } else if (ty < tz) {
-      ly += sy;
-      ty += dy;
-      crossed = (ly & ~7) != 0;
-      if (crossed) {
-        block.y() += sy;
-        ly &= 7;
-      }
-    } else {
-      lz += sz;
-      tz += dz;
-      crossed = (lz & ~7) != 0;
-      if (crossed) {
-        block.z() += sz;
-        lz &= 7;
-      }
-    }
-    if (n == steps_to_end &&
-        VoxelIndex(block.x() * kBlockSide + lx, block.y() * kBlockSide + ly, block.z() * kBlockSide + lz) == key_end) {
-      return include_end ? visitVoxel(key_end) : true;
-    }
-    if (std::min(std::min(tx, ty), tz) > length) {
-      return include_end ? visitVoxel(key_end) : true;
-    }
-    if (crossed) words = writer.masksOf(block)->free.data();
-    if (!visit(words[lx], 1ull << ((ly << 3) | lz))) return false;
-  }
-  return true;
-}
-
-// The cells of side cell_m = 2 voxels (cell c holds voxels 2c and 2c + 1 on each axis; 4 cells
-// per block side) that the segment from start_m to end_m passes through, both end cells included:
-// the same 3D DDA as marchFree, one level up. Each cell is 2 words of its block's free mask (x =
-// 2cx and 2cx + 1) with the same 4-bit pattern (y = 2cy, 2cy + 1; z = 2cz, 2cz + 1).
-// Visit: bool operator()(uint64_t* two_free_words, uint64_t pattern), false to stop.
-template <typename Visit>
-void marchCoarse(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double cell_m, MaskWriter& writer,
-                 Visit visit) {
+// The cells of side cell_m (CellGrid<kShift>) from the cell of start_m towards the cell of end_m:
+// for voxels, those of walkVoxels(start_m, end_m, voxel_size_m, include_end) (voxel_ray.h) in the
+// same order with the same tie rules, so that ray_stop_run 0 stays OctoMap's voxel set. Made for
+// the hot loop: the state stays in registers, and the current block's masks are looked up only
+// when the walk crosses into another block (about every 2^kShift steps).
+// Visit: bool operator()(uint64_t* words, uint64_t pattern) on the cell's words, false to stop.
+// Returns false when the visitor stopped the walk.
+template <int kShift, typename Visit>
+bool march(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double cell_m, bool include_end,
+           BatchUpdates& writer, Visit visit) {
+  using Grid = CellGrid<kShift>;
   const VoxelIndex key_start = toVoxel(start_m, cell_m);
   const VoxelIndex key_end = toVoxel(end_m, cell_m);
-  auto pattern = [](int ly, int lz) { return 0x303ull << ((ly << 4) | (lz << 1)); };
   auto visitCell = [&](const VoxelIndex& c) {
-    const BlockIndex b(c.x() >> 2, c.y() >> 2, c.z() >> 2);
-    return visit(writer.masksOf(b)->free.data() + ((c.x() & 3) << 1), pattern(c.y() & 3, c.z() & 3));
+    constexpr int m = Grid::kInBlock;
+    return visit(Grid::words(writer.masksOf(Grid::blockOf(c)), c.x() & m), Grid::pattern(c.y() & m, c.z() & m));
   };
-  if (!visitCell(key_start) || key_start == key_end) return;
+  if (key_start == key_end) return include_end ? visitCell(key_end) : true;
   Eigen::Vector3d direction = end_m - start_m;
   const double length = direction.norm();
   direction /= length;
-  double t_max[3], t_delta[3];
   int step[3];
+  double t_max[3], t_delta[3];
   for (int i = 0; i < 3; ++i) {
     step[i] = direction[i] > 0.0 ? 1 : (direction[i] < 0.0 ? -1 : 0);
     if (step[i] != 0) {
@@ -150,59 +60,69 @@ void marchCoarse(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, d
       t_delta[i] = cell_m / std::fabs(direction[i]);
     } else {
       t_max[i] = std::numeric_limits<double>::max();
-      t_delta[i] = 0.0;
+      t_delta[i] = 0.0;  // never stepped: t_max stays at max
     }
   }
-  int lx = key_start.x() & 3, ly = key_start.y() & 3, lz = key_start.z() & 3;
-  BlockIndex block(key_start.x() >> 2, key_start.y() >> 2, key_start.z() >> 2);
+  // In-block coordinates and the block; a step that wraps an in-block coordinate moves to the
+  // neighbouring block.
+  constexpr int kWrap = ~Grid::kInBlock;
+  int lx = key_start.x() & Grid::kInBlock, ly = key_start.y() & Grid::kInBlock, lz = key_start.z() & Grid::kInBlock;
+  BlockIndex block = Grid::blockOf(key_start);
   double tx = t_max[0], ty = t_max[1], tz = t_max[2];
   const double dx = t_delta[0], dy = t_delta[1], dz = t_delta[2];
   const int sx = step[0], sy = step[1], sz = step[2];
-  uint64_t* words = writer.masksOf(block)->free.data();
+  BlockMasks* masks = writer.masksOf(block);
+  if (!visit(Grid::words(masks, lx), Grid::pattern(ly, lz))) return false;
+  // Each step moves one cell towards the end cell on one axis, so the walk can be in the end cell
+  // only after exactly this many steps (and never, if rounding made an axis overshoot).
   const long steps_to_end = (key_end - key_start).cwiseAbs().sum();
   const long max_steps = 3 * static_cast<long>(length / cell_m) + 6;
   for (long n = 1; n <= max_steps; ++n) {
+    // walkVoxels' choice: x if t_x < t_y and t_x < t_z; else y if t_y < t_z; else z.
     bool crossed;
     if (tx < ty && tx < tz) {
       lx += sx;
       tx += dx;
-      crossed = (lx & ~3) != 0;
+      crossed = (lx & kWrap) != 0;
       if (crossed) {
         block.x() += sx;
-        lx &= 3;
+        lx &= Grid::kInBlock;
       }
     } else if (ty < tz) {
       ly += sy;
       ty += dy;
-      crossed = (ly & ~3) != 0;
+      crossed = (ly & kWrap) != 0;
       if (crossed) {
         block.y() += sy;
-        ly &= 3;
+        ly &= Grid::kInBlock;
       }
     } else {
       lz += sz;
       tz += dz;
-      crossed = (lz & ~3) != 0;
+      crossed = (lz & kWrap) != 0;
       if (crossed) {
         block.z() += sz;
-        lz &= 3;
+        lz &= Grid::kInBlock;
       }
     }
-    const bool at_end =
-        n == steps_to_end && VoxelIndex(block.x() * 4 + lx, block.y() * 4 + ly, block.z() * 4 + lz) == key_end;
-    if (!at_end && std::min(std::min(tx, ty), tz) > length) {
-      visitCell(key_end);  // left the segment without entering the end cell (it ends on a face or an edge)
-      return;
+    if (n == steps_to_end && VoxelIndex((block.x() << kShift) + lx, (block.y() << kShift) + ly,
+                                        (block.z() << kShift) + lz) == key_end) {
+      return include_end ? visitCell(key_end) : true;
     }
-    if (crossed) words = writer.masksOf(block)->free.data();
-    if (!visit(words + (lx << 1), pattern(ly, lz)) || at_end) return;
+    if (std::min(std::min(tx, ty), tz) > length) {
+      // Left the segment without entering the end cell (it ends on a face or an edge).
+      return include_end ? visitCell(key_end) : true;
+    }
+    if (crossed) masks = writer.masksOf(block);
+    if (!visit(Grid::words(masks, lx), Grid::pattern(ly, lz))) return false;
   }
+  return true;
 }
 
-// Visitors of marchFree. Whole rays: every voxel is free.
+// Visitors of march<3> (voxels). Whole rays: every voxel is free.
 struct CarveAll {
-  bool operator()(uint64_t& word, uint64_t bit) const {
-    word |= bit;
+  bool operator()(uint64_t* word, uint64_t bit) const {
+    *word |= bit;
     return true;
   }
 };
@@ -213,21 +133,21 @@ struct CarveUntilRun {
   int stop_run;
   int run = 0;
   bool at_end_voxel = true;
-  bool operator()(uint64_t& word, uint64_t bit) {
+  bool operator()(uint64_t* word, uint64_t bit) {
     if (at_end_voxel) {
       at_end_voxel = false;
       return true;
     }
     // Without a branch on "already carved": it alternates irregularly along a ray.
-    const int carved = (word & bit) != 0;
-    word |= bit;
+    const int carved = (*word & bit) != 0;
+    *word |= bit;
     run = (run + 1) & -carved;
     return run < stop_run;
   }
 };
 
-// marchCoarse's counterpart of CarveUntilRun: stops after stop_run cells in a row whose 8 voxels
-// were all carved already.
+// The counterpart of CarveUntilRun on 2-voxel cells (march<2>): stops after stop_run cells in a
+// row whose 8 voxels were all carved already.
 struct CarveCellsUntilRun {
   int stop_run;
   int run = 0;
@@ -239,38 +159,6 @@ struct CarveCellsUntilRun {
     return run < stop_run;
   }
 };
-
-}  // namespace
-
-namespace {
-
-// Unique endpoint voxels of points [begin, end) with their colour sums, into one chunk's scratch.
-// Neighbouring pixels mostly fall into the same voxel (6 pixels per 5 cm voxel at 5 m): the last
-// voxel's slot is kept, which skips most hash lookups.
-void collectEndpoints(const PointBatch& batch, size_t begin, size_t end, double voxel_size_m, RayBatch::Chunk& chunk) {
-  const bool colored = batch.hasColor();
-  VoxelIndex last_ijk(std::numeric_limits<int>::min(), 0, 0);
-  uint32_t slot = 0;
-  for (size_t i = begin; i < end; ++i) {
-    const VoxelIndex ijk = toVoxel(batch.points[i].cast<double>(), voxel_size_m);
-    if (ijk != last_ijk) {
-      bool inserted;
-      slot = chunk.endpoint_table.findOrInsert(detail::packIndex(ijk), inserted);
-      last_ijk = ijk;
-      if (inserted) {
-        chunk.endpoints.push_back(ijk);
-        if (colored) chunk.color_sums.push_back({0, 0, 0, 0});
-      }
-    }
-    if (colored) {
-      auto& sum = chunk.color_sums[slot];
-      sum[0] += batch.colors[i][0];
-      sum[1] += batch.colors[i][1];
-      sum[2] += batch.colors[i][2];
-      sum[3] += 1;
-    }
-  }
-}
 
 }  // namespace
 
@@ -288,32 +176,32 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
   for (int c = 0; c < num_chunks; ++c) {
     Chunk& chunk = chunks_[c];
-    chunk.table.clear();
-    chunk.masks.clear();
-    chunk.endpoint_table.clear();
+    chunk.updates.clearMasks();
     chunk.endpoints.clear();
-    chunk.color_sums.clear();
-    collectEndpoints(batch, n * c / num_chunks, n * (c + 1) / num_chunks, voxel_size_m, chunk);
-    MaskWriter writer(chunk.table, chunk.masks);
-    for (const VoxelIndex& endpoint : chunk.endpoints) {
+    for (size_t i = n * c / num_chunks; i < n * (c + 1) / num_chunks; ++i) {
+      chunk.endpoints.add(toVoxel(batch.points[i].cast<double>(), voxel_size_m),
+                          batch.hasColor() ? batch.colors[i].data() : nullptr);
+    }
+    BatchUpdates& writer = chunk.updates;
+    for (const VoxelIndex& endpoint : chunk.endpoints.voxels()) {
       const Eigen::Vector3d end = voxelCentre(endpoint, voxel_size_m);
       const Eigen::Vector3d ray = end - origin;
       const double range = ray.norm();
       const bool in_range = !limited || range <= max_range_m;
       const Eigen::Vector3d stop = in_range ? end : Eigen::Vector3d(origin + ray * (max_range_m / range));
       if (exact) {
-        marchFree(origin, stop, voxel_size_m, false, writer, CarveAll{});
+        march<3>(origin, stop, voxel_size_m, false, writer, CarveAll{});
       } else {
         // Voxel by voxel for the last kFineVoxels before the end, then by 2-voxel cells (5.).
         const double fine_m = RayBatch::kFineVoxels * voxel_size_m;
         const double length = (stop - origin).norm();
         if (length <= fine_m + 2.0 * voxel_size_m) {
-          marchFree(stop, origin, voxel_size_m, true, writer, CarveUntilRun{stop_run});
+          march<3>(stop, origin, voxel_size_m, true, writer, CarveUntilRun{stop_run});
         } else {
           const Eigen::Vector3d coarse_start = stop + (origin - stop) * (fine_m / length);
-          if (marchFree(stop, coarse_start, voxel_size_m, false, writer, CarveUntilRun{stop_run})) {
-            marchCoarse(coarse_start, origin, 2.0 * voxel_size_m, writer,
-                        CarveCellsUntilRun{std::max(1, stop_run / 2)});
+          if (march<3>(stop, coarse_start, voxel_size_m, false, writer, CarveUntilRun{stop_run})) {
+            march<2>(coarse_start, origin, 2.0 * voxel_size_m, true, writer,
+                     CarveCellsUntilRun{std::max(1, stop_run / 2)});
           }
         }
       }
@@ -321,61 +209,20 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
     }
   }
   num_rays_ = 0;
-  for (int c = 0; c < num_chunks; ++c) num_rays_ += chunks_[c].endpoints.size();
+  for (int c = 0; c < num_chunks; ++c) num_rays_ += chunks_[c].endpoints.voxels().size();
 
-  // 2. Union of the chunks' masks into chunk 0's table.
-  Chunk& first = chunks_[0];
-  for (int c = 1; c < num_chunks; ++c) {
-    Chunk& other = chunks_[c];
-    for (uint32_t b = 0; b < other.table.size(); ++b) {
-      bool inserted;
-      const uint32_t slot = first.table.findOrInsert(other.table.keyOf(b), inserted);
-      if (inserted) first.masks.emplace_back();
-      for (int w = 0; w < 8; ++w) {
-        first.masks[slot].free[w] |= other.masks[b].free[w];
-        first.masks[slot].hit[w] |= other.masks[b].hit[w];
-      }
-    }
-  }
-  masks_.swap(first.masks);
-  first.masks.clear();
-  for (BlockMasks& m : masks_) {
-    for (int w = 0; w < 8; ++w) m.free[w] &= ~m.hit[w];
-  }
-  order_.resize(masks_.size());
-  std::iota(order_.begin(), order_.end(), 0u);
-  std::sort(order_.begin(), order_.end(),
-            [&](uint32_t a, uint32_t b) { return first.table.keyOf(a) < first.table.keyOf(b); });
-  blocks_.resize(order_.size());
-  for (size_t i = 0; i < order_.size(); ++i) blocks_[i] = detail::unpackIndex(first.table.keyOf(order_[i]));
+  // 2. Union of the chunks' masks, taken over from chunk 0.
+  for (int c = 1; c < num_chunks; ++c) chunks_[0].updates.unite(chunks_[c].updates);
+  swapMasks(chunks_[0].updates);
 
   // 3. Mean colours of the hit voxels, over all chunks (an endpoint voxel may span two bands).
-  colors_.clear();
-  if (!batch.hasColor()) return;
-  endpoint_table_.clear();
   endpoints_.clear();
-  color_sums_.clear();
-  for (int c = 0; c < num_chunks; ++c) {
-    const Chunk& chunk = chunks_[c];
-    for (size_t e = 0; e < chunk.endpoints.size(); ++e) {
-      bool inserted;
-      const uint32_t slot = endpoint_table_.findOrInsert(detail::packIndex(chunk.endpoints[e]), inserted);
-      if (inserted) {
-        endpoints_.push_back(chunk.endpoints[e]);
-        color_sums_.push_back({0, 0, 0, 0});
-      }
-      for (int k = 0; k < 4; ++k) color_sums_[slot][k] += chunk.color_sums[e][k];
-    }
+  if (batch.hasColor()) {
+    for (int c = 0; c < num_chunks; ++c) endpoints_.merge(chunks_[c].endpoints);
   }
-  for (size_t i = 0; i < endpoints_.size(); ++i) {
-    const auto& sum = color_sums_[i];
-    const Eigen::Vector3d end = voxelCentre(endpoints_[i], voxel_size_m);
-    if (limited && (end - origin).norm() > max_range_m) continue;
-    const uint32_t c = sum[3];
-    colors_.push_back({endpoints_[i],
-                       {static_cast<uint8_t>((sum[0] + c / 2) / c), static_cast<uint8_t>((sum[1] + c / 2) / c),
-                        static_cast<uint8_t>((sum[2] + c / 2) / c)}});
-  }
+  finish(endpoints_, batch.hasColor(), [&](const VoxelIndex& ijk) {
+    return !limited || (voxelCentre(ijk, voxel_size_m) - origin).norm() <= max_range_m;
+  });
 }
 
 }  // namespace cenote::mapping

@@ -48,22 +48,14 @@
 #include <vector>
 
 #include "common/point_batch.h"
-#include "mapping/detail/block_table.h"
+#include "mapping/integration/batch_updates.h"
+#include "mapping/integration/endpoint_set.h"
 #include "mapping/voxel_types.h"
 
 namespace cenote::mapping {
 
-struct BlockMasks {
-  std::array<uint64_t, 8> free{};  // bit offsetInBlock(ijk): crossed by a ray (not hit)
-  std::array<uint64_t, 8> hit{};   // bit offsetInBlock(ijk): holds an endpoint within range
-};
-
-struct EndpointColor {
-  VoxelIndex ijk;
-  std::array<uint8_t, 3> rgb;
-};
-
-class RayBatch {
+// The updates (BatchUpdates: block masks, colours) of a batch of rays.
+class RayBatch : public BatchUpdates {
  public:
   static constexpr int kRayChunks = 16;  // fast mode; fixed so that results ignore the thread count
   static constexpr int kFineVoxels = 16;  // fast mode: voxels before a ray's end carved one by one (5.)
@@ -72,33 +64,18 @@ class RayBatch {
   // stop_run: see 3. above; 0 marches every ray whole (OctoMap's voxel sets).
   void build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads, int stop_run);
 
-  // Touched blocks in ascending packed order, with their masks.
-  size_t numBlocks() const { return blocks_.size(); }
-  const BlockIndex& block(size_t i) const { return blocks_[i]; }
-  const BlockMasks& masks(size_t i) const { return masks_[order_[i]]; }
-  // Mean colour of every hit voxel (empty for an uncoloured batch).
-  const std::vector<EndpointColor>& colors() const { return colors_; }
   // Rays cast: the unique endpoint voxels of each chunk, summed.
   size_t numRays() const { return num_rays_; }
 
-  // Scratch of one chunk of points (public for the helpers in ray_batch.cpp).
+ private:
+  // Scratch of one chunk of points.
   struct Chunk {
-    detail::BlockTable endpoint_table;
-    std::vector<VoxelIndex> endpoints;                 // unique endpoint voxels, in point order
-    std::vector<std::array<uint32_t, 4>> color_sums;  // r, g, b, count per endpoint
-    detail::BlockTable table;                          // block -> slot in masks
-    std::vector<BlockMasks> masks;
+    EndpointSet endpoints;  // unique endpoint voxels, in point order
+    BatchUpdates updates;   // masks only
   };
 
- private:
-  detail::BlockTable endpoint_table_;                 // colour merge over the chunks
-  std::vector<VoxelIndex> endpoints_;
-  std::vector<std::array<uint32_t, 4>> color_sums_;  // r, g, b, count per endpoint
+  EndpointSet endpoints_;  // colour merge over the chunks
   std::vector<Chunk> chunks_;
-  std::vector<BlockIndex> blocks_;
-  std::vector<uint32_t> order_;
-  std::vector<BlockMasks> masks_;
-  std::vector<EndpointColor> colors_;
   size_t num_rays_ = 0;
 };
 
