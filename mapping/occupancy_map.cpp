@@ -2,6 +2,7 @@
 
 #include <openvdb/tools/Count.h>
 #include <openvdb/tools/Prune.h>
+#include <openvdb/tree/NodeManager.h>
 
 #include <emmintrin.h>
 
@@ -63,9 +64,6 @@ namespace {
 using openvdb::Coord;
 using detail::LeafIndex;
 using detail::LeafRef;
-
-// Points and origins beyond this many voxels from 0 are rejected (packed block keys, int32 safety).
-constexpr double kMaxVoxelIndex = 1 << 23;
 
 Coord coordOf(const VoxelIndex& ijk) { return Coord(ijk.x(), ijk.y(), ijk.z()); }
 
@@ -377,7 +375,11 @@ MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere,
     }
     if (leaf->isEmpty()) emptied.push_back(block);
   }
-  openvdb::tools::pruneInactive(tree);
+  // tools::pruneInactive, serially (its node list is built with TBB even when not threaded): a
+  // clear touches few nodes, and TBB's (uninstrumented) workers make ThreadSanitizer report races.
+  openvdb::tree::NodeManager<detail::LogOddsTree, detail::LogOddsTree::DEPTH - 2> nodes(tree, /*serial=*/true);
+  openvdb::tools::InactivePruneOp<detail::LogOddsTree> prune(tree);
+  nodes.foreachBottomUp(prune, /*threaded=*/false);
   for (const BlockIndex& block : emptied) impl_->leaf_index.erase(block);
   const VoxelBox candidate_blocks{blockOf(candidates.min), blockOf(candidates.max)};
   impl_->color.eraseIf([&](const BlockIndex& block) { return everywhere || candidate_blocks.contains(block); },

@@ -76,7 +76,8 @@ class OccupancyMap {
   // integration/ray_batch.h for the exact rules (dedup per voxel, max range, occupied wins).
   // @return the changed blocks and their bounding box.
   // @throws Error, leaving the map unchanged, for: an empty batch, a non-finite origin or point,
-  //   colours given for some points only, a point or origin farther than 2^23 voxels from 0.
+  //   colours given for some points only, a point or origin farther than kMaxVoxelIndex voxels
+  //   from 0 on an axis (voxel_types.h).
   MapDelta integrate(const PointBatch& batch);
 
   // Projective integration of a depth image with intrinsics and pose (integration/
@@ -86,7 +87,7 @@ class OccupancyMap {
   // and MapDelta as integrate().
   // @throws Error, leaving the map unchanged, for: width or height < 1, depth (or colours, when
   //   given) not width * height, fx or fy not finite and > 0, cx or cy not finite, a non-finite
-  //   pose, a camera or point farther than 2^23 voxels from 0.
+  //   pose, a camera or point farther than kMaxVoxelIndex voxels from 0 on an axis.
   MapDelta integrateDepth(const DepthFrame& frame);
 
   // Forget (make unknown) the voxels whose centre lies in the box / sphere, or outside the sphere.

@@ -19,6 +19,13 @@ using BlockIndex = Eigen::Vector3i;
 inline constexpr int kBlockShift = 3;            // 8 voxels per block side
 inline constexpr int kBlockSide = 1 << kBlockShift;
 inline constexpr int kBlockVoxels = kBlockSide * kBlockSide * kBlockSide;
+// Voxels a map holds lie within +-kMaxVoxelIndex of 0 on each axis (52 km at 5 cm, 1 km at 1 mm):
+// packed keys (detail::packIndex) hold 21 bits per axis, for a voxel (endpoint de-duplication) as
+// for a block and each of its neighbours.
+inline constexpr int kMaxVoxelIndex = (1 << 20) - kBlockSide;
+inline bool inMapRange(const Eigen::Vector3i& ijk) {
+  return (ijk.array() >= -kMaxVoxelIndex).all() && (ijk.array() <= kMaxVoxelIndex).all();
+}
 
 // Unknown: never observed. Unknown is never free.
 enum class VoxelState : uint8_t { kUnknown = 0, kFree = 1, kOccupied = 2 };

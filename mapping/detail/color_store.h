@@ -4,7 +4,7 @@
 // 5 % of the known voxels at 5 cm, a few per block), so the grid's dense 512-value leaves held
 // ~40x more memory than colours (2.3 MB of the bench's 9.7 MB map). .vdb files still hold an
 // Int32Grid "color" (mapping/io/map_io.cpp converts both ways).
-// Values: map_impl.h packColor. Indices: voxel_types.h; voxels must lie within +-2^23 on each
+// Values: map_impl.h packColor. Indices: voxel_types.h; voxels must lie within +-kMaxVoxelIndex on each
 // axis to be set (what OccupancyMap accepts); get() reports voxels beyond as colourless.
 // Threads: none; OccupancyMap guards it with its grid mutex.
 #pragma once

@@ -4,8 +4,8 @@
 // buffer, one dependent cache miss after another; here it probes one slot of a table that stays in
 // cache (32 bytes per slot, at most half full) and then reads the mask word and the value, two
 // independent loads. A batch of lookups can prefetch both for a group of voxels ahead.
-// Indices: voxel_types.h. Blocks must lie within +-2^20 on each axis to be inserted (voxels within
-// +-2^23: what OccupancyMap accepts); find() reports blocks beyond absent.
+// Indices: voxel_types.h. Blocks must lie within +-2^20 on each axis to be inserted (the map's
+// voxels, within +-kMaxVoxelIndex, always do); find() reports blocks beyond absent.
 // Threads: none; OccupancyMap guards it with its grid mutex, like the tree. Entries point into the
 // tree's leaves: insert (or erase) with every leaf the tree gains (or loses), or rebuild.
 #pragma once

@@ -67,15 +67,17 @@ openvdb::GridPtrVec toFileGrids(const detail::MapImpl& impl, double voxel_size_m
 }
 
 // Fills an empty map from the grids of a .vdb file (tiles are split into voxels).
-// @throws Error for a coloured voxel beyond the +-2^23 voxels per axis the map holds.
+// @throws Error for a voxel beyond the +-kMaxVoxelIndex per axis the map holds (voxel_types.h).
 void fromFileGrids(openvdb::FloatGrid& log_odds, openvdb::Int32Grid& color, detail::MapImpl& impl,
                    const std::string& path) {
   log_odds.tree().voxelizeActiveTiles(false);
   for (auto leaf = log_odds.tree().cbeginLeaf(); leaf; ++leaf) {
     const Coord o = leaf->origin();
-    if (!detail::inPackRange(BlockIndex(o.x() >> kBlockShift, o.y() >> kBlockShift, o.z() >> kBlockShift))) {
+    const VoxelIndex first(o.x(), o.y(), o.z());
+    if (!inMapRange(first) || !inMapRange(first + VoxelIndex::Constant(kBlockSide - 1))) {
       throw Error(path + ": voxel (" + std::to_string(o.x()) + ", " + std::to_string(o.y()) + ", " +
-                  std::to_string(o.z()) + ") lies beyond the 2^23 voxels per axis a map holds");
+                  std::to_string(o.z()) + ") lies beyond the " + std::to_string(kMaxVoxelIndex) +
+                  " voxels per axis a map holds");
     }
     impl.log_odds->tree().addLeaf(new openvdb::FloatTree::LeafNodeType(*leaf));
   }
@@ -85,9 +87,10 @@ void fromFileGrids(openvdb::FloatGrid& log_odds, openvdb::Int32Grid& color, deta
     it.getBoundingBox(box);
     for (auto xyz = box.begin(); xyz; ++xyz) {
       const VoxelIndex ijk((*xyz).x(), (*xyz).y(), (*xyz).z());
-      if (!detail::inPackRange(blockOf(ijk))) {
+      if (!inMapRange(ijk)) {
         throw Error(path + ": coloured voxel (" + std::to_string(ijk.x()) + ", " + std::to_string(ijk.y()) + ", " +
-                    std::to_string(ijk.z()) + ") lies beyond the 2^23 voxels per axis a map holds");
+                    std::to_string(ijk.z()) + ") lies beyond the " + std::to_string(kMaxVoxelIndex) +
+                    " voxels per axis a map holds");
       }
       impl.color.set(ijk, *it);
     }

@@ -1,4 +1,4 @@
-// Queries from several threads while one thread integrates: no data race (build with
+// Queries from several threads while one thread integrates, clears and crops: no data race (build with
 // -DCENOTE_TSAN=ON to have ThreadSanitizer check it), every answer a valid state, and the final
 // map the same as one integrated with nobody reading.
 #include <gtest/gtest.h>
@@ -57,12 +57,23 @@ TEST(MapConcurrency, QueriesWhileIntegratingSeeValidStatesAndChangeNothing) {
       }
     });
   }
-  for (const auto& b : batches) {
-    const MapDelta delta = map.integrate(b);
+  // Integration, clearing and cropping, as a long mission does them: clears edit the leaf index
+  // and the colour store in place while readers look leaves up.
+  auto change = [&](auto&& apply) {
+    const MapDelta delta = apply(map);
     frontiers.update(delta);
     field.update(delta);
-    reference.integrate(b);
+    apply(reference);
+  };
+  for (size_t i = 0; i < batches.size(); ++i) {
+    change([&](OccupancyMap& m) { return m.integrate(batches[i]); });
+    const double x = 1.0 + 0.3 * static_cast<double>(i);
+    change([&](OccupancyMap& m) {
+      return m.clearBox(Aabb{Eigen::Vector3d(x, -0.4, -1.6), Eigen::Vector3d(x + 0.3, 0.4, -1.0)});
+    });
+    change([&](OccupancyMap& m) { return m.clearSphere(Eigen::Vector3d(3.0, 0.0, -1.0), 0.1 * static_cast<double>(i)); });
   }
+  change([&](OccupancyMap& m) { return m.cropToRadius(Eigen::Vector3d::Zero(), 3.0); });
   done = true;
   for (auto& r : readers) r.join();
   EXPECT_GT(answers.load(), 0u);

@@ -153,6 +153,27 @@ TEST(OccupancyMap, BadBatchesAreRejectedAndLeaveMapUnchanged) {
   EXPECT_EQ(map.version(), version);
 }
 
+// At the edge of the map's range (voxel_types.h, kMaxVoxelIndex) every endpoint keeps its own voxel
+// (packed keys there once merged whole rows of them), and a point one voxel beyond is refused.
+TEST(OccupancyMap, EndpointsAtTheRangeLimitStayDistinct) {
+  OccupancyMap map(smallConfig(1.0));  // 1 m voxels: float coordinates hold whole voxels there
+  const double edge = -static_cast<double>(kMaxVoxelIndex) + 0.5;  // centre of the last voxel
+  PointBatch batch;
+  batch.origin = Eigen::Vector3d(0.5, edge + 3.0, edge + 3.0);
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) batch.points.emplace_back(2.5f, static_cast<float>(edge + i), static_cast<float>(edge + j));
+  }
+  map.integrate(batch);
+  EXPECT_EQ(map.stats().occupied, 16u);
+  {
+    auto acc = map.constAccessor();
+    for (const Eigen::Vector3f& p : batch.points) {
+      EXPECT_EQ(acc.state(map.toIndex(p.cast<double>())), VoxelState::kOccupied) << p.transpose();
+    }
+  }
+  EXPECT_THROW(map.integrate(oneRay(batch.origin, Eigen::Vector3f(2.5f, static_cast<float>(edge - 1.0), 0.0f))), Error);
+}
+
 // Analytic scenes: occupied voxels within one voxel of the surface; free between camera and
 // surface; unknown behind it.
 // ray_stop_run 0 (whole rays): every sampled voxel between camera and surface is free. The default
