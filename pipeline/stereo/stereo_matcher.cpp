@@ -1,5 +1,6 @@
 #include "pipeline/stereo/stereo_matcher.h"
 
+#include <atomic>
 #include <omp.h>
 
 #include <algorithm>
@@ -147,7 +148,11 @@ void censusTransforms(const std::vector<MatchLevel*>& levels) {
 // The memory of this frame's result: the last frame's (`kept`) when the caller no longer holds
 // any of it, so that a frame does not fault in 4 MB of fresh pages at 800x600; else new memory.
 DisparityMap resultBuffers(DisparityMap& kept) {
-  auto onlyHere = [](const cv::Mat& m) { return m.u != nullptr && m.u->refcount == 1; };
+  // OpenCV drops references with an atomic decrement, possibly on the caller's consumer thread:
+  // an acquire load orders that thread's last reads of the result before our next writes.
+  auto onlyHere = [](const cv::Mat& m) {
+    return m.u != nullptr && std::atomic_ref<int>(m.u->refcount).load(std::memory_order_acquire) == 1;
+  };
   if (!onlyHere(kept.disparity) || !onlyHere(kept.confidence)) kept = DisparityMap{};
   return kept;
 }

@@ -209,14 +209,29 @@ TEST(StereoMatcher, OneAndTwoThreadsGiveBitIdenticalResults) {
   }
 }
 
-TEST(StereoMatcher, RepeatedMatchesReuseMemoryAndGiveTheSameResult) {
-  const SyntheticPair pair = slantedPlane(200, 120, 15.0, 0.0, 0.0, 11);
+// A matcher writes a frame's result into the last frame's memory once the caller has released
+// it, and never into a result the caller still holds.
+TEST(StereoMatcher, RepeatedMatchesReuseOnlyReleasedMemory) {
+  const SyntheticPair a = slantedPlane(200, 120, 15.0, 0.0, 0.0, 11);
+  const SyntheticPair b = slantedPlane(200, 120, 9.0, 0.02, 0.01, 12);
   StereoConfig config;
   config.num_disparities = 32;
-  StereoMatcher matcher(config);
-  const DisparityMap first = matcher.match(pair.left, pair.right);
-  const DisparityMap second = matcher.match(pair.left, pair.right);
-  expectBitIdentical(first, second, "second call");
+  StereoMatcher matcher(config), fresh(config);
+  const DisparityMap expected_a = fresh.match(a.left, a.right);
+  const DisparityMap expected_b = fresh.match(b.left, b.right);
+
+  const DisparityMap held = matcher.match(a.left, a.right);
+  const DisparityMap other = matcher.match(b.left, b.right);
+  EXPECT_NE(other.disparity.ptr<float>(), held.disparity.ptr<float>());
+  expectBitIdentical(held, expected_a, "result held while the next frame was matched");
+  expectBitIdentical(other, expected_b, "next frame");
+
+  DisparityMap released = matcher.match(a.left, a.right);
+  const float* memory = released.disparity.ptr<float>();
+  released = DisparityMap{};
+  const DisparityMap reused = matcher.match(b.left, b.right);
+  EXPECT_EQ(reused.disparity.ptr<float>(), memory);
+  expectBitIdentical(reused, expected_b, "frame matched into released memory");
 }
 
 TEST(StereoMatcher, SubpixelErrorOnSlantedPlaneBelowFifteenHundredths) {
