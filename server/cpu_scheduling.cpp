@@ -26,14 +26,15 @@ struct SchedAttr {
   uint32_t util_max;
 };
 
+constexpr uint32_t kSchedOther = 0, kSchedBatch = 3;
+
+// Changes only the slice: sched_setattr sets policy, flags and nice too, so they are read first
+// and written back (a launch tool may have made some threads real-time: those are left alone).
 bool setThreadSlice(pid_t tid, uint64_t slice_ns) {
   SchedAttr attr{};
+  if (syscall(SYS_sched_getattr, tid, &attr, sizeof attr, 0) != 0) return false;  // e.g. the thread ended
+  if (attr.policy != kSchedOther && attr.policy != kSchedBatch) return true;
   attr.size = sizeof attr;
-  attr.policy = 0;  // SCHED_OTHER
-  errno = 0;
-  const int nice = getpriority(PRIO_PROCESS, static_cast<id_t>(tid));
-  if (errno != 0) return false;  // the thread has ended
-  attr.nice = nice;              // sched_setattr sets the nice value too: keep the thread's own
   attr.runtime_ns = slice_ns;
   return syscall(SYS_sched_setattr, tid, &attr, 0) == 0;
 }

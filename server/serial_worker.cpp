@@ -1,5 +1,6 @@
 #include "server/serial_worker.h"
 
+#include "common/error.h"
 #include "server/cpu_scheduling.h"
 
 namespace cenote::server {
@@ -20,6 +21,8 @@ void SerialWorker::finish() {
 void SerialWorker::submit(std::function<void()> job) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    // A late call during shutdown: no thread would ever run it, and its caller would wait for ever.
+    if (stop_) throw Error("map writer stopped: the server is shutting down");
     jobs_.push_back(std::move(job));
   }
   ready_.notify_one();

@@ -21,12 +21,13 @@ class SerialWorker {
   explicit SerialWorker(int nice);
   ~SerialWorker();  // finish()
 
-  // Runs the jobs queued so far, then ends the thread; run() must not be called after it.
+  // Runs the jobs queued so far, then ends the thread; run() afterwards throws cenote::Error.
   // Idempotent.
   void finish();
   SerialWorker(const SerialWorker&) = delete;
   SerialWorker& operator=(const SerialWorker&) = delete;
 
+  // @throws what `job` throws, or cenote::Error "map writer stopped" after finish().
   template <typename Job>
   auto run(Job&& job) -> decltype(job()) {
     using Result = decltype(job());
