@@ -84,8 +84,11 @@ TEST(PngEncoder, CameraImagesAreAboutTheSizeOfOpenCvsAndFlatImagesTiny) {
   ASSERT_TRUE(cv::imencode(".png", image, opencv));
   const std::vector<uint8_t> ours = encodePng(image);
   EXPECT_LT(ours.size(), 1.03 * opencv.size()) << "ours " << ours.size() << " B, OpenCV " << opencv.size() << " B";
+  expectSamePixels(cv::imdecode(ours, cv::IMREAD_UNCHANGED), image, "camera image (several deflate blocks), OpenCV");
   const cv::Mat black(600, 800, CV_8UC3, cv::Scalar::all(0));
-  EXPECT_LT(encodePng(black).size(), 0.01 * black.total() * 3) << "a flat image is mostly runs";
+  const std::vector<uint8_t> flat = encodePng(black);
+  EXPECT_LT(flat.size(), 0.01 * black.total() * 3) << "a flat image is mostly runs";
+  expectSamePixels(cv::imdecode(flat, cv::IMREAD_UNCHANGED), black, "flat image, OpenCV");
 }
 
 TEST(PngEncoder, WriteImageWritesAFileOpenCvReads) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <libdeflate.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <random>
@@ -11,7 +12,9 @@
 namespace cenote::pipeline {
 namespace {
 
-// Inflates a zlib stream with libdeflate (which checks the Adler-32 too); `expected_size` exactly.
+// Inflates a zlib stream with libdeflate and with zlib itself (the reference decoder, stricter
+// about incomplete Huffman codes), both checking the Adler-32; `expected_size` exactly. Returns
+// libdeflate's output after checking that zlib's is the same.
 std::vector<uint8_t> inflate(const std::vector<uint8_t>& stream, std::size_t expected_size) {
   libdeflate_decompressor* d = libdeflate_alloc_decompressor();
   std::vector<uint8_t> out(expected_size);
@@ -19,6 +22,12 @@ std::vector<uint8_t> inflate(const std::vector<uint8_t>& stream, std::size_t exp
       libdeflate_zlib_decompress(d, stream.data(), stream.size(), out.data(), out.size(), nullptr);
   libdeflate_free_decompressor(d);
   EXPECT_EQ(result, LIBDEFLATE_SUCCESS) << "stream of " << stream.size() << " bytes";
+  std::vector<uint8_t> by_zlib(expected_size + 1);  // one spare byte: a longer output shows
+  uLongf zlib_size = by_zlib.size();
+  EXPECT_EQ(uncompress(by_zlib.data(), &zlib_size, stream.data(), stream.size()), Z_OK)
+      << "zlib refuses the stream of " << stream.size() << " bytes";
+  by_zlib.resize(zlib_size);
+  EXPECT_EQ(by_zlib, out) << "zlib and libdeflate disagree";
   return out;
 }
 
