@@ -7,7 +7,7 @@
 
 namespace cenote {
 
-std::string readTextFile(const std::string& path, const std::string& what) {
+std::string readFileBytes(const std::string& path, const std::string& what) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(what + " " + path + " cannot be read");
   std::ostringstream text;

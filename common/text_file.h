@@ -1,6 +1,6 @@
-// text_file.h: whole-file and first-line reads of small files given on a command line or in a
-// configuration (PEM certificates and keys, bearer tokens), with errors that name the file and
-// what it was for. Threads: pure functions.
+// text_file.h: whole-file and first-line reads of small files (PEM certificates and keys, bearer
+// tokens, reports, encoded images), with errors that name the file and what it was for.
+// Threads: pure functions.
 #pragma once
 
 #include <string>
@@ -8,7 +8,7 @@
 namespace cenote {
 
 // The file's bytes. @throws Error "<what> <path> cannot be read".
-std::string readTextFile(const std::string& path, const std::string& what);
+std::string readFileBytes(const std::string& path, const std::string& what);
 
 // The file's first line without surrounding white space (a bearer token).
 // @throws Error "<what> <path> cannot be read" or "<what> <path> holds no token on its first line".

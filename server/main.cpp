@@ -69,9 +69,9 @@ std::shared_ptr<grpc::ServerCredentials> credentialsFrom(const Options& o) {
   }
   if (o.tls_cert.empty() || o.tls_key.empty()) throw Error("TLS needs both --tls-cert and --tls-key");
   grpc::SslServerCredentialsOptions tls;
-  tls.pem_key_cert_pairs.push_back({readTextFile(o.tls_key, "TLS key"), readTextFile(o.tls_cert, "TLS certificate")});
+  tls.pem_key_cert_pairs.push_back({readFileBytes(o.tls_key, "TLS key"), readFileBytes(o.tls_cert, "TLS certificate")});
   if (!o.tls_client_ca.empty()) {
-    tls.pem_root_certs = readTextFile(o.tls_client_ca, "TLS client CA");
+    tls.pem_root_certs = readFileBytes(o.tls_client_ca, "TLS client CA");
     tls.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   return grpc::SslServerCredentials(tls);

@@ -16,9 +16,9 @@ client::MapClient& Connection::client() {
     options.token = token_file.empty() ? token : readTokenFile(token_file, "--token-file");
     options.deadline_s = deadline_s;
     options.use_tls = tls || !tls_ca.empty() || !tls_cert.empty();
-    if (!tls_ca.empty()) options.tls_root_cert_pem = readTextFile(tls_ca, "--tls-ca");
-    if (!tls_cert.empty()) options.tls_client_cert_pem = readTextFile(tls_cert, "--tls-cert");
-    if (!tls_key.empty()) options.tls_client_key_pem = readTextFile(tls_key, "--tls-key");
+    if (!tls_ca.empty()) options.tls_root_cert_pem = readFileBytes(tls_ca, "--tls-ca");
+    if (!tls_cert.empty()) options.tls_client_cert_pem = readFileBytes(tls_cert, "--tls-cert");
+    if (!tls_key.empty()) options.tls_client_key_pem = readFileBytes(tls_key, "--tls-key");
     if (tls_cert.empty() != tls_key.empty()) throw CliError("--tls-cert and --tls-key go together");
     client_ = std::make_unique<client::MapClient>(server, options);
   }

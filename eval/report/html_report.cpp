@@ -85,7 +85,7 @@ std::string timingSection(const fs::path& dir) {
   if (!fs::exists(path)) return html + missing("No report.json in this folder (written by cenote run).");
   Json j;
   try {
-    j = Json::parse(readTextFile(path.string(), "report"));
+    j = Json::parse(readFileBytes(path.string(), "report"));
   } catch (const std::exception& e) {
     return html + missing(path.string() + ": not valid JSON (" + e.what() + ")");
   }
@@ -155,7 +155,7 @@ std::string metricsSection(const fs::path& dir) {
   for (const fs::path& f : files) {
     Json j;
     try {
-      j = Json::parse(readTextFile(f.string(), "metrics file"));
+      j = Json::parse(readFileBytes(f.string(), "metrics file"));
     } catch (const std::exception& e) {
       html += missing(f.string() + ": not valid JSON, skipped");
       continue;
@@ -180,7 +180,7 @@ std::string plotsSection(const fs::path& dir) {
   if (pngs.empty()) return html + missing("No plots (cenote eval ... --plot DIR/plots) in this folder.");
   html += "<div class=\"plots\">\n";
   for (const fs::path& p : pngs) {
-    html += "<figure>" + imgTag(readTextFile(p.string(), "plot"), p.filename().string()) + "<figcaption>" +
+    html += "<figure>" + imgTag(readFileBytes(p.string(), "plot"), p.filename().string()) + "<figcaption>" +
             escape(fs::relative(p, dir).string()) + "</figcaption></figure>\n";
   }
   return html + "</div>\n";

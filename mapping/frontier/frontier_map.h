@@ -5,9 +5,9 @@
 // Incremental: update(delta) re-examines only the changed blocks whose voxel states (known,
 // occupied) changed, not just their log-odds, and those of their 6 face neighbours whose facing
 // layer of known voxels changed, with 512-bit masks per block (frontier = free and not known in
-// some face direction, by 64-bit word shifts); the masks of blocks no delta named since come from
-// the snapshot this map keeps of every block a delta named (so give it every delta). Each
-// block's frontier is cut into 26-connected pieces by bit-parallel dilation
+// some face direction, by 64-bit word shifts); the masks of a block some delta named come from
+// the snapshot this map keeps of it (so give it every delta), those of other blocks from the map.
+// Each block's frontier is cut into 26-connected pieces by bit-parallel dilation
 // (frontier/frontier_bits.h); pieces of neighbouring blocks are joined by a union-find on their
 // facing layers. Only the components whose voxels or faces changed, and those they now touch, are
 // re-labelled and re-split (frontier/cluster_split.h, exact integer moments kept per piece: the

@@ -43,8 +43,8 @@ v1::StereoFrame diveFrame(const std::string& dir, const pipeline::StereoDataset&
   v1::StereoFrame frame;
   frame.set_timestamp_s(dataset.timestamp(i));
   const std::string name = dataset.frameName(i) + ".png";
-  frame.mutable_left()->set_encoded(readTextFile((fs::path(dir) / "dive/mav0/cam0/data" / name).string(), "left image"));
-  frame.mutable_right()->set_encoded(readTextFile((fs::path(dir) / "dive/mav0/cam1/data" / name).string(), "right image"));
+  frame.mutable_left()->set_encoded(readFileBytes((fs::path(dir) / "dive/mav0/cam0/data" / name).string(), "left image"));
+  frame.mutable_right()->set_encoded(readFileBytes((fs::path(dir) / "dive/mav0/cam1/data" / name).string(), "right image"));
   if (with_pose) toWire(Eigen::Isometry3d::Identity(), frame.mutable_pose());
   return frame;
 }

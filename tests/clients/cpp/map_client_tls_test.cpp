@@ -34,8 +34,8 @@ class MapClientTlsTest : public ::testing::Test {
   void TearDown() override {
     if (!dir_.empty()) std::filesystem::remove_all(dir_);
   }
-  std::string pem(const std::string& name) const { return readTextFile(dir_ + "/" + name + ".pem", "test certificate"); }
-  std::string key(const std::string& name) const { return readTextFile(dir_ + "/" + name + ".key", "test key"); }
+  std::string pem(const std::string& name) const { return readFileBytes(dir_ + "/" + name + ".pem", "test certificate"); }
+  std::string key(const std::string& name) const { return readFileBytes(dir_ + "/" + name + ".key", "test key"); }
 
   // A call that must fail before reaching the service.
   static void expectUnavailable(MapClient& map, const char* what) {
