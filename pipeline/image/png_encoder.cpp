@@ -62,7 +62,11 @@ void subFilterRow(const uint8_t* in, std::size_t length, std::size_t bpp, uint8_
 bool isPngEncodable(const cv::Mat& image) {
   const int type = image.type();
   const bool known = type == CV_8UC1 || type == CV_8UC3 || type == CV_8UC4 || type == CV_16UC1;
-  return known && image.dims == 2 && image.rows > 0 && image.cols > 0;
+  // The image data goes into one IDAT chunk, whose length field holds less than 2^31 bytes: at most
+  // 2^30 filtered bytes, which deflate (literal codes of at most 15 bits) cannot grow past it.
+  const double filtered_bytes = (static_cast<double>(image.cols) * static_cast<double>(image.elemSize()) + 1.0) *
+                                static_cast<double>(image.rows);
+  return known && image.dims == 2 && image.rows > 0 && image.cols > 0 && filtered_bytes <= 0x1p30;
 }
 
 std::vector<uint8_t> encodePng(const cv::Mat& image) {

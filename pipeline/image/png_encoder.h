@@ -13,7 +13,7 @@
 namespace cenote::pipeline {
 
 // Whether encodePng() takes this image: CV_8UC1, CV_8UC3 (BGR), CV_8UC4 (BGRA) or CV_16UC1,
-// at least one pixel, at most 2^31 - 1 pixels per side.
+// at least one pixel, at most 2^30 bytes of image data (one IDAT chunk).
 bool isPngEncodable(const cv::Mat& image);
 
 // The whole PNG file of `image` (grey, RGB or RGBA; 16-bit grey big-endian, as PNG stores it),
