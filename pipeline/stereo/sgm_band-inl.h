@@ -51,10 +51,11 @@ HWY_INLINE V shiftedBand(V prev, V sentinel, int shift, const uint16_t* iota) {
   return hn::LoadU(d, lanes + kLanes + at);
 }
 
-// Band SAD. The full search keeps running column sums over the whole range; here a column's
-// sums over the window rows are computed afresh from the window's right rows (kept reversed and
-// widened to 16 bits), over the union of the bands of the pixels whose window holds the column
-// only (usually one or two bands instead of the whole range).
+// Band SAD. The full search keeps running column sums over the whole range; here each pixel
+// sums its window's columns over its own band only, the columns' sums over the window rows
+// computed from the window's right rows (kept reversed and widened to 16 bits). The pixels of a
+// 4x4 block share their band (StereoConfig::coarse_scale), so a pixel usually takes the previous
+// pixel's columns, in registers, and computes only the one entering its window.
 
 // The window's right rows around row y: all of them at the first row of a pass, else the one
 // entering the window along dy (ring slot by image row, as the full search's column ring).
@@ -88,41 +89,25 @@ BandSadWindow<kWindow> bandSadWindow(const SgmParams& p, const SgmImages& im, co
   return w;
 }
 
-// Sums over the window rows of |left - right| at column c, for disparity indices [first, first + n)
-// written to out[0, n): n covers the bands of pixels c - r .. c + r (those inside the image),
-// whose windows hold column c, and is at least kBandDisparities + one vector (see below; out has
-// room for that). Returns `first`.
-template <int kWindow>
-HWY_INLINE int bandColumn(const SgmParams& p, const BandSadWindow<kWindow>& window, const int16_t* starts, int c,
-                          uint16_t* out) {
+// Sums over the window rows of |left - right| at column c (clamped to the image), for the band
+// from `start`: kVectors vectors.
+template <int kWindow, int kVectors>
+HWY_INLINE void bandColumn(const SgmParams& p, const BandSadWindow<kWindow>& window, int c, int start,
+                           VU16 (&out)[kVectors]) {
   const DU16 d;
   const hn::RebindToSigned<DU16> di;
-  constexpr int r = kWindow / 2;
   constexpr int kN = static_cast<int>(hn::MaxLanes(DU16()));
-  int lo = starts[c], hi = lo;
-  for (int j = -r; j <= r; ++j) {  // clamped to the image: a pixel twice changes nothing
-    const int start = starts[clampColumn(c + j, p.width)];
-    lo = std::min(lo, start);
-    hi = std::max(hi, start);
-  }
-  // The band and one more vector always (neighbouring bands usually differ by a few disparities;
-  // a loop count of one or two vectors would mispredict), more in a loop only where they differ
-  // by more than a vector.
-  constexpr int kAlways = kBandDisparities + kN;
-  const int n = hi - lo + kBandDisparities;
-  const std::ptrdiff_t at = p.width - 1 - c + p.min_disparity + lo;  // reversedAt(), from lo
+  c = clampColumn(c, p.width);
+  const std::ptrdiff_t at = p.width - 1 - c + p.min_disparity + start;  // reversedAt()
   hn::Vec<decltype(di)> left[kWindow];
   for (int i = 0; i < kWindow; ++i) left[i] = hn::Set(di, window.left[i][c]);
-  auto vector = [&](int k) HWY_ATTR __attribute__((always_inline)) {
-    auto sum = hn::Abs(hn::Sub(left[0], hn::LoadU(di, window.right[0] + at + k)));
+  for (int j = 0; j < kVectors; ++j) {
+    auto sum = hn::Abs(hn::Sub(left[0], hn::LoadU(di, window.right[0] + at + j * kN)));
     for (int i = 1; i < kWindow; ++i) {
-      sum = hn::Add(sum, hn::Abs(hn::Sub(left[i], hn::LoadU(di, window.right[i] + at + k))));
+      sum = hn::Add(sum, hn::Abs(hn::Sub(left[i], hn::LoadU(di, window.right[i] + at + j * kN))));
     }
-    hn::Store(hn::BitCast(d, sum), d, out + k);
-  };
-  for (int k = 0; k < kAlways; k += kN) vector(k);
-  for (int k = kAlways; k < n; k += kN) vector(k);
-  return lo;
+    out[j] = hn::BitCast(d, sum);
+  }
 }
 
 // One row of one pass, as aggregateRowFull(), over each pixel's band. kWindow: the SAD window
@@ -175,24 +160,13 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   uint16_t* const min_row_fwd = b.path_min[2];
   uint16_t* const min_row_back_out = b.path_min[3];
   const uint16_t* const iota = b.iota;
-  // Band SAD: columns of window sums, slot c % (kWindow + 1), holding disparities from
-  // column_first[slot]. Those of the first pixel's window first, then each pixel computes the one
-  // past its window (a column early: the unaligned loads of a column just stored would miss
-  // store-to-load forwarding).
-  constexpr int kColumnSlots = kWindow + 1;
-  int column_first[kColumnSlots] = {};
-  auto columnSlot = [&](int c) HWY_ATTR {
-    return b.band_columns + static_cast<std::ptrdiff_t>(c % kColumnSlots) * b.band_column_stride;
-  };
+  // Band SAD: the window's column sums at the band of the pixel that computed them (columns
+  // x - r dx .. x + r dx, the last one entering the window), and that band's start.
+  constexpr int kColumns = kCensus ? 1 : kWindow;
+  VU16 columns[kColumns][kVectors];
+  int columns_start = -1;
   BandSadWindow<kCensus ? 1 : kWindow> window{};
-  if constexpr (!kCensus) {
-    window = bandSadWindow<kWindow>(p, im, b, y);
-    const int x0 = dx > 0 ? 0 : W - 1;
-    for (int j = 0; j <= r; ++j) {
-      const int c = x0 + dx * j;
-      if (c >= 0 && c < W) column_first[c % kColumnSlots] = bandColumn<kWindow>(p, window, starts, c, columnSlot(c));
-    }
-  }
+  if constexpr (!kCensus) window = bandSadWindow<kWindow>(p, im, b, y);
   uint16_t* const batch_sums = b.sums;
   const uint16_t* const census_right_lo = b.census_reversed[0];
   const uint16_t* const census_right_hi = b.census_reversed[1];
@@ -210,9 +184,14 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     const int shift_vertical = shiftFrom(x), shift_back = shiftFrom(x - dx), shift_fwd = shiftFrom(x + dx);
 
     if constexpr (!kCensus) {
-      const int ahead = x + dx * (r + 1);
-      if (ahead >= 0 && ahead < W) {
-        column_first[ahead % kColumnSlots] = bandColumn<kWindow>(p, window, starts, ahead, columnSlot(ahead));
+      if (start == columns_start) {  // the previous pixel's band: its columns, one further
+        for (int c = 0; c + 1 < kWindow; ++c) {
+          for (int j = 0; j < kVectors; ++j) columns[c][j] = columns[c + 1][j];
+        }
+        bandColumn<kWindow>(p, window, x + dx * r, start, columns[kWindow - 1]);
+      } else {
+        for (int c = 0; c < kWindow; ++c) bandColumn<kWindow>(p, window, x + dx * (c - r), start, columns[c]);
+        columns_start = start;
       }
     }
     const int valid_max = x - p.min_disparity;  // largest disparity index with a right pixel
@@ -246,14 +225,6 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
                                    ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp
                                    : batch_sums + slot * Dp;
     const uint16_t* const sums_in = add_stored ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp : nullptr;
-    // The window's columns, clamped to the image, at the band's first disparity.
-    const uint16_t* columns[kCensus ? 1 : kWindow];
-    if constexpr (!kCensus) {
-      for (int c = -r; c <= r; ++c) {
-        const int column = clampColumn(x + c, W);
-        columns[c + r] = columnSlot(column) + (start - column_first[column % kColumnSlots]);
-      }
-    }
     // The along-row predecessor when it searched another band: one vector is shifted in
     // registers, several go through memory.
     if (kVectors > 1 && shift_along != 0) {
@@ -271,8 +242,8 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         const VU16 hi = hn::Xor(hn::Set(d, census_hi), hn::LoadU(d, census_right_hi + census_base + k));
         cost = hn::Add(hn::PopulationCount(lo), hn::PopulationCount(hi));
       } else {
-        VU16 acc = hn::LoadU(d, columns[0] + k);
-        for (int c = 1; c < kWindow; ++c) acc = hn::Add(acc, hn::LoadU(d, columns[c] + k));
+        VU16 acc = columns[0][j];
+        for (int c = 1; c < kWindow; ++c) acc = hn::Add(acc, columns[c][j]);
         cost = hn::ShiftRightSame(acc, sad_shift);
       }
       if (border) {

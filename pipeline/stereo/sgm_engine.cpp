@@ -153,11 +153,8 @@ struct StripBuffers {
   uint16_t* column_sum = nullptr;  // SAD: [x][Dp] sums over the window rows
   uint8_t* ring = nullptr;         // SAD: window rows of [x][Dp] absolute differences
   // Band SAD (instead of column_sum and ring): the window's right rows reversed and widened
-  // ([window][reversed_length], slot by image row), and window + 1 columns of sums over those
-  // rows ([window + 1][band_column_stride], slot by image column), see sgm_band-inl.h.
+  // ([window][reversed_length], slot by image row), see sgm_band-inl.h.
   uint16_t* band_rows = nullptr;
-  uint16_t* band_columns = nullptr;
-  int band_column_stride = 0;
   uint16_t* running = nullptr;     // SAD: Dp, running horizontal window sum
   uint16_t* sums = nullptr;        // [kWinnerBatch][Dp]: path sums of the pixels awaiting their winner
   uint16_t* batch_best = nullptr;  // [kWinnerBatch][N]: lane-wise minimum of each pixel's sums
@@ -193,9 +190,8 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   const std::size_t path_row = (W + 2) * b.pixel_stride + 2 * b.lead;
   const std::size_t along = std::max<std::size_t>(Dp + 2 * N, 5 * kBandDisparities);
   const bool band_sad = band && !p.census;
-  b.band_column_stride = static_cast<int>(alignUp(Dp + N, 64));  // at least a band and a vector
   const std::size_t sad = p.census ? 0
-                          : band_sad ? p.window * rev + (p.window + 1) * b.band_column_stride
+                          : band_sad ? p.window * rev
                                      : W * Dp + (W * Dp * p.window + 1) / 2;
   // Every piece is rounded up to 64 elements by take(); 32 pieces at most.
   const std::size_t total = 4 * (path_row + W + 2) + 2 * along + sad + 2 * Dp +
@@ -219,7 +215,6 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   b.along[1] = take(along);
   if (band_sad) {
     b.band_rows = take(p.window * rev);
-    b.band_columns = take((p.window + 1) * b.band_column_stride);
   } else if (!p.census) {
     b.column_sum = take(W * Dp);
     b.ring = reinterpret_cast<uint8_t*>(take((W * Dp * p.window + 1) / 2));  // window rows of bytes
