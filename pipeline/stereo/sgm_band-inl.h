@@ -307,9 +307,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       along[j] = along_new[j];
     }
     along_min = minLaneBroadcast(d, mins_along);
-    min_row_vertical[x + 1] = minLane(d, mins_vertical);
-    min_row_fwd[x + 1] = minLane(d, mins_fwd);
-    min_row_back_out[x + 1] = minLane(d, mins_back);
+    storePathMinima(min_row_vertical, min_row_fwd, min_row_back_out, x, mins_vertical, mins_fwd, mins_back);
     if (output == RowOutput::kWinner) {
       const int N = kN;
       if constexpr (kVectors > 1) {
@@ -322,7 +320,5 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       }
     }
   }
-  std::swap(b.path[1], b.path[3]);
-  std::swap(b.path_min[1], b.path_min[3]);
-  if (output == RowOutput::kWinner && p.lr_check) leftRightCheck(p, b, disparity, confidence);
+  finishRow(p, b, output, disparity, confidence);
 }

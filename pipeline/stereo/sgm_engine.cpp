@@ -605,6 +605,26 @@ void leftRightCheck(const SgmParams& p, const StripBuffers& b, float* disparity,
 
 enum class RowOutput { kNone, kStoreSums, kWinner };
 
+// After pixel x: the minima of its three stored paths (vertical, forward and backward diagonal),
+// which the next row's pixels read for their P2 term, into rows b.path_min[0], [2] and [3]
+// (passed as pointers: the band kernel keeps them in locals, see aggregateRowBand).
+HWY_INLINE void storePathMinima(uint16_t* min_vertical, uint16_t* min_fwd, uint16_t* min_back, int x,
+                                VU16 mins_vertical, VU16 mins_fwd, VU16 mins_back) {
+  const DU16 d;
+  min_vertical[x + 1] = minLane(d, mins_vertical);
+  min_fwd[x + 1] = minLane(d, mins_fwd);
+  min_back[x + 1] = minLane(d, mins_back);
+}
+
+// After a row (both search modes): direction 1's new row becomes the one the next image row
+// reads (pixels -1 and W of both rows are never written: they stay "no predecessor"); then the
+// left-right check of the row's winners.
+void finishRow(const SgmParams& p, StripBuffers& b, RowOutput output, float* disparity, float* confidence) {
+  std::swap(b.path[1], b.path[3]);
+  std::swap(b.path_min[1], b.path_min[3]);
+  if (output == RowOutput::kWinner && p.lr_check) leftRightCheck(p, b, disparity, confidence);
+}
+
 // What the cost of a pixel needs, known at compile time for the common cases. kGeneral decides
 // at run time (first pixel of a row, left border, SAD window columns outside the image).
 enum class PixelKind { kGeneral, kSadInterior, kCensusInterior };
@@ -774,9 +794,7 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     }
     hn::Store(vertical_pending, d, vertical + Dp - N);
     along_min = minLaneBroadcast(d, mins_along);
-    b.path_min[0][x + 1] = minLane(d, mins_vertical);
-    b.path_min[2][x + 1] = minLane(d, mins_fwd);
-    b.path_min[3][x + 1] = minLane(d, mins_back);
+    storePathMinima(b.path_min[0], b.path_min[2], b.path_min[3], x, mins_vertical, mins_fwd, mins_back);
     along_cur = 1 - along_cur;
     if (output == RowOutput::kWinner) {
       hn::Store(best, d, b.batch_best + slot * N);
@@ -787,11 +805,7 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       }
     }
   }
-  // Direction 1's new row becomes the one the next image row reads (pixels -1 and W of both
-  // rows are never written: they stay "no predecessor").
-  std::swap(b.path[1], b.path[3]);
-  std::swap(b.path_min[1], b.path_min[3]);
-  if (output == RowOutput::kWinner && p.lr_check) leftRightCheck(p, b, disparity, confidence);
+  finishRow(p, b, output, disparity, confidence);
 }
 
 // Coarse-to-fine band search: aggregateRowBand().
