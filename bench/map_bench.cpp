@@ -30,6 +30,7 @@
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <utility>
 #include <span>
 #include <string>
 #include <ctime>
@@ -96,16 +97,22 @@ std::vector<DepthFrame> makeDepthFrames(const BenchView& view) {
   return frames;
 }
 
-double threadCpuMs() {
+// CPU time of `clock` (CLOCK_THREAD_CPUTIME_ID: this thread; CLOCK_PROCESS_CPUTIME_ID: all).
+double cpuMs(clockid_t clock) {
   timespec t;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  clock_gettime(clock, &t);
   return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
 }
+double threadCpuMs() { return cpuMs(CLOCK_THREAD_CPUTIME_ID); }
 
-double medianAfterFirst(std::vector<double> v) {
-  if (v.size() > 1) v.erase(v.begin());
+double median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
+}
+// The first frame starts from an empty map: left out when there are others.
+double medianAfterFirst(std::vector<double> v) {
+  if (v.size() > 1) v.erase(v.begin());
+  return median(std::move(v));
 }
 double mean(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / v.size(); }
 
@@ -205,11 +212,6 @@ LookupTimes timeBatchedLookups(const OccupancyMap& map, const std::vector<Eigen:
   return out;
 }
 
-double median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-
 // --lookups-only: five rounds of single and batched lookups, alternating, on one map.
 void reportLookups(const OccupancyMap& map) {
   std::mt19937 rng(5);
@@ -241,11 +243,7 @@ void reportLookups(const OccupancyMap& map) {
 
 // --clears-only: see the header comment.
 void reportClears(const std::vector<PointBatch>& frames, const MapConfig& config) {
-  auto processCpuMs = [] {
-    timespec t;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);  // pruneInactive runs on TBB's threads too
-    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
-  };
+  auto processCpuMs = [] { return cpuMs(CLOCK_PROCESS_CPUTIME_ID); };  // any helper thread counted too
   std::vector<double> known_ms, box_ms, sphere_ms;
   uint64_t fingerprint = 14695981039346656037ull;
   for (int round = 0; round < 5; ++round) {
