@@ -298,14 +298,15 @@ void shrinkImage(const cv::Mat& grey, int scale, cv::Mat& out) {
     grey.copyTo(out);
     return;
   }
-  cv::Mat half;
-  halveImage(grey, half);
-  for (int s = scale / 2; s > 1; s /= 2) {
-    cv::Mat next;
-    halveImage(half, next);
-    half = next;
+  // The halvings before the last go through scratch images kept per thread, and the last writes
+  // `out` in place: a frame allocates nothing once the sizes are known (the matcher keeps `out`).
+  thread_local cv::Mat scratch[2];
+  const cv::Mat* in = &grey;
+  for (int s = scale, k = 0; s > 2; s /= 2, k ^= 1) {
+    halveImage(*in, scratch[k]);
+    in = &scratch[k];
   }
-  out = half;
+  halveImage(*in, out);
 }
 
 void halveImage(const cv::Mat& grey, cv::Mat& half) {
