@@ -11,14 +11,11 @@
 #include <string_view>
 #include <vector>
 
+#include "pipeline/image/big_endian.h"
+
 namespace cenote::pipeline {
 namespace {
 
-constexpr std::array<uint8_t, 8> kSignature = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-
-uint32_t bigEndian32(const uint8_t* p) {
-  return (uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | uint32_t{p[3]};
-}
 
 // Chunks that do not change the pixels cv::imread returns (it applies no gamma, colour profile
 // or background). Any other chunk sends the file to OpenCV.
@@ -96,23 +93,23 @@ bool unfilterRow(int filter, const uint8_t* in, uint8_t* out, const uint8_t* pre
 }  // namespace
 
 cv::Mat decodePngFast(const uint8_t* data, std::size_t size) {
-  if (size < kSignature.size() || std::memcmp(data, kSignature.data(), kSignature.size()) != 0) return {};
-  std::size_t pos = kSignature.size();
+  if (size < kPngSignature.size() || std::memcmp(data, kPngSignature.data(), kPngSignature.size()) != 0) return {};
+  std::size_t pos = kPngSignature.size();
   int width = 0, height = 0, channels = 0;
   thread_local std::vector<uint8_t> compressed;
   compressed.clear();
   bool seen_header = false, seen_end = false;
   while (!seen_end) {
     if (size - pos < 12) return {};
-    const uint32_t length = bigEndian32(data + pos);
+    const uint32_t length = loadBigEndian32(data + pos);
     if (length > size - pos - 12) return {};
     const std::string_view type(reinterpret_cast<const char*>(data + pos + 4), 4);
     const uint8_t* body = data + pos + 8;
     // The CRC covers the type and the body; libpng rejects a mismatch, and so do we (by deferring).
-    if (libdeflate_crc32(0, data + pos + 4, length + 4) != bigEndian32(body + length)) return {};
+    if (libdeflate_crc32(0, data + pos + 4, length + 4) != loadBigEndian32(body + length)) return {};
     if (type == "IHDR") {
       if (length != 13 || seen_header) return {};
-      const uint32_t w = bigEndian32(body), h = bigEndian32(body + 4);
+      const uint32_t w = loadBigEndian32(body), h = loadBigEndian32(body + 4);
       const int bit_depth = body[8], colour_type = body[9];
       const bool standard = body[10] == 0 && body[11] == 0 && body[12] == 0;  // deflate, filter set 0, not interlaced
       if (!standard || bit_depth != 8 || w == 0 || h == 0 || w > (1u << 15) || h > (1u << 15)) return {};

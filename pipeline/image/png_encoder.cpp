@@ -7,16 +7,17 @@
 #include <cstring>
 #include <opencv2/imgproc.hpp>
 
+#include "pipeline/image/big_endian.h"
 #include "pipeline/image/rle_deflate.h"
 
 namespace cenote::pipeline {
 namespace {
 
-constexpr std::array<uint8_t, 8> kSignature = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
 constexpr uint8_t kSubFilter = 1;
 
 void appendBigEndian32(std::vector<uint8_t>& out, uint32_t value) {
-  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<uint8_t>(value >> shift));
+  out.resize(out.size() + 4);
+  storeBigEndian32(out.data() + out.size() - 4, value);
 }
 
 // Appends a chunk: length, type, body (what body(out) appends), CRC of type and body.
@@ -27,7 +28,7 @@ void appendChunk(std::vector<uint8_t>& out, const char type[4], Body body) {
   out.insert(out.end(), type, type + 4);
   body(out);
   const std::size_t length = out.size() - start - 8;
-  for (int i = 0; i < 4; ++i) out[start + i] = static_cast<uint8_t>(length >> (24 - 8 * i));
+  storeBigEndian32(out.data() + start, static_cast<uint32_t>(length));
   appendBigEndian32(out, libdeflate_crc32(0, out.data() + start + 4, length + 4));
 }
 
@@ -79,7 +80,7 @@ std::vector<uint8_t> encodePng(const cv::Mat& image) {
     subFilterRow(png_order.ptr<uint8_t>(y), row_bytes, bpp, filtered.data() + (row_bytes + 1) * y);
   }
 
-  std::vector<uint8_t> file(kSignature.begin(), kSignature.end());
+  std::vector<uint8_t> file(kPngSignature.begin(), kPngSignature.end());
   appendChunk(file, "IHDR", [&](std::vector<uint8_t>& out) {
     appendBigEndian32(out, static_cast<uint32_t>(image.cols));
     appendBigEndian32(out, static_cast<uint32_t>(image.rows));

@@ -6,6 +6,8 @@
 #include <array>
 #include <cstring>
 
+#include "pipeline/image/big_endian.h"
+
 namespace cenote::pipeline {
 namespace {
 
@@ -267,8 +269,8 @@ void deflateRle(const uint8_t* data, std::size_t size, std::vector<uint8_t>& out
     writeBlock(data, first, std::min(size, first + kBlockBytes), b + 1 == blocks, bits);
   }
   p = bits.finish();
-  const uint32_t adler = libdeflate_adler32(1, data, size);
-  for (int shift = 24; shift >= 0; shift -= 8) *p++ = static_cast<uint8_t>(adler >> shift);
+  storeBigEndian32(p, libdeflate_adler32(1, data, size));
+  p += 4;
   out.insert(out.end(), scratch.data(), p);
 }
 
