@@ -49,11 +49,12 @@ bool setProcessTimeSlice(double slice_ms) {
   if (slice_ms <= 0.0) return true;
   const auto slice_ns = static_cast<uint64_t>(slice_ms * 1e6);
   // The calling thread first: if the kernel refuses, no other thread is touched.
-  if (!setThreadSlice(gettid(), slice_ns)) return false;
+  const pid_t self = gettid();
+  if (!setThreadSlice(self, slice_ns)) return false;
   std::error_code error;
   for (const auto& task : std::filesystem::directory_iterator("/proc/self/task", error)) {
     const pid_t tid = static_cast<pid_t>(std::stol(task.path().filename().string()));
-    if (tid != gettid()) setThreadSlice(tid, slice_ns);  // threads made before the config was read
+    if (tid != self) setThreadSlice(tid, slice_ns);  // threads made before the config was read
   }
   return true;
 }

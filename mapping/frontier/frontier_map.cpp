@@ -352,7 +352,7 @@ struct FrontierMap::Impl {
     // unassigned one is merged with it: that component is taken apart, its pieces joined at once
     // (they are connected).
     for (uint32_t slot : queued) {
-      const std::array<uint32_t, 26> around = blocks[slot]->around;
+      const std::array<uint32_t, 26>& around = blocks[slot]->around;
       for (uint32_t i = 0; i < blocks[slot]->pieces.size(); ++i) {
         const Piece& p = blocks[slot]->pieces[i];
         if (p.component != 0) continue;

@@ -26,7 +26,7 @@ class EndpointSet {
     table_.clear();
     voxels_.clear();
     sums_.clear();
-    last_ = VoxelIndex(std::numeric_limits<int>::min(), 0, 0);
+    last_ = kNoVoxel;
   }
 
   // Adds one point's voxel; rgb: its colour, or null for an uncoloured point. Neighbouring pixels
@@ -60,7 +60,7 @@ class EndpointSet {
       }
       for (int k = 0; k < 4; ++k) sums_[slot][k] += other.sums_[e][k];
     }
-    last_ = VoxelIndex(std::numeric_limits<int>::min(), 0, 0);
+    last_ = kNoVoxel;
   }
 
   const std::vector<VoxelIndex>& voxels() const { return voxels_; }
@@ -77,7 +77,8 @@ class EndpointSet {
   detail::BlockTable table_;  // voxel -> index in voxels_
   std::vector<VoxelIndex> voxels_;
   std::vector<std::array<uint32_t, 4>> sums_;  // r, g, b, count per voxel
-  VoxelIndex last_ = VoxelIndex(std::numeric_limits<int>::min(), 0, 0);
+  static inline const VoxelIndex kNoVoxel{std::numeric_limits<int>::min(), 0, 0};  // beyond any map
+  VoxelIndex last_ = kNoVoxel;  // the voxel of the last add(), so a run of equal voxels skips the table
   uint32_t last_slot_ = 0;
 };
 

@@ -118,8 +118,8 @@ CollisionResult sweepCapsule(const OccupancyMap::ConstAccessor& acc, const Segme
 std::vector<VoxelQuery> queryVoxels(const OccupancyMap& map, const std::vector<Eigen::Vector3d>& points_m) {
   const size_t n = points_m.size();
   std::vector<VoxelQuery> out(n);
-  const double limit = 1e9 * map.voxelSize();
-  // A voxel no map holds (its block lies beyond +-2^20) stands for points that cannot be looked up.
+  const double limit = kMaxVoxelIndex * map.voxelSize();
+  // A voxel no map holds stands for points beyond the map's range (voxel_types.h): always unknown.
   const VoxelIndex nowhere = VoxelIndex::Constant(std::numeric_limits<int>::max());
   std::vector<VoxelIndex> ijk(n);
   for (size_t i = 0; i < n; ++i) {

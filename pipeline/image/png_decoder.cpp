@@ -16,7 +16,6 @@
 namespace cenote::pipeline {
 namespace {
 
-
 // Chunks that do not change the pixels cv::imread returns (it applies no gamma, colour profile
 // or background). Any other chunk sends the file to OpenCV.
 bool isIgnorableChunk(std::string_view type) {
