@@ -175,9 +175,10 @@ class FrameStream {
 }  // namespace
 
 IngestService::IngestService(MapHost& host, CallGuard& guard, const ServerSettings& settings,
-                             std::shared_ptr<const pipeline::Rectifier> rectifier)
+                             std::shared_ptr<const pipeline::Rectifier> rectifier, const CpuPlacement& cpus)
     : host_(host),
       guard_(guard),
+      cpus_(cpus),
       settings_(settings),
       rectifier_(std::move(rectifier)),
       poses_(settings.server.pose_history_s) {}
@@ -190,6 +191,8 @@ grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
                         "the server has no stereo calibration: start cenote-server with --calibration");
     }
     StreamSlot slot(frame_streams_, settings_.server.max_frame_streams);
+    // Decoding, rectification and the pipeline's threads (started by FrameStream) are bulk work.
+    BulkCpuScope bulk(cpus_);
     FrameStream frames(host_, settings_, *rectifier_, poses_, counters_, timings_);
     acknowledgeEach(stream, [&](const v1::StereoFrame& wire, v1::FrameAck& ack) {
       const bool running = frames.handle(wire, ack);

@@ -18,6 +18,7 @@
 #include "pipeline/calibration/rectifier.h"
 #include "pipeline/runner/stage_timer.h"
 #include "server/call_guard.h"
+#include "server/cpu_placement.h"
 #include "server/map_host.h"
 #include "server/pose_buffer.h"
 #include "server/server_config.h"
@@ -63,9 +64,10 @@ class IngestTimings {
 class IngestService final : public v1::Ingest::Service {
  public:
   // rectifier: the stereo rig; null when the server has no calibration (StreamFrames then fails
-  // with FAILED_PRECONDITION).
+  // with FAILED_PRECONDITION). cpus: a StreamFrames call's pipeline runs on all of them, not on
+  // the query CPUs its handler thread has.
   IngestService(MapHost& host, CallGuard& guard, const ServerSettings& settings,
-                std::shared_ptr<const pipeline::Rectifier> rectifier);
+                std::shared_ptr<const pipeline::Rectifier> rectifier, const CpuPlacement& cpus);
 
   grpc::Status StreamFrames(grpc::ServerContext* context,
                             grpc::ServerReaderWriter<v1::FrameAck, v1::StereoFrame>* stream) override;
@@ -85,6 +87,7 @@ class IngestService final : public v1::Ingest::Service {
 
   MapHost& host_;
   CallGuard& guard_;
+  const CpuPlacement& cpus_;
   const ServerSettings& settings_;
   std::shared_ptr<const pipeline::Rectifier> rectifier_;
   PoseBuffer poses_;

@@ -27,6 +27,7 @@
 #include "pipeline/dataset/stereo_dataset.h"
 #include "proto/grpc_runtime.h"
 #include "server/admin_service.h"
+#include "server/cpu_placement.h"
 #include "server/cpu_scheduling.h"
 #include "server/ingest_service.h"
 #include "server/query_service.h"
@@ -103,9 +104,10 @@ int serve(const Options& o) {
     std::fprintf(stderr, "cenote-server: the kernel refused server.time_slice_ms %g; running with its default\n",
                  settings.server.time_slice_ms);
   }
+  const CpuPlacement cpus(settings.server.query_cpus);  // before any thread is pinned
   MapHost host(initialMap(o, settings), settings.server.host);
   Snapshotter snapshots(host, settings.server.snapshot_dir, settings.server.frame_id, settings.server.snapshot_period_s);
-  IngestService ingest(host, guard, settings, rectifierFrom(settings.server.calibration));
+  IngestService ingest(host, guard, settings, rectifierFrom(settings.server.calibration), cpus);
   QueryService query(host, guard, settings.server, settings.server.frame_id);
   UpdatesService updates(host, guard);
   AdminService admin(host, guard, snapshots, ingest);
@@ -129,12 +131,17 @@ int serve(const Options& o) {
   builder.RegisterService(&query);
   builder.RegisterService(&updates);
   builder.RegisterService(&admin);
-  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  std::unique_ptr<grpc::Server> server;
+  {
+    // gRPC's pollers start here and start more of themselves later: all inherit the query CPUs.
+    QueryCpuScope pinned(cpus);
+    server = builder.BuildAndStart();
+  }
   if (!server || port == 0) throw Error("cannot listen on " + settings.server.listen + " (address in use or invalid?)");
 
   const std::string host_part = settings.server.listen.substr(0, settings.server.listen.rfind(':'));
   std::cout << "cenote-server listening on " << host_part << ":" << port << (token.empty() ? "" : " (token required)")
-            << std::endl;
+            << "; " << cpus.describe() << std::endl;
   if (!o.port_file.empty()) {
     const std::string temp = o.port_file + ".tmp";
     std::ofstream(temp) << port << "\n";

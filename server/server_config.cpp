@@ -1,5 +1,9 @@
 #include "server/server_config.h"
 
+#include <sched.h>
+
+#include <string>
+
 #include "common/yaml_section.h"
 
 namespace cenote::server {
@@ -20,6 +24,8 @@ std::vector<ConfigError> ServerConfig::validate() const {
   errors.check(max_pollers >= 1 && max_pollers <= 1024, "max_pollers", max_pollers, "must be in [1, 1024]");
   errors.check(time_slice_ms == 0.0 || (time_slice_ms >= 0.1 && time_slice_ms <= 100.0), "time_slice_ms",
                time_slice_ms, "must be 0 (kernel default) or in [0.1, 100]");
+  errors.check(query_cpus >= 0 && query_cpus <= CPU_SETSIZE, "query_cpus", query_cpus,
+               "must be in [0, " + std::to_string(CPU_SETSIZE) + "] (0: gRPC threads not pinned)");
   errors.check(host.ingest_nice >= 0 && host.ingest_nice <= 19, "ingest_nice", host.ingest_nice, "must be in [0, 19]");
   errors.check(host.derived_nice >= 0 && host.derived_nice <= 19, "derived_nice", host.derived_nice,
                "must be in [0, 19]");
@@ -52,6 +58,7 @@ void ServerConfig::read(YamlSection& section) {
   section.read("min_pollers", min_pollers);
   section.read("max_pollers", max_pollers);
   section.read("time_slice_ms", time_slice_ms);
+  section.read("query_cpus", query_cpus);
   section.read("ingest_nice", host.ingest_nice);
   section.read("derived_nice", host.derived_nice);
   section.read("derived_period_s", host.derived_period_s);

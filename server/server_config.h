@@ -45,6 +45,8 @@ struct ServerConfig {
   int max_pollers = 16;                     //   more are made while calls wait; see server/main.cpp)
   double time_slice_ms = 0.1;               // CPU time slice of every server thread (cpu_scheduling.h);
                                             // 0: the kernel's default
+  int query_cpus = 1;                       // CPUs of gRPC's threads, the last ones (cpu_placement.h);
+                                            // 0: not pinned
   MapHostOptions host;                      // keys max_subscriber_lag, ingest_nice, derived_nice,
                                             // derived_period_s, derived_follow_s
   RequestLimits limits;

@@ -106,12 +106,13 @@ TEST(ServerLifecycle, BadStartupInputIsRefusedWithAMessageNamingIt) {
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("server.listne"), std::string::npos) << text;
 
-  std::ofstream(dir / "range.yaml") << "map:\n  voxel_size_m: -1\nserver:\n  max_frame_streams: 0\n  time_slice_ms: 0.05\n";
+  std::ofstream(dir / "range.yaml") << "map:\n  voxel_size_m: -1\nserver:\n  max_frame_streams: 0\n  time_slice_ms: 0.05\n  query_cpus: -1\n";
   std::tie(status, text) = runToExit("--config " + (dir / "range.yaml").string());
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("map.voxel_size_m"), std::string::npos) << text;
   EXPECT_NE(text.find("server.max_frame_streams"), std::string::npos) << text;
   EXPECT_NE(text.find("server.time_slice_ms"), std::string::npos) << text;
+  EXPECT_NE(text.find("server.query_cpus"), std::string::npos) << text;
 
   std::tie(status, text) = runToExit("--listen 127.0.0.1:0 --load " + (dir / "missing.vdb").string());
   EXPECT_EQ(status, 1);
@@ -121,6 +122,40 @@ TEST(ServerLifecycle, BadStartupInputIsRefusedWithAMessageNamingIt) {
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("no-token cannot be read"), std::string::npos) << text;
   fs::remove_all(dir.parent_path());
+}
+
+// A line of /proc/<pid>/task/<tid>/status, e.g. "Cpus_allowed_list" -> "0-1".
+std::string taskStatus(const fs::path& task, const std::string& key) {
+  std::ifstream in(task / "status");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind(key + ":", 0) == 0) return line.substr(line.find_first_not_of(" \t", key.size() + 1));
+  }
+  return "";
+}
+
+TEST(ServerLifecycle, GrpcThreadsRunOnTheQueryCpuAndTheMapOnAll) {
+  const std::string all = taskStatus("/proc/self", "Cpus_allowed_list");
+  if (std::thread::hardware_concurrency() < 2 || all.find_first_of("-,") == std::string::npos) {
+    GTEST_SKIP() << "the process may use one CPU only (" << all << ")";
+  }
+  ServerProcess server(CENOTE_SERVER_BINARY);  // default configuration: query_cpus 1
+  Stubs stubs(server.target());
+  integrate(stubs, wallBatch(2.0, 1.0, 0.02, 1.0));  // the writer's OpenMP team exists now
+  EXPECT_NE(server.log().find("gRPC threads on CPU"), std::string::npos) << server.log();
+  const std::string last = all.substr(all.find_last_of("-,") + 1);
+  int grpc_threads = 0, map_threads = 0;
+  for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(server.pid()) + "/task")) {
+    const std::string name = taskStatus(task.path(), "Name"), cpus = taskStatus(task.path(), "Cpus_allowed_list");
+    if (name == "grpcpp_sync_ser") {  // gRPC's pollers, where the handlers run
+      ++grpc_threads;
+      EXPECT_EQ(cpus, last) << "gRPC thread " << task.path().filename();
+    } else if (name == "cenote-server") {  // main, map writer and its OpenMP team, derived, snapshots
+      ++map_threads;
+      EXPECT_EQ(cpus, all) << "thread " << task.path().filename();
+    }
+  }
+  EXPECT_GE(grpc_threads, 2);  // server.min_pollers
+  EXPECT_GE(map_threads, 4);
 }
 
 }  // namespace
