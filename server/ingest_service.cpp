@@ -225,8 +225,13 @@ void IngestService::integrateBatch(const v1::PointBatch& wire, v1::BatchAck& ack
   PointBatch batch;
   batch.t_s = wire.timestamp_s();
   batch.origin = finitePoint(wire.origin(), "origin");
-  batch.points = pointsFromWire<float>(wire.xyz(), "xyz", settings_.server.limits.max_points_per_batch,
-                                      "server.limits.max_points_per_batch");
+  const int64_t limit = settings_.server.limits.max_points_per_batch;
+  const std::string limit_name = "server.limits.max_points_per_batch";
+  if (!wire.xyz().empty() && !wire.xyz_f32().empty()) {
+    throw invalidArgument("xyz and xyz_f32 are both set: send the points in one of them");
+  }
+  batch.points = wire.xyz_f32().empty() ? pointsFromWire<float>(wire.xyz(), "xyz", limit, limit_name)
+                                        : pointsFromWire<float>(wire.xyz_f32(), "xyz_f32", limit, limit_name);
   if (batch.points.empty()) throw invalidArgument("xyz: the batch has no points");
   if (!wire.rgb().empty()) {
     if (wire.rgb().size() != 3 * batch.points.size()) {

@@ -77,8 +77,8 @@ void checkCount(int64_t count, const std::string& what, int64_t limit, const std
   }
 }
 
-template <typename Scalar>
-std::vector<Eigen::Matrix<Scalar, 3, 1>> pointsFromWire(const google::protobuf::RepeatedField<double>& xyz,
+template <typename Scalar, typename WireScalar>
+std::vector<Eigen::Matrix<Scalar, 3, 1>> pointsFromWire(const google::protobuf::RepeatedField<WireScalar>& xyz,
                                                         const std::string& what, int64_t limit,
                                                         const std::string& limit_name) {
   if (xyz.size() % 3 != 0) {
@@ -87,12 +87,12 @@ std::vector<Eigen::Matrix<Scalar, 3, 1>> pointsFromWire(const google::protobuf::
   const int64_t n = xyz.size() / 3;
   checkCount(n, what, limit, limit_name);
   std::vector<Eigen::Matrix<Scalar, 3, 1>> points(static_cast<size_t>(n));
-  const double* p = xyz.data();
+  const WireScalar* p = xyz.data();
   for (int64_t i = 0; i < n; ++i, p += 3) {
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
       throw invalidArgument(what + ": point " + std::to_string(i) + " has a non-finite coordinate");
     }
-    points[i] = Eigen::Vector3d(p[0], p[1], p[2]).cast<Scalar>();
+    points[i] = Eigen::Matrix<WireScalar, 3, 1>(p[0], p[1], p[2]).template cast<Scalar>();
   }
   return points;
 }
@@ -100,6 +100,8 @@ std::vector<Eigen::Matrix<Scalar, 3, 1>> pointsFromWire(const google::protobuf::
 template std::vector<Eigen::Vector3d> pointsFromWire<double>(const google::protobuf::RepeatedField<double>&,
                                                              const std::string&, int64_t, const std::string&);
 template std::vector<Eigen::Vector3f> pointsFromWire<float>(const google::protobuf::RepeatedField<double>&,
+                                                            const std::string&, int64_t, const std::string&);
+template std::vector<Eigen::Vector3f> pointsFromWire<float>(const google::protobuf::RepeatedField<float>&,
                                                             const std::string&, int64_t, const std::string&);
 
 }  // namespace cenote::server

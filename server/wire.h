@@ -30,12 +30,13 @@ mapping::Aabb finiteBox(const v1::Box& box, const std::string& what);
 // Pose T_world_cam from position + unit quaternion (|q| within 1e-3 of 1, then normalised).
 Eigen::Isometry3d finitePose(const v1::Pose& pose, const std::string& what);
 
-// Flat x, y, z triples into points (double for queries, float for a PointBatch: converted in the
-// same pass). @throws StatusError: INVALID_ARGUMENT when the length is not a multiple of 3 or a
-// coordinate is not finite; RESOURCE_EXHAUSTED when there are more than `limit` points (the
-// message names `limit_name`). Instantiated for double and float.
-template <typename Scalar = double>
-std::vector<Eigen::Matrix<Scalar, 3, 1>> pointsFromWire(const google::protobuf::RepeatedField<double>& xyz,
+// Flat x, y, z triples (double, or a PointBatch's xyz_f32) into points (double for queries, float
+// for a PointBatch: converted in the same pass). @throws StatusError: INVALID_ARGUMENT when the
+// length is not a multiple of 3 or a coordinate is not finite; RESOURCE_EXHAUSTED when there are
+// more than `limit` points (the message names `limit_name`). Instantiated for double -> double,
+// double -> float and float -> float.
+template <typename Scalar = double, typename WireScalar = double>
+std::vector<Eigen::Matrix<Scalar, 3, 1>> pointsFromWire(const google::protobuf::RepeatedField<WireScalar>& xyz,
                                                         const std::string& what, int64_t limit,
                                                         const std::string& limit_name);
 

@@ -196,6 +196,40 @@ TEST(ServerWithoutCalibration, StreamFramesFailsWithFailedPrecondition) {
   EXPECT_NE(status.error_message().find("--calibration"), std::string::npos) << status.error_message();
 }
 
+// The batch with its points in xyz_f32 instead of xyz.
+v1::PointBatch asFloat32(v1::PointBatch batch) {
+  for (double v : batch.xyz()) batch.add_xyz_f32(static_cast<float>(v));
+  batch.clear_xyz();
+  return batch;
+}
+
+TEST(ServerPointIngest, Float32PointsGiveTheSameMapAsDoubles) {
+  ServerProcess server(CENOTE_SERVER_BINARY);
+  Stubs stubs(server.target());
+  const std::string dir = (fs::temp_directory_path() / ("cenote-f32-" + std::to_string(getpid()))).string();
+  fs::create_directories(dir);
+  // Off-grid coordinates, so that rounding to float32 matters.
+  std::vector<v1::PointBatch> batches = {wallBatch(2.0137, 1.0, 0.0231, 1.0), wallBatch(3.0071, 1.5, 0.0297, 2.0)};
+  std::unique_ptr<mapping::OccupancyMap> maps[2];
+  for (int f32 = 0; f32 < 2; ++f32) {
+    auto reset_context = contextWithDeadline();
+    v1::ChangeReply reset;
+    ASSERT_TRUE(stubs.admin->Reset(reset_context.get(), v1::ResetRequest(), &reset).ok());
+    for (const v1::PointBatch& batch : batches) {
+      auto context = contextWithDeadline();
+      v1::BatchAck ack;
+      const grpc::Status status = stubs.ingest->IntegratePoints(context.get(), f32 ? asFloat32(batch) : batch, &ack);
+      ASSERT_TRUE(status.ok()) << status.error_message();
+    }
+    maps[f32] = downloadMap(*stubs.admin, dir);
+  }
+  const MapDifference diff = compareMaps(*maps[0], *maps[1]);
+  EXPECT_GT(diff.known, 50000u);
+  EXPECT_EQ(diff.different_state, 0u);
+  EXPECT_EQ(diff.different_log_odds, 0u);
+  fs::remove_all(dir);
+}
+
 TEST(ServerPointIngest, OversizedAndBrokenBatchesAreRefusedAndTheMapIsUnchanged) {
   const std::string config = (fs::temp_directory_path() / ("cenote-limits-" + std::to_string(getpid()) + ".yaml")).string();
   std::ofstream(config) << "server:\n  limits:\n    max_points_per_batch: 1000\n";
@@ -222,6 +256,16 @@ TEST(ServerPointIngest, OversizedAndBrokenBatchesAreRefusedAndTheMapIsUnchanged)
   v1::PointBatch ragged = wallBatch(2.0, 0.2, 0.05, 1.0);
   ragged.add_xyz(1.0);
   EXPECT_EQ(call(ragged).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  v1::PointBatch both = wallBatch(2.0, 0.2, 0.05, 1.0);
+  both.add_xyz_f32(1.0f);
+  status = call(both);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("xyz and xyz_f32 are both set"), std::string::npos) << status.error_message();
+  v1::PointBatch ragged_f32 = asFloat32(wallBatch(2.0, 0.2, 0.05, 1.0));
+  ragged_f32.add_xyz_f32(1.0f);
+  status = call(ragged_f32);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("xyz_f32: "), std::string::npos) << status.error_message();
   v1::PointBatch bad_colours = wallBatch(2.0, 0.2, 0.05, 1.0);
   bad_colours.set_rgb("abc");
   EXPECT_EQ(call(bad_colours).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
