@@ -5,6 +5,7 @@
 
 #include "pipeline/runner/frame_pipeline.h"
 #include "pipeline/runner/keyframe_selector.h"
+#include "server/cpu_scheduling.h"
 #include "server/frame_decoder.h"
 #include "server/wire.h"
 
@@ -62,8 +63,13 @@ class FrameStream {
         counters_(counters),
         timings_(timings),
         keyframes_(settings.pipeline.run),
-        stages_(settings.pipeline, false),
-        integrator_([this] { integrateOutputs(); }) {}
+        // Stereo, fusion and handing their points to the map run below the query handlers' CPU
+        // priority, as integration does (cpu_scheduling.h).
+        stages_(settings.pipeline, false, [nice = settings.server.host.ingest_nice] { setThreadNice(nice); }),
+        integrator_([this] {
+          setThreadNice(settings_.server.host.ingest_nice);
+          integrateOutputs();
+        }) {}
 
   ~FrameStream() {
     stages_.abort();

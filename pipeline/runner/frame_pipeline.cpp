@@ -27,15 +27,21 @@ Eigen::Isometry3d rectifiedFromRaw(const Rectifier& rectifier) {
   return T_raw_rect;
 }
 
-FramePipeline::FramePipeline(const PipelineConfig& config, bool keep_maps)
+FramePipeline::FramePipeline(const PipelineConfig& config, bool keep_maps, std::function<void()> on_thread_start)
     : config_(config),
       keep_maps_(keep_maps),
       rectified_(config.run.queue_depth),
       depths_(config.run.queue_depth),
       outputs_(config.run.queue_depth) {
   throwIfInvalid(config_.validate(), "pipeline configuration");
-  stereo_thread_ = std::thread([this] { stereoStage(); });
-  fusion_thread_ = std::thread([this] { fusionStage(); });
+  stereo_thread_ = std::thread([this, on_thread_start] {
+    if (on_thread_start) on_thread_start();
+    stereoStage();
+  });
+  fusion_thread_ = std::thread([this, on_thread_start] {
+    if (on_thread_start) on_thread_start();
+    fusionStage();
+  });
 }
 
 FramePipeline::~FramePipeline() {

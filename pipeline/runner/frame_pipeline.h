@@ -45,8 +45,9 @@ Eigen::Isometry3d rectifiedFromRaw(const Rectifier& rectifier);
 class FramePipeline {
  public:
   // Starts the stage threads. keep_maps: outputs carry the fused depth maps (to write them out).
+  // on_thread_start: runs first on each stage thread (the server lowers their CPU priority with it).
   // @throws cenote::Error for an invalid stereo or fusion setting.
-  FramePipeline(const PipelineConfig& config, bool keep_maps);
+  FramePipeline(const PipelineConfig& config, bool keep_maps, std::function<void()> on_thread_start = {});
   // Closes the input and joins the threads (frames in flight are finished and dropped).
   ~FramePipeline();
   FramePipeline(const FramePipeline&) = delete;

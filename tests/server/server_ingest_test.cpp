@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "common/text_file.h"
 #include "mapping/io/map_io.h"
@@ -49,6 +50,18 @@ v1::StereoFrame diveFrame(const std::string& dir, const pipeline::StereoDataset&
   return frame;
 }
 
+// Threads of the server at server.ingest_nice (5 in config/default.yaml), each checked to run on
+// every CPU of this process.
+int threadsAtIngestNice(pid_t server) {
+  int count = 0;
+  for (const ThreadInfo& thread : threadsOf(server)) {
+    if (thread.nice != 5) continue;
+    ++count;
+    EXPECT_EQ(thread.cpus, cpusOfThisProcess()) << thread.name;
+  }
+  return count;
+}
+
 // A short simulated cave dive and `cenote run`'s map of it, made once for the suite.
 class SimulatedDive : public ::testing::Test {
  protected:
@@ -88,6 +101,7 @@ TEST_F(SimulatedDive, StreamedFramesAndPosesGiveTheSameMapAsCenoteRun) {
     poses->WritesDone();
     ASSERT_TRUE(poses->Finish().ok());
   }
+  const int background_before = threadsAtIngestNice(server.pid());
   auto context = contextWithDeadline(300.0);
   auto frames = stubs.ingest->StreamFrames(context.get());
   size_t processed = 0;
@@ -98,6 +112,15 @@ TEST_F(SimulatedDive, StreamedFramesAndPosesGiveTheSameMapAsCenoteRun) {
     EXPECT_EQ(ack.sequence(), i);
     EXPECT_EQ(ack.outcome(), v1::FRAME_OUTCOME_PROCESSED) << ack.message();
     processed += ack.outcome() == v1::FRAME_OUTCOME_PROCESSED;
+    if (i == 0) {
+      // The stream's stereo, fusion and integrating threads run below the query handlers' CPU
+      // priority, on every CPU (they start from a handler thread pinned to the query CPU).
+      int background = 0;
+      for (int tries = 0; tries < 500 && (background = threadsAtIngestNice(server.pid())) < background_before + 3; ++tries) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      }
+      EXPECT_GE(background, background_before + 3);
+    }
   }
   frames->WritesDone();
   const grpc::Status status = frames->Finish();

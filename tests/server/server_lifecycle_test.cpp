@@ -124,38 +124,26 @@ TEST(ServerLifecycle, BadStartupInputIsRefusedWithAMessageNamingIt) {
   fs::remove_all(dir.parent_path());
 }
 
-// A line of /proc/<pid>/task/<tid>/status, e.g. "Cpus_allowed_list" -> "0-1".
-std::string taskStatus(const fs::path& task, const std::string& key) {
-  std::ifstream in(task / "status");
-  for (std::string line; std::getline(in, line);) {
-    if (line.rfind(key + ":", 0) == 0) return line.substr(line.find_first_not_of(" \t", key.size() + 1));
-  }
-  return "";
-}
-
 TEST(ServerLifecycle, GrpcThreadsRunOnTheQueryCpuAndTheMapOnAll) {
-  const std::string all = taskStatus("/proc/self", "Cpus_allowed_list");
-  if (std::thread::hardware_concurrency() < 2 || all.find_first_of("-,") == std::string::npos) {
-    GTEST_SKIP() << "the process may use one CPU only (" << all << ")";
-  }
+  const std::string all = cpusOfThisProcess();
+  if (all.find_first_of("-,") == std::string::npos) GTEST_SKIP() << "the process may use one CPU only (" << all << ")";
   ServerProcess server(CENOTE_SERVER_BINARY);  // default configuration: query_cpus 1
   Stubs stubs(server.target());
   integrate(stubs, wallBatch(2.0, 1.0, 0.02, 1.0));  // the writer's OpenMP team exists now
   EXPECT_NE(server.log().find("gRPC threads on CPU"), std::string::npos) << server.log();
   const std::string last = all.substr(all.find_last_of("-,") + 1);
-  int grpc_threads = 0, map_threads = 0;
-  for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(server.pid()) + "/task")) {
-    const std::string name = taskStatus(task.path(), "Name"), cpus = taskStatus(task.path(), "Cpus_allowed_list");
-    if (name == "grpcpp_sync_ser") {  // gRPC's pollers, where the handlers run
+  int grpc_threads = 0, own_threads = 0;
+  for (const ThreadInfo& thread : threadsOf(server.pid())) {
+    if (thread.name == "grpcpp_sync_ser") {  // gRPC's pollers, where the handlers run
       ++grpc_threads;
-      EXPECT_EQ(cpus, last) << "gRPC thread " << task.path().filename();
-    } else if (name == "cenote-server") {  // main, map writer and its OpenMP team, derived, snapshots
-      ++map_threads;
-      EXPECT_EQ(cpus, all) << "thread " << task.path().filename();
+      EXPECT_EQ(thread.cpus, last);
+    } else if (thread.name == "cenote-server") {  // main, map writer and its OpenMP team, derived, snapshots
+      ++own_threads;
+      EXPECT_EQ(thread.cpus, all);
     }
   }
   EXPECT_GE(grpc_threads, 2);  // server.min_pollers
-  EXPECT_GE(map_threads, 4);
+  EXPECT_GE(own_threads, 4);
 }
 
 }  // namespace

@@ -2,12 +2,17 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
+#include <sstream>
 
 #include "mapping/io/map_io.h"
 
 namespace cenote::server::test {
+
+namespace fs = std::filesystem;
 
 MapDifference compareMaps(const mapping::OccupancyMap& a, const mapping::OccupancyMap& b) {
   const auto access_a = a.constAccessor();
@@ -58,5 +63,42 @@ v1::PointBatch wallBatch(double wall_x_m, double half_m, double spacing_m, doubl
   }
   return batch;
 }
+
+namespace {
+
+// The value of `key` in a /proc status file ("Cpus_allowed_list:\t0-1" -> "0-1").
+std::string statusField(const fs::path& status, const std::string& key) {
+  std::ifstream in(status);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind(key + ":", 0) == 0) return line.substr(line.find_first_not_of(" \t", key.size() + 1));
+  }
+  return "";
+}
+
+// Field 19 of /proc/<pid>/task/<tid>/stat (after the parenthesised name, which may hold spaces).
+int niceOf(const fs::path& stat) {
+  std::ifstream in(stat);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::istringstream fields(text.substr(text.rfind(')') + 2));
+  std::string field;
+  for (int i = 3; fields >> field; ++i)
+    if (i == 19) return std::stoi(field);
+  return 0;
+}
+
+}  // namespace
+
+std::vector<ThreadInfo> threadsOf(pid_t pid) {
+  std::vector<ThreadInfo> threads;
+  std::error_code error;  // a thread may end while we read: skipped
+  for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(pid) + "/task", error)) {
+    ThreadInfo info{statusField(task.path() / "status", "Name"), statusField(task.path() / "status", "Cpus_allowed_list"),
+                    niceOf(task.path() / "stat")};
+    if (!info.name.empty()) threads.push_back(info);
+  }
+  return threads;
+}
+
+std::string cpusOfThisProcess() { return statusField("/proc/self/status", "Cpus_allowed_list"); }
 
 }  // namespace cenote::server::test

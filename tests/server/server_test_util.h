@@ -5,6 +5,9 @@
 #include <grpcpp/grpcpp.h>
 
 #include <string>
+#include <vector>
+
+#include <sys/types.h>
 
 #include "cenote/v1/admin.grpc.pb.h"
 #include "cenote/v1/ingest.grpc.pb.h"
@@ -46,5 +49,15 @@ std::unique_ptr<mapping::OccupancyMap> downloadMap(v1::Admin::Stub& admin, const
 
 // A wall of points at x = wall_x_m, |y|, |z| <= half_m, seen from the origin.
 v1::PointBatch wallBatch(double wall_x_m, double half_m, double spacing_m, double t_s);
+
+// One thread of a running process, from /proc/<pid>/task/<tid>/{status,stat}.
+struct ThreadInfo {
+  std::string name;  // e.g. "grpcpp_sync_ser" (gRPC's pollers), "cenote-server" (our own threads)
+  std::string cpus;  // Cpus_allowed_list, e.g. "0-1"
+  int nice = 0;
+};
+std::vector<ThreadInfo> threadsOf(pid_t pid);  // "self" for this process: getpid()
+// The CPUs this test process may use, as Cpus_allowed_list writes them.
+std::string cpusOfThisProcess();
 
 }  // namespace cenote::server::test
