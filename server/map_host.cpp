@@ -82,6 +82,11 @@ uint64_t MapHost::derivedUpdates() const {
   return derived_updates_;
 }
 
+uint64_t MapHost::changesSeenWhenDerivedIdled() const {
+  std::lock_guard<std::mutex> lock(derived_mutex_);
+  return idle_changes_;
+}
+
 bool MapHost::waitForDerived(std::chrono::system_clock::time_point deadline) const {
   std::unique_lock<std::mutex> lock(derived_mutex_);
   last_derived_query_ = Clock::now();
@@ -117,6 +122,7 @@ void MapHost::derivedLoop() {
       if (derived_changes_ < published_changes_ && followingQueries(Clock::now())) {
         derived_cv_.wait_until(lock, last_update + period);
       } else {
+        idle_changes_ = published_changes_;
         derived_cv_.wait(lock);
       }
     }

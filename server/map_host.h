@@ -59,6 +59,10 @@ class MapHost {
   // Rounds of distance field and frontier updates done so far (each covers all changes pending).
   uint64_t derivedUpdates() const;
   const mapping::FrontierMap& frontiers() const { return *frontiers_; }
+  // For tests, which cannot otherwise see a decision not to update: the number of changes made
+  // when the derived thread last went to sleep with no time limit (until the next change, query or
+  // the end), i.e. decided that those not yet derived wait for a query. 0 until it first does.
+  uint64_t changesSeenWhenDerivedIdled() const;
 
  private:
   template <typename Change>
@@ -77,6 +81,7 @@ class MapHost {
   uint64_t published_changes_ = 0;   // changes made
   uint64_t derived_changes_ = 0;     // changes the derived structures include
   uint64_t derived_updates_ = 0;     // rounds of derived updates
+  uint64_t idle_changes_ = 0;        // published_changes_ at the derived thread's last untimed wait
   uint64_t batches_ = 0;
   using Clock = std::chrono::steady_clock;
   bool followingQueries(Clock::time_point now) const;

@@ -40,16 +40,31 @@ std::unique_ptr<MapHost> makeHost(double period_s, double follow_s) {
   return std::make_unique<MapHost>(std::make_unique<mapping::OccupancyMap>(mapping::MapConfig{}), options);
 }
 
-// Polls (up to 10 s) until the host has done `rounds` derived updates.
+// Polls `done` every millisecond until it is true or 10 s have passed; its last answer.
+template <typename Done>
+bool pollUpTo10s(Done&& done) {
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (!done() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(1ms);
+  return done();
+}
+
+// Waits (up to 10 s) until the host has done `rounds` derived updates.
 bool waitForRounds(const MapHost& host, uint64_t rounds) {
-  for (int i = 0; i < 1000 && host.derivedUpdates() < rounds; ++i) std::this_thread::sleep_for(10ms);
-  return host.derivedUpdates() >= rounds;
+  return pollUpTo10s([&] { return host.derivedUpdates() >= rounds; });
+}
+
+// Waits (up to 10 s) until the derived thread has looked at the first `changes` changes and gone to
+// sleep until a query comes (or another change): from then on, until one does, nothing more is
+// derived, so what has been is final, whatever the machine's speed.
+bool waitForDerivedIdleAfter(const MapHost& host, uint64_t changes) {
+  return pollUpTo10s([&] { return host.changesSeenWhenDerivedIdled() >= changes; });
 }
 
 TEST(MapHostDerived, NothingIsDerivedUntilTheFirstDistanceQueryWhichSeesEveryChange) {
   auto host = makeHost(0.02, 10.0);
   for (int i = 0; i < 3; ++i) host->integrate(wallBatch(0.0));
-  std::this_thread::sleep_for(200ms);  // ten periods: a following host would have updated
+  // No query yet, so the host does not follow the map: it leaves the changes for the first query.
+  ASSERT_TRUE(waitForDerivedIdleAfter(*host, 3));
   EXPECT_EQ(host->derivedUpdates(), 0u);
 
   ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
@@ -78,7 +93,7 @@ TEST(MapHostDerived, AfterTheFollowWindowChangesWaitForTheNextQuery) {
   std::this_thread::sleep_for(300ms);  // the last query is now older than derived_follow_s
 
   host->integrate(wallBatch(1.0));
-  std::this_thread::sleep_for(200ms);
+  ASSERT_TRUE(waitForDerivedIdleAfter(*host, 2));
   EXPECT_EQ(host->derivedUpdates(), 1u);
   EXPECT_GT(distanceAt(*host, {0.5, 1.5, 0.0}), 0.6);  // the field does not know the new part yet
 
