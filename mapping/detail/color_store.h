@@ -129,6 +129,8 @@ class ColorStore {
     *this = std::move(kept);
   }
   void clear() { *this = ColorStore(); }
+  // Blocks with an entry, including those left without colours that eraseIf has not yet dropped.
+  size_t numBlocks() const { return blocks_.size(); }
   size_t memoryBytes() const {
     size_t bytes = sizeof(*this) + table_.memoryBytes() + blocks_.capacity() * sizeof(BlockColors);
     for (const BlockColors& colors : blocks_) bytes += colors.packed.capacity() * sizeof(int32_t);

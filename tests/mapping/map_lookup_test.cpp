@@ -5,6 +5,7 @@
 
 #include <map>
 #include <random>
+#include <set>
 
 #include "mapping/detail/leaf_index.h"
 #include "mapping/detail/map_impl.h"
@@ -115,11 +116,25 @@ TEST(MapLookup, IndexAndColoursFollowTheTreeThroughClearingCroppingAndReset) {
   expectLookupsEqualTree(map, region, "integrated");
 
   // Each clear: lookups still equal the tree, and every voxel outside the cleared shape keeps its
-  // state, value and colour, while inside it is unknown and colourless.
+  // state, value and colour, while inside it is unknown and colourless. The colour store keeps the
+  // entries of blocks it emptied until they are more than half of its entries, then holds only the
+  // blocks with colours left (color_store.h ColorStore::eraseIf): its entry count after the clear
+  // is the one that rule gives from the count before and the blocks that kept colours.
+  const detail::ColorStore& colours = detail::MapAccess::of(map).color;
+  int compactions = 0, clears_keeping_empty_blocks = 0;
   auto check = [&](const std::string& when, auto&& inside, auto&& clear) {
     const std::vector<VoxelSnapshot> before = snapshot(map, region);
+    const size_t entries_before = colours.numBlocks();
     clear();
     expectLookupsEqualTree(map, region, when);
+    std::set<uint64_t> coloured_blocks;
+    colours.forEach([&](const VoxelIndex& ijk, int32_t) { coloured_blocks.insert(detail::packIndex(blockOf(ijk))); });
+    const size_t emptied = entries_before - coloured_blocks.size();
+    const bool compacts = 2 * emptied > entries_before;
+    EXPECT_EQ(colours.numBlocks(), compacts ? coloured_blocks.size() : entries_before)
+        << when << ": " << entries_before << " entries before, " << coloured_blocks.size() << " blocks with colours after";
+    compactions += compacts;
+    clears_keeping_empty_blocks += !compacts && emptied > 0;
     const std::vector<VoxelSnapshot> after = snapshot(map, region);
     size_t i = 0, removed_colours = 0, kept_colours = 0;
     for (int x = region.min.x(); x <= region.max.x(); ++x) {
@@ -164,6 +179,11 @@ TEST(MapLookup, IndexAndColoursFollowTheTreeThroughClearingCroppingAndReset) {
                                   test::lookAt(Eigen::Vector3d(0.2, 0.1, 0.0), Eigen::Vector3d(2.0, 0.1, -1.5)), 8.0));
   expectLookupsEqualTree(map, region, "integrated again");
   check("reset", [](const Eigen::Vector3d&) { return true; }, [&] { map.reset(); });
+  // Reset leaves the store as a new one; both ways of eraseIf ran along the way.
+  EXPECT_EQ(colours.numBlocks(), 0u);
+  EXPECT_EQ(colours.memoryBytes(), detail::ColorStore().memoryBytes());
+  EXPECT_GE(compactions, 2);
+  EXPECT_GE(clears_keeping_empty_blocks, 1);
 }
 
 }  // namespace
