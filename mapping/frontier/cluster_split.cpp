@@ -199,7 +199,7 @@ class Splitter {
 
   Splitter(const std::vector<BlockRun>& runs, const SplitParams& params, const VoxelIndex& ref, uint64_t& next_id,
            std::vector<FrontierCluster>& out)
-      : runs_(runs), params_(params), ref_(ref), next_id_(next_id), out_(out) {}
+      : runs_(runs), params_(params), max_extent_voxels_(params.maxExtentVoxels()), ref_(ref), next_id_(next_id), out_(out) {}
 
   // Splits the voxels of all runs, one chunk per run to start with.
   void splitAll() {
@@ -228,7 +228,7 @@ class Splitter {
     if (m.n < params_.min_voxels) return;
     int32_t extent_voxels = 0;
     for (int i = 0; i < 3; ++i) extent_voxels = std::max(extent_voxels, m.hi[i] - m.lo[i] + 1);
-    if (extent_voxels * params_.voxel_size_m > params_.max_extent_m && m.n >= 2) {
+    if (extent_voxels > max_extent_voxels_ && m.n >= 2) {
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m.scaledCovariance());
       const Plane plane{m.n, {m.sum[0], m.sum[1], m.sum[2]}, eig.eigenvectors().col(2)};
       std::vector<uint32_t> low, high;
@@ -332,6 +332,7 @@ class Splitter {
 
   const std::vector<BlockRun>& runs_;
   const SplitParams& params_;
+  const int32_t max_extent_voxels_;
   const VoxelIndex ref_;
   uint64_t& next_id_;
   std::vector<FrontierCluster>& out_;

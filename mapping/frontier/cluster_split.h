@@ -1,6 +1,8 @@
 // cluster_split.h: turns one 26-connected component of frontier voxels into FrontierClusters:
 // split in two across its main axis (PCA, through the mean) until no side of a part's bounding
-// box exceeds max_extent_m; parts with fewer than min_voxels voxels are dropped.
+// box exceeds max_extent_m (counted in whole voxels); parts with fewer than min_voxels voxels are
+// dropped. A voxel on a splitting plane goes to the side the axis points to, as Eigen's
+// eigenvector sign has it: repeatable (the moments are exact), not mirror-symmetric.
 // Everything is computed from exact integer moments (counts, sums of coordinates and of their
 // products, face-direction counts), so the clusters depend only on the set of voxels, never on the
 // order a flood fill listed them in: the same clusters whatever grouping of updates found them.
@@ -8,6 +10,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +33,10 @@ struct SplitParams {
   double voxel_size_m = 0.05;
   double max_extent_m = 2.0;  // > 0
   int min_voxels = 10;        // >= 1
+
+  // The longest box side, in voxels, that does not exceed max_extent_m. Counted in voxels because
+  // in metres 6 x 0.1 is 0.6000000000000001 > 0.6: a part exactly max_extent_m wide was split.
+  int32_t maxExtentVoxels() const { return static_cast<int32_t>(std::floor(max_extent_m / voxel_size_m + 1e-9)); }
 };
 
 // Exact moments of a run of frontier voxels within one block (e.g. one piece), coordinates

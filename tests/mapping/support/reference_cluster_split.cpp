@@ -63,9 +63,11 @@ void split(const std::vector<ReferenceVoxel>& part, double voxel_size_m, double 
            std::vector<ReferenceCluster>& out) {
   const PartSums s = sumsOf(part);
   if (s.n < min_voxels) return;
-  // The box side in metres: its extent in voxels (the same along any translation) times the size.
+  // Split while the box's longest side exceeds max_extent_m, counted in whole voxels (a side of
+  // exactly max_extent_m stays, whatever 6 x 0.1 rounds to in double).
   const int extent_voxels = (s.hi - s.lo + VoxelIndex::Ones()).maxCoeff();
-  if (s.n >= 2 && extent_voxels * voxel_size_m > max_extent_m) {
+  const int max_voxels = static_cast<int>(std::floor(max_extent_m / voxel_size_m + 1e-9));
+  if (s.n >= 2 && extent_voxels > max_voxels) {
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scaledCovariance(s));
     const Eigen::Vector3d axis = eig.eigenvectors().col(2);  // eigenvalues ascend: the largest
     std::vector<ReferenceVoxel> low, high;

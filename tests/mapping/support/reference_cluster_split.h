@@ -4,15 +4,14 @@
 // code: no block runs or moments, no box classification of chunks. Tests compare FrontierMap's
 // clusters with these.
 // The rule: a part with fewer than min_voxels voxels is dropped; a part of at least 2 voxels whose
-// bounding box side (extent in voxels times voxel_size_m) exceeds max_extent_m is cut by the plane
-// through its mean across its main axis (the eigenvector of the largest eigenvalue of its
+// longest bounding box side exceeds max_extent_m, counted in whole voxels (more than
+// floor(max_extent_m / voxel_size_m) of them: a side of exactly max_extent_m stays), is cut by the
+// plane through its mean across its main axis (the eigenvector of the largest eigenvalue of its
 // covariance, as Eigen::SelfAdjointEigenSolver returns it), a voxel going to the low part when
-// (n v - sum) . axis < 0 (n times (v - mean) . axis; a voxel on the plane goes to the other part),
-// and both parts are split again; a part the plane does not cut (one side empty) is kept whole.
-// "Exceeds" is evaluated as FrontierMap does, extent_voxels * voxel_size_m > max_extent_m in
-// double: where max_extent_m is a whole number of voxels the product's rounding decides (6 * 0.1 =
-// 0.6000000000000001 > 0.6, so a 6-voxel part is split at 0.6 m; 5 * 0.1 = 0.5 is not split at
-// 0.5 m), which the words "no side exceeds max_extent_m" do not say (reported to the lead).
+// (n v - sum) . axis < 0 (n times (v - mean) . axis; a voxel on the plane goes to the other part:
+// which part that is follows the sign Eigen gives the axis, so mirror images need not split
+// alike), and both parts are split again; a part the plane does not cut (one side empty) is kept
+// whole.
 // Units: voxel indices in; metres out (voxel_size_m); world frame. Threads: plain functions.
 #pragma once
 
