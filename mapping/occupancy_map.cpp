@@ -4,14 +4,13 @@
 #include <openvdb/tools/Prune.h>
 #include <openvdb/tree/NodeManager.h>
 
-#include <emmintrin.h>
-
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
 #include "common/error.h"
 #include "mapping/detail/map_impl.h"
+#include "mapping/detail/occupied_mask.h"
 #include "mapping/detail/publish_word.h"
 #include "mapping/integration/depth_frame.h"
 #include "mapping/integration/voxel_ray.h"
@@ -563,16 +562,8 @@ bool OccupancyMap::ConstAccessor::readBlockMasks(const BlockIndex& block, std::a
     known[w] = leaf->known[w];
     any |= known[w] != 0;
     if (known[w] == 0) continue;
-    // LogOddsModel::isOccupied (l >= occupied), 4 voxels per SSE2 compare (the frontier update
-    // reads every changed block's neighbours: 27 % of its instructions were this loop, scalar);
-    // unknown ones are masked off below.
-    const __m128 limit = _mm_set1_ps(threshold);
-    uint64_t occ = 0;
-    for (int g = 0; g < 16; ++g) {
-      const __m128 l = _mm_loadu_ps(values + w * 64 + 4 * g);
-      occ |= static_cast<uint64_t>(_mm_movemask_ps(_mm_cmpge_ps(l, limit))) << (4 * g);
-    }
-    occupied[w] = occ & known[w];
+    // LogOddsModel::isOccupied on the known voxels, 4 per SSE2 compare (occupied_mask.h).
+    occupied[w] = detail::occupiedMask(values + w * 64, known[w], threshold);
   }
   return any;
 }

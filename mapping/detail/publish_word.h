@@ -1,5 +1,6 @@
 // publish_word.h: one batch's log-odds updates applied to 64 voxels of a leaf at once (one 64-bit
-// word of its masks: x fixed, y * 8 + z), four voxels per SSE2 instruction.
+// word of its masks: x fixed, y * 8 + z), four voxels per SSE2 instruction (simd_target.h; elsewhere,
+// e.g. ARM, publishWordScalar, voxel by voxel).
 // Why: publishing went voxel by voxel (find the next set bit, branch on hit / known / changed),
 // ~15 instructions per updated voxel; a frame updates ~1M voxels, mostly in dense runs (2x2x2
 // cells of coarse clearing), so whole groups of four cost a few instructions each.
@@ -9,13 +10,34 @@
 // Units: log-odds (log_odds.h). Threads: a pure function of its arguments and the 64 values.
 #pragma once
 
-#include <emmintrin.h>
-
+#include <bit>
 #include <cstdint>
 
+#include "mapping/detail/simd_target.h"
 #include "mapping/log_odds.h"
 
 namespace cenote::mapping::detail {
+
+// The rule above voxel by voxel: the portable kernel (ARM, CENOTE_FORCE_SCALAR); tests compare
+// publishWord against it. Arguments and result as publishWord's.
+inline uint64_t publishWordScalar(float* values, uint64_t known, uint64_t update, uint64_t hits,
+                                  const LogOddsModel& model) {
+  uint64_t changed = 0;
+  for (uint64_t rest = update; rest != 0; rest &= rest - 1) {
+    const int i = std::countr_zero(rest);
+    const uint64_t bit = uint64_t{1} << i;
+    const bool is_known = (known & bit) != 0;
+    const float before = is_known ? values[i] : 0.0f;
+    const float after = (hits & bit) != 0 ? model.applyHit(before) : model.applyMiss(before);
+    if (!is_known || after != before) {
+      values[i] = after;
+      changed |= bit;
+    }
+  }
+  return changed;
+}
+
+#if CENOTE_MAPPING_SSE2
 
 // All-ones lanes for the set bits of a 4-bit group (bit i -> lane i).
 inline __m128 laneMask(unsigned bits4) {
@@ -55,5 +77,11 @@ inline uint64_t publishWord(float* values, uint64_t known, uint64_t update, uint
   }
   return changed;
 }
+#else
+// As above, voxel by voxel.
+inline uint64_t publishWord(float* values, uint64_t known, uint64_t update, uint64_t hits, const LogOddsModel& model) {
+  return publishWordScalar(values, known, update, hits, model);
+}
+#endif
 
 }  // namespace cenote::mapping::detail
