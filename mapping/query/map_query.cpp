@@ -12,10 +12,41 @@ namespace {
 
 constexpr double kMaxBoxVoxels = 2147483648.0;
 
-void checkSegment(const SegmentQuery& q, size_t i) {
+std::string rangeText(const OccupancyMap& map) {
+  return "the map's range, +-" + std::to_string(static_cast<int64_t>(mapRange_m(map))) + " m on each axis";
+}
+
+bool withinRange(const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, const OccupancyMap& map) {
+  const double range = mapRange_m(map);
+  return (lo_m.array() >= -range).all() && (hi_m.array() <= range).all();
+}
+
+// Voxels of the box [lo, hi] counted along each axis, as a double (no overflow).
+double boxVoxels(const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, double voxel_size_m) {
+  return ((hi_m - lo_m) / voxel_size_m).array().ceil().prod();
+}
+
+void checkSegment(const SegmentQuery& q, size_t i, const OccupancyMap& map) {
+  const std::string what = "map query: segment " + std::to_string(i);
   if (!q.start_m.allFinite() || !q.end_m.allFinite() || !std::isfinite(q.radius_m) || q.radius_m < 0.0) {
-    throw Error("map query: segment " + std::to_string(i) + " must have finite ends and a finite radius >= 0");
+    throw Error(what + " must have finite ends and a finite radius >= 0");
   }
+  const Eigen::Vector3d lo = q.start_m.cwiseMin(q.end_m).array() - q.radius_m;
+  const Eigen::Vector3d hi = q.start_m.cwiseMax(q.end_m).array() + q.radius_m;
+  if (!withinRange(lo, hi, map)) throw Error(what + " reaches beyond " + rangeText(map));
+  if (q.radius_m > 0.0 && boxVoxels(lo, hi, map.voxelSize()) > kMaxBoxVoxels) {
+    throw Error(what + ": its capsule's bounding box holds more than 2^31 voxels");
+  }
+}
+
+// How far from `origin` along the unit vector `dir` the ray stays within the map's range.
+double distanceToRangeEdge(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double range) {
+  double t = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    if (dir[a] > 0.0) t = std::min(t, (range - origin[a]) / dir[a]);
+    if (dir[a] < 0.0) t = std::min(t, (-range - origin[a]) / dir[a]);
+  }
+  return t;
 }
 
 // Segment: the voxels it passes through, in order.
@@ -115,10 +146,12 @@ CollisionResult sweepCapsule(const OccupancyMap::ConstAccessor& acc, const Segme
 
 }  // namespace
 
+double mapRange_m(const OccupancyMap& map) { return kMaxVoxelIndex * map.voxelSize(); }
+
 std::vector<VoxelQuery> queryVoxels(const OccupancyMap& map, const std::vector<Eigen::Vector3d>& points_m) {
   const size_t n = points_m.size();
   std::vector<VoxelQuery> out(n);
-  const double limit = kMaxVoxelIndex * map.voxelSize();
+  const double limit = mapRange_m(map);
   // A voxel no map holds stands for points beyond the map's range (voxel_types.h): always unknown.
   const VoxelIndex nowhere = VoxelIndex::Constant(std::numeric_limits<int>::max());
   std::vector<VoxelIndex> ijk(n);
@@ -144,7 +177,11 @@ std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aab
     if (!box.min_m.allFinite() || !box.max_m.allFinite()) {
       throw Error("map query: box " + std::to_string(i) + " must be finite");
     }
-    if (!box.isEmpty() && ((box.max_m - box.min_m) / s).array().ceil().prod() > kMaxBoxVoxels) {
+    if (box.isEmpty()) continue;
+    if (!withinRange(box.min_m, box.max_m, map)) {
+      throw Error("map query: box " + std::to_string(i) + " reaches beyond " + rangeText(map));
+    }
+    if (boxVoxels(box.min_m, box.max_m, s) > kMaxBoxVoxels) {
       throw Error("map query: box " + std::to_string(i) + " holds more than 2^31 voxels");
     }
   }
@@ -190,7 +227,7 @@ std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aab
 
 std::vector<CollisionResult> checkSegments(const OccupancyMap& map, const std::vector<SegmentQuery>& segments,
                                            bool stop_at_unknown) {
-  for (size_t i = 0; i < segments.size(); ++i) checkSegment(segments[i], i);
+  for (size_t i = 0; i < segments.size(); ++i) checkSegment(segments[i], i, map);
   std::vector<CollisionResult> out(segments.size());
   const auto acc = map.constAccessor();
   for (size_t i = 0; i < segments.size(); ++i) {
@@ -211,8 +248,14 @@ std::vector<CollisionResult> raycast(const OccupancyMap& map, const std::vector<
     if (!rays[i].origin_m.allFinite() || !std::isfinite(n) || n == 0.0) {
       throw Error("map raycast: ray " + std::to_string(i) + " needs a finite origin and a finite non-zero direction");
     }
+    if (!withinRange(rays[i].origin_m, rays[i].origin_m, map)) {
+      throw Error("map raycast: ray " + std::to_string(i) + " starts beyond " + rangeText(map));
+    }
     segments[i].start_m = rays[i].origin_m;
-    segments[i].end_m = rays[i].origin_m + rays[i].direction * (max_range_m / n);
+    // Beyond the map's range every voxel is unknown: the ray ends half a voxel before its edge.
+    const double edge = distanceToRangeEdge(rays[i].origin_m, rays[i].direction / n, mapRange_m(map)) - 0.5 * map.voxelSize();
+    segments[i].end_m = edge < max_range_m ? rays[i].origin_m + rays[i].direction * (std::max(edge, 0.0) / n)
+                                           : rays[i].origin_m + rays[i].direction * (max_range_m / n);
   }
   return checkSegments(map, segments, stop_at_unknown);
 }

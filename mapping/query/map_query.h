@@ -2,6 +2,8 @@
 // box counts, segment and capsule collision (with stop-at-unknown), raycasts. All batched: each
 // call takes one ConstAccessor (one shared lock) for the whole batch.
 // Units: metres, world frame. A voxel belongs to a box / capsule when its centre does.
+// Range: boxes, segments and capsules must lie within the map's range, +-mapRange_m(map) on each
+// axis (voxel_types.h: beyond it no voxel is ever known, and voxel indices would overflow).
 // Threads: free functions; call them from any number of threads while the map integrates (each
 // call holds the map's shared lock for its duration; see occupancy_map.h).
 #pragma once
@@ -12,6 +14,9 @@
 #include "mapping/occupancy_map.h"
 
 namespace cenote::mapping {
+
+// Half the side of the cube, centred on the origin, that holds every voxel the map can know.
+double mapRange_m(const OccupancyMap& map);
 
 struct VoxelQuery {
   VoxelState state = VoxelState::kUnknown;
@@ -30,7 +35,8 @@ struct BoxCounts {
 };
 
 // Counts of the voxels whose centre lies in each box. An empty box counts nothing.
-// @throws Error for a non-finite box or one holding more than 2^31 voxels.
+// @throws Error for a non-finite box, one reaching beyond the map's range or holding more than
+// 2^31 voxels.
 std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aabb>& boxes_m);
 
 struct SegmentQuery {
@@ -52,7 +58,8 @@ struct CollisionResult {
 
 // First occupied voxel along each segment or capsule, in order of distance from its start.
 // stop_at_unknown: the walk ends at the first unknown voxel (stopped_at_unknown), since unknown is
-// never free. @throws Error for a non-finite segment or a negative radius.
+// never free. @throws Error for a non-finite segment, a negative radius, a segment or capsule
+// reaching beyond the map's range, or a capsule whose bounding box holds more than 2^31 voxels.
 std::vector<CollisionResult> checkSegments(const OccupancyMap& map, const std::vector<SegmentQuery>& segments,
                                            bool stop_at_unknown);
 
@@ -61,8 +68,10 @@ struct Ray {
   Eigen::Vector3d direction = Eigen::Vector3d::UnitX();  // any length > 0
 };
 
-// First occupied voxel along each ray within max_range_m (a segment check of that length).
-// @throws Error for a zero or non-finite direction, or max_range_m <= 0.
+// First occupied voxel along each ray within max_range_m (a segment check of that length, ending
+// where the ray leaves the map's range if sooner).
+// @throws Error for a zero or non-finite direction, an origin beyond the map's range, or
+// max_range_m <= 0.
 std::vector<CollisionResult> raycast(const OccupancyMap& map, const std::vector<Ray>& rays, double max_range_m,
                                      bool stop_at_unknown);
 

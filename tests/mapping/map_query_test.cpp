@@ -93,5 +93,40 @@ TEST(MapQuery, RaycastWithinRange) {
   EXPECT_THROW(checkSegments(*map, {SegmentQuery{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), -1.0}}, false), Error);
 }
 
+// Far beyond the map's range voxel indices overflow int: such queries were undefined behaviour (a
+// capsule at x = -1e12 looped for ever, one at +1e12 reported no unknown voxel). Now they are
+// errors naming the range, and a long ray stops at the range's edge.
+TEST(MapQuery, QueriesBeyondTheMapsRangeAreErrorsNotHangs) {
+  const auto map = corridor();  // 0.1 m voxels: range +-104856.8 m
+  EXPECT_DOUBLE_EQ(mapRange_m(*map), kMaxVoxelIndex * 0.1);
+  for (const double x : {-1e12, 1e12, 2e5}) {
+    for (const double radius : {0.0, 0.1}) {
+      const SegmentQuery far{Eigen::Vector3d(x, 0, 0), Eigen::Vector3d(x + 1.0, 0, 0), radius};
+      try {
+        checkSegments(*map, {far}, false);
+        ADD_FAILURE() << "segment at x = " << x << " radius " << radius << " accepted";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("segment 0 reaches beyond the map's range, +-104856 m"), std::string::npos)
+            << e.what();
+      }
+    }
+    EXPECT_THROW(queryBoxes(*map, {Aabb{Eigen::Vector3d(x, 0, 0), Eigen::Vector3d(x + 1.0, 1, 1)}}), Error) << x;
+    EXPECT_THROW(raycast(*map, {Ray{Eigen::Vector3d(x, 0, 0), Eigen::Vector3d::UnitX()}}, 1.0, false), Error) << x;
+  }
+  // A capsule whose bounding box holds more than 2^31 voxels (a 1 km radius at 0.1 m).
+  EXPECT_THROW(checkSegments(*map, {SegmentQuery{Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(), 1000.0}}, false),
+               Error);
+  // A ray longer than the range: cut at the edge, after passing the wall like a short one.
+  const Ray along{Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3d::UnitX()};
+  const auto near = raycast(*map, {along}, 5.0, false);
+  const auto long_ray = raycast(*map, {along}, 1e9, false);
+  EXPECT_TRUE(near[0].hit);
+  EXPECT_EQ(long_ray[0].hit, near[0].hit);
+  EXPECT_EQ(long_ray[0].hit_voxel, near[0].hit_voxel);
+  EXPECT_DOUBLE_EQ(long_ray[0].hit_distance_m, near[0].hit_distance_m);
+  // Points beyond the range are simply unknown.
+  EXPECT_EQ(queryVoxels(*map, {Eigen::Vector3d(1e12, 0, 0)})[0].state, VoxelState::kUnknown);
+}
+
 }  // namespace
 }  // namespace cenote::mapping

@@ -396,6 +396,13 @@ TEST_F(MapClientQueryTest, OversizedRequestsAreResourceExhaustedNamingTheLimit) 
     EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << e.what();
     EXPECT_NE(e.message().find("max_box_voxels"), std::string::npos) << e.what();
   }
+  try {
+    map.segments({{kOrigin_m, centre(5, 0, 0), 20.0}});  // a 20 m capsule: about 800^3 voxels
+    ADD_FAILURE() << "a 20 m capsule succeeded";
+  } catch (const RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << e.what();
+    EXPECT_NE(e.message().find("max_box_voxels"), std::string::npos) << e.what();
+  }
   PointBatch huge;
   huge.origin_m = kOrigin_m;
   huge.points_m.assign(1000001, centre(30, 0, 0));
@@ -428,7 +435,10 @@ TEST_F(MapClientQueryTest, NonFiniteOrNegativeInputIsInvalidArgumentAndChangesNo
            [&] { map.voxels({Eigen::Vector3d(nan, 0, 0)}); },
            [&] { map.segments({{kOrigin_m, centre(5, 0, 0), -0.1}}); },
            [&] { map.clearSphere(kOrigin_m, -1.0); },
-           [&] { map.raycast({{kOrigin_m, Eigen::Vector3d::Zero()}}, 5.0); }}) {
+           [&] { map.raycast({{kOrigin_m, Eigen::Vector3d::Zero()}}, 5.0); },
+           // Far beyond the map's range (voxel indices would overflow): a clear error, no hang.
+           [&] { map.segments({{Eigen::Vector3d(-1e12, 0, 0), Eigen::Vector3d(-1e12 + 1, 0, 0), 0.1}}); },
+           [&] { map.extract({Eigen::Vector3d(1e12, 0, 0), Eigen::Vector3d(1e12 + 0.1, 0.1, 0.1)}); }}) {
     try {
       call();
       ADD_FAILURE() << "bad input accepted";
