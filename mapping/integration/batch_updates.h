@@ -1,7 +1,8 @@
 // batch_updates.h: the voxel updates of one integration batch, as OccupancyMap publishes them:
 // for every touched block a free mask and a hit mask (each voxel updated at most once, occupied
 // wins), blocks in ascending packed order, and the mean colour of every hit voxel. RayBatch and
-// ProjectiveBatch compute them (they derive from it); RayBatch's chunks also fill one each.
+// ProjectiveBatch each build one (and hand it out read-only to OccupancyMap::publish); RayBatch's
+// chunks also fill one each.
 // Units: voxel indices. Threads: one owner.
 #pragma once
 
