@@ -115,7 +115,7 @@ void ProjectiveBatch::build(const DepthFrame& f, double s, double max_range_m, i
     updates_.masksOf(candidates_[b])->free = m.free;
   }
   for (const VoxelIndex& ijk : endpoints_.voxels()) updates_.setHit(ijk);
-  updates_.finish(endpoints_, f.hasColor(), [](const VoxelIndex&) { return true; });
+  updates_.finish(endpoints_, f.hasColor());
 }
 
 }  // namespace cenote::mapping
