@@ -230,7 +230,7 @@ MapDelta OccupancyMap::integrate(const PointBatch& batch) {
   std::lock_guard<std::mutex> writer(impl_->writer_mutex);
   RayBatch& rays = impl_->scratch;
   rays.build(batch, voxelSize(), config_.max_range_m, config_.num_threads, config_.ray_stop_run);
-  return publish(rays);
+  return publish(rays.updates(), rays.numRays());
 }
 
 void OccupancyMap::checkDepthFrame(const DepthFrame& f) const {
@@ -272,23 +272,22 @@ MapDelta OccupancyMap::integrateDepth(const DepthFrame& frame) {
   std::lock_guard<std::mutex> writer(impl_->writer_mutex);
   ProjectiveBatch& batch = impl_->projective_scratch;
   batch.build(frame, voxelSize(), config_.max_range_m, config_.num_threads);
-  return publish(batch);
+  return publish(batch.updates(), batch.numRays());
 }
 
-template <typename Batch>
-MapDelta OccupancyMap::publish(const Batch& rays) {
+MapDelta OccupancyMap::publish(const BatchUpdates& updates, size_t points_used) {
   MapDelta delta;
-  delta.points_used = rays.numRays();
+  delta.points_used = points_used;
   const double s = voxelSize();
   auto& tree = impl_->log_odds->tree();
   openvdb::tree::ValueAccessor<detail::LogOddsTree, false> acc(tree);
   const size_t group = static_cast<size_t>(config_.publish_blocks);
-  for (size_t begin = 0; begin < rays.numBlocks(); begin += group) {
-    const size_t end = std::min(rays.numBlocks(), begin + group);
+  for (size_t begin = 0; begin < updates.numBlocks(); begin += group) {
+    const size_t end = std::min(updates.numBlocks(), begin + group);
     std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
     for (size_t b = begin; b < end; ++b) {
-      const BlockIndex& block = rays.block(b);
-      const BlockMasks& masks = rays.masks(b);
+      const BlockIndex& block = updates.block(b);
+      const BlockMasks& masks = updates.masks(b);
       const Coord origin = coordOf(block * kBlockSide);
       auto* leaf = acc.probeLeaf(origin);
       if (leaf == nullptr) {  // a new leaf: existing ones are indexed already and never move
@@ -312,16 +311,16 @@ MapDelta OccupancyMap::publish(const Batch& rays) {
     }
   }
   // Colours of the hit voxels: a running mean per voxel.
-  if (!rays.colors().empty()) {
+  if (!updates.colors().empty()) {
     detail::ColorStore& colors = impl_->color;
-    const size_t n = rays.colors().size();
+    const size_t n = updates.colors().size();
     // 8 colours per block of a group: a colour costs about a tenth of a block's publishing (a
     // hash probe), so a colour group holds the lock about as long as a block group.
     for (size_t begin = 0; begin < n; begin += group * 8) {
       const size_t end = std::min(n, begin + group * 8);
       std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
       for (size_t i = begin; i < end; ++i) {
-        const EndpointColor& c = rays.colors()[i];
+        const EndpointColor& c = updates.colors()[i];
         bool inserted;
         int32_t& packed = colors.at(c.ijk, inserted);
         if (inserted) {

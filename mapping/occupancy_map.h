@@ -34,7 +34,8 @@
 
 namespace cenote::mapping {
 
-struct DepthFrame;  // integration/depth_frame.h
+struct DepthFrame;     // integration/depth_frame.h
+class BatchUpdates;   // integration/batch_updates.h
 
 namespace detail {
 struct MapImpl;
@@ -145,10 +146,9 @@ class OccupancyMap {
   friend class detail::MapAccess;
   void checkBatch(const PointBatch& batch) const;
   void checkDepthFrame(const DepthFrame& frame) const;
-  // Writes a computed batch (RayBatch or ProjectiveBatch) into the grids, publish_blocks blocks per
-  // exclusive lock. Called with the writer mutex held.
-  template <typename Batch>
-  MapDelta publish(const Batch& batch);
+  // Writes the updates of a computed batch (RayBatch or ProjectiveBatch, from points_used points)
+  // into the grids, publish_blocks blocks per exclusive lock. Called with the writer mutex held.
+  MapDelta publish(const BatchUpdates& updates, size_t points_used);
   template <typename Predicate>
   MapDelta removeVoxels(const VoxelBox& candidates, bool everywhere, Predicate&& remove);
 

@@ -190,12 +190,19 @@ struct FrontierMap::Impl {
   int min_voxels = 10;
   double max_extent_m = 2.0;
   double s = 0.05;
-  // Scratch of one update, kept for its capacity.
+  // Scratch of one update, kept for its capacity: each update clears it instead of allocating it.
+  detail::BlockTable region_table, read_table;
+  std::vector<BlockIndex> region;      // changed blocks and their face neighbours, each once
+  std::vector<uint8_t> inputs_changed;  // per region block: its states or a facing layer changed
+  std::vector<uint32_t> relabel;       // blocks with unassigned frontier voxels
+  std::vector<uint32_t> dirty;         // components taken apart
+  std::vector<uint32_t> queued;        // blocks labelled this update, each once
   UnionFind sets;
   std::vector<std::pair<uint32_t, uint32_t>> nodes;  // union-find node -> (block slot, piece index)
   std::vector<Mask> new_pieces;
-  std::vector<detail::BlockRun> runs;  // a component's pieces
-  detail::BlockTable region_table, read_table;
+  std::vector<uint32_t> component_of_root;  // union-find root -> new component id
+  std::vector<uint32_t> order;              // new component ids in creation order
+  std::vector<detail::BlockRun> runs;       // a component's pieces
 
   uint32_t findSlot(const BlockIndex& b) const { return table.find(detail::packIndex(b)); }
   uint32_t getSlot(const BlockIndex& b) {
@@ -263,8 +270,8 @@ struct FrontierMap::Impl {
     // states changed, or whose neighbour's facing layer of known voxels changed, can have a new
     // frontier (the others are listed all the same: the order of the region fixes new ids).
     region_table.clear();
-    std::vector<BlockIndex> region;
-    std::vector<uint8_t> inputs_changed;  // per region block
+    region.clear();
+    inputs_changed.clear();
     auto addBlock = [&](const BlockIndex& b, bool changed_inputs) {
       bool inserted;
       const uint32_t slot = region_table.findOrInsert(detail::packIndex(b), inserted);
@@ -293,8 +300,8 @@ struct FrontierMap::Impl {
     // 2. New frontier masks. A block whose frontier voxels or their faces changed loses its
     // pieces, and the components they belonged to are taken apart (a removed voxel may split one,
     // a changed face turns its direction).
-    std::vector<uint32_t> relabel;  // blocks with unassigned frontier voxels
-    std::vector<uint32_t> dirty;
+    relabel.clear();
+    dirty.clear();
     std::array<uint8_t, kBlockVoxels> faces;
     for (size_t r = 0; r < region.size(); ++r) {
       if (!inputs_changed[r]) continue;
@@ -323,7 +330,7 @@ struct FrontierMap::Impl {
     // 3. Pieces of the unassigned voxels of each block, a union-find node each.
     sets.clear();
     nodes.clear();
-    std::vector<uint32_t> queued;
+    queued.clear();
     for (uint32_t slot : relabel) {
       FrontierBlock& fb = *blocks[slot];
       if (fb.mark == update_number) continue;
@@ -368,8 +375,8 @@ struct FrontierMap::Impl {
       }
     }
     // 5. One component per set, in the order of their first piece; split into clusters.
-    std::vector<uint32_t> component_of_root(sets.size(), 0);
-    std::vector<uint32_t> order;  // new component ids in creation order
+    component_of_root.assign(sets.size(), 0);
+    order.clear();
     for (uint32_t node = 0; node < nodes.size(); ++node) {
       const uint32_t root = sets.find(node);
       if (component_of_root[root] == 0) {

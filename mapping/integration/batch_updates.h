@@ -1,7 +1,8 @@
 // batch_updates.h: the voxel updates of one integration batch, as OccupancyMap publishes them:
 // for every touched block a free mask and a hit mask (each voxel updated at most once, occupied
 // wins), blocks in ascending packed order, and the mean colour of every hit voxel. RayBatch and
-// ProjectiveBatch compute them (they derive from it); RayBatch's chunks also fill one each.
+// ProjectiveBatch each build one (and hand it out read-only to OccupancyMap::publish); RayBatch's
+// chunks also fill one each.
 // Units: voxel indices. Threads: one owner.
 #pragma once
 
@@ -18,6 +19,7 @@ namespace cenote::mapping {
 struct BlockMasks {
   std::array<uint64_t, 8> free{};  // bit offsetInBlock(ijk): crossed by a ray (not hit)
   std::array<uint64_t, 8> hit{};   // bit offsetInBlock(ijk): holds an endpoint within range
+  bool isHit(int offset) const { return (hit[offset >> 6] >> (offset & 63)) & 1; }
 };
 
 class BatchUpdates {
@@ -50,19 +52,13 @@ class BatchUpdates {
   // Exchanges the masks being built with those of `other`.
   void swapMasks(BatchUpdates& other);
   // Ends building: occupied wins (free &= ~hit), blocks sorted; with colored, the mean colour of
-  // every endpoint voxel for which keep(ijk) is true, in the endpoints' order.
-  template <typename Keep>
-  void finish(const EndpointSet& endpoints, bool colored, Keep keep) {
-    finishMasks();
-    colors_.clear();
-    if (!colored) return;
-    for (size_t i = 0; i < endpoints.voxels().size(); ++i) {
-      if (keep(endpoints.voxels()[i])) colors_.push_back(endpoints.meanColor(i));
-    }
-  }
+  // every endpoint voxel whose hit bit is set, in the endpoints' order (an endpoint beyond the
+  // maximum range set no hit, so it records no colour either).
+  void finish(const EndpointSet& endpoints, bool colored);
 
  private:
   void finishMasks();
+  void finishColors(const EndpointSet& endpoints);
 
   detail::BlockTable table_;  // block -> slot in masks_
   std::vector<BlockMasks> masks_;

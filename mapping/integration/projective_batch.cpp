@@ -30,7 +30,7 @@ void ProjectiveBatch::build(const DepthFrame& f, double s, double max_range_m, i
 
   // 1. Hits: the voxel of every back-projected point within range, with colour sums (last voxel
   // cached: neighbouring pixels mostly share one).
-  clearMasks();
+  updates_.clearMasks();
   endpoints_.clear();
   num_hits_ = 0;
   double max_depth = 0.0;
@@ -112,10 +112,10 @@ void ProjectiveBatch::build(const DepthFrame& f, double s, double max_range_m, i
   for (size_t b = 0; b < candidates_.size(); ++b) {
     const BlockMasks& m = candidate_masks_[b];
     if (std::all_of(m.free.begin(), m.free.end(), [](uint64_t w) { return w == 0; })) continue;
-    masksOf(candidates_[b])->free = m.free;
+    updates_.masksOf(candidates_[b])->free = m.free;
   }
-  for (const VoxelIndex& ijk : endpoints_.voxels()) setHit(ijk);
-  finish(endpoints_, f.hasColor(), [](const VoxelIndex&) { return true; });
+  for (const VoxelIndex& ijk : endpoints_.voxels()) updates_.setHit(ijk);
+  updates_.finish(endpoints_, f.hasColor());
 }
 
 }  // namespace cenote::mapping

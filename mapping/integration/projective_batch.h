@@ -31,18 +31,21 @@
 namespace cenote::mapping {
 
 // The updates (BatchUpdates: block masks, colours) of a depth frame, by projection.
-class ProjectiveBatch : public BatchUpdates {
+class ProjectiveBatch {
  public:
   // Computes the updates of `frame`, which must already be checked (sizes, finite pose, fx, fy > 0).
   // max_range_m <= 0: unlimited.
   void build(const DepthFrame& frame, double voxel_size_m, double max_range_m, int num_threads);
 
+  // The updates of the last build(), read-only.
+  const BatchUpdates& updates() const { return updates_; }
   // Pixels with a depth within range (their hits were recorded).
   size_t numRays() const { return num_hits_; }
   // Frustum blocks whose voxels were projected (for benchmarks).
   size_t numFrustumBlocks() const { return num_frustum_blocks_; }
 
  private:
+  BatchUpdates updates_;
   EndpointSet endpoints_;  // hit voxels with their colour sums
   std::vector<BlockIndex> candidates_;
   std::vector<BlockMasks> candidate_masks_;

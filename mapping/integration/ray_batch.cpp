@@ -213,16 +213,15 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
 
   // 2. Union of the chunks' masks, taken over from chunk 0.
   for (int c = 1; c < num_chunks; ++c) chunks_[0].updates.unite(chunks_[c].updates);
-  swapMasks(chunks_[0].updates);
+  updates_.swapMasks(chunks_[0].updates);
 
-  // 3. Mean colours of the hit voxels, over all chunks (an endpoint voxel may span two bands).
+  // 3. Mean colours of the hit voxels, over all chunks (an endpoint voxel may span two bands);
+  // finish() keeps those whose hit bit is set, i.e. the endpoints within range.
   endpoints_.clear();
   if (batch.hasColor()) {
     for (int c = 0; c < num_chunks; ++c) endpoints_.merge(chunks_[c].endpoints);
   }
-  finish(endpoints_, batch.hasColor(), [&](const VoxelIndex& ijk) {
-    return !limited || (voxelCentre(ijk, voxel_size_m) - origin).norm() <= max_range_m;
-  });
+  updates_.finish(endpoints_, batch.hasColor());
 }
 
 }  // namespace cenote::mapping

@@ -55,7 +55,7 @@
 namespace cenote::mapping {
 
 // The updates (BatchUpdates: block masks, colours) of a batch of rays.
-class RayBatch : public BatchUpdates {
+class RayBatch {
  public:
   static constexpr int kRayChunks = 16;  // fast mode; fixed so that results ignore the thread count
   static constexpr int kFineVoxels = 16;  // fast mode: voxels before a ray's end carved one by one (5.)
@@ -64,6 +64,8 @@ class RayBatch : public BatchUpdates {
   // stop_run: see 3. above; 0 marches every ray whole (OctoMap's voxel sets).
   void build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads, int stop_run);
 
+  // The updates of the last build(), read-only.
+  const BatchUpdates& updates() const { return updates_; }
   // Rays cast: the unique endpoint voxels of each chunk, summed.
   size_t numRays() const { return num_rays_; }
 
@@ -74,6 +76,7 @@ class RayBatch : public BatchUpdates {
     BatchUpdates updates;   // masks only
   };
 
+  BatchUpdates updates_;
   EndpointSet endpoints_;  // colour merge over the chunks
   std::vector<Chunk> chunks_;
   size_t num_rays_ = 0;

@@ -287,6 +287,29 @@ TEST(OccupancyMap, ColourIsMeanOfPointsInVoxel) {
   EXPECT_FALSE(acc.color(VoxelIndex(5, 0, 0), rgb));
 }
 
+// Endpoints beyond max range record no hit, so no colour: neither in a block their ray carved nor
+// in one it never reached; in either integration mode.
+TEST(OccupancyMap, ColourOnlyForEndpointsWithinMaxRange) {
+  for (int stop_run : {16, 0}) {
+    MapConfig c = smallConfig(0.1);
+    c.max_range_m = 1.0;
+    c.ray_stop_run = stop_run;
+    OccupancyMap map(c);
+    PointBatch b = oneRay(Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3f(0.55f, 0.05f, 0.05f));
+    b.points.push_back(Eigen::Vector3f(1.15f, 0.05f, 0.05f));  // voxel 11, block 1 (carved to voxel 9)
+    b.points.push_back(Eigen::Vector3f(3.05f, 0.05f, 0.05f));  // voxel 30, block 3 (never reached)
+    b.colors = {{10, 20, 30}, {40, 50, 60}, {70, 80, 90}};
+    map.integrate(b);
+    auto acc = map.constAccessor();
+    std::array<uint8_t, 3> rgb{};
+    ASSERT_TRUE(acc.color(VoxelIndex(5, 0, 0), rgb)) << "stop_run " << stop_run;
+    EXPECT_EQ(rgb, (std::array<uint8_t, 3>{10, 20, 30})) << "stop_run " << stop_run;
+    EXPECT_EQ(acc.state(VoxelIndex(9, 0, 0)), VoxelState::kFree) << "stop_run " << stop_run;
+    EXPECT_FALSE(acc.color(VoxelIndex(11, 0, 0), rgb)) << "stop_run " << stop_run;
+    EXPECT_FALSE(acc.color(VoxelIndex(30, 0, 0), rgb)) << "stop_run " << stop_run;
+  }
+}
+
 TEST(OccupancyMap, ClearBoxSphereCropAndResetForgetVoxels) {
   OccupancyMap map(smallConfig(0.1));
   Scene scene;
