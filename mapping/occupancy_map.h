@@ -34,7 +34,7 @@
 
 namespace cenote::mapping {
 
-struct DepthFrame;     // integration/depth_frame.h
+struct DepthFrame;    // integration/depth_frame.h
 class BatchUpdates;   // integration/batch_updates.h
 
 namespace detail {
