@@ -15,7 +15,7 @@
 // fingerprint of every known voxel's state and colour afterwards to compare versions.
 // --updates-only: integrates the frames and times only the frontier and distance field updates
 // (wall and thread CPU time, medians after the first frame), with a fingerprint of the clusters to
-// compare versions; --distance 0 leaves the distance field out (profile frontiers alone).
+// compare versions, and one of the distance field's answers near the map; --distance 0 leaves the distance field out (profile frontiers alone).
 // Frames: an 800x600 camera (fx 600) flying 2 m above a sloping sea floor with rocks, looking
 // 14 degrees down (so that a frame has ~270k points), ray-cast exactly with 1 cm depth noise
 // (tests/mapping/support/analytic_scene.h);
@@ -39,6 +39,7 @@
 #include "mapping/distance/distance_field.h"
 #include "mapping/frontier/frontier_map.h"
 #include "mapping/integration/depth_frame.h"
+#include "mapping/integration/voxel_ray.h"
 #include "mapping/occupancy_map.h"
 #include "mapping/query/map_query.h"
 #include "tests/mapping/support/analytic_scene.h"
@@ -122,7 +123,38 @@ struct UpdateTimes {
   std::vector<double> frontier_ms, frontier_cpu_ms, distance_ms, distance_cpu_ms;
   size_t num_clusters = 0, num_frontier_voxels = 0;
   uint64_t cluster_fingerprint = 0;  // FNV-1a over the clusters' counts, centroids and directions
+  uint64_t distance_fingerprint = 0; // FNV-1a over the field's queries at every voxel centre near the map
 };
+
+// FNV-1a over the exact bits of the distance field's answers (distance and gradient, which names the
+// nearest obstacle) at every voxel centre of the map's known blocks and their 26 neighbour blocks.
+uint64_t distanceFingerprint(const OccupancyMap& map, const DistanceField& field) {
+  std::vector<BlockIndex> blocks;
+  for (const BlockIndex& b : map.constAccessor().knownBlocks())
+    for (int x = -1; x <= 1; ++x)
+      for (int y = -1; y <= 1; ++y)
+        for (int z = -1; z <= 1; ++z) blocks.push_back(b + BlockIndex(x, y, z));
+  auto less = [](const BlockIndex& a, const BlockIndex& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::sort(blocks.begin(), blocks.end(), less);
+  blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+  uint64_t h = 14695981039346656037ull;
+  auto mix = [&h](double v) {
+    uint64_t bits;
+    std::memcpy(&bits, &v, 8);
+    for (int i = 0; i < 8; ++i) h = (h ^ ((bits >> (8 * i)) & 0xFF)) * 1099511628211ull;
+  };
+  std::vector<Eigen::Vector3d> points(kBlockVoxels);
+  for (const BlockIndex& b : blocks) {
+    for (int o = 0; o < kBlockVoxels; ++o) points[o] = voxelCentre(voxelOfOffset(b, o), map.voxelSize());
+    for (const DistanceQuery& q : field.query(points)) {
+      mix(q.distance_m);
+      for (int i = 0; i < 3; ++i) mix(q.gradient[i]);
+    }
+  }
+  return h;
+}
 
 UpdateTimes timeUpdates(const std::vector<PointBatch>& frames, const MapConfig& config, bool with_distance) {
   UpdateTimes out;
@@ -156,6 +188,7 @@ UpdateTimes timeUpdates(const std::vector<PointBatch>& frames, const MapConfig& 
     for (int i = 0; i < 3; ++i) mix(c.centroid_m[i]), mix(c.direction[i]), mix(c.bounds_m.min_m[i]), mix(c.bounds_m.max_m[i]);
   }
   out.cluster_fingerprint = h;
+  if (with_distance) out.distance_fingerprint = distanceFingerprint(live, field);
   return out;
 }
 
@@ -324,8 +357,10 @@ int main(int argc, char** argv) {
                 medianAfterFirst(u.frontier_ms), medianAfterFirst(u.frontier_cpu_ms), mean(u.frontier_ms),
                 u.num_clusters, u.num_frontier_voxels, static_cast<unsigned long long>(u.cluster_fingerprint));
     if (with_distance) {
-      std::printf("distance field update: %.2f ms/frame median wall, %.2f ms CPU (mean with the first frame %.2f wall)\n",
-                  medianAfterFirst(u.distance_ms), medianAfterFirst(u.distance_cpu_ms), mean(u.distance_ms));
+      std::printf("distance field update: %.2f ms/frame median wall, %.2f ms CPU (mean with the first frame %.2f wall); "
+                  "fingerprint %016llx\n",
+                  medianAfterFirst(u.distance_ms), medianAfterFirst(u.distance_cpu_ms), mean(u.distance_ms),
+                  static_cast<unsigned long long>(u.distance_fingerprint));
     }
     return 0;
   }
