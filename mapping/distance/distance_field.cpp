@@ -28,9 +28,16 @@ struct Cell {
   void clear() { dx = kNoObstacle; }
 };
 
+// Index in Block::around of the block at block offset (bx, by, bz), each in -1..1.
+constexpr int aroundSlot(int bx, int by, int bz) { return (bx + 1) * 9 + (by + 1) * 3 + (bz + 1); }
+
 struct Block {
   std::array<Cell, kBlockVoxels> cells;
   std::array<uint64_t, 8> obstacle{};  // bit offsetInBlock: occupied in the map as last seen
+  BlockIndex index = BlockIndex::Zero();
+  // The 27 blocks around this one (itself in the middle; nullptr: not created), linked both ways
+  // when a block is created: the waves step to neighbour cells without a hash lookup.
+  std::array<Block*, 27> around{};
 };
 
 // Cells waiting to spread, first in first out. The waves are label-correcting (a cell lowered
@@ -39,24 +46,23 @@ struct Block {
 // priority queue) jumps across the whole wave front between pops and waited on cache misses.
 class WaveQueue {
  public:
-  void push(int key, const VoxelIndex& ijk) { entries_.push_back({ijk, key}); }
+  struct Entry {
+    Block* block;
+    int key;     // squared distance when pushed (raise: the old one)
+    int offset;  // offsetInBlock
+  };
+  void push(int key, Block* block, int offset) { entries_.push_back({block, key, offset}); }
   bool empty() const { return head_ == entries_.size(); }
-  VoxelIndex pop(int& key) {
-    const Entry& e = entries_[head_++];
-    key = e.key;
-    const VoxelIndex ijk = e.ijk;
+  Entry pop() {
+    const Entry e = entries_[head_++];
     if (head_ == entries_.size()) {
       entries_.clear();
       head_ = 0;
     }
-    return ijk;
+    return e;
   }
 
  private:
-  struct Entry {
-    VoxelIndex ijk;
-    int key;  // squared distance when pushed (raise: the old one)
-  };
   std::vector<Entry> entries_;
   size_t head_ = 0;
 };
@@ -91,9 +97,29 @@ struct DistanceField::Impl {
     bool inserted;
     table.findOrInsert(detail::packIndex(b), inserted);
     blocks.push_back(std::make_unique<Block>());
+    Block* block = blocks.back().get();
+    block->index = b;
+    link(*block);
     cached_index = b;
-    cached = blocks.back().get();
-    return *cached;
+    cached = block;
+    return *block;
+  }
+  // Links a new block and the existing blocks around it to each other.
+  void link(Block& block) {
+    for (int bx = -1; bx <= 1; ++bx)
+      for (int by = -1; by <= 1; ++by)
+        for (int bz = -1; bz <= 1; ++bz) {
+          const int i = aroundSlot(bx, by, bz);
+          if (i == aroundSlot(0, 0, 0)) {
+            block.around[i] = &block;
+            continue;
+          }
+          const uint32_t slot = table.find(detail::packIndex(block.index + BlockIndex(bx, by, bz)));
+          if (slot == detail::BlockTable::kNone) continue;
+          Block* other = blocks[slot].get();
+          block.around[i] = other;
+          other->around[aroundSlot(-bx, -by, -bz)] = &block;
+        }
   }
   Cell* find(const VoxelIndex& ijk) {
     Block* block = findBlock(blockOf(ijk));
@@ -110,64 +136,47 @@ struct DistanceField::Impl {
     return (block->obstacle[o >> 6] >> (o & 63)) & 1;
   }
 
-  void setObstacle(Block& block, const BlockIndex& b, int o) {
+  void setObstacle(Block& block, int o) {
     block.obstacle[o >> 6] |= 1ull << (o & 63);
     Cell& c = block.cells[o];
     c.dx = c.dy = c.dz = 0;
     c.raise = 0;
-    open.push(0, voxelOfOffset(b, o));
+    open.push(0, &block, o);
   }
-  void removeObstacle(Block& block, const BlockIndex& b, int o) {
+  void removeObstacle(Block& block, int o) {
     removed_any = true;
     block.obstacle[o >> 6] &= ~(1ull << (o & 63));
     Cell& c = block.cells[o];
     c.clear();
     c.raise = 1;
-    open.push(0, voxelOfOffset(b, o));
+    open.push(0, &block, o);
   }
 
-  // The 27 blocks around the block of the cell being spread (most neighbours of a cell lie in its
-  // own block, the rest in these): looked up once per centre block instead of once per neighbour.
-  struct Neighbourhood {
-    BlockIndex centre = BlockIndex::Constant(std::numeric_limits<int>::min());
-    std::array<Block*, 27> blocks{};
-    std::array<bool, 27> looked_up{};
-  } around;
   bool removed_any = false;  // an obstacle went away in this update: lower entries must check theirs
 
-  void moveAround(const BlockIndex& centre) {
-    if (centre == around.centre) return;
-    around.centre = centre;
-    around.looked_up.fill(false);
-  }
-  // Block of the neighbour at block offset (bx, by, bz) in -1..1 from the centre; created if asked.
-  Block* aroundBlock(int bx, int by, int bz, bool create) {
-    const int i = (bx + 1) * 9 + (by + 1) * 3 + (bz + 1);
-    if (!around.looked_up[i] || (create && around.blocks[i] == nullptr)) {
-      const BlockIndex b = around.centre + BlockIndex(bx, by, bz);
-      around.blocks[i] = create ? &getBlock(b) : findBlock(b);
-      around.looked_up[i] = true;
-    }
-    return around.blocks[i];
+  // Block of the neighbour at block offset (bx, by, bz) in -1..1 from `centre`, created if asked.
+  Block* aroundBlock(Block& centre, int bx, int by, int bz, bool create) {
+    Block* block = centre.around[aroundSlot(bx, by, bz)];
+    if (block == nullptr && create) block = &getBlock(centre.index + BlockIndex(bx, by, bz));
+    return block;
   }
 
   // The raise and lower waves of Lau et al., in order of squared distance, over the 26 neighbours.
   void propagate() {
     while (!open.empty()) {
-      int key;
-      const VoxelIndex ijk = open.pop(key);
-      moveAround(blockOf(ijk));
-      Block* centre = aroundBlock(0, 0, 0, false);
-      if (centre == nullptr) continue;
-      Cell* c = &centre->cells[offsetInBlock(ijk)];
-      const int lx = ijk.x() & 7, ly = ijk.y() & 7, lz = ijk.z() & 7;
+      const WaveQueue::Entry e = open.pop();
+      const int key = e.key;
+      Block& centre = *e.block;
+      const VoxelIndex ijk = voxelOfOffset(centre.index, e.offset);
+      Cell* c = &centre.cells[e.offset];
+      const int lx = e.offset >> 6, ly = (e.offset >> 3) & 7, lz = e.offset & 7;
       if (c->raise) {
         c->raise = 0;
         for (int dx = -1; dx <= 1; ++dx)
           for (int dy = -1; dy <= 1; ++dy)
             for (int dz = -1; dz <= 1; ++dz) {
               if (dx == 0 && dy == 0 && dz == 0) continue;
-              Block* nb = aroundBlock((lx + dx) >> 3, (ly + dy) >> 3, (lz + dz) >> 3, false);
+              Block* nb = aroundBlock(centre, (lx + dx) >> 3, (ly + dy) >> 3, (lz + dz) >> 3, false);
               if (nb == nullptr) continue;
               const int no = (((lx + dx) & 7) << 6) | (((ly + dy) & 7) << 3) | ((lz + dz) & 7);
               Cell* nc = &nb->cells[no];
@@ -179,10 +188,10 @@ struct DistanceField::Impl {
                 const int old = nc->dist2();
                 nc->clear();
                 nc->raise = 1;
-                open.push(old, n);
+                open.push(old, nb, no);
               } else {
                 // Still valid: re-spreads into the cleared region.
-                open.push(nc->dist2(), n);
+                open.push(nc->dist2(), nb, no);
               }
             }
         continue;
@@ -197,13 +206,14 @@ struct DistanceField::Impl {
             const VoxelIndex offset = to_obstacle - VoxelIndex(dx, dy, dz);  // from the neighbour
             const int d2 = offset.squaredNorm();
             if (d2 > max_dist2) continue;
-            Block* nb = aroundBlock((lx + dx) >> 3, (ly + dy) >> 3, (lz + dz) >> 3, true);
-            Cell& nc = nb->cells[(((lx + dx) & 7) << 6) | (((ly + dy) & 7) << 3) | ((lz + dz) & 7)];
+            Block* nb = aroundBlock(centre, (lx + dx) >> 3, (ly + dy) >> 3, (lz + dz) >> 3, true);
+            const int no = (((lx + dx) & 7) << 6) | (((ly + dy) & 7) << 3) | ((lz + dz) & 7);
+            Cell& nc = nb->cells[no];
             if (nc.raise || (nc.hasObstacle() && d2 >= nc.dist2())) continue;
             nc.dx = static_cast<int16_t>(offset.x());
             nc.dy = static_cast<int16_t>(offset.y());
             nc.dz = static_cast<int16_t>(offset.z());
-            open.push(d2, ijk + VoxelIndex(dx, dy, dz));
+            open.push(d2, nb, no);
           }
     }
     removed_any = false;
@@ -246,9 +256,9 @@ void DistanceField::update(const MapDelta& delta) {
           const int bit = __builtin_ctzll(changed);
           changed &= changed - 1;
           if ((occupied[w] >> bit) & 1) {
-            impl_->setObstacle(*block, b, w * 64 + bit);
+            impl_->setObstacle(*block, w * 64 + bit);
           } else {
-            impl_->removeObstacle(*block, b, w * 64 + bit);
+            impl_->removeObstacle(*block, w * 64 + bit);
           }
         }
       }
@@ -264,7 +274,6 @@ void DistanceField::rebuild() {
     impl_->blocks.clear();
     impl_->cached = nullptr;
     impl_->cached_index = BlockIndex::Constant(INT32_MIN);
-    impl_->around = Impl::Neighbourhood{};
   }
   MapDelta all;
   all.changed_blocks = map_.constAccessor().knownBlocks();
