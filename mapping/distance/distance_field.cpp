@@ -28,6 +28,23 @@ struct Cell {
   void clear() { dx = kNoObstacle; }
 };
 
+// A face neighbour of a cell: one step along one axis; `stride` is that axis's step of
+// offsetInBlock, `block` the neighbour block's offset when the step leaves the cell's block.
+struct Face {
+  int axis, step, stride;
+  BlockIndex block;
+};
+// In the order of the lower wave's original (dx, dy, dz) loops, which the field depends on (ties).
+const std::array<Face, 6> kFaces = {{{0, -1, 64, BlockIndex(-1, 0, 0)},
+                                     {1, -1, 8, BlockIndex(0, -1, 0)},
+                                     {2, -1, 1, BlockIndex(0, 0, -1)},
+                                     {2, 1, 1, BlockIndex(0, 0, 1)},
+                                     {1, 1, 8, BlockIndex(0, 1, 0)},
+                                     {0, 1, 64, BlockIndex(1, 0, 0)}}};
+
+// Queue entries ahead of the one popped whose cells are prefetched: enough to cover a miss's latency.
+constexpr size_t kPrefetchAhead = 48;
+
 // Index in Block::around of the block at block offset (bx, by, bz), each in -1..1.
 constexpr int aroundSlot(int bx, int by, int bz) { return (bx + 1) * 9 + (by + 1) * 3 + (bz + 1); }
 
@@ -53,6 +70,10 @@ class WaveQueue {
   };
   void push(int key, Block* block, int offset) { entries_.push_back({block, key, offset}); }
   bool empty() const { return head_ == entries_.size(); }
+  // The entry `ahead` places after the next one to pop, or nullptr.
+  const Entry* peek(size_t ahead) const {
+    return head_ + ahead < entries_.size() ? &entries_[head_ + ahead] : nullptr;
+  }
   Entry pop() {
     const Entry e = entries_[head_++];
     if (head_ == entries_.size()) {
@@ -161,9 +182,21 @@ struct DistanceField::Impl {
     return block;
   }
 
+  // Asks the cache for the cache lines of an entry's cell and its face neighbours inside its block
+  // (a breadth-first wave front spans megabytes: its cells have left the cache when popped).
+  static void prefetchAround(const WaveQueue::Entry& e) {
+    const Cell* c = &e.block->cells[e.offset];
+    __builtin_prefetch(c, 1);
+    if ((e.offset >> 6) > 0) __builtin_prefetch(c - 64, 1);
+    if ((e.offset >> 6) < 7) __builtin_prefetch(c + 64, 1);
+    if (((e.offset >> 3) & 7) > 0) __builtin_prefetch(c - 8, 1);
+    if (((e.offset >> 3) & 7) < 7) __builtin_prefetch(c + 8, 1);
+  }
+
   // The raise and lower waves of Lau et al., in order of squared distance, over the 26 neighbours.
   void propagate() {
     while (!open.empty()) {
+      if (const WaveQueue::Entry* next = open.peek(kPrefetchAhead)) prefetchAround(*next);
       const WaveQueue::Entry e = open.pop();
       const int key = e.key;
       Block& centre = *e.block;
@@ -199,22 +232,23 @@ struct DistanceField::Impl {
       if (!c->hasObstacle() || key > c->dist2()) continue;  // stale entry
       const VoxelIndex to_obstacle(c->dx, c->dy, c->dz);
       if (removed_any && !isObstacle(ijk + to_obstacle)) continue;  // a raise will clear it
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            if (std::abs(dx) + std::abs(dy) + std::abs(dz) != 1) continue;
-            const VoxelIndex offset = to_obstacle - VoxelIndex(dx, dy, dz);  // from the neighbour
-            const int d2 = offset.squaredNorm();
-            if (d2 > max_dist2) continue;
-            Block* nb = aroundBlock(centre, (lx + dx) >> 3, (ly + dy) >> 3, (lz + dz) >> 3, true);
-            const int no = (((lx + dx) & 7) << 6) | (((ly + dy) & 7) << 3) | ((lz + dz) & 7);
-            Cell& nc = nb->cells[no];
-            if (nc.raise || (nc.hasObstacle() && d2 >= nc.dist2())) continue;
-            nc.dx = static_cast<int16_t>(offset.x());
-            nc.dy = static_cast<int16_t>(offset.y());
-            nc.dz = static_cast<int16_t>(offset.z());
-            open.push(d2, nb, no);
-          }
+      // The 6 face neighbours, in the order of the original (dx, dy, dz) loops.
+      const int local[3] = {lx, ly, lz};
+      for (const Face& f : kFaces) {
+        VoxelIndex offset = to_obstacle;  // from the neighbour
+        offset[f.axis] -= f.step;
+        const int d2 = offset.squaredNorm();
+        if (d2 > max_dist2) continue;
+        const bool inside = static_cast<unsigned>(local[f.axis] + f.step) < kBlockSide;
+        Block* nb = inside ? &centre : aroundBlock(centre, f.block.x(), f.block.y(), f.block.z(), true);
+        const int no = e.offset + (inside ? f.step : -f.step * (kBlockSide - 1)) * f.stride;
+        Cell& nc = nb->cells[no];
+        if (nc.raise || (nc.hasObstacle() && d2 >= nc.dist2())) continue;
+        nc.dx = static_cast<int16_t>(offset.x());
+        nc.dy = static_cast<int16_t>(offset.y());
+        nc.dz = static_cast<int16_t>(offset.z());
+        open.push(d2, nb, no);
+      }
     }
     removed_any = false;
   }
