@@ -28,19 +28,12 @@ struct Cell {
   void clear() { dx = kNoObstacle; }
 };
 
-// A face neighbour of a cell: one step along one axis; `stride` is that axis's step of
-// offsetInBlock, `block` the neighbour block's offset when the step leaves the cell's block.
+// A face neighbour of a cell: one step along one axis; `stride` is that axis's step of offsetInBlock.
 struct Face {
   int axis, step, stride;
-  BlockIndex block;
 };
 // In the order of the lower wave's original (dx, dy, dz) loops, which the field depends on (ties).
-const std::array<Face, 6> kFaces = {{{0, -1, 64, BlockIndex(-1, 0, 0)},
-                                     {1, -1, 8, BlockIndex(0, -1, 0)},
-                                     {2, -1, 1, BlockIndex(0, 0, -1)},
-                                     {2, 1, 1, BlockIndex(0, 0, 1)},
-                                     {1, 1, 8, BlockIndex(0, 1, 0)},
-                                     {0, 1, 64, BlockIndex(1, 0, 0)}}};
+constexpr std::array<Face, 6> kFaces = {{{0, -1, 64}, {1, -1, 8}, {2, -1, 1}, {2, 1, 1}, {1, 1, 8}, {0, 1, 64}}};
 
 // Queue entries ahead of the one popped whose cells are prefetched: enough to cover a miss's latency.
 constexpr size_t kPrefetchAhead = 48;
@@ -234,13 +227,19 @@ struct DistanceField::Impl {
       if (removed_any && !isObstacle(ijk + to_obstacle)) continue;  // a raise will clear it
       // The 6 face neighbours, in the order of the original (dx, dy, dz) loops.
       const int local[3] = {lx, ly, lz};
+#pragma GCC unroll 6  // constant faces: the axis and stride fold into each copy
       for (const Face& f : kFaces) {
         VoxelIndex offset = to_obstacle;  // from the neighbour
         offset[f.axis] -= f.step;
         const int d2 = offset.squaredNorm();
         if (d2 > max_dist2) continue;
         const bool inside = static_cast<unsigned>(local[f.axis] + f.step) < kBlockSide;
-        Block* nb = inside ? &centre : aroundBlock(centre, f.block.x(), f.block.y(), f.block.z(), true);
+        Block* nb = &centre;
+        if (!inside) {
+          BlockIndex step = BlockIndex::Zero();
+          step[f.axis] = f.step;
+          nb = aroundBlock(centre, step.x(), step.y(), step.z(), true);
+        }
         const int no = e.offset + (inside ? f.step : -f.step * (kBlockSide - 1)) * f.stride;
         Cell& nc = nb->cells[no];
         if (nc.raise || (nc.hasObstacle() && d2 >= nc.dist2())) continue;
