@@ -35,9 +35,6 @@ struct Face {
 // In the order of the lower wave's original (dx, dy, dz) loops, which the field depends on (ties).
 constexpr std::array<Face, 6> kFaces = {{{0, -1, 64}, {1, -1, 8}, {2, -1, 1}, {2, 1, 1}, {1, 1, 8}, {0, 1, 64}}};
 
-// Queue entries ahead of the one popped whose cells are prefetched: enough to cover a miss's latency.
-constexpr size_t kPrefetchAhead = 48;
-
 // Index in Block::around of the block at block offset (bx, by, bz), each in -1..1.
 constexpr int aroundSlot(int bx, int by, int bz) { return (bx + 1) * 9 + (by + 1) * 3 + (bz + 1); }
 
@@ -63,10 +60,6 @@ class WaveQueue {
   };
   void push(int key, Block* block, int offset) { entries_.push_back({block, key, offset}); }
   bool empty() const { return head_ == entries_.size(); }
-  // The entry `ahead` places after the next one to pop, or nullptr.
-  const Entry* peek(size_t ahead) const {
-    return head_ + ahead < entries_.size() ? &entries_[head_ + ahead] : nullptr;
-  }
   Entry pop() {
     const Entry e = entries_[head_++];
     if (head_ == entries_.size()) {
@@ -175,21 +168,9 @@ struct DistanceField::Impl {
     return block;
   }
 
-  // Asks the cache for the cache lines of an entry's cell and its face neighbours inside its block
-  // (a breadth-first wave front spans megabytes: its cells have left the cache when popped).
-  static void prefetchAround(const WaveQueue::Entry& e) {
-    const Cell* c = &e.block->cells[e.offset];
-    __builtin_prefetch(c, 1);
-    if ((e.offset >> 6) > 0) __builtin_prefetch(c - 64, 1);
-    if ((e.offset >> 6) < 7) __builtin_prefetch(c + 64, 1);
-    if (((e.offset >> 3) & 7) > 0) __builtin_prefetch(c - 8, 1);
-    if (((e.offset >> 3) & 7) < 7) __builtin_prefetch(c + 8, 1);
-  }
-
   // The raise and lower waves of Lau et al., in order of squared distance, over the 26 neighbours.
   void propagate() {
     while (!open.empty()) {
-      if (const WaveQueue::Entry* next = open.peek(kPrefetchAhead)) prefetchAround(*next);
       const WaveQueue::Entry e = open.pop();
       const int key = e.key;
       Block& centre = *e.block;
