@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <mutex>
 
 #include "mapping/detail/block_table.h"
@@ -81,7 +80,7 @@ struct DistanceField::Impl {
   std::vector<std::unique_ptr<Block>> blocks;
   WaveQueue open;
   int max_dist2 = 0;
-  // One-block cache for the neighbour walks: most neighbours share the popped cell's block.
+  // One-block cache for the obstacle checks and the changed blocks (the waves use Block::around).
   BlockIndex cached_index = BlockIndex::Constant(INT32_MIN);
   Block* cached = nullptr;
 
