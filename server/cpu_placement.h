@@ -9,10 +9,10 @@
 // integration, even behind a SCHED_IDLE thread (a thread that ran much before it slept comes back
 // "ineligible" under EEVDF). Pinned, the handlers only ever wait behind each other and whatever
 // bulk work the load balancer leaves on their CPU: bench/server_bench on 2 cores while ingesting at
-// 15 Hz measured single-query p99 0.3-0.56 ms against 0.6-1.4 ms unpinned, at the same queries per
-// second (docs/PERFORMANCE.md, "Server").
+// 15 Hz measured single-query p99 0.32-0.60 ms against 0.80-2.34 ms unpinned, with more queries
+// per second (docs/PERFORMANCE.md, "Server").
 // Threads: a thread inherits its creator's CPUs, so gRPC's threads are pinned by starting the
-// server inside a QueryCpuScope; a bulk thread started from a handler calls toAllCpus() first.
+// server inside a CpuScope(kQueries); a handler starting bulk threads holds a CpuScope(kBulk).
 #pragma once
 
 #include <sched.h>
@@ -42,29 +42,24 @@ class CpuPlacement {
   bool pins_queries_ = false;
 };
 
-// The calling thread runs on the query CPUs while it lives (and threads it starts then stay there).
-class QueryCpuScope {
+// Moves the calling thread to one side of a placement while it lives, and to the other after:
+//  - kQueries around starting the gRPC server (its pollers inherit the query CPUs, and the threads
+//    they start later do too);
+//  - kBulk in a gRPC handler that does bulk work itself (a stereo frame stream): it and the
+//    pipeline threads it starts run on every CPU, then it returns to the query CPUs.
+class CpuScope {
  public:
-  explicit QueryCpuScope(const CpuPlacement& placement) : placement_(placement) { placement_.toQueryCpus(); }
-  ~QueryCpuScope() { placement_.toAllCpus(); }
-  QueryCpuScope(const QueryCpuScope&) = delete;
-  QueryCpuScope& operator=(const QueryCpuScope&) = delete;
+  enum class Side { kQueries, kBulk };
+  CpuScope(const CpuPlacement& placement, Side side) : placement_(placement), side_(side) { enter(side_); }
+  ~CpuScope() { enter(side_ == Side::kQueries ? Side::kBulk : Side::kQueries); }
+  CpuScope(const CpuScope&) = delete;
+  CpuScope& operator=(const CpuScope&) = delete;
 
  private:
-  const CpuPlacement& placement_;
-};
+  void enter(Side side) const { side == Side::kQueries ? placement_.toQueryCpus() : placement_.toAllCpus(); }
 
-// The opposite, for a gRPC handler that does bulk work itself (a stereo frame stream): it runs on
-// every CPU while this lives, and returns to the query CPUs after.
-class BulkCpuScope {
- public:
-  explicit BulkCpuScope(const CpuPlacement& placement) : placement_(placement) { placement_.toAllCpus(); }
-  ~BulkCpuScope() { placement_.toQueryCpus(); }
-  BulkCpuScope(const BulkCpuScope&) = delete;
-  BulkCpuScope& operator=(const BulkCpuScope&) = delete;
-
- private:
   const CpuPlacement& placement_;
+  const Side side_;
 };
 
 }  // namespace cenote::server

@@ -198,7 +198,7 @@ grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
     }
     StreamSlot slot(frame_streams_, settings_.server.max_frame_streams);
     // Decoding, rectification and the pipeline's threads (started by FrameStream) are bulk work.
-    BulkCpuScope bulk(cpus_);
+    CpuScope bulk(cpus_, CpuScope::Side::kBulk);
     FrameStream frames(host_, settings_, *rectifier_, poses_, counters_, timings_);
     acknowledgeEach(stream, [&](const v1::StereoFrame& wire, v1::FrameAck& ack) {
       const bool running = frames.handle(wire, ack);

@@ -134,7 +134,7 @@ int serve(const Options& o) {
   std::unique_ptr<grpc::Server> server;
   {
     // gRPC's pollers start here and start more of themselves later: all inherit the query CPUs.
-    QueryCpuScope pinned(cpus);
+    CpuScope pinned(cpus, CpuScope::Side::kQueries);
     server = builder.BuildAndStart();
   }
   if (!server || port == 0) throw Error("cannot listen on " + settings.server.listen + " (address in use or invalid?)");

@@ -1,5 +1,5 @@
 // cpu_placement.h: gRPC's threads go to the last `query_cpus` CPUs of the process, threads they
-// start stay there, and bulk work (BulkCpuScope) and everything else keep every CPU. Needs a
+// start stay there, and bulk work (CpuScope kBulk) and everything else keep every CPU. Needs a
 // process allowed at least 2 CPUs; skipped otherwise.
 #include "server/cpu_placement.h"
 
@@ -34,11 +34,11 @@ TEST(CpuPlacement, QueryThreadsAndTheirThreadsRunOnTheLastCpus) {
   const CpuPlacement placement(1);
   ASSERT_TRUE(placement.pinsQueries());
   {
-    QueryCpuScope pinned(placement);
+    CpuScope pinned(placement, CpuScope::Side::kQueries);
     EXPECT_EQ(cpusOfThisThread(), std::vector<int>{all.back()});
     EXPECT_EQ(cpusOfNewThread(), std::vector<int>{all.back()});  // gRPC's later pollers
     {
-      BulkCpuScope bulk(placement);  // a frame stream's handler
+      CpuScope bulk(placement, CpuScope::Side::kBulk);  // a frame stream's handler
       EXPECT_EQ(cpusOfThisThread(), all);
       EXPECT_EQ(cpusOfNewThread(), all);  // its pipeline threads
     }
@@ -61,7 +61,7 @@ TEST(CpuPlacement, NothingIsPinnedWithoutACpuLeftForBulkWork) {
   for (int query_cpus : {0, static_cast<int>(all.size()), static_cast<int>(all.size()) + 3}) {
     const CpuPlacement placement(query_cpus);
     EXPECT_FALSE(placement.pinsQueries()) << query_cpus;
-    QueryCpuScope pinned(placement);
+    CpuScope pinned(placement, CpuScope::Side::kQueries);
     EXPECT_EQ(cpusOfThisThread(), all) << query_cpus;
   }
 }
