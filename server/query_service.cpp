@@ -94,14 +94,8 @@ grpc::Status QueryService::CheckSegments(grpc::ServerContext* context, const v1:
         throw invalidArgument(what + ".radius_m = " + std::to_string(s.radius_m()) + ": must be finite and >= 0");
       }
       segments[i].radius_m = s.radius_m();
-      if (s.radius_m() > 0.0) {  // a capsule visits every voxel of its bounding box's slabs
-        mapping::Aabb bounds;
-        bounds.extend(segments[i].start_m);
-        bounds.extend(segments[i].end_m);
-        bounds.min_m.array() -= s.radius_m();
-        bounds.max_m.array() += s.radius_m();
-        checkBoxVolume(bounds, what);
-      }
+      // A capsule visits every voxel of its bounding box's slabs.
+      if (s.radius_m() > 0.0) checkBoxVolume(mapping::boundsOf(segments[i]), what);
     }
     reply->set_map_version(host_.map().version());
     for (const auto& r : mapping::checkSegments(host_.map(), segments, request->stop_at_unknown())) {
@@ -178,11 +172,7 @@ grpc::Status QueryService::ExtractVoxels(grpc::ServerContext* context, const v1:
     const mapping::Aabb box = finiteBox(request->box(), "box");
     checkBoxVolume(box, "box");
     const mapping::OccupancyMap& map = host_.map();
-    const double range_m = mapping::mapRange_m(map);
-    if (!box.isEmpty() && ((box.min_m.array() < -range_m).any() || (box.max_m.array() > range_m).any())) {
-      throw invalidArgument("box reaches beyond the map's range, +-" + std::to_string(static_cast<int64_t>(range_m)) +
-                            " m on each axis");
-    }
+    if (!mapping::withinMapRange(box, map)) throw invalidArgument("box reaches beyond " + mapping::mapRangeText(map));
     reply->set_voxel_size_m(map.voxelSize());
     if (box.isEmpty()) return grpc::Status::OK;
     // Voxels whose centre lies in the box: i with (i + 0.5) s in [min, max].

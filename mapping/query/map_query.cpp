@@ -12,30 +12,20 @@ namespace {
 
 constexpr double kMaxBoxVoxels = 2147483648.0;
 
-std::string rangeText(const OccupancyMap& map) {
-  return "the map's range, +-" + std::to_string(static_cast<int64_t>(mapRange_m(map))) + " m on each axis";
-}
-
-bool withinRange(const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, const OccupancyMap& map) {
-  const double range = mapRange_m(map);
-  return (lo_m.array() >= -range).all() && (hi_m.array() <= range).all();
-}
-
-// Voxels of the box [lo, hi] counted along each axis, as a double (no overflow).
-double boxVoxels(const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, double voxel_size_m) {
-  return ((hi_m - lo_m) / voxel_size_m).array().ceil().prod();
+// Voxels of a box counted along each axis, as a double (no overflow).
+double boxVoxels(const Aabb& box_m, double voxel_size_m) {
+  return ((box_m.max_m - box_m.min_m) / voxel_size_m).array().ceil().prod();
 }
 
 void checkSegment(const SegmentQuery& q, size_t i, const OccupancyMap& map) {
-  const std::string what = "map query: segment " + std::to_string(i);
+  auto fail = [&](const std::string& why) { throw Error("map query: segment " + std::to_string(i) + why); };
   if (!q.start_m.allFinite() || !q.end_m.allFinite() || !std::isfinite(q.radius_m) || q.radius_m < 0.0) {
-    throw Error(what + " must have finite ends and a finite radius >= 0");
+    fail(" must have finite ends and a finite radius >= 0");
   }
-  const Eigen::Vector3d lo = q.start_m.cwiseMin(q.end_m).array() - q.radius_m;
-  const Eigen::Vector3d hi = q.start_m.cwiseMax(q.end_m).array() + q.radius_m;
-  if (!withinRange(lo, hi, map)) throw Error(what + " reaches beyond " + rangeText(map));
-  if (q.radius_m > 0.0 && boxVoxels(lo, hi, map.voxelSize()) > kMaxBoxVoxels) {
-    throw Error(what + ": its capsule's bounding box holds more than 2^31 voxels");
+  const Aabb bounds = boundsOf(q);
+  if (!withinMapRange(bounds, map)) fail(" reaches beyond " + mapRangeText(map));
+  if (q.radius_m > 0.0 && boxVoxels(bounds, map.voxelSize()) > kMaxBoxVoxels) {
+    fail(": its capsule's bounding box holds more than 2^31 voxels");
   }
 }
 
@@ -148,6 +138,22 @@ CollisionResult sweepCapsule(const OccupancyMap::ConstAccessor& acc, const Segme
 
 double mapRange_m(const OccupancyMap& map) { return kMaxVoxelIndex * map.voxelSize(); }
 
+bool withinMapRange(const Aabb& box_m, const OccupancyMap& map) {
+  const double range = mapRange_m(map);
+  return box_m.isEmpty() || ((box_m.min_m.array() >= -range).all() && (box_m.max_m.array() <= range).all());
+}
+
+std::string mapRangeText(const OccupancyMap& map) {
+  return "the map's range, +-" + std::to_string(static_cast<int64_t>(mapRange_m(map))) + " m on each axis";
+}
+
+Aabb boundsOf(const SegmentQuery& segment) {
+  Aabb box;
+  box.min_m = segment.start_m.cwiseMin(segment.end_m).array() - segment.radius_m;
+  box.max_m = segment.start_m.cwiseMax(segment.end_m).array() + segment.radius_m;
+  return box;
+}
+
 std::vector<VoxelQuery> queryVoxels(const OccupancyMap& map, const std::vector<Eigen::Vector3d>& points_m) {
   const size_t n = points_m.size();
   std::vector<VoxelQuery> out(n);
@@ -178,10 +184,10 @@ std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aab
       throw Error("map query: box " + std::to_string(i) + " must be finite");
     }
     if (box.isEmpty()) continue;
-    if (!withinRange(box.min_m, box.max_m, map)) {
-      throw Error("map query: box " + std::to_string(i) + " reaches beyond " + rangeText(map));
+    if (!withinMapRange(box, map)) {
+      throw Error("map query: box " + std::to_string(i) + " reaches beyond " + mapRangeText(map));
     }
-    if (boxVoxels(box.min_m, box.max_m, s) > kMaxBoxVoxels) {
+    if (boxVoxels(box, s) > kMaxBoxVoxels) {
       throw Error("map query: box " + std::to_string(i) + " holds more than 2^31 voxels");
     }
   }
@@ -248,14 +254,13 @@ std::vector<CollisionResult> raycast(const OccupancyMap& map, const std::vector<
     if (!rays[i].origin_m.allFinite() || !std::isfinite(n) || n == 0.0) {
       throw Error("map raycast: ray " + std::to_string(i) + " needs a finite origin and a finite non-zero direction");
     }
-    if (!withinRange(rays[i].origin_m, rays[i].origin_m, map)) {
-      throw Error("map raycast: ray " + std::to_string(i) + " starts beyond " + rangeText(map));
+    if (!withinMapRange(Aabb{rays[i].origin_m, rays[i].origin_m}, map)) {
+      throw Error("map raycast: ray " + std::to_string(i) + " starts beyond " + mapRangeText(map));
     }
     segments[i].start_m = rays[i].origin_m;
     // Beyond the map's range every voxel is unknown: the ray ends half a voxel before its edge.
     const double edge = distanceToRangeEdge(rays[i].origin_m, rays[i].direction / n, mapRange_m(map)) - 0.5 * map.voxelSize();
-    segments[i].end_m = edge < max_range_m ? rays[i].origin_m + rays[i].direction * (std::max(edge, 0.0) / n)
-                                           : rays[i].origin_m + rays[i].direction * (max_range_m / n);
+    segments[i].end_m = rays[i].origin_m + rays[i].direction * (std::clamp(edge, 0.0, max_range_m) / n);
   }
   return checkSegments(map, segments, stop_at_unknown);
 }

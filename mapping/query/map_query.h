@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "mapping/occupancy_map.h"
@@ -17,6 +18,10 @@ namespace cenote::mapping {
 
 // Half the side of the cube, centred on the origin, that holds every voxel the map can know.
 double mapRange_m(const OccupancyMap& map);
+// Whether `box_m` lies within that cube (an empty box does).
+bool withinMapRange(const Aabb& box_m, const OccupancyMap& map);
+// "the map's range, +-N m on each axis", for error messages.
+std::string mapRangeText(const OccupancyMap& map);
 
 struct VoxelQuery {
   VoxelState state = VoxelState::kUnknown;
@@ -44,6 +49,9 @@ struct SegmentQuery {
   Eigen::Vector3d end_m = Eigen::Vector3d::Zero();
   double radius_m = 0.0;  // 0: the voxels the segment passes through; > 0: a capsule
 };
+
+// The box a segment or capsule can touch: its ends' box grown by its radius.
+Aabb boundsOf(const SegmentQuery& segment);
 
 struct CollisionResult {
   bool hit = false;                  // an occupied voxel, before any unknown with stop_at_unknown
