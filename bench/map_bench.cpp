@@ -126,6 +126,13 @@ struct UpdateTimes {
   uint64_t distance_fingerprint = 0; // FNV-1a over the field's queries at every voxel centre near the map
 };
 
+// FNV-1a: the fingerprints this bench prints to compare versions of the map code.
+constexpr uint64_t kFnvOffset = 14695981039346656037ull, kFnvPrime = 1099511628211ull;
+// Mixes the 8 bytes of `word` into `h`, lowest first.
+void fnvMixBytes(uint64_t& h, uint64_t word) {
+  for (int i = 0; i < 8; ++i) h = (h ^ ((word >> (8 * i)) & 0xFF)) * kFnvPrime;
+}
+
 // FNV-1a over the exact bits of the distance field's answers (distance and gradient, which names the
 // nearest obstacle) at every voxel centre of the map's known blocks and their 26 neighbour blocks.
 uint64_t distanceFingerprint(const OccupancyMap& map, const DistanceField& field) {
@@ -139,11 +146,11 @@ uint64_t distanceFingerprint(const OccupancyMap& map, const DistanceField& field
   };
   std::sort(blocks.begin(), blocks.end(), less);
   blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
-  uint64_t h = 14695981039346656037ull;
+  uint64_t h = kFnvOffset;
   auto mix = [&h](double v) {
     uint64_t bits;
     std::memcpy(&bits, &v, 8);
-    for (int i = 0; i < 8; ++i) h = (h ^ ((bits >> (8 * i)) & 0xFF)) * 1099511628211ull;
+    fnvMixBytes(h, bits);
   };
   std::vector<Eigen::Vector3d> points(kBlockVoxels);
   for (const BlockIndex& b : blocks) {
@@ -178,11 +185,8 @@ UpdateTimes timeUpdates(const std::vector<PointBatch>& frames, const MapConfig& 
   const auto clusters = frontiers.clusters(Eigen::Vector3d::Zero());
   out.num_clusters = clusters.size();
   out.num_frontier_voxels = frontiers.numFrontierVoxels();
-  uint64_t h = 14695981039346656037ull;
-  auto mix = [&h](double v) {
-    const int64_t q = std::llround(v * 1e6);
-    for (int i = 0; i < 8; ++i) h = (h ^ ((q >> (8 * i)) & 0xFF)) * 1099511628211ull;
-  };
+  uint64_t h = kFnvOffset;
+  auto mix = [&h](double v) { fnvMixBytes(h, static_cast<uint64_t>(std::llround(v * 1e6))); };
   for (const auto& c : clusters) {
     mix(static_cast<double>(c.num_voxels));
     for (int i = 0; i < 3; ++i) mix(c.centroid_m[i]), mix(c.direction[i]), mix(c.bounds_m.min_m[i]), mix(c.bounds_m.max_m[i]);
@@ -278,7 +282,7 @@ void reportLookups(const OccupancyMap& map) {
 void reportClears(const std::vector<PointBatch>& frames, const MapConfig& config) {
   auto processCpuMs = [] { return cpuMs(CLOCK_PROCESS_CPUTIME_ID); };  // any helper thread counted too
   std::vector<double> known_ms, box_ms, sphere_ms;
-  uint64_t fingerprint = 14695981039346656037ull;
+  uint64_t fingerprint = kFnvOffset;
   for (int round = 0; round < 5; ++round) {
     OccupancyMap map(config);
     for (const auto& f : frames) map.integrate(f);
@@ -304,7 +308,7 @@ void reportClears(const std::vector<PointBatch>& frames, const MapConfig& config
         std::array<uint8_t, 3> rgb{};
         const bool coloured = acc.color(ijk, rgb);
         const uint64_t v = static_cast<uint64_t>(acc.state(ijk)) | coloured << 2 | rgb[0] << 3 | rgb[1] << 11 | rgb[2] << 19;
-        fingerprint = (fingerprint ^ v) * 1099511628211ull;
+        fingerprint = (fingerprint ^ v) * kFnvPrime;  // a voxel's word at once
       }
     }
   }
