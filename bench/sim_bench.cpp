@@ -1,4 +1,4 @@
-// sim_bench: speed of the simulator (pipeline/sim/) per scene, stage by stage, at 800x600.
+// sim_bench: speed of the simulator (sim/) per scene, stage by stage, at 800x600.
 // Prints a Markdown table for docs/PERFORMANCE.md ("## Simulator").
 //   sim_bench [--threads 2] [--frames 20] [--scene cave|reef|wreck|all]
 // Stages of one frame (both cameras): rasterise (visibility + exact depth), radiance (texture,
@@ -15,10 +15,10 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/sim/image_formation.h"
-#include "pipeline/sim/rasterizer.h"
-#include "pipeline/sim/sim_dataset.h"
-#include "pipeline/sim/simulator.h"
+#include "sim/image_formation.h"
+#include "sim/rasterizer.h"
+#include "sim/sim_dataset.h"
+#include "sim/simulator.h"
 
 using namespace cenote;
 using Clock = std::chrono::steady_clock;
@@ -47,23 +47,23 @@ int main(int argc, char** argv) {
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const char* name : {"cave", "reef", "wreck"}) {
     if (which != "all" && which != name) continue;
-    pipeline::SimConfig config;
-    config.scene = pipeline::parseSimScene(name);
+    sim::SimConfig config;
+    config.scene = sim::parseSimScene(name);
     config.num_frames = frames;
     const auto t0 = Clock::now();
-    const pipeline::Simulator sim(config);
+    const sim::Simulator simulator(config);
     const double build_ms = ms(t0, Clock::now());
     std::vector<double> raster, radiance, expose, frame;
     for (int i = 0; i < frames; ++i) {
-      const Eigen::Isometry3d T = sim.T_world_cam0(sim.frameTimeS(i));
+      const Eigen::Isometry3d T = simulator.T_world_cam0(simulator.frameTimeS(i));
       const auto a = Clock::now();
-      const pipeline::VisibilityBuffer vis = pipeline::rasterize(sim.scene().mesh, sim.rig().camera, T);
+      const sim::VisibilityBuffer vis = sim::rasterize(simulator.scene().mesh, simulator.rig().camera, T);
       const auto b = Clock::now();
-      const cv::Mat r = pipeline::renderRadiance(sim.scene(), sim.texture(), sim.rig().camera, T, vis, T);
+      const cv::Mat r = sim::renderRadiance(simulator.scene(), simulator.texture(), simulator.rig().camera, T, vis, T);
       const auto c = Clock::now();
-      const cv::Mat img = pipeline::exposeImage(r, sim.gain(), 2.0f, 1);
+      const cv::Mat img = sim::exposeImage(r, simulator.gain(), 2.0f, 1);
       const auto d = Clock::now();
-      const pipeline::SimFrame f = sim.renderFrame(i);
+      const sim::SimFrame f = simulator.renderFrame(i);
       const auto e = Clock::now();
       raster.push_back(2 * ms(a, b));
       radiance.push_back(2 * ms(b, c));
@@ -71,9 +71,9 @@ int main(int argc, char** argv) {
       frame.push_back(ms(d, e));
     }
     const std::string dir = (std::filesystem::temp_directory_path() / ("cenote_sim_bench_" + std::string(name))).string();
-    const pipeline::SimDatasetSummary summary = pipeline::writeSimDataset(sim, dir);
+    const sim::SimDatasetSummary summary = sim::writeSimDataset(simulator, dir);
     std::filesystem::remove_all(dir);
-    std::printf("| %s | %zu | %.0f | %.1f | %.1f | %.1f | %.1f | %.1f |\n", name, sim.scene().mesh.numTriangles(),
+    std::printf("| %s | %zu | %.0f | %.1f | %.1f | %.1f | %.1f | %.1f |\n", name, simulator.scene().mesh.numTriangles(),
                 build_ms, median(raster), median(radiance), median(expose), median(frame),
                 1000.0 * summary.wall_s / frames);
     std::fflush(stdout);

@@ -26,12 +26,12 @@
 #include "pipeline/calibration/stereo_calibration.h"
 #include "pipeline/dataset/stereo_dataset.h"
 #include "proto/grpc_runtime.h"
-#include "server/admin_service.h"
-#include "server/cpu_placement.h"
-#include "server/cpu_scheduling.h"
-#include "server/ingest_service.h"
-#include "server/query_service.h"
-#include "server/updates_service.h"
+#include "server/services/admin_service.h"
+#include "server/cpu/cpu_placement.h"
+#include "server/cpu/cpu_scheduling.h"
+#include "server/services/ingest_service.h"
+#include "server/services/query_service.h"
+#include "server/services/updates_service.h"
 
 namespace cenote::server {
 namespace {

@@ -10,7 +10,7 @@
 
 #include "common/config_error.h"
 #include "mapping/map_config.h"
-#include "server/map_host_options.h"
+#include "server/host/map_host_options.h"
 #include "pipeline/runner/run_config.h"
 
 namespace cenote {

@@ -27,7 +27,7 @@
 #include "eval/report/plots.h"
 #include "eval/trajectory/trajectory_alignment.h"
 #include "eval/trajectory/trajectory_io.h"
-#include "pipeline/image/image_io.h"
+#include "io/image/image_io.h"
 
 namespace cenote::apps {
 namespace {
@@ -169,8 +169,8 @@ void runDepth(const DepthOptions& o) {
       s.median_abs_m = f.median_abs_m;
       s.error_pfm = *scratch / (std::to_string(i) + ".error.pfm");
       s.reference_pfm = *scratch / (std::to_string(i) + ".reference.pfm");
-      pipeline::writePfm(s.error_pfm, eval::frameErrorMap(f, options));
-      pipeline::writePfm(s.reference_pfm, eval::loadDepthMap(f.reference_file) * o.reference_scale);
+      io::writePfm(s.error_pfm, eval::frameErrorMap(f, options));
+      io::writePfm(s.reference_pfm, eval::loadDepthMap(f.reference_file) * o.reference_scale);
       samples.push_back(s);
     }
     plot_json = *scratch / "depth.json";

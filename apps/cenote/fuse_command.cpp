@@ -17,11 +17,11 @@
 #include "apps/cenote/commands.h"
 #include "common/error.h"
 #include "common/yaml_section.h"
-#include "pipeline/frame/pose_check.h"
+#include "common/pose_check.h"
 #include "pipeline/fusion/fusion_window.h"
-#include "pipeline/image/image_io.h"
-#include "pipeline/image/ply_io.h"
-#include "pipeline/trajectory/tum_trajectory.h"
+#include "io/image/image_io.h"
+#include "io/cloud/ply_io.h"
+#include "io/trajectory/tum_trajectory.h"
 
 namespace cenote::apps {
 namespace {
@@ -78,12 +78,12 @@ Eigen::Matrix3d parseIntrinsics(const std::string& text) {
   if (values.size() != 4) throw Error("--intrinsics '" + text + "': expected FX,FY,CX,CY (4 numbers)");
   Eigen::Matrix3d K;
   K << values[0], 0.0, values[2], 0.0, values[1], values[3], 0.0, 0.0, 1.0;
-  pipeline::checkIntrinsics(K, "--intrinsics");
+  checkIntrinsics(K, "--intrinsics");
   return K;
 }
 
 // Every <timestamp>.depth.pfm of the folder, in time order, each with its pose.
-std::vector<InputFrame> listFrames(const FuseOptions& o, const pipeline::TumTrajectory& trajectory) {
+std::vector<InputFrame> listFrames(const FuseOptions& o, const io::TumTrajectory& trajectory) {
   if (!fs::is_directory(o.depth_dir)) throw Error("--depth-dir " + o.depth_dir + ": not a directory");
   std::vector<InputFrame> frames;
   for (const auto& entry : fs::directory_iterator(o.depth_dir)) {
@@ -117,7 +117,7 @@ std::vector<InputFrame> listFrames(const FuseOptions& o, const pipeline::TumTraj
       throw Error(text.str());
     }
     frame.T_world_cam = pose->T_world_cam;
-    pipeline::checkPose(frame.T_world_cam, o.trajectory + ": pose at t = " + frame.stamp);
+    checkPose(frame.T_world_cam, o.trajectory + ": pose at t = " + frame.stamp);
   }
   return frames;
 }
@@ -130,11 +130,11 @@ pipeline::DepthFrame loadFrame(const FuseOptions& o, const InputFrame& in, const
   frame.K = K;
   frame.T_world_cam = in.T_world_cam;
   const std::string depth_path = (fs::path(o.depth_dir) / (in.stamp + kDepthSuffix)).string();
-  frame.depth = pipeline::readPfm(depth_path);
+  frame.depth = io::readPfm(depth_path);
   if (frame.depth.type() != CV_32FC1) throw Error(depth_path + ": depth must be a single-channel PFM");
   const std::string conf_path = (fs::path(o.depth_dir) / (in.stamp + kConfidenceSuffix)).string();
   if (fs::exists(conf_path)) {
-    frame.confidence = pipeline::readPfm(conf_path);
+    frame.confidence = io::readPfm(conf_path);
     if (frame.confidence.type() != CV_32FC1 || frame.confidence.size() != frame.depth.size()) {
       throw Error(conf_path + " is " + sizeText(frame.confidence) + " (or not single-channel) but " + depth_path +
                   " is " + sizeText(frame.depth));
@@ -144,7 +144,7 @@ pipeline::DepthFrame loadFrame(const FuseOptions& o, const InputFrame& in, const
   }
   if (!o.color_dir.empty()) {
     const std::string color_path = (fs::path(o.color_dir) / (in.stamp + ".png")).string();
-    frame.color = pipeline::readImage(color_path, cv::IMREAD_COLOR);
+    frame.color = io::readImage(color_path, cv::IMREAD_COLOR);
     if (frame.color.size() != frame.depth.size()) {
       throw Error(color_path + " is " + sizeText(frame.color) + " but " + depth_path + " is " + sizeText(frame.depth));
     }
@@ -155,7 +155,7 @@ pipeline::DepthFrame loadFrame(const FuseOptions& o, const InputFrame& in, const
 void run(const FuseOptions& o) {
   const pipeline::FusionConfig config = makeConfig(o);
   const Eigen::Matrix3d K = parseIntrinsics(o.intrinsics);
-  const pipeline::TumTrajectory trajectory = pipeline::TumTrajectory::read(o.trajectory);
+  const io::TumTrajectory trajectory = io::TumTrajectory::read(o.trajectory);
   const std::vector<InputFrame> frames = listFrames(o, trajectory);
   if (static_cast<int>(frames.size()) < config.num_views) {
     throw Error("--depth-dir " + o.depth_dir + ": " + std::to_string(frames.size()) + " depth maps (*" + kDepthSuffix +
@@ -166,7 +166,7 @@ void run(const FuseOptions& o) {
   if (!fs::is_directory(o.out)) throw Error("--out " + o.out + ": cannot create directory");
 
   pipeline::FusionWindow window(config);
-  pipeline::PlyWriter ply((fs::path(o.out) / "points.ply").string());
+  io::PlyWriter ply((fs::path(o.out) / "points.ply").string());
   const int half = config.num_views / 2;
   int fused_frames = 0;
   double fusion_ms = 0.0;
@@ -183,13 +183,13 @@ void run(const FuseOptions& o) {
     if (!fused) continue;
     const std::string stamp = frames[i - half].stamp;
     const fs::path base = fs::path(o.out) / stamp;
-    pipeline::writePfm(base.string() + ".depth.pfm", fused->frame.depth);
-    pipeline::writePfm(base.string() + ".conf.pfm", fused->frame.confidence);
+    io::writePfm(base.string() + ".depth.pfm", fused->frame.depth);
+    io::writePfm(base.string() + ".conf.pfm", fused->frame.confidence);
     if (o.png16) {
-      const int clipped = pipeline::writeDepthPng16(base.string() + ".depth.png", fused->frame.depth);
+      const int clipped = io::writeDepthPng16(base.string() + ".depth.png", fused->frame.depth);
       if (clipped > 0) std::cerr << "warning: " << stamp << ": " << clipped << " depths above 65.535 m written as 0\n";
     }
-    if (o.preview) pipeline::writeImage(base.string() + ".preview.png", pipeline::colorizeMap(fused->frame.depth));
+    if (o.preview) io::writeImage(base.string() + ".preview.png", io::colorizeMap(fused->frame.depth));
     ply.append(fused->points);
     ++fused_frames;
   }

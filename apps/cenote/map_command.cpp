@@ -22,7 +22,7 @@
 #include "mapping/io/map_io.h"
 #include "mapping/io/scan_graph.h"
 #include "mapping/query/map_query.h"
-#include "pipeline/image/ply_io.h"
+#include "io/cloud/ply_io.h"
 
 namespace cenote::apps {
 namespace {
@@ -93,7 +93,7 @@ void runIntegrate(const IntegrateOptions& o) {
     readScanGraph(o.graph, o.max_scans, add);
   } else {
     if (o.origin.empty()) throw Error("map integrate: --cloud needs --origin X,Y,Z (the sensor position)");
-    const pipeline::PlyPoints cloud = pipeline::readPly(o.cloud);
+    const io::PlyPoints cloud = io::readPly(o.cloud);
     PointBatch batch;
     batch.origin = parsePoint(o.origin, "--origin");
     batch.points = cloud.points;

@@ -74,7 +74,7 @@ void run(const RunOptions& o) {
   }
   const std::unique_ptr<pipeline::StereoDataset> dataset =
       pipeline::openDataset(o.dataset, pipeline::parseDatasetFormat(o.format));
-  const pipeline::Trajectory trajectory =
+  const io::Trajectory trajectory =
       pipeline::cameraTrajectory(*dataset, o.trajectory, o.trajectory_format, runner.config().run.pose_frame);
   std::cerr << dataset->describe() << "; trajectory " << trajectory.name() << " (" << trajectory.size() << " poses)\n";
 

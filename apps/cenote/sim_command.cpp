@@ -1,5 +1,5 @@
-// `cenote sim`: renders a simulated underwater stereo sequence (pipeline/sim/) and writes it as an
-// EuRoC-layout dataset with ground truth (layout in pipeline/sim/sim_dataset.h).
+// `cenote sim`: renders a simulated underwater stereo sequence (sim/) and writes it as an
+// EuRoC-layout dataset with ground truth (layout in sim/sim_dataset.h).
 //   cenote sim --scene cave|reef|wreck --frames N --out DIR [--width 800 --height 600] [--rate 15]
 //              [--seed S] [--baseline 0.12] [--exposure-ratio R] [--noise SIGMA] [--config FILE]
 // Settings: defaults, then the `sim:` section of --config, then the options given here.
@@ -15,8 +15,8 @@
 #include "apps/cenote/progress_bar.h"
 #include "common/error.h"
 #include "common/yaml_section.h"
-#include "pipeline/sim/sim_dataset.h"
-#include "pipeline/sim/simulator.h"
+#include "sim/sim_dataset.h"
+#include "sim/simulator.h"
 
 namespace cenote::apps {
 namespace {
@@ -29,8 +29,8 @@ struct SimOptions {
   bool quiet = false;
 };
 
-pipeline::SimConfig makeConfig(const SimOptions& o) {
-  pipeline::SimConfig config;
+sim::SimConfig makeConfig(const SimOptions& o) {
+  sim::SimConfig config;
   if (!o.config.empty()) {
     YamlSection root(loadYamlFile(o.config), "", o.config);
     YamlSection section = root.section("sim");
@@ -39,7 +39,7 @@ pipeline::SimConfig makeConfig(const SimOptions& o) {
   }
   if (!o.scene.empty()) {
     try {
-      config.scene = pipeline::parseSimScene(o.scene);
+      config.scene = sim::parseSimScene(o.scene);
     } catch (const Error&) {
       throw Error("--scene " + o.scene + ": must be cave, reef or wreck");
     }
@@ -62,23 +62,23 @@ pipeline::SimConfig makeConfig(const SimOptions& o) {
 }
 
 void run(const SimOptions& o) {
-  const pipeline::SimConfig config = makeConfig(o);
+  const sim::SimConfig config = makeConfig(o);
   std::error_code ec;
   std::filesystem::create_directories(o.out, ec);
   if (!std::filesystem::is_directory(o.out)) throw Error("--out " + o.out + ": cannot create directory");
 
   const auto start = std::chrono::steady_clock::now();
-  const pipeline::Simulator sim(config);
+  const sim::Simulator simulator(config);
   const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  ProgressBar bar("sim " + std::string(pipeline::toString(config.scene)));
+  ProgressBar bar("sim " + std::string(sim::toString(config.scene)));
   const auto total = static_cast<size_t>(config.num_frames);
-  const pipeline::SimDatasetSummary summary = pipeline::writeSimDataset(sim, o.out, [&](int done) {
+  const sim::SimDatasetSummary summary = sim::writeSimDataset(simulator, o.out, [&](int done) {
     if (!o.quiet) bar.update(static_cast<size_t>(done), total);
   });
-  const pipeline::PinholeCamera& cam = sim.rig().camera;
+  const sim::PinholeCamera& cam = simulator.rig().camera;
   std::printf("simulated %d frames of the %s scene (%dx%d, f = %.2f px, baseline %.3f m, %zu triangles) into %s\n",
-              summary.frames, pipeline::toString(config.scene), cam.width, cam.height, cam.fx, config.baseline_m,
-              sim.scene().mesh.numTriangles(), o.out.c_str());
+              summary.frames, sim::toString(config.scene), cam.width, cam.height, cam.fx, config.baseline_m,
+              simulator.scene().mesh.numTriangles(), o.out.c_str());
   std::printf("ground truth: %zu surface points (%.3f m apart), depth per frame, body and cam0 trajectories\n",
               summary.surface_points, config.surface_spacing_m);
   std::printf("time: scene %.2f s, render %.1f ms/frame, write %.1f ms/frame (per thread), total %.2f s on %d threads\n",

@@ -9,7 +9,7 @@
 #include "common/error.h"
 #include "common/yaml_section.h"
 #include "pipeline/calibration/rectifier.h"
-#include "pipeline/image/image_io.h"
+#include "io/image/image_io.h"
 #include "pipeline/stereo/stereo_matcher.h"
 
 namespace cenote::apps {
@@ -54,8 +54,8 @@ double median(std::vector<double> values) {
 void run(const StereoOptions& o) {
   pipeline::StereoMatcher matcher(makeConfig(o));
   pipeline::StereoFrame frame;
-  frame.left = pipeline::readImage(o.left, cv::IMREAD_COLOR);
-  frame.right = pipeline::readImage(o.right, cv::IMREAD_COLOR);
+  frame.left = io::readImage(o.left, cv::IMREAD_COLOR);
+  frame.right = io::readImage(o.right, cv::IMREAD_COLOR);
   double focal_px = o.focal_px, baseline_m = o.baseline_m;
   cv::Mat left = frame.left, right = frame.right;
   if (!o.calib.empty()) {
@@ -86,14 +86,14 @@ void run(const StereoOptions& o) {
     std::cout << "stereo_ms_median=" << median(ms) << "\n";
   }
 
-  pipeline::writePfm(o.out_disparity, result.disparity);
-  if (!o.out_confidence.empty()) pipeline::writePfm(o.out_confidence, result.confidence);
+  io::writePfm(o.out_disparity, result.disparity);
+  if (!o.out_confidence.empty()) io::writePfm(o.out_confidence, result.confidence);
   if (!o.out_depth.empty()) {
-    pipeline::writePfm(o.out_depth, pipeline::disparityToDepth(result.disparity, focal_px, baseline_m));
+    io::writePfm(o.out_depth, pipeline::disparityToDepth(result.disparity, focal_px, baseline_m));
   }
   if (!o.out_preview.empty()) {
     const auto& c = matcher.config();
-    pipeline::writeImage(o.out_preview, pipeline::colorizeMap(result.disparity, c.min_disparity_px,
+    io::writeImage(o.out_preview, io::colorizeMap(result.disparity, c.min_disparity_px,
                                                               c.min_disparity_px + c.num_disparities));
   }
   const int valid = cv::countNonZero(result.confidence > 0.0f);

@@ -8,7 +8,7 @@
 
 #include "common/error.h"
 #include "eval/depth/colmap_depth_io.h"
-#include "pipeline/image/image_io.h"
+#include "io/image/image_io.h"
 
 namespace cenote::eval {
 namespace {
@@ -99,8 +99,8 @@ std::map<std::string, DepthFile> listDepthMaps(const std::string& dir, bool pref
 cv::Mat loadDepthMap(const DepthFile& file) {
   cv::Mat depth;
   switch (file.kind) {
-    case DepthFileKind::kPfm: depth = pipeline::readPfm(file.path); break;
-    case DepthFileKind::kPng16: depth = pipeline::readDepthPng16(file.path); break;
+    case DepthFileKind::kPfm: depth = io::readPfm(file.path); break;
+    case DepthFileKind::kPng16: depth = io::readDepthPng16(file.path); break;
     case DepthFileKind::kColmapGeometric:
     case DepthFileKind::kColmapPhotometric: depth = readColmapArray(file.path); break;
   }

@@ -17,7 +17,7 @@
 #include "common/error.h"
 #include "common/text_file.h"
 #include "eval/report/metrics_json.h"
-#include "pipeline/image/image_io.h"
+#include "io/image/image_io.h"
 
 namespace cenote::eval {
 namespace {
@@ -228,7 +228,7 @@ std::string samplesSection(const fs::path& dir, const HtmlReportOptions& options
     const auto image = images.find(stem);
     if (image != images.end()) {
       try {
-        const cv::Mat input = pipeline::readImage(image->second, cv::IMREAD_COLOR);
+        const cv::Mat input = io::readImage(image->second, cv::IMREAD_COLOR);
         html += "<figure>" + imgTag(encodePng(input, options.sample_width_px), "input") +
                 "<figcaption>input image</figcaption></figure>\n";
       } catch (const Error& e) {
@@ -238,7 +238,7 @@ std::string samplesSection(const fs::path& dir, const HtmlReportOptions& options
     for (const auto& [key, entry] : files.maps) {
       const auto& [label, path] = entry;
       try {
-        const cv::Mat map = pipeline::readPfm(path);
+        const cv::Mat map = io::readPfm(path);
         if (map.type() != CV_32FC1) continue;
         double lo = 0.0, hi = 0.0;
         std::vector<float> finite;
@@ -252,7 +252,7 @@ std::string samplesSection(const fs::path& dir, const HtmlReportOptions& options
         }
         char range[96];
         std::snprintf(range, sizeof(range), " (%.3g to %.3g, %.0f %% valid)", lo, hi, 100.0 * finite.size() / map.total());
-        html += "<figure>" + imgTag(encodePng(pipeline::colorizeMap(map, lo, hi), options.sample_width_px), label) +
+        html += "<figure>" + imgTag(encodePng(io::colorizeMap(map, lo, hi), options.sample_width_px), label) +
                 "<figcaption>" + escape(label) + range + "</figcaption></figure>\n";
       } catch (const Error& e) {
         html += missing(e.what());

@@ -27,20 +27,20 @@ const char* toString(Alignment alignment) {
   return "?";
 }
 
-AssociatedPositions associate(const std::vector<pipeline::StampedPose>& estimate,
-                              const std::vector<pipeline::StampedPose>& reference, double tolerance_s) {
+AssociatedPositions associate(const std::vector<io::StampedPose>& estimate,
+                              const std::vector<io::StampedPose>& reference, double tolerance_s) {
   if (!(tolerance_s >= 0.0) || !std::isfinite(tolerance_s)) {
     std::ostringstream text;
     text << "association tolerance " << tolerance_s << " s: must be finite and >= 0";
     throw Error(text.str());
   }
-  std::vector<pipeline::StampedPose> ref = reference;
+  std::vector<io::StampedPose> ref = reference;
   std::stable_sort(ref.begin(), ref.end(), [](const auto& a, const auto& b) { return a.t_s < b.t_s; });
   std::vector<std::tuple<double, size_t, size_t>> candidates;  // |dt|, estimate index, reference index
   for (size_t i = 0; i < estimate.size(); ++i) {
     const double t = estimate[i].t_s;
     auto it = std::lower_bound(ref.begin(), ref.end(), t - tolerance_s,
-                               [](const pipeline::StampedPose& p, double v) { return p.t_s < v; });
+                               [](const io::StampedPose& p, double v) { return p.t_s < v; });
     for (; it != ref.end() && it->t_s <= t + tolerance_s; ++it) {
       candidates.emplace_back(std::abs(it->t_s - t), i, static_cast<size_t>(it - ref.begin()));
     }
@@ -98,14 +98,14 @@ Similarity alignPositions(const std::vector<Eigen::Vector3d>& estimate, const st
   return result;
 }
 
-TrajectoryEvaluation evaluateTrajectory(const std::vector<pipeline::StampedPose>& estimate,
-                                        const std::vector<pipeline::StampedPose>& reference,
+TrajectoryEvaluation evaluateTrajectory(const std::vector<io::StampedPose>& estimate,
+                                        const std::vector<io::StampedPose>& reference,
                                         const TrajectoryEvaluationOptions& options) {
   TrajectoryEvaluation e;
   e.alignment = options.alignment;
   e.pairs = associate(estimate, reference, options.tolerance_s);
   if (e.pairs.t_s.size() < 3) {
-    const auto range = [](const std::vector<pipeline::StampedPose>& p) {
+    const auto range = [](const std::vector<io::StampedPose>& p) {
       if (p.empty()) return std::string("no poses");
       double lo = p.front().t_s, hi = lo;
       for (const auto& x : p) lo = std::min(lo, x.t_s), hi = std::max(hi, x.t_s);

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/trajectory/tum_trajectory.h"
+#include "io/trajectory/tum_trajectory.h"
 
 namespace cenote::eval {
 
@@ -32,8 +32,8 @@ struct AssociatedPositions {
 };
 
 // @throws cenote::Error when tolerance_s is negative or not finite.
-AssociatedPositions associate(const std::vector<pipeline::StampedPose>& estimate,
-                              const std::vector<pipeline::StampedPose>& reference, double tolerance_s);
+AssociatedPositions associate(const std::vector<io::StampedPose>& estimate,
+                              const std::vector<io::StampedPose>& reference, double tolerance_s);
 
 // p_ref = scale * R * p_est + t.
 struct Similarity {
@@ -65,8 +65,8 @@ struct TrajectoryEvaluation {
 
 // @throws cenote::Error when fewer than 3 poses can be associated (naming how many each side has and
 //         the time ranges), or as alignPositions.
-TrajectoryEvaluation evaluateTrajectory(const std::vector<pipeline::StampedPose>& estimate,
-                                        const std::vector<pipeline::StampedPose>& reference,
+TrajectoryEvaluation evaluateTrajectory(const std::vector<io::StampedPose>& estimate,
+                                        const std::vector<io::StampedPose>& reference,
                                         const TrajectoryEvaluationOptions& options = {});
 
 }  // namespace cenote::eval

@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "common/error.h"
-#include "pipeline/trajectory/trajectory.h"
+#include "io/trajectory/trajectory.h"
 
 namespace cenote::eval {
 namespace {
@@ -64,18 +64,18 @@ TrajectoryFileFormat detectTrajectoryFileFormat(const std::string& path) {
     if (looksLikeColmapImage(line)) return TrajectoryFileFormat::kColmap;
     break;
   }
-  switch (pipeline::detectTrajectoryFormat(path)) {
-    case pipeline::TrajectoryFormat::kTum: return TrajectoryFileFormat::kTum;
-    case pipeline::TrajectoryFormat::kEuroc: return TrajectoryFileFormat::kEuroc;
-    case pipeline::TrajectoryFormat::kKitti: return TrajectoryFileFormat::kKitti;
+  switch (io::detectTrajectoryFormat(path)) {
+    case io::TrajectoryFormat::kTum: return TrajectoryFileFormat::kTum;
+    case io::TrajectoryFormat::kEuroc: return TrajectoryFileFormat::kEuroc;
+    case io::TrajectoryFormat::kKitti: return TrajectoryFileFormat::kKitti;
   }
   return TrajectoryFileFormat::kTum;
 }
 
-std::vector<pipeline::StampedPose> readColmapImagesTxt(const std::string& path) {
+std::vector<io::StampedPose> readColmapImagesTxt(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw Error("cannot read " + path + ": " + (fs::exists(path) ? "not readable" : "no such file"));
-  std::vector<pipeline::StampedPose> poses;
+  std::vector<io::StampedPose> poses;
   std::vector<std::string> names;
   std::string line;
   int line_number = 0;
@@ -103,7 +103,7 @@ std::vector<pipeline::StampedPose> readColmapImagesTxt(const std::string& path) 
     std::getline(words >> std::ws, name);
     if (name.empty()) throw Error(where + "image line has no NAME");
     Eigen::Quaterniond q(v[1], v[2], v[3], v[4]);
-    if (std::abs(q.norm() - 1.0) > pipeline::kQuaternionNormTolerance) {
+    if (std::abs(q.norm() - 1.0) > io::kQuaternionNormTolerance) {
       std::ostringstream text;
       text << where << "quaternion (QW QX QY QZ) has norm " << q.norm() << ", must be 1";
       throw Error(text.str());
@@ -123,7 +123,7 @@ std::vector<pipeline::StampedPose> readColmapImagesTxt(const std::string& path) 
   std::vector<size_t> order(poses.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return poses[a].t_s < poses[b].t_s; });
-  std::vector<pipeline::StampedPose> sorted;
+  std::vector<io::StampedPose> sorted;
   for (size_t k = 0; k < order.size(); ++k) {
     if (k > 0 && poses[order[k]].t_s == poses[order[k - 1]].t_s) {
       throw Error(path + ": images '" + names[order[k - 1]] + "' and '" + names[order[k]] + "' have the same timestamp");
@@ -133,22 +133,22 @@ std::vector<pipeline::StampedPose> readColmapImagesTxt(const std::string& path) 
   return sorted;
 }
 
-std::vector<pipeline::StampedPose> readTrajectoryFile(const std::string& path, TrajectoryFileFormat format,
+std::vector<io::StampedPose> readTrajectoryFile(const std::string& path, TrajectoryFileFormat format,
                                                       const std::string& kitti_times) {
   if (format == TrajectoryFileFormat::kAuto) format = detectTrajectoryFileFormat(path);
   if (!kitti_times.empty() && format != TrajectoryFileFormat::kKitti) {
     throw Error("a times file (" + kitti_times + ") applies to KITTI trajectories only, " + path + " is " +
                 toString(format));
   }
-  std::vector<pipeline::StampedPose> poses;
+  std::vector<io::StampedPose> poses;
   switch (format) {
     case TrajectoryFileFormat::kColmap: poses = readColmapImagesTxt(path); break;
-    case TrajectoryFileFormat::kTum: poses = pipeline::Trajectory::read(path, pipeline::TrajectoryFormat::kTum).poses(); break;
+    case TrajectoryFileFormat::kTum: poses = io::Trajectory::read(path, io::TrajectoryFormat::kTum).poses(); break;
     case TrajectoryFileFormat::kEuroc:
-      poses = pipeline::Trajectory::read(path, pipeline::TrajectoryFormat::kEuroc).poses();
+      poses = io::Trajectory::read(path, io::TrajectoryFormat::kEuroc).poses();
       break;
     case TrajectoryFileFormat::kKitti:
-      poses = pipeline::Trajectory::read(path, pipeline::TrajectoryFormat::kKitti, kitti_times).poses();
+      poses = io::Trajectory::read(path, io::TrajectoryFormat::kKitti, kitti_times).poses();
       break;
     case TrajectoryFileFormat::kAuto: break;
   }

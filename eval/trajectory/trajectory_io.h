@@ -1,6 +1,6 @@
 // trajectory_io.h: trajectories for evaluation, in the formats users compare against.
-//   tum     `t tx ty tz qx qy qz qw`                       (pipeline/trajectory/trajectory.h)
-//   euroc   CSV `t_ns, px, py, pz, qw, qx, qy, qz[, ...]`  (pipeline/trajectory/trajectory.h)
+//   tum     `t tx ty tz qx qy qz qw`                       (io/trajectory/trajectory.h)
+//   euroc   CSV `t_ns, px, py, pz, qw, qx, qy, qz[, ...]`  (io/trajectory/trajectory.h)
 //   kitti   12 numbers a line, row-major [R | t]; times from a file, else the line index at 10 Hz
 //   colmap  sparse model images.txt: `IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME` then a line of
 //           2-D points; the pose is T_cam_world (world to camera), inverted here. The timestamp is
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/trajectory/tum_trajectory.h"
+#include "io/trajectory/tum_trajectory.h"
 
 namespace cenote::eval {
 
@@ -29,11 +29,11 @@ TrajectoryFileFormat detectTrajectoryFileFormat(const std::string& path);
 // @param kitti_times KITTI only: file of one timestamp (s) per line; empty = line index at 10 Hz.
 // @throws cenote::Error naming the file and line of the first malformed entry, or when the file
 //         holds no pose.
-std::vector<pipeline::StampedPose> readTrajectoryFile(const std::string& path, TrajectoryFileFormat format,
+std::vector<io::StampedPose> readTrajectoryFile(const std::string& path, TrajectoryFileFormat format,
                                                       const std::string& kitti_times = "");
 
 // COLMAP images.txt. @throws cenote::Error naming file and line (bad numbers, a quaternion whose
 //         norm is not 1, an image name that is not a timestamp, two images at one time).
-std::vector<pipeline::StampedPose> readColmapImagesTxt(const std::string& path);
+std::vector<io::StampedPose> readColmapImagesTxt(const std::string& path);
 
 }  // namespace cenote::eval

@@ -10,7 +10,7 @@
 // (a cell lowered again spreads again), so it reaches the same kind of field, and consecutive cells
 // stay close in memory, where a priority queue jumped across the whole wave front.
 // Propagating nearest-obstacle coordinates makes the distance exact Euclidean at almost every cell
-// and never more than one voxel too large (tests/mapping/distance_field_test.cpp checks this
+// and never more than one voxel too large (tests/mapping/distance/distance_field_test.cpp checks this
 // against brute force after integrations and after clearing a box: at least 99 % exact).
 // Distances are between voxel centres for cells; a point query returns |p - c| for the nearest
 // obstacle's centre c, and the gradient (p - c) / |p - c|, pointing away from the obstacle.

@@ -18,8 +18,8 @@
 //     rays: from there those rays have carved (nearly) the same path to the origin. Rays that cross
 //     at one voxel and part again make a single carved voxel a poor signal: stop_run 1 loses 13 %
 //     of the free voxels, 4 loses 0.8 % (and leaves holes inside rooms that become false
-//     frontiers, tests/mapping/frontier_map_test.cpp), 16 loses 0.04 % with 99.999 % same states
-//     where both know (tests/mapping/octomap_equivalence_test.cpp) at about half the work.
+//     frontiers, tests/mapping/frontier/frontier_map_test.cpp), 16 loses 0.04 % with 99.999 % same states
+//     where both know (tests/mapping/integration/octomap_equivalence_test.cpp) at about half the work.
 //     stop_run 0 marches every ray whole from the origin, like OctoMap's computeRayKeys:
 //     OctoMap's voxel sets (and no coarse clearing, 5.).
 //  4. Points are split into a fixed number of chunks (consecutive points: image bands), each
@@ -37,7 +37,7 @@
 //     they stop sooner (integration: a third fewer instructions, docs/PERFORMANCE.md). Price: grazing rays can give a
 //     surface voxel seen in an earlier frame one extra miss (the bench map: 42264 -> 42220
 //     occupied voxels, 0.1 %); where both maps know a voxel, 99.99 % same state as OctoMap, and
-//     3 % more voxels known free than OctoMap (tests/mapping/octomap_equivalence_test.cpp).
+//     3 % more voxels known free than OctoMap (tests/mapping/integration/octomap_equivalence_test.cpp).
 // Range rule: an endpoint centre farther than max_range_m carves free space to max_range_m along
 // its ray and records no hit (OctoMap's rule). Rays end at the endpoint voxel, exclusive.
 // Units: metres, world frame. Threads: one RayBatch per writer; build() uses OpenMP internally.

@@ -5,7 +5,7 @@
 
 #include "common/error.h"
 #include "pipeline/calibration/rectifier.h"
-#include "pipeline/image/image_io.h"
+#include "io/image/image_io.h"
 
 namespace cenote::pipeline {
 namespace {
@@ -31,8 +31,8 @@ ChessboardCalibration calibrateFromChessboards(const std::vector<std::pair<std::
   std::vector<std::vector<cv::Point2f>> left_points, right_points;
   cv::Size size;
   for (const auto& [left_file, right_file] : pairs) {
-    const cv::Mat left = readImage(left_file, cv::IMREAD_GRAYSCALE);
-    const cv::Mat right = readImage(right_file, cv::IMREAD_GRAYSCALE);
+    const cv::Mat left = io::readImage(left_file, cv::IMREAD_GRAYSCALE);
+    const cv::Mat right = io::readImage(right_file, cv::IMREAD_GRAYSCALE);
     if (size.empty()) size = left.size();
     if (left.size() != size || right.size() != size) {
       throw Error("calibrate: " + (left.size() != size ? left_file : right_file) + " is " +

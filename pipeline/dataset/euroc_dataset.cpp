@@ -7,7 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "common/error.h"
-#include "pipeline/image/image_io.h"
+#include "io/image/image_io.h"
 
 namespace cenote::pipeline {
 namespace fs = std::filesystem;
@@ -89,15 +89,15 @@ StereoFrame EurocDataset::load(size_t index) const {
   const Frame& f = frames_.at(index);
   StereoFrame frame;
   frame.t_s = f.t_s;
-  frame.left = readImage(f.left, cv::IMREAD_UNCHANGED);
-  frame.right = readImage(f.right, cv::IMREAD_UNCHANGED);
+  frame.left = io::readImage(f.left, cv::IMREAD_UNCHANGED);
+  frame.right = io::readImage(f.right, cv::IMREAD_UNCHANGED);
   return frame;
 }
 
 std::optional<TrajectorySource> EurocDataset::defaultTrajectory() const {
   const fs::path gt = fs::path(mav0_) / "state_groundtruth_estimate0" / "data.csv";
   if (!fs::exists(gt)) return std::nullopt;
-  return TrajectorySource{gt.string(), TrajectoryFormat::kEuroc, "", true};
+  return TrajectorySource{gt.string(), io::TrajectoryFormat::kEuroc, "", true};
 }
 
 std::string EurocDataset::describe() const {

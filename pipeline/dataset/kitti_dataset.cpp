@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "common/error.h"
-#include "pipeline/image/image_io.h"
+#include "io/image/image_io.h"
 
 namespace cenote::pipeline {
 namespace fs = std::filesystem;
@@ -58,7 +58,7 @@ KittiDataset::KittiDataset(const std::string& sequence_dir) : dir_(sequence_dir)
   }
   const std::string calib = (dir / "calib.txt").string();
   if (!fs::exists(calib)) throw Error("KITTI " + sequence_dir + ": missing calib.txt");
-  const cv::Mat first = readImage((fs::path(left_dir_) / (frameStem(0) + ".png")).string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat first = io::readImage((fs::path(left_dir_) / (frameStem(0) + ".png")).string(), cv::IMREAD_UNCHANGED);
   const std::string left_key = colour ? "P2" : "P0", right_key = colour ? "P3" : "P1";
   calibration_ = readKittiCalibration(calib, first.size(), left_key, right_key);
   // P_i = K [I | t_i] maps camera-0 points into camera i: the camera sits at -t_i in camera 0.
@@ -74,8 +74,8 @@ std::string KittiDataset::frameName(size_t index) const { return frameStem(index
 StereoFrame KittiDataset::load(size_t index) const {
   StereoFrame frame;
   frame.t_s = times_.at(index);
-  frame.left = readImage((fs::path(left_dir_) / (frameStem(index) + ".png")).string(), cv::IMREAD_UNCHANGED);
-  frame.right = readImage((fs::path(right_dir_) / (frameStem(index) + ".png")).string(), cv::IMREAD_UNCHANGED);
+  frame.left = io::readImage((fs::path(left_dir_) / (frameStem(index) + ".png")).string(), cv::IMREAD_UNCHANGED);
+  frame.right = io::readImage((fs::path(right_dir_) / (frameStem(index) + ".png")).string(), cv::IMREAD_UNCHANGED);
   return frame;
 }
 
@@ -85,7 +85,7 @@ std::optional<TrajectorySource> KittiDataset::defaultTrajectory() const {
   const fs::path seq = dir.filename().empty() ? dir.parent_path().filename() : dir.filename();
   const fs::path poses = dir.parent_path().parent_path() / "poses" / (seq.string() + ".txt");
   if (!fs::exists(poses)) return std::nullopt;
-  return TrajectorySource{poses.string(), TrajectoryFormat::kKitti, (fs::path(dir_) / "times.txt").string(), true};
+  return TrajectorySource{poses.string(), io::TrajectoryFormat::kKitti, (fs::path(dir_) / "times.txt").string(), true};
 }
 
 std::string KittiDataset::describe() const {

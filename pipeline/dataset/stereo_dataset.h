@@ -14,14 +14,14 @@
 
 #include "pipeline/calibration/stereo_calibration.h"
 #include "pipeline/frame/frames.h"
-#include "pipeline/trajectory/trajectory.h"
+#include "io/trajectory/trajectory.h"
 
 namespace cenote::pipeline {
 
 // A trajectory file a dataset ships with, and what it describes.
 struct TrajectorySource {
   std::string path;
-  TrajectoryFormat format = TrajectoryFormat::kTum;
+  io::TrajectoryFormat format = io::TrajectoryFormat::kTum;
   std::string kitti_times;  // KITTI only
   bool describes_body = false;  // true: poses of the body (IMU); false: of the left camera
 };

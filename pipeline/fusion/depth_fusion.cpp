@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "common/error.h"
-#include "pipeline/frame/pose_check.h"
+#include "common/pose_check.h"
 #include "pipeline/fusion/fusion_kernels.h"
 
 namespace cenote::pipeline {

@@ -22,7 +22,7 @@
 #include "pipeline/runner/bounded_queue.h"
 #include "pipeline/runner/run_config.h"
 #include "pipeline/runner/stage_failure.h"
-#include "pipeline/runner/stage_timer.h"
+#include "common/stage_timer.h"
 
 namespace cenote::pipeline {
 

@@ -14,7 +14,7 @@ uint64_t voxelKey(const Eigen::Vector3f& p, double voxel_m) {
 }  // namespace
 
 PointOutput::PointOutput(const std::string& path, double voxel_m)
-    : voxel_m_(voxel_m), writer_(std::make_unique<PlyWriter>(path)) {}
+    : voxel_m_(voxel_m), writer_(std::make_unique<io::PlyWriter>(path)) {}
 
 void PointOutput::append(const PointBatch& batch) {
   if (voxel_m_ <= 0.0) {

@@ -11,7 +11,7 @@
 #include <unordered_map>
 
 #include "common/point_batch.h"
-#include "pipeline/image/ply_io.h"
+#include "io/cloud/ply_io.h"
 
 namespace cenote::pipeline {
 
@@ -30,7 +30,7 @@ class PointOutput {
     std::array<uint8_t, 3> color;
   };
   double voxel_m_;
-  std::unique_ptr<PlyWriter> writer_;
+  std::unique_ptr<io::PlyWriter> writer_;
   std::unordered_map<uint64_t, Voxel> voxels_;
   size_t written_ = 0;
 };

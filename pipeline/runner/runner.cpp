@@ -12,7 +12,7 @@
 
 #include "common/error.h"
 #include "pipeline/calibration/rectifier.h"
-#include "pipeline/image/image_io.h"
+#include "io/image/image_io.h"
 #include "pipeline/runner/frame_pipeline.h"
 #include "pipeline/runner/keyframe_selector.h"
 #include "pipeline/runner/point_output.h"
@@ -51,7 +51,7 @@ Runner::Runner(PipelineConfig config) : config_(std::move(config)) {
   throwIfInvalid(config_.validate(), "pipeline configuration");
 }
 
-RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_trajectory, const std::string& out_dir,
+RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera_trajectory, const std::string& out_dir,
                       const std::atomic<bool>& stop, const PointSink& sink, const ProgressCallback& progress) {
   const RunConfig& rc = config_.run;
   std::error_code ec;
@@ -119,10 +119,10 @@ RunReport Runner::run(const StereoDataset& dataset, const Trajectory& camera_tra
       const auto t0 = Clock::now();
       if (rc.write_depth) {
         const std::string base = (fs::path(out_dir) / "depth" / names.take(item->frame.t_s)).string();
-        writePfm(base + ".depth.pfm", item->frame.depth);
-        writePfm(base + ".conf.pfm", item->frame.confidence);
+        io::writePfm(base + ".depth.pfm", item->frame.depth);
+        io::writePfm(base + ".conf.pfm", item->frame.confidence);
         // The rectified left image beside its maps (JPEG: a tenth of a PNG's encoding time).
-        if (!item->frame.color.empty()) writeImage(base + ".jpg", item->frame.color);
+        if (!item->frame.color.empty()) io::writeImage(base + ".jpg", item->frame.color);
       }
       points.append(item->points);
       output_timer.add(msSince(t0));
@@ -209,13 +209,13 @@ std::string RunReport::toTable() const {
   return t.str();
 }
 
-Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
+io::Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
                             const std::string& trajectory_format, PoseFrame pose_frame) {
   TrajectorySource source;
   if (!trajectory_path.empty()) {
     source.path = trajectory_path;
-    source.format = trajectory_format.empty() ? detectTrajectoryFormat(trajectory_path) : parseTrajectoryFormat(trajectory_format);
-    source.describes_body = source.format == TrajectoryFormat::kEuroc;
+    source.format = trajectory_format.empty() ? io::detectTrajectoryFormat(trajectory_path) : io::parseTrajectoryFormat(trajectory_format);
+    source.describes_body = source.format == io::TrajectoryFormat::kEuroc;
   } else if (const std::optional<TrajectorySource> own = dataset.defaultTrajectory()) {
     source = *own;
   } else {
@@ -223,7 +223,7 @@ Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& tra
   }
   if (pose_frame == PoseFrame::kBody) source.describes_body = true;
   if (pose_frame == PoseFrame::kCamera) source.describes_body = false;
-  const Trajectory trajectory = Trajectory::read(source.path, source.format, source.kitti_times);
+  const io::Trajectory trajectory = io::Trajectory::read(source.path, source.format, source.kitti_times);
   return source.describes_body ? trajectory.transformedBy(dataset.T_body_cam()) : trajectory;
 }
 

@@ -24,8 +24,8 @@
 #include "common/point_batch.h"
 #include "pipeline/dataset/stereo_dataset.h"
 #include "pipeline/runner/run_config.h"
-#include "pipeline/runner/stage_timer.h"
-#include "pipeline/trajectory/trajectory.h"
+#include "common/stage_timer.h"
+#include "io/trajectory/trajectory.h"
 
 namespace cenote::pipeline {
 
@@ -62,7 +62,7 @@ class Runner {
   // @param camera_trajectory poses of the dataset's left (raw) camera, T_world_cam.
   // @param out_dir created if absent.
   // @throws cenote::Error when an output cannot be written (what was written so far stays).
-  RunReport run(const StereoDataset& dataset, const Trajectory& camera_trajectory, const std::string& out_dir,
+  RunReport run(const StereoDataset& dataset, const io::Trajectory& camera_trajectory, const std::string& out_dir,
                 const std::atomic<bool>& stop, const PointSink& sink = {}, const ProgressCallback& progress = {});
 
   const PipelineConfig& config() const { return config_; }
@@ -74,7 +74,7 @@ class Runner {
 // The trajectory of the dataset's left camera: `trajectory_path` (format detected from the file
 // unless given) or the dataset's own; body poses are composed with the dataset's T_body_cam.
 // @throws cenote::Error when there is no trajectory at all or it cannot be read.
-Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
+io::Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
                             const std::string& trajectory_format, PoseFrame pose_frame);
 
 // Peak resident memory of this process in MiB (getrusage).

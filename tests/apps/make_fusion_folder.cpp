@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "pipeline/image/image_io.h"
+#include "io/image/image_io.h"
 #include "tests/support/synthetic_scene.h"
 
 int main(int argc, char** argv) {
@@ -36,9 +36,9 @@ int main(int argc, char** argv) {
     std::snprintf(stamp, sizeof(stamp), "%.6f", 100.0 + 0.5 * i);
     pipeline::DepthFrame frame = test::renderScene(test::boxScene(), camera, poses[i], 100.0 + 0.5 * i);
     const test::NoisyDepth noisy = test::addStereoNoise(frame.depth, noise, 7 + i);
-    pipeline::writePfm((out / "depth" / (std::string(stamp) + ".depth.pfm")).string(), noisy.depth);
-    pipeline::writePfm((out / "depth" / (std::string(stamp) + ".conf.pfm")).string(), noisy.confidence);
-    pipeline::writeImage((out / "color" / (std::string(stamp) + ".png")).string(), frame.color);
+    io::writePfm((out / "depth" / (std::string(stamp) + ".depth.pfm")).string(), noisy.depth);
+    io::writePfm((out / "depth" / (std::string(stamp) + ".conf.pfm")).string(), noisy.confidence);
+    io::writeImage((out / "color" / (std::string(stamp) + ".png")).string(), frame.color);
     const Eigen::Quaterniond q(poses[i].linear());
     const Eigen::Vector3d t = poses[i].translation();
     traj << stamp << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " " << q.y() << " " << q.z()

@@ -84,12 +84,12 @@ TEST_F(SimulatedDive, StreamedFramesAndPosesGiveTheSameMapAsCenoteRun) {
   ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", config_, "--calibration", dir_ + "/dive"}});
   Stubs stubs(server.target());
   const auto dataset = pipeline::openDataset(dir_ + "/dive");
-  const pipeline::Trajectory trajectory = pipeline::cameraTrajectory(*dataset, "", "", pipeline::PoseFrame::kAuto);
+  const io::Trajectory trajectory = pipeline::cameraTrajectory(*dataset, "", "", pipeline::PoseFrame::kAuto);
 
   {  // Poses first, at the ground-truth rate, as a VIO would send them.
     auto context = contextWithDeadline();
     auto poses = stubs.ingest->StreamPoses(context.get());
-    for (const pipeline::StampedPose& p : trajectory.poses()) {
+    for (const io::StampedPose& p : trajectory.poses()) {
       v1::PoseStamped pose;
       pose.set_timestamp_s(p.t_s);
       toWire(p.T_world_cam, pose.mutable_pose());

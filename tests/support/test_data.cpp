@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
-#include "pipeline/image/image_io.h"
+#include "io/image/image_io.h"
 
 namespace cenote::test {
 namespace fs = std::filesystem;
@@ -92,7 +92,7 @@ std::optional<StereoPairWithTruth> loadMotorcycle() {
   p.name = "Motorcycle";
   p.left = cv::imread(dir + "motorcycle_left.png", cv::IMREAD_COLOR);
   p.right = cv::imread(dir + "motorcycle_right.png", cv::IMREAD_COLOR);
-  p.truth = pipeline::readPfm(dir + "motorcycle_disp.pfm");
+  p.truth = io::readPfm(dir + "motorcycle_disp.pfm");
   for (int y = 0; y < p.truth.rows; ++y) {
     for (int x = 0; x < p.truth.cols; ++x) {
       float& d = p.truth.at<float>(y, x);

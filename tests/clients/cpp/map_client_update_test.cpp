@@ -261,7 +261,7 @@ TEST(MapClientUpdates, AdminEditsAndSnapshots) {
     map.snapshot("../escape.vdb");
     ADD_FAILURE() << "a snapshot path with .. was accepted";
   } catch (const RpcError& e) {
-    // server/snapshotter.h: a path outside the snapshot directory is refused.
+    // server/host/snapshotter.h: a path outside the snapshot directory is refused.
     EXPECT_EQ(e.code(), grpc::StatusCode::PERMISSION_DENIED) << e.what();
   }
 

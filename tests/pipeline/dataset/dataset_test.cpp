@@ -42,13 +42,13 @@ TEST(EurocDataset, CameraTrajectoryComposesBodyPosesWithTheExtrinsics) {
   test::PlaneSequence s;
   test::writeEurocPlaneSequence(dir, s);
   const auto dataset = openDataset(dir);
-  const Trajectory camera = cameraTrajectory(*dataset, "", "", PoseFrame::kAuto);
+  const io::Trajectory camera = cameraTrajectory(*dataset, "", "", PoseFrame::kAuto);
   // Frame 4 at t = 100 + 4/15 s: the camera is at 0.15 m/s * 4/15 s = 0.04 m.
   const auto pose = camera.poseAt(dataset->timestamp(4), 0.1);
   ASSERT_TRUE(pose);
   EXPECT_NEAR(pose->translation().x(), 0.04, 1e-9);
   // Forcing "camera" skips the extrinsics: the body's own position comes out.
-  const Trajectory as_camera = cameraTrajectory(*dataset, "", "", PoseFrame::kCamera);
+  const io::Trajectory as_camera = cameraTrajectory(*dataset, "", "", PoseFrame::kCamera);
   EXPECT_NEAR(as_camera.poseAt(dataset->timestamp(4), 0.1)->translation().x(), 0.04 - 0.05, 1e-9);
 }
 
@@ -110,7 +110,7 @@ TEST(KittiDataset, ReadsSequenceCalibrationTimesAndGroundTruth) {
   EXPECT_NEAR(dataset->T_body_cam().translation().norm(), 0.0, 1e-12);  // grey camera 0 is the reference
   const auto gt = dataset->defaultTrajectory();
   ASSERT_TRUE(gt);
-  const Trajectory camera = cameraTrajectory(*dataset, "", "", PoseFrame::kAuto);
+  const io::Trajectory camera = cameraTrajectory(*dataset, "", "", PoseFrame::kAuto);
   EXPECT_NEAR(camera.poseAt(dataset->timestamp(2), 0.2)->translation().x(), 0.02, 1e-6);
 }
 

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
-#include "pipeline/image/ply_io.h"
+#include "io/cloud/ply_io.h"
 #include "pipeline/runner/bounded_queue.h"
 #include "tests/support/plane_sequence.h"
 
@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 struct Fixture {
   std::string dataset_dir, out_dir;
   std::unique_ptr<StereoDataset> dataset;
-  Trajectory trajectory;
+  io::Trajectory trajectory;
 };
 
 Fixture makeFixture(const std::string& name, const test::PlaneSequence& s = {}) {
@@ -55,7 +55,7 @@ TEST(Runner, FusedPointsLieOnThePlaneAndEveryFrameIsCounted) {
   EXPECT_EQ(r.frames_processed, 9u);
   EXPECT_EQ(r.frames_fused, 7u);  // a window of 3 emits from the third frame on
   EXPECT_EQ(r.skipped_no_pose + r.skipped_not_keyframe + r.skipped_unreadable, 0u);
-  const PlyPoints cloud = readPly(f.out_dir + "/points.ply");
+  const io::PlyPoints cloud = io::readPly(f.out_dir + "/points.ply");
   ASSERT_GT(cloud.points.size(), 7u * 160 * 120 / 2) << "at least half the pixels fused";
   EXPECT_EQ(cloud.points.size(), r.points_written);
   EXPECT_EQ(sunk, r.points_written);
@@ -68,10 +68,10 @@ TEST(Runner, FusedPointsLieOnThePlaneAndEveryFrameIsCounted) {
 TEST(Runner, FramesWithoutPoseAreSkippedAndCountedNeverGuessed) {
   Fixture f = makeFixture("runner_no_pose");
   // Keep only the poses before frame 4.
-  std::vector<StampedPose> early;
-  for (const StampedPose& p : f.trajectory.poses())
+  std::vector<io::StampedPose> early;
+  for (const io::StampedPose& p : f.trajectory.poses())
     if (p.t_s < f.dataset->timestamp(4) - 0.02) early.push_back(p);
-  const Trajectory partial(early, "partial");
+  const io::Trajectory partial(early, "partial");
   const std::atomic<bool> stop{false};
   const RunReport r = Runner(smallConfig()).run(*f.dataset, partial, f.out_dir, stop);
   EXPECT_EQ(r.skipped_no_pose, 5u);
@@ -135,8 +135,8 @@ TEST(Runner, VoxelDownsamplingKeepsExactlyOnePointPerOccupiedVoxel) {
     return std::make_tuple(std::floor(p.x() / 0.05), std::floor(p.y() / 0.05), std::floor(p.z() / 0.05));
   };
   std::set<std::tuple<float, float, float>> occupied, kept;
-  for (const auto& p : readPly(f.out_dir + "_all/points.ply").points) occupied.insert(key(p));
-  for (const auto& p : readPly(f.out_dir + "/points.ply").points) kept.insert(key(p));
+  for (const auto& p : io::readPly(f.out_dir + "_all/points.ply").points) occupied.insert(key(p));
+  for (const auto& p : io::readPly(f.out_dir + "/points.ply").points) kept.insert(key(p));
   EXPECT_EQ(r.points_written, occupied.size());
   EXPECT_EQ(kept.size(), r.points_written) << "two points in one voxel";
   EXPECT_EQ(kept, occupied);

@@ -9,10 +9,10 @@
 #include "eval/cloud/cloud_metrics.h"
 #include "eval/cloud/voxel_downsample.h"
 #include "pipeline/fusion/back_projection.h"
-#include "pipeline/image/image_io.h"
-#include "pipeline/image/ply_io.h"
+#include "io/image/image_io.h"
+#include "io/cloud/ply_io.h"
 #include "pipeline/runner/runner.h"
-#include "pipeline/sim/sim_dataset.h"
+#include "sim/sim_dataset.h"
 
 namespace cenote::pipeline {
 namespace {
@@ -21,11 +21,11 @@ namespace fs = std::filesystem;
 TEST(SimulatedCave, FusedPointsMatchTheSeenSurfaceWithin5cm) {
   const std::string dir = testing::TempDir() + "/sim_cave_30";
   fs::remove_all(dir);
-  SimConfig sim_config;
-  sim_config.scene = SimSceneKind::kCave;
+  sim::SimConfig sim_config;
+  sim_config.scene = sim::SimSceneKind::kCave;
   sim_config.num_frames = 30;
-  const Simulator sim(sim_config);
-  writeSimDataset(sim, dir + "/data");
+  const sim::Simulator simulator(sim_config);
+  sim::writeSimDataset(simulator, dir + "/data");
 
   const auto dataset = openDataset(dir + "/data");
   PipelineConfig config = PipelineConfig::load(std::string(CENOTE_SOURCE_DIR) + "/config/default.yaml");
@@ -33,11 +33,11 @@ TEST(SimulatedCave, FusedPointsMatchTheSeenSurfaceWithin5cm) {
   // floor is where one top-down pass (4 paths) fails: 11 % bad-1 there against 3 % with the
   // bottom-up paths (precision 85 % vs 93 % at 5 cm over the dive).
   config.stereo.num_paths = 8;
-  const Trajectory trajectory = cameraTrajectory(*dataset, "", "", config.run.pose_frame);
+  const io::Trajectory trajectory = cameraTrajectory(*dataset, "", "", config.run.pose_frame);
   const std::atomic<bool> stop{false};
   const RunReport report = Runner(config).run(*dataset, trajectory, dir + "/out", stop);
   ASSERT_EQ(report.frames_processed, 30u);
-  const PlyPoints ours = readPly(dir + "/out/points.ply");
+  const io::PlyPoints ours = io::readPly(dir + "/out/points.ply");
 
   // The surface seen by the fused reference frames (all but the first and last with N_f = 3), within
   // the pipeline's working range (fusion.max_depth_m); precision is judged against the surface
@@ -46,12 +46,12 @@ TEST(SimulatedCave, FusedPointsMatchTheSeenSurfaceWithin5cm) {
   std::vector<Eigen::Vector3f> truth, truth_beyond;
   const float max_depth = static_cast<float>(config.fusion.max_depth_m);
   const int half = config.fusion.num_views / 2;
-  for (int i = half; i < sim.numFrames() - half; ++i) {
+  for (int i = half; i < simulator.numFrames() - half; ++i) {
     DepthFrame frame;
-    const cv::Mat depth = readPfm(dir + "/data/groundtruth/depth/" + std::to_string(sim.frameTimeNs(i)) + ".pfm");
-    const PinholeCamera& c = sim.rig().camera;
+    const cv::Mat depth = io::readPfm(dir + "/data/groundtruth/depth/" + std::to_string(simulator.frameTimeNs(i)) + ".pfm");
+    const PinholeCamera& c = simulator.rig().camera;
     frame.K << c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0;
-    frame.T_world_cam = sim.T_world_cam0(sim.frameTimeS(i));
+    frame.T_world_cam = simulator.T_world_cam0(simulator.frameTimeS(i));
     for (const auto& [limit, cloud] : {std::pair{max_depth, &truth}, std::pair{1.25f * max_depth, &truth_beyond}}) {
       frame.depth = depth.clone();
       frame.depth.setTo(std::numeric_limits<float>::infinity(), depth > limit);

@@ -1,0 +1,187 @@
+#include "io/cloud/ply_io.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "common/error.h"
+
+namespace cenote::io {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "PLY writer assumes a little-endian host");
+
+constexpr size_t kBytesPerPoint = 3 * sizeof(float) + 3;
+constexpr std::array<uint8_t, 3> kGrey = {128, 128, 128};
+constexpr size_t kWriteBehindBytes = size_t{8} << 20;
+
+// The header has a fixed size whatever the count: the count is right-aligned in a 20-digit field
+// made of a comment line's padding, so close() can rewrite it in place.
+std::string header(size_t count) {
+  const std::string digits = std::to_string(count);
+  std::string text = "ply\nformat binary_little_endian 1.0\ncomment written by cenote\n";
+  text += "comment " + std::string(20 - digits.size(), '.') + "\n";
+  text += "element vertex " + digits + "\n";
+  text += "property float x\nproperty float y\nproperty float z\n";
+  text += "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
+  return text;
+}
+
+void packPoint(char* dst, const Eigen::Vector3f& p, const std::array<uint8_t, 3>& rgb) {
+  std::memcpy(dst, p.data(), 3 * sizeof(float));
+  std::memcpy(dst + 3 * sizeof(float), rgb.data(), 3);
+}
+
+}  // namespace
+
+PlyWriter::PlyWriter(std::string path) : path_(std::move(path)) {
+  fd_ = ::open((path_ + ".tmp").c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw Error("cannot write " + path_ + ": cannot create file (" + std::strerror(errno) + ")");
+  const std::string text = header(0);
+  try {
+    writeAll(text.data(), text.size());
+  } catch (...) {
+    ::close(fd_);
+    throw;
+  }
+}
+
+PlyWriter::~PlyWriter() {
+  if (closed_) return;
+  if (fd_ >= 0) ::close(fd_);
+  std::error_code ec;
+  std::filesystem::remove(path_ + ".tmp", ec);
+}
+
+void PlyWriter::writeAll(const char* data, size_t size) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd_, data, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw Error("cannot write " + path_ + ": write failed (" + std::strerror(n < 0 ? errno : ENOSPC) + ")");
+    data += n;
+    size -= static_cast<size_t>(n);
+    written_bytes_ += static_cast<size_t>(n);
+  }
+}
+
+void PlyWriter::writeBehind() {
+  if (written_bytes_ - flushed_bytes_ < kWriteBehindBytes) return;
+  // Best effort: a failure here only means the pages stay cached; write errors surface in write().
+  ::sync_file_range(fd_, static_cast<off_t>(flushed_bytes_), static_cast<off_t>(written_bytes_ - flushed_bytes_),
+                    SYNC_FILE_RANGE_WRITE);
+  if (flushed_bytes_ > dropped_bytes_) {
+    const auto start = static_cast<off_t>(dropped_bytes_), length = static_cast<off_t>(flushed_bytes_ - dropped_bytes_);
+    ::sync_file_range(fd_, start, length,
+                      SYNC_FILE_RANGE_WAIT_BEFORE | SYNC_FILE_RANGE_WRITE | SYNC_FILE_RANGE_WAIT_AFTER);
+    ::posix_fadvise(fd_, start, length, POSIX_FADV_DONTNEED);
+    dropped_bytes_ = flushed_bytes_;
+  }
+  flushed_bytes_ = written_bytes_;
+}
+
+void PlyWriter::append(const PointBatch& batch) {
+  if (batch.hasColor() && batch.colors.size() != batch.points.size()) {
+    throw Error("PLY " + path_ + ": batch has " + std::to_string(batch.points.size()) + " points but " +
+                std::to_string(batch.colors.size()) + " colours");
+  }
+  buffer_.resize(batch.size() * kBytesPerPoint);
+  for (size_t i = 0; i < batch.size(); ++i) {
+    packPoint(buffer_.data() + i * kBytesPerPoint, batch.points[i], batch.hasColor() ? batch.colors[i] : kGrey);
+  }
+  writeAll(buffer_.data(), buffer_.size());
+  count_ += batch.size();
+  writeBehind();
+}
+
+void PlyWriter::close() {
+  if (closed_) return;
+  const std::string text = header(count_);
+  const bool header_written = ::pwrite(fd_, text.data(), text.size(), 0) == static_cast<ssize_t>(text.size());
+  const int header_errno = errno;
+  const bool closed = ::close(fd_) == 0;
+  fd_ = -1;
+  if (!header_written || !closed) {
+    throw Error("cannot write " + path_ + ": write failed (" + std::strerror(header_written ? errno : header_errno) + ")");
+  }
+  std::error_code ec;
+  std::filesystem::rename(path_ + ".tmp", path_, ec);
+  if (ec) throw Error("cannot write " + path_ + ": " + ec.message());
+  closed_ = true;
+}
+
+void writePly(const std::string& path, const std::vector<Eigen::Vector3f>& points,
+              const std::vector<std::array<uint8_t, 3>>& colors) {
+  PointBatch batch;
+  batch.points = points;
+  batch.colors = colors;
+  if (!colors.empty() && colors.size() != points.size()) {
+    throw Error("writePly " + path + ": " + std::to_string(points.size()) + " points but " +
+                std::to_string(colors.size()) + " colours");
+  }
+  PlyWriter writer(path);
+  writer.append(batch);
+  writer.close();
+}
+
+PlyPoints readPly(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot read " + path + ": " + (std::filesystem::exists(path) ? "permission denied" : "no such file"));
+  std::string line;
+  std::getline(in, line);
+  if (line != "ply") throw Error(path + ": not a PLY file (first line is not 'ply')");
+  long count = -1;
+  std::vector<std::string> properties;
+  bool binary_le = false;
+  while (std::getline(in, line)) {
+    if (line == "end_header") break;
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "format") {
+      std::string format;
+      words >> format;
+      binary_le = format == "binary_little_endian";
+      if (!binary_le) throw Error(path + ": PLY format '" + format + "' is not supported (binary_little_endian only)");
+    } else if (keyword == "element") {
+      std::string name;
+      words >> name;
+      if (name != "vertex") throw Error(path + ": PLY element '" + name + "' is not supported (vertices only)");
+      words >> count;
+      if (!words || count < 0) throw Error(path + ": PLY vertex count is not a number >= 0");
+    } else if (keyword == "property") {
+      std::string type, name;
+      words >> type >> name;
+      properties.push_back(type + " " + name);
+    } else if (keyword != "comment" && keyword != "obj_info") {
+      throw Error(path + ": unexpected PLY header line '" + line + "'");
+    }
+  }
+  if (line != "end_header") throw Error(path + ": PLY header has no end_header");
+  const std::vector<std::string> expected = {"float x",     "float y",       "float z",
+                                             "uchar red",   "uchar green",   "uchar blue"};
+  if (!binary_le || count < 0 || properties != expected) {
+    throw Error(path + ": PLY layout is not 'float x y z, uchar red green blue' binary little-endian vertices");
+  }
+  PlyPoints result;
+  result.points.resize(count);
+  result.colors.resize(count);
+  std::vector<char> buffer(static_cast<size_t>(count) * kBytesPerPoint);
+  in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+  if (in.gcount() != static_cast<std::streamsize>(buffer.size())) {
+    throw Error(path + ": PLY file is truncated (" + std::to_string(count) + " vertices announced)");
+  }
+  for (long i = 0; i < count; ++i) {
+    const char* src = buffer.data() + i * kBytesPerPoint;
+    std::memcpy(result.points[i].data(), src, 3 * sizeof(float));
+    std::memcpy(result.colors[i].data(), src + 3 * sizeof(float), 3);
+  }
+  return result;
+}
+
+}  // namespace cenote::io

@@ -1,0 +1,191 @@
+#include "io/image/image_io.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "common/error.h"
+#include "io/image/png_decoder.h"
+#include "io/image/png_encoder.h"
+
+namespace cenote::io {
+namespace {
+
+constexpr double kMillimetresPerMetre = 1000.0;  // 16-bit depth PNGs store millimetres
+
+std::string temporaryPath(const std::string& path) { return path + ".tmp"; }
+
+void commit(const std::string& tmp, const std::string& path) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw Error("cannot write " + path + ": " + ec.message());
+  }
+}
+
+}  // namespace
+
+void writePfm(const std::string& path, const cv::Mat& image) {
+  if (image.type() != CV_32FC1 && image.type() != CV_32FC3) {
+    throw Error("writePfm " + path + ": image must be CV_32FC1 or CV_32FC3");
+  }
+  const std::string tmp = temporaryPath(path);
+  std::ofstream out(tmp, std::ios::binary);
+  if (!out) throw Error("cannot write " + path + ": cannot create file");
+  const int channels = image.channels();
+  out << (channels == 3 ? "PF" : "Pf") << "\n" << image.cols << " " << image.rows << "\n-1\n";
+  for (int y = image.rows - 1; y >= 0; --y) {
+    out.write(reinterpret_cast<const char*>(image.ptr<float>(y)),
+              static_cast<std::streamsize>(image.cols) * channels * sizeof(float));
+  }
+  out.close();
+  if (!out) throw Error("cannot write " + path + ": write failed (disk full?)");
+  commit(tmp, path);
+}
+
+cv::Mat readPfm(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot read " + path + ": " + (std::filesystem::exists(path) ? "permission denied" : "no such file"));
+  std::string magic;
+  int width = 0, height = 0;
+  double scale = 0.0;
+  in >> magic >> width >> height >> scale;
+  if (!in || (magic != "Pf" && magic != "PF")) throw Error(path + ": not a PFM file (bad header)");
+  if (width <= 0 || height <= 0 || width > 65536 || height > 65536 || scale == 0.0) {
+    throw Error(path + ": PFM header has invalid size or scale");
+  }
+  in.get();  // the single whitespace after the scale
+  const int channels = magic == "PF" ? 3 : 1;
+  cv::Mat image(height, width, channels == 3 ? CV_32FC3 : CV_32FC1);
+  const bool swap = scale > 0.0;  // positive scale = big-endian data
+  for (int y = height - 1; y >= 0; --y) {
+    in.read(reinterpret_cast<char*>(image.ptr<float>(y)),
+            static_cast<std::streamsize>(width) * channels * sizeof(float));
+    if (!in) throw Error(path + ": PFM file is truncated");
+    if (swap) {
+      uint32_t* words = image.ptr<uint32_t>(y);
+      for (int i = 0; i < width * channels; ++i) words[i] = __builtin_bswap32(words[i]);
+    }
+  }
+  return image;
+}
+
+int writeDepthPng16(const std::string& path, const cv::Mat& depth) {
+  if (depth.type() != CV_32FC1) throw Error("writeDepthPng16 " + path + ": depth must be CV_32FC1 (metres)");
+  cv::Mat millimetres(depth.size(), CV_16UC1);
+  int clipped = 0;
+  for (int y = 0; y < depth.rows; ++y) {
+    const float* in = depth.ptr<float>(y);
+    uint16_t* out = millimetres.ptr<uint16_t>(y);
+    for (int x = 0; x < depth.cols; ++x) {
+      const double mm = std::round(in[x] * kMillimetresPerMetre);
+      const bool valid = std::isfinite(in[x]) && in[x] > 0.0f;
+      const bool fits = mm <= std::numeric_limits<uint16_t>::max();
+      clipped += valid && !fits;
+      out[x] = valid && fits ? static_cast<uint16_t>(mm) : 0;
+    }
+  }
+  writeImage(path, millimetres);
+  return clipped;
+}
+
+cv::Mat readDepthPng16(const std::string& path) {
+  const cv::Mat raw = readImage(path, cv::IMREAD_UNCHANGED);
+  if (raw.type() != CV_16UC1) throw Error(path + ": not a 16-bit single-channel depth PNG");
+  cv::Mat depth(raw.size(), CV_32FC1);
+  for (int y = 0; y < raw.rows; ++y) {
+    const uint16_t* in = raw.ptr<uint16_t>(y);
+    float* out = depth.ptr<float>(y);
+    for (int x = 0; x < raw.cols; ++x) {
+      out[x] = in[x] == 0 ? std::numeric_limits<float>::infinity() : static_cast<float>(in[x] / kMillimetresPerMetre);
+    }
+  }
+  return depth;
+}
+
+cv::Mat readImage(const std::string& path, int flags) {
+  if (!std::filesystem::exists(path)) throw Error("cannot read image " + path + ": no such file");
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  std::vector<uint8_t> bytes(in ? static_cast<std::size_t>(in.tellg()) : 0);
+  in.seekg(0);
+  if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()))) {
+    throw Error("cannot read image " + path + ": read failed");
+  }
+  // 8-bit PNGs (what stereo sequences are made of) through libdeflate; everything else, and any
+  // PNG it does not handle, through OpenCV. Both give the same pixels.
+  if (flags == cv::IMREAD_UNCHANGED || flags == cv::IMREAD_COLOR) {
+    cv::Mat fast = decodePngFast(bytes.data(), bytes.size());
+    if (!fast.empty() && (flags == cv::IMREAD_UNCHANGED || fast.channels() == 3)) return fast;
+  }
+  cv::Mat image = bytes.empty() ? cv::Mat() : cv::imdecode(bytes, flags);
+  if (image.empty()) throw Error("cannot read image " + path + ": not a readable image file");
+  return image;
+}
+
+void writeImage(const std::string& path, const cv::Mat& image) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  if (ext.empty()) ext = ".png";
+  std::vector<uint8_t> bytes;
+  // PNGs through our own encoder where it takes the image (a quarter of OpenCV's time), anything
+  // else through OpenCV.
+  const bool png = ext == ".png" || ext == ".PNG";
+  if (png && isPngEncodable(image)) {
+    bytes = encodePng(image);
+  } else {
+    bool ok = false;
+    try {
+      ok = cv::imencode(ext, image, bytes);
+    } catch (const cv::Exception& e) {
+      throw Error("cannot encode " + path + ": " + e.what());
+    }
+    if (!ok) throw Error("cannot encode " + path);
+  }
+  const std::string tmp = temporaryPath(path);
+  std::ofstream out(tmp, std::ios::binary);
+  if (!out) throw Error("cannot write " + path + ": cannot create file");
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.close();
+  if (!out) throw Error("cannot write " + path + ": write failed (disk full?)");
+  commit(tmp, path);
+}
+
+cv::Mat colorizeMap(const cv::Mat& map, double min_value, double max_value) {
+  if (map.type() != CV_32FC1) throw Error("colorizeMap: map must be CV_32FC1");
+  if (min_value >= max_value) {
+    min_value = std::numeric_limits<double>::max();
+    max_value = std::numeric_limits<double>::lowest();
+    for (int y = 0; y < map.rows; ++y) {
+      const float* row = map.ptr<float>(y);
+      for (int x = 0; x < map.cols; ++x) {
+        if (!std::isfinite(row[x])) continue;
+        min_value = std::min<double>(min_value, row[x]);
+        max_value = std::max<double>(max_value, row[x]);
+      }
+    }
+    if (min_value >= max_value) max_value = min_value + 1.0;
+  }
+  cv::Mat scaled(map.size(), CV_8UC1), valid(map.size(), CV_8UC1);
+  const double scale = 255.0 / (max_value - min_value);
+  for (int y = 0; y < map.rows; ++y) {
+    const float* row = map.ptr<float>(y);
+    uint8_t* s = scaled.ptr<uint8_t>(y);
+    uint8_t* v = valid.ptr<uint8_t>(y);
+    for (int x = 0; x < map.cols; ++x) {
+      v[x] = std::isfinite(row[x]) ? 255 : 0;
+      s[x] = v[x] ? cv::saturate_cast<uint8_t>((row[x] - min_value) * scale) : 0;
+    }
+  }
+  cv::Mat colour;
+  cv::applyColorMap(scaled, colour, cv::COLORMAP_TURBO);
+  colour.setTo(cv::Scalar::all(0), valid == 0);
+  return colour;
+}
+
+}  // namespace cenote::io

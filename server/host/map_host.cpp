@@ -1,0 +1,147 @@
+#include "server/host/map_host.h"
+
+#include "server/cpu/cpu_scheduling.h"
+
+namespace cenote::server {
+
+MapHost::MapHost(std::unique_ptr<mapping::OccupancyMap> map, const MapHostOptions& options)
+    : map_(std::move(map)),
+      distance_(std::make_unique<mapping::DistanceField>(*map_)),
+      frontiers_(std::make_unique<mapping::FrontierMap>(*map_)),
+      feed_(options.max_subscriber_lag),
+      options_(options),
+      writer_(options.ingest_nice) {
+  // A loaded map: derive everything once before serving (stats() walks the grid: ask once).
+  const mapping::MapStats loaded = map_->stats();
+  if (loaded.occupied + loaded.free > 0) {
+    distance_->rebuild();
+    frontiers_->rebuild();
+  }
+  derived_thread_ = std::thread([this] { derivedLoop(); });
+}
+
+MapHost::~MapHost() {
+  // Changes still queued reach the map, the feed and the derived structures while they all
+  // exist; then the derived thread stops and subscribers see the feed end.
+  writer_.finish();
+  {
+    std::lock_guard<std::mutex> lock(derived_mutex_);
+    stop_ = true;
+  }
+  derived_cv_.notify_all();
+  derived_thread_.join();
+  feed_.close();
+}
+
+template <typename Change>
+mapping::MapDelta MapHost::change(Change&& apply) {
+  return writer_.run([&] {
+    mapping::MapDelta delta = apply();
+    const uint64_t version = map_->version();
+    {
+      std::lock_guard<std::mutex> lock(derived_mutex_);
+      pending_.merge(delta);
+      ++published_changes_;
+    }
+    derived_cv_.notify_all();
+    feed_.publish(MapChange{version, delta});
+    return delta;
+  });
+}
+
+mapping::MapDelta MapHost::integrate(const PointBatch& batch) {
+  mapping::MapDelta delta = change([&] { return map_->integrate(batch); });
+  std::lock_guard<std::mutex> lock(derived_mutex_);
+  ++batches_;
+  return delta;
+}
+
+mapping::MapDelta MapHost::clearBox(const mapping::Aabb& box_m) {
+  return change([&] { return map_->clearBox(box_m); });
+}
+
+mapping::MapDelta MapHost::clearSphere(const Eigen::Vector3d& centre_m, double radius_m) {
+  return change([&] { return map_->clearSphere(centre_m, radius_m); });
+}
+
+mapping::MapDelta MapHost::cropToRadius(const Eigen::Vector3d& centre_m, double radius_m) {
+  return change([&] { return map_->cropToRadius(centre_m, radius_m); });
+}
+
+mapping::MapDelta MapHost::reset() {
+  return change([&] { return map_->reset(); });
+}
+
+uint64_t MapHost::batchesIntegrated() const {
+  std::lock_guard<std::mutex> lock(derived_mutex_);
+  return batches_;
+}
+
+uint64_t MapHost::derivedUpdates() const {
+  std::lock_guard<std::mutex> lock(derived_mutex_);
+  return derived_updates_;
+}
+
+uint64_t MapHost::changesSeenWhenDerivedIdled() const {
+  std::lock_guard<std::mutex> lock(derived_mutex_);
+  return idle_changes_;
+}
+
+bool MapHost::waitForDerived(std::chrono::system_clock::time_point deadline) const {
+  std::unique_lock<std::mutex> lock(derived_mutex_);
+  last_derived_query_ = Clock::now();
+  const uint64_t target = published_changes_;
+  if (derived_changes_ >= target) return true;
+  ++waiting_queries_;
+  derived_cv_.notify_all();
+  const bool done = derived_cv_.wait_until(lock, deadline, [&] { return derived_changes_ >= target || stop_; });
+  --waiting_queries_;
+  return done;
+}
+
+bool MapHost::followingQueries(Clock::time_point now) const {
+  return last_derived_query_ &&
+         now - *last_derived_query_ <= std::chrono::duration<double>(options_.derived_follow_s);
+}
+
+void MapHost::derivedLoop() {
+  setThreadNice(options_.derived_nice);
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.derived_period_s));
+  Clock::time_point last_update = Clock::now();
+  std::unique_lock<std::mutex> lock(derived_mutex_);
+  while (true) {
+    const auto due = [&] {
+      if (stop_) return true;
+      if (derived_changes_ >= published_changes_) return false;
+      const Clock::time_point now = Clock::now();
+      return waiting_queries_ > 0 || (followingQueries(now) && now >= last_update + period);
+    };
+    // The kind of wait is chosen again at every wake-up: a change that arrives while following
+    // must be picked up when its period ends, not at the next change or query.
+    while (!due()) {
+      if (derived_changes_ < published_changes_ && followingQueries(Clock::now())) {
+        derived_cv_.wait_until(lock, last_update + period);
+      } else {
+        idle_changes_ = published_changes_;
+        derived_cv_.wait(lock);
+      }
+    }
+    if (stop_) return;
+    last_update = Clock::now();
+    mapping::MapDelta delta;
+    std::swap(delta, pending_);
+    const uint64_t changes = published_changes_;
+    lock.unlock();
+    // Deltas merged since the last round are applied at once: one wave over their union.
+    if (!delta.isEmpty()) {
+      distance_->update(delta);
+      frontiers_->update(delta);
+    }
+    lock.lock();
+    derived_changes_ = changes;
+    ++derived_updates_;
+    derived_cv_.notify_all();
+  }
+}
+
+}  // namespace cenote::server

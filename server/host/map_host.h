@@ -1,0 +1,96 @@
+// map_host.h: the map the server serves, the structures derived from it (distance field,
+// frontiers) and the feed of its changes. Every change of the map goes through here, so the
+// derived structures and the subscribers see every MapDelta, in order.
+//
+// Changes run one at a time on the map's writer thread (serial_worker.h), at a lower CPU priority
+// than the gRPC handlers: when the cores are busy, planners' short queries go first.
+// The distance field and the frontiers are brought up to date by a thread of their own, lower
+// still, from the accumulated deltas: at once when a distance or frontier query is waiting, and
+// every `derived_period_s` while the map changes, as long as such a query came within the last
+// `derived_follow_s` (a planner asking every few seconds then finds them nearly current). Ingest
+// never waits for them, and a map nobody asks distances of spends no CPU on them: keeping them
+// current took a third of the server's CPU while ingesting 70k-point frames at 15 Hz (perf,
+// bench/server_bench). A distance or frontier query first waits (up to its deadline) until they
+// include every change made before it arrived: a client reads its own writes.
+// Units: metres, world frame, seconds.
+// Threads: changes from any thread (they queue for the writer thread); queries from any number of
+// threads (the map's own reader locks; see mapping/occupancy_map.h).
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "common/point_batch.h"
+#include "mapping/distance/distance_field.h"
+#include "mapping/frontier/frontier_map.h"
+#include "mapping/occupancy_map.h"
+#include "server/host/change_feed.h"
+#include "server/host/map_host_options.h"
+#include "server/host/serial_worker.h"
+
+namespace cenote::server {
+
+class MapHost {
+ public:
+  MapHost(std::unique_ptr<mapping::OccupancyMap> map, const MapHostOptions& options);
+  ~MapHost();
+  MapHost(const MapHost&) = delete;
+  MapHost& operator=(const MapHost&) = delete;
+
+  const mapping::OccupancyMap& map() const { return *map_; }
+  ChangeFeed& feed() { return feed_; }
+
+  // @throws cenote::Error for a bad batch (the map is then unchanged).
+  mapping::MapDelta integrate(const PointBatch& batch);
+  mapping::MapDelta clearBox(const mapping::Aabb& box_m);
+  mapping::MapDelta clearSphere(const Eigen::Vector3d& centre_m, double radius_m);
+  mapping::MapDelta cropToRadius(const Eigen::Vector3d& centre_m, double radius_m);
+  mapping::MapDelta reset();
+  uint64_t batchesIntegrated() const;
+
+  // Waits until the distance field and frontiers include every change made so far.
+  // @return false when `deadline` came first.
+  bool waitForDerived(std::chrono::system_clock::time_point deadline) const;
+  const mapping::DistanceField& distanceField() const { return *distance_; }
+  // Rounds of distance field and frontier updates done so far (each covers all changes pending).
+  uint64_t derivedUpdates() const;
+  const mapping::FrontierMap& frontiers() const { return *frontiers_; }
+  // For tests, which cannot otherwise see a decision not to update: the number of changes made
+  // when the derived thread last went to sleep with no time limit (until the next change, query or
+  // the end), i.e. decided that those not yet derived wait for a query. 0 until it first does.
+  uint64_t changesSeenWhenDerivedIdled() const;
+
+ private:
+  template <typename Change>
+  mapping::MapDelta change(Change&& apply);
+  void derivedLoop();
+
+  std::unique_ptr<mapping::OccupancyMap> map_;
+  std::unique_ptr<mapping::DistanceField> distance_;
+  std::unique_ptr<mapping::FrontierMap> frontiers_;
+  ChangeFeed feed_;
+
+  const MapHostOptions options_;
+  mutable std::mutex derived_mutex_;
+  mutable std::condition_variable derived_cv_;
+  mapping::MapDelta pending_;        // changes not yet in the derived structures
+  uint64_t published_changes_ = 0;   // changes made
+  uint64_t derived_changes_ = 0;     // changes the derived structures include
+  uint64_t derived_updates_ = 0;     // rounds of derived updates
+  uint64_t idle_changes_ = 0;        // published_changes_ at the derived thread's last untimed wait
+  uint64_t batches_ = 0;
+  using Clock = std::chrono::steady_clock;
+  bool followingQueries(Clock::time_point now) const;
+
+  mutable int waiting_queries_ = 0;  // distance / frontier queries waiting for the derived structures
+  mutable std::optional<Clock::time_point> last_derived_query_;  // the latest such query's arrival
+  bool stop_ = false;
+  std::thread derived_thread_;
+  SerialWorker writer_;  // ~MapHost finishes its queued changes first
+};
+
+}  // namespace cenote::server

@@ -1,0 +1,115 @@
+#include "server/host/snapshotter.h"
+
+#include "common/error.h"
+#include "mapping/io/map_io.h"
+#include "server/wire/status_error.h"
+
+namespace cenote::server {
+namespace fs = std::filesystem;
+
+v1::SnapshotFormat snapshotFormatOf(const std::string& path) {
+  auto endsWith = [&](const std::string& suffix) {
+    return path.size() >= suffix.size() && path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
+  };
+  if (endsWith(".vdb")) return v1::SNAPSHOT_FORMAT_VDB;
+  if (endsWith(".bt")) return v1::SNAPSHOT_FORMAT_BT;
+  if (endsWith(".ot")) return v1::SNAPSHOT_FORMAT_OT;
+  if (endsWith(".mesh.ply") || endsWith("_mesh.ply")) return v1::SNAPSHOT_FORMAT_MESH_PLY;
+  if (endsWith(".ply")) return v1::SNAPSHOT_FORMAT_POINTS_PLY;
+  return v1::SNAPSHOT_FORMAT_UNSPECIFIED;
+}
+
+Snapshotter::Snapshotter(const MapHost& host, std::string directory, std::string frame_id, double period_s)
+    : host_(host), directory_(fs::absolute(directory)), frame_id_(std::move(frame_id)), period_s_(period_s) {
+  std::error_code ec;
+  fs::create_directories(directory_, ec);
+  if (ec) throw Error("snapshot directory " + directory_.string() + " cannot be created: " + ec.message());
+  if (period_s_ > 0.0) thread_ = std::thread([this] { periodicLoop(); });
+}
+
+Snapshotter::~Snapshotter() { stop(); }
+
+void Snapshotter::stop() {
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+fs::path Snapshotter::write(const std::string& relative_path, v1::SnapshotFormat format) {
+  const fs::path relative(relative_path);
+  if (relative_path.empty()) throw invalidArgument("path: empty; give a file name such as map.vdb");
+  if (relative.is_absolute()) {
+    throw StatusError(grpc::StatusCode::PERMISSION_DENIED,
+                      "path " + relative_path + " is absolute; snapshots are written under the server's snapshot directory");
+  }
+  for (const fs::path& part : relative) {
+    if (part == "..") {
+      throw StatusError(grpc::StatusCode::PERMISSION_DENIED, "path " + relative_path + " leaves the snapshot directory");
+    }
+  }
+  if (format == v1::SNAPSHOT_FORMAT_UNSPECIFIED) format = snapshotFormatOf(relative_path);
+  if (format == v1::SNAPSHOT_FORMAT_UNSPECIFIED) {
+    throw invalidArgument("path " + relative_path + ": no format given and the extension is none of .vdb .bt .ot .ply");
+  }
+  const fs::path target = directory_ / relative;
+  std::error_code ec;
+  fs::create_directories(target.parent_path(), ec);
+  writeTo(target, format);
+  return target;
+}
+
+void Snapshotter::writeTo(const fs::path& path, v1::SnapshotFormat format) {
+  std::lock_guard<std::mutex> lock(write_mutex_);
+  const mapping::OccupancyMap& map = host_.map();
+  const std::string extension = format == v1::SNAPSHOT_FORMAT_VDB ? ".vdb" : format == v1::SNAPSHOT_FORMAT_BT ? ".bt" : ".ot";
+  switch (format) {
+    case v1::SNAPSHOT_FORMAT_VDB:
+    case v1::SNAPSHOT_FORMAT_BT:
+    case v1::SNAPSHOT_FORMAT_OT:
+      if (snapshotFormatOf(path.string()) != format) {
+        throw invalidArgument("path " + path.filename().string() + " does not end in " + extension + " for this format");
+      }
+      mapping::saveMap(map, path.string(), frame_id_);
+      break;
+    case v1::SNAPSHOT_FORMAT_MESH_PLY: mapping::exportMeshPly(map, path.string()); break;
+    case v1::SNAPSHOT_FORMAT_POINTS_PLY: mapping::exportOccupiedPointsPly(map, path.string()); break;
+    default: throw invalidArgument("format " + std::to_string(static_cast<int>(format)) + " is not a snapshot format");
+  }
+}
+
+void Snapshotter::writeLatest() {
+  const uint64_t version = host_.map().version();
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    if (saved_version_ && *saved_version_ == version) return;
+  }
+  writeTo(directory_ / "map.vdb", v1::SNAPSHOT_FORMAT_VDB);
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  saved_version_ = version;
+  saved_at_ = std::chrono::steady_clock::now();
+}
+
+std::optional<double> Snapshotter::lastSnapshotAge() const {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  if (!saved_at_) return std::nullopt;
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - *saved_at_).count();
+}
+
+void Snapshotter::periodicLoop() {
+  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(period_s_));
+  std::unique_lock<std::mutex> lock(state_mutex_);
+  while (!wake_.wait_for(lock, period, [&] { return stop_; })) {
+    lock.unlock();
+    try {
+      writeLatest();
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "cenote-server: periodic snapshot failed: %s\n", e.what());
+    }
+    lock.lock();
+  }
+}
+
+}  // namespace cenote::server

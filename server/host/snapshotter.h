@@ -1,0 +1,60 @@
+// snapshotter.h: writes the map to disk, atomically (mapping/io/map_io.h writes a temporary file
+// and renames it), on request, every period while the map changes, and on shutdown. After a crash
+// (kill -9) the last complete snapshot is there to `--load`.
+// Paths asked for over the wire are relative to the snapshot directory; absolute paths and ".."
+// are refused (PERMISSION_DENIED): a client never writes elsewhere on the vehicle.
+// Threads: any; writes serialise on one mutex (readers of the map are not blocked, see map_io.h).
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "cenote/v1/admin.pb.h"
+#include "server/host/map_host.h"
+
+namespace cenote::server {
+
+class Snapshotter {
+ public:
+  // @throws cenote::Error when the directory cannot be created.
+  Snapshotter(const MapHost& host, std::string directory, std::string frame_id, double period_s);
+  ~Snapshotter();
+
+  // Writes `relative_path` (format from `format`, or from the extension when unspecified) under the
+  // snapshot directory. @return the absolute path. @throws StatusError for a refused path or format.
+  std::filesystem::path write(const std::string& relative_path, v1::SnapshotFormat format);
+  // Writes to an absolute path chosen by the server (downloads, the periodic snapshot).
+  void writeTo(const std::filesystem::path& path, v1::SnapshotFormat format);
+  // The periodic / shutdown snapshot: <directory>/map.vdb, when the map changed since the last one.
+  void writeLatest();
+  // Stops the periodic thread.
+  void stop();
+  // Seconds since the last snapshot; nullopt when none has been written.
+  std::optional<double> lastSnapshotAge() const;
+  const std::filesystem::path& directory() const { return directory_; }
+
+ private:
+  void periodicLoop();
+
+  const MapHost& host_;
+  const std::filesystem::path directory_;
+  const std::string frame_id_;
+  const double period_s_;
+  std::mutex write_mutex_;
+  mutable std::mutex state_mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;
+  std::optional<uint64_t> saved_version_;
+  std::optional<std::chrono::steady_clock::time_point> saved_at_;
+  std::thread thread_;
+};
+
+// The format a path's extension names (.vdb .bt .ot .mesh.ply / _mesh.ply .ply); UNSPECIFIED when none.
+v1::SnapshotFormat snapshotFormatOf(const std::string& path);
+
+}  // namespace cenote::server

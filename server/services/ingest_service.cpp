@@ -1,0 +1,282 @@
+#include "server/services/ingest_service.h"
+
+#include <cmath>
+#include <thread>
+
+#include "pipeline/runner/frame_pipeline.h"
+#include "pipeline/runner/keyframe_selector.h"
+#include "server/cpu/cpu_scheduling.h"
+#include "server/wire/frame_decoder.h"
+#include "server/wire/wire.h"
+
+namespace cenote::server {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Holds one of the server's frame-stream slots for the life of a call.
+class StreamSlot {
+ public:
+  StreamSlot(std::atomic<int>& active, int max) : active_(active) {
+    if (++active_ > max) {
+      --active_;
+      throw resourceExhausted("already " + std::to_string(max) +
+                              " frame streams running: the limit server.max_frame_streams");
+    }
+  }
+  ~StreamSlot() { --active_; }
+
+ private:
+  std::atomic<int>& active_;
+};
+
+// Reads every item of a bidirectional stream and writes its acknowledgement, numbered from 0, in
+// order. handle(item, ack) fills the ack; false ends the stream after writing it.
+template <typename Ack, typename Item, typename Handle>
+void acknowledgeEach(grpc::ServerReaderWriter<Ack, Item>* stream, Handle&& handle) {
+  Item item;
+  for (uint64_t sequence = 0; stream->Read(&item); ++sequence) {
+    Ack ack;
+    ack.set_sequence(sequence);
+    const bool go_on = handle(item, ack);
+    stream->Write(ack);
+    if (!go_on) break;
+  }
+}
+
+template <typename Ack>
+void reject(Ack& ack, const StatusError& e) {
+  ack.set_status_code(static_cast<int32_t>(e.code()));
+  ack.set_message(e.what());
+}
+
+// One StreamFrames call: its pipeline, the thread that integrates what comes out, its keyframes.
+class FrameStream {
+ public:
+  FrameStream(MapHost& host, const ServerSettings& settings, const pipeline::Rectifier& rectifier, PoseBuffer& poses,
+              IngestCounters& counters, IngestTimings& timings)
+      : host_(host),
+        settings_(settings),
+        rectifier_(rectifier),
+        T_raw_rect_(pipeline::rectifiedFromRaw(rectifier)),
+        poses_(poses),
+        counters_(counters),
+        timings_(timings),
+        keyframes_(settings.pipeline.run),
+        // Stereo, fusion and handing their points to the map run below the query handlers' CPU
+        // priority, as integration does (cpu_scheduling.h).
+        stages_(settings.pipeline, false, [nice = settings.server.host.ingest_nice] { setThreadNice(nice); }),
+        integrator_([this] {
+          setThreadNice(settings_.server.host.ingest_nice);
+          integrateOutputs();
+        }) {}
+
+  ~FrameStream() {
+    stages_.abort();
+    if (integrator_.joinable()) integrator_.join();
+  }
+
+  // Runs one frame up to the pipeline's input. Fills the ack; false when the pipeline has failed.
+  bool handle(const v1::StereoFrame& wire, v1::FrameAck& ack) {
+    ack.set_timestamp_s(wire.timestamp_s());
+    ++counters_.frames_received;
+    try {
+      if (!std::isfinite(wire.timestamp_s()) || !(wire.timestamp_s() > last_t_s_)) {
+        throw invalidArgument("timestamp_s = " + std::to_string(wire.timestamp_s()) +
+                              " is not after the previous frame's (" + std::to_string(last_t_s_) +
+                              "): frames must come in time order");
+      }
+      last_t_s_ = wire.timestamp_s();  // rejected or not, the next frame must come later
+      std::optional<Eigen::Isometry3d> T_world_raw;
+      if (wire.has_pose()) T_world_raw = finitePose(wire.pose(), "pose");
+      const auto decode_start = Clock::now();
+      pipeline::StereoFrame raw = decodeStereoFrame(wire, settings_.server.limits.max_image_pixels);
+      const double decode_ms = msSince(decode_start);
+      if (!T_world_raw) {
+        const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                 std::chrono::duration<double>(settings_.server.pose_wait_s));
+        T_world_raw = poses_.poseAt(raw.t_s, settings_.pipeline.run.pose_max_gap_s, deadline);
+      }
+      if (!T_world_raw) {
+        skip(ack, v1::FRAME_OUTCOME_SKIPPED_NO_POSE, "no pose of its own and no two streamed poses bracket it within " +
+                                                         std::to_string(settings_.pipeline.run.pose_max_gap_s) + " s");
+        return true;
+      }
+      if (!keyframes_.accept(*T_world_raw)) {
+        skip(ack, v1::FRAME_OUTCOME_SKIPPED_NOT_KEYFRAME, "moved less than the keyframe thresholds");
+        return true;
+      }
+      const auto t0 = Clock::now();
+      pipeline::PosedPair item;
+      try {
+        item.pair = rectifier_.rectify(raw);
+      } catch (const Error& e) {
+        throw invalidArgument(e.what());
+      }
+      item.T_world_cam = *T_world_raw * T_raw_rect_;
+      timings_.add("decode_rectify", decode_ms + msSince(t0));
+      if (!stages_.push(std::move(item))) return false;
+      ack.set_outcome(v1::FRAME_OUTCOME_PROCESSED);
+      ++counters_.frames_processed;
+    } catch (const StatusError& e) {
+      ack.set_outcome(v1::FRAME_OUTCOME_REJECTED);
+      reject(ack, e);
+      ++counters_.frames_rejected;
+    }
+    return true;
+  }
+
+  // The client closed its side: drain the pipeline into the map.
+  grpc::Status finish() {
+    stages_.close();
+    integrator_.join();
+    timings_.set("stereo", stages_.stereoTiming());
+    timings_.set("fusion", stages_.fusionTiming());
+    if (stages_.failed()) {
+      try {
+        stages_.rethrowIfFailed();
+      } catch (const std::exception& e) {
+        return grpc::Status(grpc::StatusCode::INTERNAL, std::string("pipeline failed: ") + e.what());
+      }
+    }
+    if (!integrate_error_.empty()) return grpc::Status(grpc::StatusCode::INTERNAL, integrate_error_);
+    return grpc::Status::OK;
+  }
+
+ private:
+  void skip(v1::FrameAck& ack, v1::FrameOutcome outcome, const std::string& why) {
+    ack.set_outcome(outcome);
+    ack.set_message(why);
+    ++counters_.frames_skipped;
+  }
+
+  void integrateOutputs() {
+    while (std::optional<pipeline::FusedOutput> out = stages_.pop()) {
+      if (out->points.empty()) continue;
+      try {
+        const auto t0 = Clock::now();
+        host_.integrate(out->points);
+        timings_.add("integrate", msSince(t0));
+      } catch (const std::exception& e) {
+        integrate_error_ = std::string("integration failed: ") + e.what();
+        stages_.abort();
+      }
+    }
+  }
+
+  MapHost& host_;
+  const ServerSettings& settings_;
+  const pipeline::Rectifier& rectifier_;
+  const Eigen::Isometry3d T_raw_rect_;
+  PoseBuffer& poses_;
+  IngestCounters& counters_;
+  IngestTimings& timings_;
+  pipeline::KeyframeSelector keyframes_;
+  double last_t_s_ = -std::numeric_limits<double>::infinity();
+  std::string integrate_error_;
+  pipeline::FramePipeline stages_;
+  std::thread integrator_;
+};
+
+}  // namespace
+
+IngestService::IngestService(MapHost& host, CallGuard& guard, const ServerSettings& settings,
+                             std::shared_ptr<const pipeline::Rectifier> rectifier, const CpuPlacement& cpus)
+    : host_(host),
+      guard_(guard),
+      cpus_(cpus),
+      settings_(settings),
+      rectifier_(std::move(rectifier)),
+      poses_(settings.server.pose_history_s) {}
+
+grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
+                                         grpc::ServerReaderWriter<v1::FrameAck, v1::StereoFrame>* stream) {
+  return guard_.run(context, "Ingest/StreamFrames", [&] {
+    if (!rectifier_) {
+      throw StatusError(grpc::StatusCode::FAILED_PRECONDITION,
+                        "the server has no stereo calibration: start cenote-server with --calibration");
+    }
+    StreamSlot slot(frame_streams_, settings_.server.max_frame_streams);
+    // Decoding, rectification and the pipeline's threads (started by FrameStream) are bulk work.
+    CpuScope bulk(cpus_, CpuScope::Side::kBulk);
+    FrameStream frames(host_, settings_, *rectifier_, poses_, counters_, timings_);
+    acknowledgeEach(stream, [&](const v1::StereoFrame& wire, v1::FrameAck& ack) {
+      const bool running = frames.handle(wire, ack);
+      ack.set_map_version(host_.map().version());
+      return running;
+    });
+    return frames.finish();
+  });
+}
+
+grpc::Status IngestService::StreamPoses(grpc::ServerContext* context,
+                                        grpc::ServerReaderWriter<v1::PoseAck, v1::PoseStamped>* stream) {
+  return guard_.run(context, "Ingest/StreamPoses", [&] {
+    acknowledgeEach(stream, [&](const v1::PoseStamped& wire, v1::PoseAck& ack) {
+      ack.set_timestamp_s(wire.timestamp_s());
+      try {
+        if (!std::isfinite(wire.timestamp_s())) throw invalidArgument("timestamp_s is not finite");
+        poses_.add({wire.timestamp_s(), finitePose(wire.pose(), "pose")});
+      } catch (const StatusError& e) {
+        reject(ack, e);
+      }
+      return true;
+    });
+    return grpc::Status::OK;
+  });
+}
+
+void IngestService::integrateBatch(const v1::PointBatch& wire, v1::BatchAck& ack) {
+  ack.set_timestamp_s(wire.timestamp_s());
+  PointBatch batch;
+  batch.t_s = wire.timestamp_s();
+  batch.origin = finitePoint(wire.origin(), "origin");
+  const int64_t limit = settings_.server.limits.max_points_per_batch;
+  const std::string limit_name = "server.limits.max_points_per_batch";
+  if (!wire.xyz().empty() && !wire.xyz_f32().empty()) {
+    throw invalidArgument("xyz and xyz_f32 are both set: send the points in one of them");
+  }
+  batch.points = wire.xyz_f32().empty() ? pointsFromWire<float>(wire.xyz(), "xyz", limit, limit_name)
+                                        : pointsFromWire<float>(wire.xyz_f32(), "xyz_f32", limit, limit_name);
+  if (batch.points.empty()) throw invalidArgument("xyz: the batch has no points");
+  if (!wire.rgb().empty()) {
+    if (wire.rgb().size() != 3 * batch.points.size()) {
+      throw invalidArgument("rgb: " + std::to_string(wire.rgb().size()) + " bytes for " +
+                            std::to_string(batch.points.size()) + " points (3 per point, or none)");
+    }
+    batch.colors.resize(batch.points.size());
+    const auto* rgb = reinterpret_cast<const uint8_t*>(wire.rgb().data());
+    for (size_t i = 0; i < batch.points.size(); ++i) batch.colors[i] = {rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]};
+  }
+  const mapping::MapDelta delta = host_.integrate(batch);
+  ack.set_voxels_updated(delta.voxels_updated);
+  ack.set_changed_blocks(delta.changed_blocks.size());
+  ack.set_map_version(host_.map().version());
+}
+
+grpc::Status IngestService::StreamPoints(grpc::ServerContext* context,
+                                         grpc::ServerReaderWriter<v1::BatchAck, v1::PointBatch>* stream) {
+  return guard_.run(context, "Ingest/StreamPoints", [&] {
+    acknowledgeEach(stream, [&](const v1::PointBatch& wire, v1::BatchAck& ack) {
+      try {
+        integrateBatch(wire, ack);
+      } catch (const StatusError& e) {
+        reject(ack, e);
+      } catch (const Error& e) {
+        reject(ack, invalidArgument(e.what()));
+      }
+      return true;
+    });
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status IngestService::IntegratePoints(grpc::ServerContext* context, const v1::PointBatch* request,
+                                            v1::BatchAck* reply) {
+  return guard_.run(context, "Ingest/IntegratePoints", [&] {
+    integrateBatch(*request, *reply);
+    return grpc::Status::OK;
+  });
+}
+
+}  // namespace cenote::server

@@ -1,0 +1,45 @@
+// query_service.h: Query (proto/cenote/v1/query.proto): voxel states, boxes, segments and capsules,
+// raycasts, distances, frontiers, voxel extracts and the map's metadata, all batched, served
+// concurrently with ingest (each call reads the map under its shared lock; see
+// mapping/occupancy_map.h).
+// Threads: any number of calls at once.
+#pragma once
+
+#include "cenote/v1/query.grpc.pb.h"
+#include "server/access/call_guard.h"
+#include "server/host/map_host.h"
+#include "server/server_config.h"
+
+namespace cenote::server {
+
+class QueryService final : public v1::Query::Service {
+ public:
+  QueryService(MapHost& host, CallGuard& guard, const ServerConfig& config, std::string frame_id)
+      : host_(host), guard_(guard), limits_(config.limits), frame_id_(std::move(frame_id)) {}
+
+  grpc::Status GetVoxels(grpc::ServerContext* context, const v1::VoxelsRequest* request, v1::VoxelsReply* reply) override;
+  grpc::Status GetBoxes(grpc::ServerContext* context, const v1::BoxesRequest* request, v1::BoxesReply* reply) override;
+  grpc::Status CheckSegments(grpc::ServerContext* context, const v1::SegmentsRequest* request,
+                             v1::CollisionsReply* reply) override;
+  grpc::Status Raycast(grpc::ServerContext* context, const v1::RaycastRequest* request,
+                       v1::CollisionsReply* reply) override;
+  grpc::Status GetDistances(grpc::ServerContext* context, const v1::DistancesRequest* request,
+                            v1::DistancesReply* reply) override;
+  grpc::Status GetFrontiers(grpc::ServerContext* context, const v1::FrontiersRequest* request,
+                            v1::FrontiersReply* reply) override;
+  grpc::Status ExtractVoxels(grpc::ServerContext* context, const v1::ExtractRequest* request,
+                             v1::ExtractReply* reply) override;
+  grpc::Status GetMapInfo(grpc::ServerContext* context, const v1::MapInfoRequest* request, v1::MapInfo* reply) override;
+
+ private:
+  // Voxels whose centre lies in `box`: RESOURCE_EXHAUSTED beyond limits.max_box_voxels.
+  void checkBoxVolume(const mapping::Aabb& box, const std::string& what) const;
+  void waitForDerived(grpc::ServerContext* context) const;
+
+  MapHost& host_;
+  CallGuard& guard_;
+  const RequestLimits limits_;
+  const std::string frame_id_;
+};
+
+}  // namespace cenote::server

@@ -1,0 +1,121 @@
+// MapHost's distance field and frontiers: brought up to date for a distance query (which reads its
+// own writes), followed periodically only while such queries keep coming; and the SerialWorker
+// that runs the map's changes.
+#include "server/host/map_host.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/error.h"
+#include "server/host/serial_worker.h"
+
+namespace cenote::server {
+namespace {
+
+using namespace std::chrono_literals;
+
+// A 1 m x 1 m wall of points at x = 1 m seen from the origin (5 cm voxels: the wall's voxels have
+// their centres at x = 1.025 m).
+PointBatch wallBatch(double y_offset_m) {
+  PointBatch batch;
+  batch.origin = Eigen::Vector3d::Zero();
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j <= 20; ++j) batch.points.emplace_back(1.0f, static_cast<float>(y_offset_m - 0.5 + 0.05 * i),
+                                                           static_cast<float>(-0.5 + 0.05 * j));
+  return batch;
+}
+
+double distanceAt(const MapHost& host, const Eigen::Vector3d& p_m) {
+  return host.distanceField().query({p_m}).front().distance_m;
+}
+
+std::unique_ptr<MapHost> makeHost(double period_s, double follow_s) {
+  MapHostOptions options;
+  options.derived_period_s = period_s;
+  options.derived_follow_s = follow_s;
+  return std::make_unique<MapHost>(std::make_unique<mapping::OccupancyMap>(mapping::MapConfig{}), options);
+}
+
+// Polls `done` every millisecond until it is true or 10 s have passed; its last answer.
+template <typename Done>
+bool pollUpTo10s(Done&& done) {
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (!done() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(1ms);
+  return done();
+}
+
+// Waits (up to 10 s) until the host has done `rounds` derived updates.
+bool waitForRounds(const MapHost& host, uint64_t rounds) {
+  return pollUpTo10s([&] { return host.derivedUpdates() >= rounds; });
+}
+
+// Waits (up to 10 s) until the derived thread has looked at the first `changes` changes and gone to
+// sleep until a query comes (or another change): from then on, until one does, nothing more is
+// derived, so what has been is final, whatever the machine's speed.
+bool waitForDerivedIdleAfter(const MapHost& host, uint64_t changes) {
+  return pollUpTo10s([&] { return host.changesSeenWhenDerivedIdled() >= changes; });
+}
+
+TEST(MapHostDerived, NothingIsDerivedUntilTheFirstDistanceQueryWhichSeesEveryChange) {
+  auto host = makeHost(0.02, 10.0);
+  for (int i = 0; i < 3; ++i) host->integrate(wallBatch(0.0));
+  // No query yet, so the host does not follow the map: it leaves the changes for the first query.
+  ASSERT_TRUE(waitForDerivedIdleAfter(*host, 3));
+  EXPECT_EQ(host->derivedUpdates(), 0u);
+
+  ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
+  EXPECT_EQ(host->derivedUpdates(), 1u);
+  EXPECT_NEAR(distanceAt(*host, {0.5, 0.0, 0.0}), 0.525, 0.05);
+}
+
+TEST(MapHostDerived, WhileQueriesComeTheDerivedStructuresFollowTheMapWithoutBeingAsked) {
+  // A period longer than an update: the change below arrives within it, so it is the end of the
+  // period (not the change itself) that must wake the derived thread.
+  auto host = makeHost(0.3, 10.0);
+  host->integrate(wallBatch(0.0));
+  ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
+  ASSERT_EQ(host->derivedUpdates(), 1u);
+
+  // The wall grows sideways by 1 m; nobody asks, but a query came within derived_follow_s.
+  host->integrate(wallBatch(1.0));
+  ASSERT_TRUE(waitForRounds(*host, 2));
+  EXPECT_NEAR(distanceAt(*host, {0.5, 1.5, 0.0}), 0.525, 0.05);  // in front of the new part
+}
+
+TEST(MapHostDerived, AfterTheFollowWindowChangesWaitForTheNextQuery) {
+  auto host = makeHost(0.02, 0.1);
+  host->integrate(wallBatch(0.0));
+  ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
+  std::this_thread::sleep_for(300ms);  // the last query is now older than derived_follow_s
+
+  host->integrate(wallBatch(1.0));
+  ASSERT_TRUE(waitForDerivedIdleAfter(*host, 2));
+  EXPECT_EQ(host->derivedUpdates(), 1u);
+  EXPECT_GT(distanceAt(*host, {0.5, 1.5, 0.0}), 0.6);  // the field does not know the new part yet
+
+  ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
+  EXPECT_EQ(host->derivedUpdates(), 2u);
+  EXPECT_NEAR(distanceAt(*host, {0.5, 1.5, 0.0}), 0.525, 0.05);
+}
+
+TEST(SerialWorker, RunsJobsInOrderAndRefusesJobsAfterFinish) {
+  SerialWorker worker(0);
+  std::vector<int> order;
+  for (int i = 0; i < 3; ++i) worker.run([&] { order.push_back(i); });
+  EXPECT_EQ(order, (std::vector<int>{0, 1, 2}));
+  EXPECT_THROW(worker.run([] { throw Error("bad batch"); }), Error);  // a job's error reaches its caller
+  worker.finish();
+  try {
+    worker.run([] { return 1; });
+    ADD_FAILURE() << "run() after finish() returned";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("map writer stopped"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace cenote::server
