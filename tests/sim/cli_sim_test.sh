@@ -4,7 +4,7 @@
 #   cli_sim_test.sh CENOTE
 set -euo pipefail
 cenote=$1
-source "$(dirname "${BASH_SOURCE[0]}")/../../support/cli_test_lib.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/../support/cli_test_lib.sh"
 
 for scene in cave reef wreck; do
   out=$work/$scene

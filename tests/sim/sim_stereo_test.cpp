@@ -46,11 +46,11 @@ TEST_P(SimStereo, DefaultSgmBad2IsUnderTenPercent) {
   config.scene = GetParam();
   config.num_frames = 12;
   const Simulator sim(config);
-  StereoMatcher matcher{StereoConfig{}};
+  pipeline::StereoMatcher matcher{pipeline::StereoConfig{}};
   ASSERT_EQ(matcher.config().num_disparities, 112);
   for (int index : {0, 11}) {
     const SimFrame frame = sim.renderFrame(index);
-    const DisparityMap result = matcher.match(frame.left, frame.right);
+    const pipeline::DisparityMap result = matcher.match(frame.left, frame.right);
     const Bad2 stats = evaluate(sim, frame, result.disparity, matcher.config().num_disparities);
     EXPECT_GT(stats.evaluated, 100000) << toString(GetParam()) << " frame " << index;
     EXPECT_LT(stats.bad2_percent, 10.0) << toString(GetParam()) << " frame " << index << ": bad-2 "

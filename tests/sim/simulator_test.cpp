@@ -133,7 +133,7 @@ TEST(Simulator, DistortedDepthLiesOnTheMeshAlongTheUndistortedRay) {
   c.k2 = 0.02;
   const Simulator sim(c);
   const SimFrame frame = sim.renderFrame(0);
-  const StereoCalibration calib = sim.calibration();
+  const pipeline::StereoCalibration calib = sim.calibration();
   int checked = 0, finite = 0;
   for (int y = 0; y < frame.depth.rows; ++y) {
     for (int x = 0; x < frame.depth.cols; ++x) finite += std::isfinite(frame.depth.at<float>(y, x)) ? 1 : 0;
@@ -186,17 +186,17 @@ TEST_F(SimDataset, SensorYamlReadsBackWithTheBaselineAndPosesChainThroughTheExtr
   EXPECT_EQ(summary.frames, 3);
   EXPECT_GT(summary.surface_points, 1000u);
 
-  const StereoCalibration rig =
-      readEurocSensorPair(dir_ + "/mav0/cam0/sensor.yaml", dir_ + "/mav0/cam1/sensor.yaml");
+  const pipeline::StereoCalibration rig =
+      pipeline::readEurocSensorPair(dir_ + "/mav0/cam0/sensor.yaml", dir_ + "/mav0/cam1/sensor.yaml");
   EXPECT_EQ(rig.image_size, cv::Size(160, 120));
   EXPECT_NEAR(cv::norm(rig.T), 0.15, 1e-9);
   EXPECT_NEAR(rig.T[0], -0.15, 1e-9);  // right camera on the left camera's +x
   EXPECT_NEAR(cv::norm(rig.R - cv::Matx33d::eye()), 0.0, 1e-9);
   EXPECT_NEAR(rig.left.K(0, 0), sim.rig().camera.fx, 1e-9);
-  const cv::Matx44d T_BS = readEurocBodyFromSensor(dir_ + "/mav0/cam0/sensor.yaml");
+  const cv::Matx44d T_BS = pipeline::readEurocBodyFromSensor(dir_ + "/mav0/cam0/sensor.yaml");
   EXPECT_NEAR(std::sqrt(T_BS(0, 3) * T_BS(0, 3) + T_BS(1, 3) * T_BS(1, 3) + T_BS(2, 3) * T_BS(2, 3)), 0.05, 0.005);
 
-  const StereoCalibration calib = readStereoCalibration(dir_ + "/groundtruth/calibration.yaml");
+  const pipeline::StereoCalibration calib = pipeline::readStereoCalibration(dir_ + "/groundtruth/calibration.yaml");
   EXPECT_NEAR(calib.T[0], -0.15, 1e-9);
 
   // cam0.tum = body ground truth x T_BS at the image times.
