@@ -4,6 +4,9 @@
 // y down, z forward) and world; T_world_cam maps camera points to world points.
 // Pixel (u, v) covers [u - 0.5, u + 0.5) x [v - 0.5, v + 0.5); its centre's ray is
 // ((u - cx) / fx, (v - cy) / fy, 1).
+// Why not pipeline/frame/frames.h's DepthFrame: mapping/ links no OpenCV (that one holds cv::Mat
+// images and stereo confidence); this is the map's own, plain-vector input, filled by whoever
+// holds a depth image (an RGB-D camera, a stored frame re-integrated with a corrected pose).
 // Threads: a plain value.
 #pragma once
 

@@ -1,5 +1,5 @@
 // frames.h: the plain value types handed from stage to stage of the pipeline.
-//   StereoFrame -> RectifiedPair -> DisparityMap -> DepthFrame
+//   StereoFrame -> (frame admission) -> PosedPair{RectifiedPair} -> DisparityMap -> DepthFrame
 // Units: seconds, metres, pixels. Frames: T_world_cam maps camera points to the world.
 // Images are row-major cv::Mat; a Mat header shares pixels, so a stage that keeps a frame while
 // the producer goes on must clone() what it keeps.
@@ -42,7 +42,20 @@ struct DisparityMap {
   cv::Mat confidence;  // CV_32F PKRN ratio >= 1; 0 where invalid
 };
 
-// Depth of the left view with everything the later stages need.
+// A rectified pair with the pose of its rectified left camera: what frame admission
+// (frame_admission.h) hands to the stereo stage.
+struct PosedPair {
+  RectifiedPair pair;
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
+};
+
+// Depth of the left view with everything the later stages need: the stereo stage's output and
+// the fusion window's input and output, inside the pipeline. It is cv::Mat based (OpenCV does the
+// pipeline's image work, and a Mat header shares pixels between stages without copies) and carries
+// the PKRN confidence that fusion weighs. The map never sees it: the pipeline hands the map
+// PointBatch (common/point_batch.h), and the map's own depth-image input for projective
+// integration, mapping/integration/depth_frame.h, is OpenCV-free because mapping/ does not link
+// OpenCV. Two types on purpose, one per side of that boundary.
 struct DepthFrame {
   double t_s = 0.0;
   cv::Mat depth;       // CV_32F metres along the optical axis; +inf where none

@@ -19,17 +19,17 @@ inline double rotationDeg(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b
 // Skips frames that moved less than both thresholds since the last keyframe (none set: none skipped).
 class KeyframeSelector {
  public:
-  explicit KeyframeSelector(const RunConfig& c) : translation_m_(c.keyframe_translation_m), rotation_deg_(c.keyframe_rotation_deg) {}
-  bool accept(const Eigen::Isometry3d& pose) {
-    if ((translation_m_ <= 0.0 && rotation_deg_ <= 0.0) || !last_) {
-      last_ = pose;
-      return true;
-    }
-    const bool moved = (translation_m_ > 0.0 && (pose.translation() - last_->translation()).norm() >= translation_m_) ||
-                       (rotation_deg_ > 0.0 && rotationDeg(*last_, pose) >= rotation_deg_);
-    if (moved) last_ = pose;
-    return moved;
+  explicit KeyframeSelector(const RunConfig& c)
+      : translation_m_(c.keyframe_translation_m), rotation_deg_(c.keyframe_rotation_deg) {}
+
+  // Whether a frame at `pose` would be a keyframe (the first frame always is).
+  bool wouldAccept(const Eigen::Isometry3d& pose) const {
+    if ((translation_m_ <= 0.0 && rotation_deg_ <= 0.0) || !last_) return true;
+    return (translation_m_ > 0.0 && (pose.translation() - last_->translation()).norm() >= translation_m_) ||
+           (rotation_deg_ > 0.0 && rotationDeg(*last_, pose) >= rotation_deg_);
   }
+  // Makes `pose` the keyframe the next frames are measured from.
+  void keep(const Eigen::Isometry3d& pose) { last_ = pose; }
 
  private:
   double translation_m_, rotation_deg_;

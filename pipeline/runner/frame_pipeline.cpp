@@ -20,13 +20,6 @@ cv::Mat toBgr(const cv::Mat& image) {
 
 }  // namespace
 
-Eigen::Isometry3d rectifiedFromRaw(const Rectifier& rectifier) {
-  Eigen::Isometry3d T_raw_rect = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) T_raw_rect.linear()(r, c) = rectifier.R_rect_left()(c, r);
-  return T_raw_rect;
-}
-
 FramePipeline::FramePipeline(const PipelineConfig& config, bool keep_maps, std::function<void()> on_thread_start)
     : config_(config),
       keep_maps_(keep_maps),

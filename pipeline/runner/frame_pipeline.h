@@ -5,7 +5,7 @@
 // Each stage runs on its own thread with bounded queues between them (run.queue_depth frames), so
 // push() blocks while the stages are behind: back-pressure instead of unbounded memory. Both the
 // Runner (frames read from a recorded dataset) and the gRPC server (frames received from a
-// vehicle) feed it, so the same frames in the same order give the same points, bit for bit.
+// vehicle) feed it, both through pipeline/frame/frame_admission.h, so the same frames in the same order give the same points, bit for bit.
 // Units and frames: those of DepthFrame and PointBatch (metres, seconds, world frame).
 // Threads: push()/close() from one producer thread, pop() from one consumer thread; stereo and
 // fusion use OpenMP inside and are deterministic for any thread count.
@@ -17,7 +17,6 @@
 #include <thread>
 
 #include "common/point_batch.h"
-#include "pipeline/calibration/rectifier.h"
 #include "pipeline/frame/frames.h"
 #include "pipeline/runner/bounded_queue.h"
 #include "pipeline/runner/run_config.h"
@@ -26,21 +25,11 @@
 
 namespace cenote::pipeline {
 
-// A rectified pair with the pose of its rectified left camera.
-struct PosedPair {
-  RectifiedPair pair;
-  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
-};
-
 // What comes out for every fused reference frame (or every frame, without fusion).
 struct FusedOutput {
   DepthFrame frame;   // t_s always; depth, confidence and colour only with keep_maps
   PointBatch points;  // world frame, origin = the reference camera's centre
 };
-
-// The rectified left camera in the raw left camera's frame: p_rect = R1 p_raw, so the rectified
-// camera is the raw one rotated by R1^T. T_world_rect = T_world_raw * rectifiedFromRaw(r).
-Eigen::Isometry3d rectifiedFromRaw(const Rectifier& rectifier);
 
 class FramePipeline {
  public:

@@ -14,7 +14,7 @@
 #include "pipeline/calibration/rectifier.h"
 #include "io/image/image_io.h"
 #include "pipeline/runner/frame_pipeline.h"
-#include "pipeline/runner/keyframe_selector.h"
+#include "pipeline/frame/frame_admission.h"
 #include "pipeline/runner/point_output.h"
 
 namespace cenote::pipeline {
@@ -45,6 +45,14 @@ class FrameNames {
   std::map<double, std::string> names_;
 };
 
+// Counts a frame that frame admission did not let through.
+void countSkip(Admission admission, std::atomic<size_t>& out_of_order, std::atomic<size_t>& no_pose,
+               std::atomic<size_t>& not_keyframe) {
+  if (admission == Admission::kOutOfOrder) ++out_of_order;
+  if (admission == Admission::kNoPose) ++no_pose;
+  if (admission == Admission::kNotKeyframe) ++not_keyframe;
+}
+
 }  // namespace
 
 Runner::Runner(PipelineConfig config) : config_(std::move(config)) {
@@ -61,12 +69,11 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   PointOutput points((fs::path(out_dir) / "points.ply").string(), rc.points_voxel_m);
 
   const Rectifier rectifier(dataset.calibration());
-  const Eigen::Isometry3d T_raw_rect = rectifiedFromRaw(rectifier);
 
   const size_t total = rc.max_frames > 0 ? std::min<size_t>(dataset.size(), rc.max_frames) : dataset.size();
   RunReport report;
   report.frames_in = total;
-  std::atomic<size_t> no_pose{0}, not_keyframe{0}, unreadable{0}, read_done{0};
+  std::atomic<size_t> out_of_order{0}, no_pose{0}, not_keyframe{0}, unreadable{0}, read_done{0};
   std::atomic<bool> interrupted{false};
   StageTimer read_timer, output_timer, sink_timer;
   FramePipeline stages(config_, rc.write_depth);
@@ -76,7 +83,7 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
 
   std::thread reader([&] {
     try {
-      KeyframeSelector keyframes(rc);
+      FrameAdmission admission(rectifier, rc);
       for (size_t i = 0; i < total && !failure.failed(); ++i, ++read_done) {
         if (stop.load()) {
           interrupted = true;
@@ -84,24 +91,20 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
         }
         const auto t0 = Clock::now();
         const double t = dataset.timestamp(i);
-        const std::optional<Eigen::Isometry3d> pose = camera_trajectory.poseAt(t, rc.pose_max_gap_s);
-        if (!pose) {
-          ++no_pose;
-          continue;
-        }
-        if (!keyframes.accept(*pose)) {
-          ++not_keyframe;
+        const FrameDecision decision =
+            admission.decide(t, [&](double t_s) { return camera_trajectory.poseAt(t_s, rc.pose_max_gap_s); });
+        if (decision.admission != Admission::kAdmitted) {
+          countSkip(decision.admission, out_of_order, no_pose, not_keyframe);
           continue;
         }
         PosedPair item;
         try {
-          item.pair = rectifier.rectify(dataset.load(i));
+          item = admission.admit(dataset.load(i), decision.T_world_raw);
         } catch (const Error& e) {
           ++unreadable;
           std::fprintf(stderr, "\nwarning: frame %zu (t = %.6f s) skipped: %s\n", i, t, e.what());
           continue;
         }
-        item.T_world_cam = *pose * T_raw_rect;
         if (rc.write_depth) names.add(item.pair.t_s, dataset.frameName(i));
         read_timer.add(msSince(t0));
         if (!stages.push(std::move(item))) break;
@@ -154,6 +157,7 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   report.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   report.frames_processed = stages.framesProcessed();
   report.frames_fused = stages.framesFused();
+  report.skipped_out_of_order = out_of_order;
   report.skipped_no_pose = no_pose;
   report.skipped_not_keyframe = not_keyframe;
   report.skipped_unreadable = unreadable;
@@ -174,7 +178,10 @@ std::string RunReport::toJson() const {
   j["frames_in"] = frames_in;
   j["frames_processed"] = frames_processed;
   j["frames_fused"] = frames_fused;
-  j["frames_skipped"] = {{"no_pose", skipped_no_pose}, {"not_keyframe", skipped_not_keyframe}, {"unreadable", skipped_unreadable}};
+  j["frames_skipped"] = {{"out_of_order", skipped_out_of_order},
+                         {"no_pose", skipped_no_pose},
+                         {"not_keyframe", skipped_not_keyframe},
+                         {"unreadable", skipped_unreadable}};
   j["points_written"] = points_written;
   j["interrupted"] = interrupted;
   j["wall_s"] = wall_s;
@@ -193,7 +200,7 @@ std::string RunReport::toTable() const {
   t.setf(std::ios::fixed);
   t.precision(1);
   t << "frames: " << frames_in << " in, " << frames_processed << " processed, " << frames_fused << " fused; skipped "
-    << skipped_no_pose << " without pose, " << skipped_not_keyframe << " not keyframes, " << skipped_unreadable
+    << (skipped_out_of_order > 0 ? std::to_string(skipped_out_of_order) + " out of time order, " : "") << skipped_no_pose << " without pose, " << skipped_not_keyframe << " not keyframes, " << skipped_unreadable
     << " unreadable" << (interrupted ? " (interrupted)" : "") << "\n";
   t << "stage           median ms    p95 ms   frames\n";
   for (const char* name : {"read_rectify", "stereo", "fusion", "output", "map"}) {

@@ -33,6 +33,7 @@ struct RunReport {
   size_t frames_in = 0;          // frames in the dataset (up to run.max_frames)
   size_t frames_processed = 0;   // frames that went through stereo
   size_t frames_fused = 0;       // fused reference frames emitted (or raw frames without fusion)
+  size_t skipped_out_of_order = 0;  // timestamps not after the previous frame's (frame_admission.h)
   size_t skipped_no_pose = 0;
   size_t skipped_not_keyframe = 0;
   size_t skipped_unreadable = 0;

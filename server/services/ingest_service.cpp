@@ -4,7 +4,7 @@
 #include <thread>
 
 #include "pipeline/runner/frame_pipeline.h"
-#include "pipeline/runner/keyframe_selector.h"
+#include "pipeline/frame/frame_admission.h"
 #include "server/cpu/cpu_scheduling.h"
 #include "server/wire/frame_decoder.h"
 #include "server/wire/wire.h"
@@ -57,12 +57,10 @@ class FrameStream {
               IngestCounters& counters, IngestTimings& timings)
       : host_(host),
         settings_(settings),
-        rectifier_(rectifier),
-        T_raw_rect_(pipeline::rectifiedFromRaw(rectifier)),
+        admission_(rectifier, settings.pipeline.run),
         poses_(poses),
         counters_(counters),
         timings_(timings),
-        keyframes_(settings.pipeline.run),
         // Stereo, fusion and handing their points to the map run below the query handlers' CPU
         // priority, as integration does (cpu_scheduling.h).
         stages_(settings.pipeline, false, [nice = settings.server.host.ingest_nice] { setThreadNice(nice); }),
@@ -76,45 +74,40 @@ class FrameStream {
     if (integrator_.joinable()) integrator_.join();
   }
 
-  // Runs one frame up to the pipeline's input. Fills the ack; false when the pipeline has failed.
+  // Runs one frame up to the pipeline's input (pipeline/frame/frame_admission.h decides, as it
+  // does for `cenote run`). Fills the ack; false when the pipeline has failed.
   bool handle(const v1::StereoFrame& wire, v1::FrameAck& ack) {
     ack.set_timestamp_s(wire.timestamp_s());
     ++counters_.frames_received;
     try {
-      if (!std::isfinite(wire.timestamp_s()) || !(wire.timestamp_s() > last_t_s_)) {
-        throw invalidArgument("timestamp_s = " + std::to_string(wire.timestamp_s()) +
-                              " is not after the previous frame's (" + std::to_string(last_t_s_) +
-                              "): frames must come in time order");
-      }
-      last_t_s_ = wire.timestamp_s();  // rejected or not, the next frame must come later
-      std::optional<Eigen::Isometry3d> T_world_raw;
-      if (wire.has_pose()) T_world_raw = finitePose(wire.pose(), "pose");
-      const auto decode_start = Clock::now();
-      pipeline::StereoFrame raw = decodeStereoFrame(wire, settings_.server.limits.max_image_pixels);
-      const double decode_ms = msSince(decode_start);
-      if (!T_world_raw) {
-        const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                                 std::chrono::duration<double>(settings_.server.pose_wait_s));
-        T_world_raw = poses_.poseAt(raw.t_s, settings_.pipeline.run.pose_max_gap_s, deadline);
-      }
-      if (!T_world_raw) {
-        skip(ack, v1::FRAME_OUTCOME_SKIPPED_NO_POSE, "no pose of its own and no two streamed poses bracket it within " +
-                                                         std::to_string(settings_.pipeline.run.pose_max_gap_s) + " s");
-        return true;
-      }
-      if (!keyframes_.accept(*T_world_raw)) {
-        skip(ack, v1::FRAME_OUTCOME_SKIPPED_NOT_KEYFRAME, "moved less than the keyframe thresholds");
-        return true;
+      const double previous_t_s = admission_.lastTimestamp();
+      const pipeline::FrameDecision decision =
+          admission_.decide(wire.timestamp_s(), [&](double t_s) { return poseOf(wire, t_s); });
+      switch (decision.admission) {
+        case pipeline::Admission::kOutOfOrder:
+          throw invalidArgument("timestamp_s = " + std::to_string(wire.timestamp_s()) +
+                                " is not after the previous frame's (" + std::to_string(previous_t_s) +
+                                "): frames must come in time order");
+        case pipeline::Admission::kNoPose:
+          skip(ack, v1::FRAME_OUTCOME_SKIPPED_NO_POSE,
+               "no pose of its own and no two streamed poses bracket it within " +
+                   std::to_string(settings_.pipeline.run.pose_max_gap_s) + " s");
+          return true;
+        case pipeline::Admission::kNotKeyframe:
+          skip(ack, v1::FRAME_OUTCOME_SKIPPED_NOT_KEYFRAME, "moved less than the keyframe thresholds");
+          return true;
+        case pipeline::Admission::kAdmitted:
+          break;
       }
       const auto t0 = Clock::now();
+      const pipeline::StereoFrame raw = decodeStereoFrame(wire, settings_.server.limits.max_image_pixels);
       pipeline::PosedPair item;
       try {
-        item.pair = rectifier_.rectify(raw);
+        item = admission_.admit(raw, decision.T_world_raw);
       } catch (const Error& e) {
         throw invalidArgument(e.what());
       }
-      item.T_world_cam = *T_world_raw * T_raw_rect_;
-      timings_.add("decode_rectify", decode_ms + msSince(t0));
+      timings_.add("decode_rectify", msSince(t0));
       if (!stages_.push(std::move(item))) return false;
       ack.set_outcome(v1::FRAME_OUTCOME_PROCESSED);
       ++counters_.frames_processed;
@@ -144,6 +137,15 @@ class FrameStream {
   }
 
  private:
+  // The frame's own pose, or one interpolated from the streamed poses (waiting up to
+  // server.pose_wait_s for the VIO to catch up). @throws StatusError for a non-finite own pose.
+  std::optional<Eigen::Isometry3d> poseOf(const v1::StereoFrame& wire, double t_s) {
+    if (wire.has_pose()) return finitePose(wire.pose(), "pose");
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                             std::chrono::duration<double>(settings_.server.pose_wait_s));
+    return poses_.poseAt(t_s, settings_.pipeline.run.pose_max_gap_s, deadline);
+  }
+
   void skip(v1::FrameAck& ack, v1::FrameOutcome outcome, const std::string& why) {
     ack.set_outcome(outcome);
     ack.set_message(why);
@@ -166,13 +168,10 @@ class FrameStream {
 
   MapHost& host_;
   const ServerSettings& settings_;
-  const pipeline::Rectifier& rectifier_;
-  const Eigen::Isometry3d T_raw_rect_;
+  pipeline::FrameAdmission admission_;
   PoseBuffer& poses_;
   IngestCounters& counters_;
   IngestTimings& timings_;
-  pipeline::KeyframeSelector keyframes_;
-  double last_t_s_ = -std::numeric_limits<double>::infinity();
   std::string integrate_error_;
   pipeline::FramePipeline stages_;
   std::thread integrator_;
