@@ -9,7 +9,7 @@ ifneq ($(shell command -v ccache 2>/dev/null),)
 CMAKE_FLAGS += -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache
 endif
 
-.PHONY: all deps configure build test demo bench test-data asan-test clean
+.PHONY: all deps configure build test demo bench test-data asan-test format format-check clean
 
 all: build
 
@@ -39,6 +39,13 @@ asan-test: deps test-data
 	cmake --preset asan
 	cmake --build --preset asan -j$(JOBS)
 	ctest --preset asan -j$(JOBS)
+
+# Layout of every tracked C++ file by .clang-format (clang-format 14): format in place, or only name the files that differ.
+format:
+	bash scripts/check-format.sh --fix
+
+format-check:
+	bash scripts/check-format.sh
 
 clean:
 	rm -rf $(BUILD_DIR) build-asan

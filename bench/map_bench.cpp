@@ -6,6 +6,8 @@
 // beside them. Prints a Markdown table for docs/PERFORMANCE.md.
 //   map_bench [--frames 10] [--threads 2] [--voxel 0.05] [--integrate-only 1] [--updates-only 1]
 //             [--distance 0] [--lookups-only 1] [--clears-only 1]
+// At most one of the four modes (--*-only 1); none: the full comparison. An unknown flag, a missing or
+// bad value, or two modes at once is an error (exit status not 0, the reason on stderr; --help lists the flags).
 // --integrate-only: integrates the frames into our map only (for perf / callgrind), prints ms/frame.
 // --lookups-only: integrates the frames, then times the same random lookups as the full run, single
 // calls and batched alternating, five rounds each (medians, wall and thread CPU time), and says
@@ -20,6 +22,7 @@
 // 14 degrees down (so that a frame has ~270k points), ray-cast exactly with 1 cm depth noise
 // (tests/mapping/support/analytic_scene.h);
 // pixels that see nothing within 12 m give no point (a stereo hole carves nothing).
+#include <CLI/CLI.hpp>
 #include <octomap/OcTree.h>
 #include <omp.h>
 
@@ -324,85 +327,92 @@ octomap::Pointcloud toOctomap(const PointBatch& batch) {
   return cloud;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  int num_frames = 10, threads = 2;
+// The command line; see the header comment.
+struct Options {
+  int num_frames = 10;
+  int threads = 2;
   double voxel_m = 0.05;
-  bool integrate_only = false, updates_only = false, lookups_only = false, clears_only = false, with_distance = true;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--integrate-only")) integrate_only = std::atoi(argv[i + 1]) != 0;
-    if (!std::strcmp(argv[i], "--updates-only")) updates_only = std::atoi(argv[i + 1]) != 0;
-    if (!std::strcmp(argv[i], "--lookups-only")) lookups_only = std::atoi(argv[i + 1]) != 0;
-    if (!std::strcmp(argv[i], "--clears-only")) clears_only = std::atoi(argv[i + 1]) != 0;
-    if (!std::strcmp(argv[i], "--distance")) with_distance = std::atoi(argv[i + 1]) != 0;
-    if (!std::strcmp(argv[i], "--frames")) num_frames = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--voxel")) voxel_m = std::atof(argv[i + 1]);
+  bool integrate_only = false, updates_only = false, lookups_only = false, clears_only = false;
+  bool with_distance = true;  // --distance, for --updates-only
+};
+
+constexpr double kMaxRangeM = 10.0;
+
+// The map of every mode: `voxel_m`, a 10 m maximum range, `threads` ray-marching threads.
+MapConfig mapConfig(const Options& o, int threads) {
+  MapConfig config;
+  config.voxel_size_m = o.voxel_m;
+  config.max_range_m = kMaxRangeM;
+  config.num_threads = threads;
+  return config;
+}
+
+// Integration, ours, on `threads` threads: the frames into a fresh map after one warm-up frame.
+std::unique_ptr<OccupancyMap> integrateOurs(const std::vector<PointBatch>& frames, const Options& o, int threads,
+                                            double& ms_per_frame) {
+  auto map = std::make_unique<OccupancyMap>(mapConfig(o, threads));
+  map->integrate(frames[0]);  // warm-up: scratch allocation, then start again
+  map->reset();
+  const auto t0 = Clock::now();
+  for (const auto& f : frames) map->integrate(f);
+  ms_per_frame = msSince(t0) / frames.size();
+  return map;
+}
+
+// --clears-only: see the header comment.
+void runClearsOnly(const Options& o, const std::vector<PointBatch>& frames) {
+  reportClears(frames, mapConfig(o, o.threads));
+}
+
+// --updates-only: the frontier and distance field updates alone, with their fingerprints.
+void runUpdatesOnly(const Options& o, const std::vector<PointBatch>& frames) {
+  const UpdateTimes u = timeUpdates(frames, mapConfig(o, o.threads), o.with_distance);
+  std::printf("frontier update: %.2f ms/frame median wall, %.2f ms CPU (mean with the first frame %.2f wall); "
+              "%zu clusters, %zu frontier voxels, fingerprint %016llx\n",
+              medianAfterFirst(u.frontier_ms), medianAfterFirst(u.frontier_cpu_ms), mean(u.frontier_ms), u.num_clusters,
+              u.num_frontier_voxels, static_cast<unsigned long long>(u.cluster_fingerprint));
+  if (o.with_distance) {
+    std::printf("distance field update: %.2f ms/frame median wall, %.2f ms CPU (mean with the first frame %.2f wall); "
+                "fingerprint %016llx\n",
+                medianAfterFirst(u.distance_ms), medianAfterFirst(u.distance_cpu_ms), mean(u.distance_ms),
+                static_cast<unsigned long long>(u.distance_fingerprint));
   }
-  const double max_range_m = 10.0;
-  const BenchView view = benchView(num_frames);
-  const std::vector<PointBatch> frames = makeFrames(view);
+}
+
+// --integrate-only: our integration alone (for perf / callgrind), ms/frame of wall and of CPU time.
+void runIntegrateOnly(const Options& o, const std::vector<PointBatch>& frames) {
+  // CPU time as well: on a machine shared with builds it varies much less than wall time.
+  double ms_per_frame = 0.0;
+  timespec c0, c1;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
+  const auto map = integrateOurs(frames, o, o.threads, ms_per_frame);
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+  const double cpu_ms = (c1.tv_sec - c0.tv_sec) * 1e3 + (c1.tv_nsec - c0.tv_nsec) / 1e6;
+  const MapStats stats = map->stats();
+  std::printf("integration, %d threads: %.1f ms/frame (CPU of all threads, with warm-up frame and reset: %.1f ms/frame); "
+              "%llu occupied, %llu free voxels\n",
+              o.threads, ms_per_frame, cpu_ms / frames.size(), static_cast<unsigned long long>(stats.occupied),
+              static_cast<unsigned long long>(stats.free));
+}
+
+// --lookups-only: see the header comment.
+void runLookupsOnly(const Options& o, const std::vector<PointBatch>& frames) {
+  double ms_per_frame = 0.0;
+  reportLookups(*integrateOurs(frames, o, o.threads, ms_per_frame));
+}
+
+// No mode: integration, lookups, segment checks and updates, ours beside OctoMap's, as a Markdown table.
+void runFull(const Options& o, const BenchView& view, const std::vector<PointBatch>& frames) {
+  const int num_frames = o.num_frames, threads = o.threads;
+  const double voxel_m = o.voxel_m, max_range_m = kMaxRangeM;
+  const MapConfig live_config = mapConfig(o, threads);
   size_t points = 0;
   for (const auto& f : frames) points += f.size();
 
-  MapConfig live_config;
-  live_config.voxel_size_m = voxel_m;
-  live_config.max_range_m = max_range_m;
-  live_config.num_threads = threads;
-  if (clears_only) {
-    reportClears(frames, live_config);
-    return 0;
-  }
-  if (updates_only) {
-    const UpdateTimes u = timeUpdates(frames, live_config, with_distance);
-    std::printf("frontier update: %.2f ms/frame median wall, %.2f ms CPU (mean with the first frame %.2f wall); "
-                "%zu clusters, %zu frontier voxels, fingerprint %016llx\n",
-                medianAfterFirst(u.frontier_ms), medianAfterFirst(u.frontier_cpu_ms), mean(u.frontier_ms),
-                u.num_clusters, u.num_frontier_voxels, static_cast<unsigned long long>(u.cluster_fingerprint));
-    if (with_distance) {
-      std::printf("distance field update: %.2f ms/frame median wall, %.2f ms CPU (mean with the first frame %.2f wall); "
-                  "fingerprint %016llx\n",
-                  medianAfterFirst(u.distance_ms), medianAfterFirst(u.distance_cpu_ms), mean(u.distance_ms),
-                  static_cast<unsigned long long>(u.distance_fingerprint));
-    }
-    return 0;
-  }
-
   // Integration, ours: `threads` threads and one thread.
-  auto integrateOurs = [&](int n_threads, double& ms_per_frame) {
-    MapConfig config;
-    config.voxel_size_m = voxel_m;
-    config.max_range_m = max_range_m;
-    config.num_threads = n_threads;
-    auto map = std::make_unique<OccupancyMap>(config);
-    map->integrate(frames[0]);  // warm-up: scratch allocation, then start again
-    map->reset();
-    const auto t0 = Clock::now();
-    for (const auto& f : frames) map->integrate(f);
-    ms_per_frame = msSince(t0) / frames.size();
-    return map;
-  };
   double ours_ms = 0.0, ours_1t_ms = 0.0;
-  if (integrate_only) {
-    // CPU time as well: on a machine shared with builds it varies much less than wall time.
-    timespec c0, c1;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
-    const auto map = integrateOurs(threads, ours_ms);
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
-    const double cpu_ms = (c1.tv_sec - c0.tv_sec) * 1e3 + (c1.tv_nsec - c0.tv_nsec) / 1e6;
-    const MapStats stats = map->stats();
-    std::printf("integration, %d threads: %.1f ms/frame (CPU of all threads, with warm-up frame and reset: %.1f ms/frame); "
-                "%llu occupied, %llu free voxels\n", threads, ours_ms, cpu_ms / frames.size(),
-                static_cast<unsigned long long>(stats.occupied), static_cast<unsigned long long>(stats.free));
-    return 0;
-  }
-  if (lookups_only) {
-    reportLookups(*integrateOurs(threads, ours_ms));
-    return 0;
-  }
-  integrateOurs(1, ours_1t_ms);
-  const auto map = integrateOurs(threads, ours_ms);
+  integrateOurs(frames, o, 1, ours_1t_ms);
+  const auto map = integrateOurs(frames, o, threads, ours_ms);
 
   // Projective integration of the same views as depth images.
   double projective_ms = 0.0;
@@ -515,5 +525,39 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(stats.occupied), static_cast<unsigned long long>(stats.free),
               tree.getNumLeafNodes(), ours_hits, octo_hits, occupied_seen, occupied_seen_batched, octo_occupied, num_clusters,
               static_cast<unsigned long long>(projective_free));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  CLI::App app{"map_bench: cenote's occupancy map beside OctoMap on the same frames, in the same run"};
+  app.add_option("--frames", o.num_frames, "frames of ~270k points")->capture_default_str()->check(CLI::Range(1, 1000));
+  app.add_option("--threads", o.threads, "ray-marching threads of our map (0: OpenMP's default)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 256));
+  app.add_option("--voxel", o.voxel_m, "voxel size, m")->capture_default_str()->check(CLI::Range(0.001, 10.0));
+  app.add_option("--integrate-only", o.integrate_only, "1: time our integration alone");
+  app.add_option("--updates-only", o.updates_only, "1: time the frontier and distance field updates alone");
+  app.add_option("--distance", o.with_distance, "0: --updates-only without the distance field")->capture_default_str();
+  app.add_option("--lookups-only", o.lookups_only, "1: time single and batched lookups alone");
+  app.add_option("--clears-only", o.clears_only, "1: time knownBlocks, clearBox and clearSphere alone");
+  try {
+    app.parse(argc, argv);
+    if (o.integrate_only + o.updates_only + o.lookups_only + o.clears_only > 1) {
+      throw CLI::ValidationError("--integrate-only, --updates-only, --lookups-only, --clears-only",
+                                 "at most one mode at a time");
+    }
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  const BenchView view = benchView(o.num_frames);
+  const std::vector<PointBatch> frames = makeFrames(view);
+  if (o.clears_only) runClearsOnly(o, frames);
+  else if (o.updates_only) runUpdatesOnly(o, frames);
+  else if (o.integrate_only) runIntegrateOnly(o, frames);
+  else if (o.lookups_only) runLookupsOnly(o, frames);
+  else runFull(o, view, frames);
   return 0;
 }

@@ -5,7 +5,9 @@
 //   server_bench [--server HOST:PORT] [--token T] [--calls 5000] [--seconds 3] [--frames 20]
 //                [--map-threads N]      ray-marching threads of both maps (0: OpenMP's default)
 //                [--shared-channel 1]   the 8 query clients share one connection (default: one each)
-//                [--server-arg ARG]...  passed to the cenote-server it starts
+//                [--server-arg ARG]...  passed to the cenote-server it starts (one ARG each: --server-arg --config
+//                                       --server-arg q0.yaml)
+// An unknown flag or a bad value is an error (exit status not 0, the reason on stderr; --help lists the flags).
 // Without --server it starts its own cenote-server (port 0, default settings) and also reports its
 // CPU use. The server is measured twice: idle, then while a background thread ingests frames at 15 Hz
 // (IntegratePoints; for the in-process figures, OccupancyMap::integrate on a local map): a 400x300 camera (fx 300)
@@ -16,6 +18,8 @@
 // Also prints the CPU time per query of server and client, which the machine's other load does
 // not change, and the throughput two free cores could give at that cost.
 // Prints a Markdown table for docs/PERFORMANCE.md.
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -216,16 +220,22 @@ int main(int argc, char** argv) {
   bool shared_channel = false;
   std::vector<std::string> server_args;
   double seconds = 3.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--server")) target = argv[i + 1];
-    if (!std::strcmp(argv[i], "--token")) token = argv[i + 1];
-    if (!std::strcmp(argv[i], "--calls")) calls = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--frames")) num_frames = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--map-threads")) map_threads = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--shared-channel")) shared_channel = std::atoi(argv[i + 1]) != 0;
-    if (!std::strcmp(argv[i], "--server-arg")) server_args.push_back(argv[i + 1]);
-  }
+  CLI::App app{"server_bench: cenote-server's query latency and throughput over loopback gRPC, beside the same "
+               "queries on an OccupancyMap in process"};
+  app.add_option("--server", target, "HOST:PORT of a running cenote-server (default: start one)");
+  app.add_option("--token", token, "bearer token for --server");
+  app.add_option("--calls", calls, "calls per latency figure")->capture_default_str()->check(CLI::Range(1, 10000000));
+  app.add_option("--seconds", seconds, "seconds per throughput figure")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 3600.0));
+  app.add_option("--frames", num_frames, "frames of the flight")->capture_default_str()->check(CLI::Range(2, 100000));
+  app.add_option("--map-threads", map_threads, "ray-marching threads of both maps (0: OpenMP's default)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 256));
+  app.add_option("--shared-channel", shared_channel, "1: the 8 query clients share one connection")->capture_default_str();
+  app.add_option("--server-arg", server_args, "passed to the cenote-server it starts (repeatable, one ARG each)")
+      ->allow_extra_args(false);
+  CLI11_PARSE(app, argc, argv);
   try {
     const mapping::test::Scene scene = seaFloor();
     std::vector<cenote::PointBatch> frames;

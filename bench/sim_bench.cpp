@@ -1,10 +1,12 @@
 // sim_bench: speed of the simulator (sim/) per scene, stage by stage, at 800x600.
 // Prints a Markdown table for docs/PERFORMANCE.md ("## Simulator").
 //   sim_bench [--threads 2] [--frames 20] [--scene cave|reef|wreck|all]
+// An unknown flag or a bad value is an error (exit status not 0, the reason on stderr; --help lists the flags).
 // Stages of one frame (both cameras): rasterise (visibility + exact depth), radiance (texture,
 // light, water), expose (gain, gamma, noise, 8-bit); "frame" is renderFrame() as a whole, measured
 // with the threads inside the frame. "dataset" is ms per frame of writeSimDataset (render + PNG +
 // PFM on all threads, frames in parallel), the figure that says how long `cenote sim` takes.
+#include <CLI/CLI.hpp>
 #include <omp.h>
 
 #include <algorithm>
@@ -37,11 +39,11 @@ double median(std::vector<double> v) {
 int main(int argc, char** argv) {
   int threads = 2, frames = 20;
   std::string which = "all";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--frames")) frames = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--scene")) which = argv[i + 1];
-  }
+  CLI::App app{"sim_bench: speed of the simulator per scene, stage by stage, at 800x600"};
+  app.add_option("--threads", threads, "OpenMP threads")->capture_default_str()->check(CLI::Range(1, 256));
+  app.add_option("--frames", frames, "frames per scene")->capture_default_str()->check(CLI::Range(1, 10000));
+  app.add_option("--scene", which, "scene")->capture_default_str()->check(CLI::IsMember({"cave", "reef", "wreck", "all"}));
+  CLI11_PARSE(app, argc, argv);
   omp_set_num_threads(threads);
   std::printf("| scene | triangles | scene build ms | rasterise ms | radiance ms | expose ms | frame ms | dataset ms/frame |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");

@@ -4,9 +4,11 @@
 // process): on a machine shared with other work it barely moves when the wall clock doubles.
 // It also prints the fastest run ("best ms"), the one least disturbed by other work.
 //   stereo_bench [--threads 2] [--repeat 15] [--only-first] [--skip-slow]
+// An unknown flag or a bad value is an error (exit status not 0, the reason on stderr; --help lists the flags).
 // cenote's rows: the full search and the coarse-to-fine band (StereoConfig::search) of each mode.
 // Inputs: Middlebury Cloth3 resized to 800x600 (the paper's image size) with 112 disparities,
 // and the Middlebury pairs at their own size (cones 64, Cloth3 128 disparities).
+#include <CLI/CLI.hpp>
 #include <omp.h>
 
 #include <algorithm>
@@ -75,12 +77,12 @@ int main(int argc, char** argv) {
   int threads = 2, repeat = 15;
   bool only_first = false;  // the 800x600 input alone
   bool skip_slow = false;   // without the 8-path rows and OpenCV's HH4
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) threads = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--only-first")) only_first = true;
-    else if (!std::strcmp(argv[i], "--skip-slow")) skip_slow = true;
-  }
+  CLI::App app{"stereo_bench: cenote's matcher beside OpenCV's StereoSGBM on the same images, in the same run"};
+  app.add_option("--threads", threads, "threads of both matchers")->capture_default_str()->check(CLI::Range(1, 256));
+  app.add_option("--repeat", repeat, "timed runs per row (median)")->capture_default_str()->check(CLI::Range(1, 10000));
+  app.add_flag("--only-first", only_first, "the 800x600 input alone");
+  app.add_flag("--skip-slow", skip_slow, "without the 8-path rows and OpenCV's HH4");
+  CLI11_PARSE(app, argc, argv);
   omp_set_num_threads(threads);
   cv::setNumThreads(threads);
 
