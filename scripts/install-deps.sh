@@ -23,6 +23,8 @@ PACKAGES=(
   openssl
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the format check (scripts/check-format.sh: clang-format 14, as .clang-format was tuned for)
+  clang-format
   # test data scripts
   python3 python3-numpy
 )
