@@ -15,6 +15,7 @@ std::vector<ConfigError> ServerConfig::validate() const {
   errors.check(!snapshot_dir.empty(), "snapshot_dir", snapshot_dir, "must not be empty");
   errors.check(pose_wait_s >= 0.0 && pose_wait_s <= 60.0, "pose_wait_s", pose_wait_s, "must be in [0, 60]");
   errors.check(pose_history_s > 0.0, "pose_history_s", pose_history_s, "must be > 0");
+  errors.check(pose_max_jump_s > 0.0, "pose_max_jump_s", pose_max_jump_s, "must be > 0");
   errors.check(max_frame_streams >= 1 && max_frame_streams <= 64, "max_frame_streams", max_frame_streams,
                "must be in [1, 64]");
   errors.check(host.max_subscriber_lag >= 1, "max_subscriber_lag", host.max_subscriber_lag, "must be >= 1");
@@ -39,6 +40,7 @@ std::vector<ConfigError> ServerConfig::validate() const {
                "must be >= 1");
   errors.check(limits.max_box_voxels >= 1, "limits.max_box_voxels", limits.max_box_voxels, "must be >= 1");
   errors.check(limits.max_image_pixels >= 1, "limits.max_image_pixels", limits.max_image_pixels, "must be >= 1");
+  errors.check(limits.max_poses >= 2, "limits.max_poses", limits.max_poses, "must be >= 2 (two poses bracket a frame)");
   return errors.take();
 }
 
@@ -52,6 +54,7 @@ void ServerConfig::read(YamlSection& section) {
   section.read("frame_id", frame_id);
   section.read("pose_wait_s", pose_wait_s);
   section.read("pose_history_s", pose_history_s);
+  section.read("pose_max_jump_s", pose_max_jump_s);
   section.read("max_frame_streams", max_frame_streams);
   section.read("max_subscriber_lag", host.max_subscriber_lag);
   section.read("completion_queues", completion_queues);
@@ -69,6 +72,7 @@ void ServerConfig::read(YamlSection& section) {
   l.read("max_points_per_batch", limits.max_points_per_batch);
   l.read("max_box_voxels", limits.max_box_voxels);
   l.read("max_image_pixels", limits.max_image_pixels);
+  l.read("max_poses", limits.max_poses);
   l.finish();
 }
 

@@ -26,6 +26,7 @@ struct RequestLimits {
   int64_t max_points_per_batch = 1000000; // points in one ingested point batch
   int64_t max_box_voxels = 10000000;      // voxels in one box query or extract
   int64_t max_image_pixels = 4096 * 4096; // of one stereo image
+  int64_t max_poses = 100000;             // streamed poses kept (200 Hz for over 8 minutes)
 };
 
 struct ServerConfig {
@@ -39,6 +40,7 @@ struct ServerConfig {
   std::string frame_id = "world";           // the map's frame, written into snapshots
   double pose_wait_s = 1.0;                 // a frame without pose waits this long for a later pose
   double pose_history_s = 60.0;             // poses older than this (before the newest) are dropped
+  double pose_max_jump_s = 60.0;            // a pose further than this after the stream's clock is refused
   int max_frame_streams = 2;                // concurrent StreamFrames calls (each runs a pipeline)
   int completion_queues = 1;                // gRPC's sync server: completion queues,
   int min_pollers = 2;                      //   and threads polling each (handlers run on them;

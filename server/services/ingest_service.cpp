@@ -81,6 +81,7 @@ class FrameStream {
     ++counters_.frames_received;
     try {
       const double previous_t_s = admission_.lastTimestamp();
+      poses_.noteFrameTime(wire.timestamp_s());
       const pipeline::FrameDecision decision =
           admission_.decide(wire.timestamp_s(), [&](double t_s) { return poseOf(wire, t_s); });
       switch (decision.admission) {
@@ -186,7 +187,8 @@ IngestService::IngestService(MapHost& host, CallGuard& guard, const ServerSettin
       cpus_(cpus),
       settings_(settings),
       rectifier_(std::move(rectifier)),
-      poses_(settings.server.pose_history_s) {}
+      poses_(PoseBufferLimits{settings.server.pose_history_s, static_cast<size_t>(settings.server.limits.max_poses),
+                              settings.server.pose_max_jump_s}) {}
 
 grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
                                          grpc::ServerReaderWriter<v1::FrameAck, v1::StereoFrame>* stream) {

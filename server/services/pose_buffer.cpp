@@ -1,6 +1,7 @@
 #include "server/services/pose_buffer.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "io/trajectory/trajectory.h"
 #include "server/wire/status_error.h"
@@ -14,11 +15,26 @@ void PoseBuffer::add(const io::StampedPose& pose) {
       throw invalidArgument("pose at t = " + std::to_string(pose.t_s) + " s is not after the previous pose (t = " +
                             std::to_string(poses_.back().t_s) + " s): timestamps must increase");
     }
+    const double clock_s = std::max(poses_.empty() ? newest_frame_t_s_ : poses_.back().t_s, newest_frame_t_s_);
+    if (std::isfinite(clock_s) && pose.t_s - clock_s > limits_.max_jump_s) {
+      throw invalidArgument("pose at t = " + std::to_string(pose.t_s) + " s is " + std::to_string(pose.t_s - clock_s) +
+                            " s after the stream's clock (t = " + std::to_string(clock_s) +
+                            " s): more than server.pose_max_jump_s = " + std::to_string(limits_.max_jump_s) +
+                            " s; is it stamped with the cameras' clock?");
+    }
     poses_.push_back(pose);
     ++received_;
-    while (poses_.size() > 2 && poses_.front().t_s < pose.t_s - history_s_) poses_.pop_front();
+    while (poses_.size() > 2 && poses_.front().t_s < pose.t_s - limits_.history_s) poses_.pop_front();
+    while (poses_.size() > limits_.max_poses) poses_.pop_front();
   }
   added_.notify_all();
+}
+
+void PoseBuffer::noteFrameTime(double t_s) {
+  if (!std::isfinite(t_s)) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  newest_frame_t_s_ = std::max(newest_frame_t_s_, t_s);
+  while (!poses_.empty() && poses_.back().t_s - newest_frame_t_s_ > limits_.max_jump_s) poses_.pop_back();
 }
 
 std::optional<Eigen::Isometry3d> PoseBuffer::poseAt(double t_s, double max_gap_s,
@@ -40,6 +56,11 @@ std::optional<Eigen::Isometry3d> PoseBuffer::poseAt(double t_s, double max_gap_s
 size_t PoseBuffer::received() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return received_;
+}
+
+size_t PoseBuffer::size() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return poses_.size();
 }
 
 }  // namespace cenote::server
