@@ -379,6 +379,13 @@ MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere,
   openvdb::tools::InactivePruneOp<detail::LogOddsTree> prune(tree);
   nodes.foreachBottomUp(prune, /*threaded=*/false);
   for (const BlockIndex& block : emptied) impl_->leaf_index.erase(block);
+  impl_->leaf_index.shrinkToFit();
+  if (everywhere) {
+    // A crop or reset also drops the integration scratch, whose capacity the largest batch so far
+    // set (hundreds of MB after batches of rays in all directions); the next batch allocates anew.
+    impl_->scratch = RayBatch();
+    impl_->projective_scratch = ProjectiveBatch();
+  }
   const VoxelBox candidate_blocks{blockOf(candidates.min), blockOf(candidates.max)};
   impl_->color.eraseIf([&](const BlockIndex& block) { return everywhere || candidate_blocks.contains(block); },
                        removed);

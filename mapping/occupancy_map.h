@@ -92,6 +92,8 @@ class OccupancyMap {
   MapDelta integrateDepth(const DepthFrame& frame);
 
   // Forget (make unknown) the voxels whose centre lies in the box / sphere, or outside the sphere.
+  // Blocks left without a known voxel are freed; cropToRadius and reset also free the integration
+  // scratch (the next integrate allocates it again).
   // @throws Error for a non-finite or negative size. @return what changed.
   MapDelta clearBox(const Aabb& box_m);
   MapDelta clearSphere(const Eigen::Vector3d& centre_m, double radius_m);

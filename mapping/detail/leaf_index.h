@@ -93,6 +93,14 @@ class LeafIndex {
     size_ = 0;
     rehash(kMinCapacity);
   }
+  // Shrinks the table to the smallest capacity that holds its entries (at most half full) once
+  // erasing has left it more than 8 times too large: after a crop or reset the map's memory falls
+  // with its blocks (a table grown to 1M slots is 32 MB). Same entries; the order of slots changes.
+  void shrinkToFit() {
+    size_t capacity = kMinCapacity;
+    while (capacity < 2 * size_) capacity *= 2;
+    if (capacity * 8 <= slots_.size()) rehash(capacity);
+  }
   size_t size() const { return size_; }
   size_t memoryBytes() const { return sizeof(*this) + slots_.capacity() * sizeof(Slot); }
 

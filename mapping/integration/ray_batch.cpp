@@ -11,150 +11,182 @@
 namespace cenote::mapping {
 namespace {
 
-// The grid a ray is marched on: cells of 2^(3 - kShift) voxels per side, 2^kShift per block side
-// (kShift 3: voxels; 2: the 2x2x2-voxel cells of coarse clearing, 5.; cell c holds voxels 2c and
-// 2c + 1 on each axis). A cell is 2^(3 - kShift) consecutive words of its block's free mask (x)
-// with the same bit pattern (y, z) in each.
-template <int kShift>
-struct CellGrid {
-  static_assert(kShift == 2 || kShift == 3);
-  static constexpr int kInBlock = (1 << kShift) - 1;  // mask of an in-block cell coordinate
-  static BlockIndex blockOf(const VoxelIndex& c) {
-    return BlockIndex(c.x() >> kShift, c.y() >> kShift, c.z() >> kShift);
-  }
-  static uint64_t* words(BlockMasks* masks, int lx) { return masks->free.data() + (lx << (3 - kShift)); }
-  static uint64_t pattern(int ly, int lz) {
-    if constexpr (kShift == 3) return 1ull << ((ly << 3) | lz);
-    return 0x303ull << ((ly << 4) | (lz << 1));
-  }
-};
+// One ray on the voxel grid, from `origin_m` to `end_m`, as the crossings of voxel faces by the
+// segment p(t) = origin + t d, d = end - origin, t in [0, 1]. The crossing of the face plane x = b s
+// (b an integer; likewise y, z) is at t = b a - c with a = s / d_x, c = origin_x / d_x: one formula,
+// evaluated the same way whichever way the ray is walked, and increasing with the face crossed on
+// each axis (b a and then b a - c round monotonically). Walked from the origin, the crossings come
+// in order of increasing t, ties to the highest axis (z before y before x: OctoMap's computeRayKeys);
+// walked from the end, in the exact reverse order (decreasing t, ties to the lowest axis). So both
+// walks visit the same voxels, whatever the rounding, and a walk from the end that stops early
+// visits only voxels of the whole ray (ray_batch.h, 3.). Each axis steps exactly as often as the
+// end voxel is away from the origin's on it: the walk always ends in the end voxel.
+// Made for the hot loop: the state stays in registers, and the current block's masks are looked up
+// only when the walk crosses into another block (about every 8 steps).
+struct RayWalk {
+  VoxelIndex key_origin, key_end;
+  int step[3];          // +-1 along the ray, 0 for an axis it never steps on
+  long count[3];        // steps on each axis from the origin's voxel to the end's
+  double a[3], c[3];    // t of face b on axis i: b a[i] - c[i]
 
-// The cells of side cell_m (CellGrid<kShift>) from the cell of start_m towards the cell of end_m:
-// for voxels, those of walkVoxels(start_m, end_m, voxel_size_m, include_end) (voxel_ray.h) in the
-// same order with the same tie rules, so that ray_stop_run 0 stays OctoMap's voxel set. Made for
-// the hot loop: the state stays in registers, and the current block's masks are looked up only
-// when the walk crosses into another block (about every 2^kShift steps).
-// Visit: bool operator()(uint64_t* words, uint64_t pattern) on the cell's words, false to stop.
-// Returns false when the visitor stopped the walk.
-template <int kShift, typename Visit>
-bool march(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double cell_m, bool include_end,
-           BatchUpdates& writer, Visit visit) {
-  using Grid = CellGrid<kShift>;
-  const VoxelIndex key_start = toVoxel(start_m, cell_m);
-  const VoxelIndex key_end = toVoxel(end_m, cell_m);
-  auto visitCell = [&](const VoxelIndex& c) {
-    constexpr int m = Grid::kInBlock;
-    return visit(Grid::words(writer.masksOf(Grid::blockOf(c)), c.x() & m), Grid::pattern(c.y() & m, c.z() & m));
-  };
-  if (key_start == key_end) return include_end ? visitCell(key_end) : true;
-  Eigen::Vector3d direction = end_m - start_m;
-  const double length = direction.norm();
-  direction /= length;
-  int step[3];
-  double t_max[3], t_delta[3];
-  for (int i = 0; i < 3; ++i) {
-    step[i] = direction[i] > 0.0 ? 1 : (direction[i] < 0.0 ? -1 : 0);
-    if (step[i] != 0) {
-      const double border = (key_start[i] + 0.5) * cell_m + step[i] * cell_m * 0.5;
-      t_max[i] = (border - start_m[i]) / direction[i];
-      t_delta[i] = cell_m / std::fabs(direction[i]);
-    } else {
-      t_max[i] = std::numeric_limits<double>::max();
-      t_delta[i] = 0.0;  // never stepped: t_max stays at max
+  RayWalk(const Eigen::Vector3d& origin_m, const Eigen::Vector3d& end_m, double s)
+      : key_origin(toVoxel(origin_m, s)), key_end(toVoxel(end_m, s)) {
+    const Eigen::Vector3d d = end_m - origin_m;
+    for (int i = 0; i < 3; ++i) {
+      const long n = static_cast<long>(key_end[i]) - key_origin[i];
+      step[i] = n > 0 ? 1 : (n < 0 ? -1 : 0);
+      count[i] = n < 0 ? -n : n;
+      // Distinct voxels on an axis mean distinct coordinates: d[i] != 0 where count[i] > 0.
+      a[i] = count[i] > 0 ? s / d[i] : 0.0;
+      c[i] = count[i] > 0 ? origin_m[i] / d[i] : 0.0;
     }
   }
-  // In-block coordinates and the block; a step that wraps an in-block coordinate moves to the
-  // neighbouring block.
-  constexpr int kWrap = ~Grid::kInBlock;
-  int lx = key_start.x() & Grid::kInBlock, ly = key_start.y() & Grid::kInBlock, lz = key_start.z() & Grid::kInBlock;
-  BlockIndex block = Grid::blockOf(key_start);
-  double tx = t_max[0], ty = t_max[1], tz = t_max[2];
-  const double dx = t_delta[0], dy = t_delta[1], dz = t_delta[2];
-  const int sx = step[0], sy = step[1], sz = step[2];
+  long steps() const { return count[0] + count[1] + count[2]; }
+  double faceT(int i, double b) const { return b * a[i] - c[i]; }
+};
+
+// A voxel's word of its block's free mask and its bit in it.
+inline uint64_t* freeWord(BlockMasks* masks, int lx) { return masks->free.data() + lx; }
+inline uint64_t voxelBit(int ly, int lz) { return 1ull << ((ly << 3) | lz); }
+
+// The voxels of the ray from origin_m to end_m, from the origin's voxel up to the end's, exclusive
+// (OctoMap's free-space rule; nothing when both share a voxel): visit(word, bit) on each, in order;
+// false stops the walk. Returns false when the visitor stopped it.
+template <typename Visit>
+bool marchFromOrigin(const Eigen::Vector3d& origin_m, const Eigen::Vector3d& end_m, double voxel_size_m,
+                     BatchUpdates& writer, Visit visit) {
+  const RayWalk w(origin_m, end_m, voxel_size_m);
+  const long steps = w.steps();
+  if (steps == 0) return true;
+  constexpr double kNever = std::numeric_limits<double>::infinity();
+  // The next face on each axis (its index as a double: exact, and no conversion in the loop), the
+  // t of crossing it, and the steps left on the axis.
+  double bx = w.key_origin.x() + (w.step[0] > 0), by = w.key_origin.y() + (w.step[1] > 0),
+         bz = w.key_origin.z() + (w.step[2] > 0);
+  long nx = w.count[0], ny = w.count[1], nz = w.count[2];
+  double tx = nx > 0 ? w.faceT(0, bx) : kNever, ty = ny > 0 ? w.faceT(1, by) : kNever,
+         tz = nz > 0 ? w.faceT(2, bz) : kNever;
+  const double ax = w.a[0], ay = w.a[1], az = w.a[2], cx = w.c[0], cy = w.c[1], cz = w.c[2];
+  const int sx = w.step[0], sy = w.step[1], sz = w.step[2];
+  int lx = w.key_origin.x() & 7, ly = w.key_origin.y() & 7, lz = w.key_origin.z() & 7;
+  BlockIndex block = blockOf(w.key_origin);
   BlockMasks* masks = writer.masksOf(block);
-  if (!visit(Grid::words(masks, lx), Grid::pattern(ly, lz))) return false;
-  // Each step moves one cell towards the end cell on one axis, so the walk can be in the end cell
-  // only after exactly this many steps (and never, if rounding made an axis overshoot).
-  const long steps_to_end = (key_end - key_start).cwiseAbs().sum();
-  const long max_steps = 3 * static_cast<long>(length / cell_m) + 6;
-  for (long n = 1; n <= max_steps; ++n) {
-    // walkVoxels' choice: x if t_x < t_y and t_x < t_z; else y if t_y < t_z; else z.
+  if (!visit(freeWord(masks, lx), voxelBit(ly, lz))) return false;
+  // In-block coordinates and the block; a step that wraps an in-block coordinate moves to the
+  // neighbouring block. The last step enters the end voxel, which is not visited.
+  for (long n = 1; n < steps; ++n) {
     bool crossed;
     if (tx < ty && tx < tz) {
       lx += sx;
-      tx += dx;
-      crossed = (lx & kWrap) != 0;
+      bx += sx;
+      tx = --nx > 0 ? bx * ax - cx : kNever;
+      crossed = (lx & ~7) != 0;
       if (crossed) {
         block.x() += sx;
-        lx &= Grid::kInBlock;
+        lx &= 7;
       }
     } else if (ty < tz) {
       ly += sy;
-      ty += dy;
-      crossed = (ly & kWrap) != 0;
+      by += sy;
+      ty = --ny > 0 ? by * ay - cy : kNever;
+      crossed = (ly & ~7) != 0;
       if (crossed) {
         block.y() += sy;
-        ly &= Grid::kInBlock;
+        ly &= 7;
       }
     } else {
       lz += sz;
-      tz += dz;
-      crossed = (lz & kWrap) != 0;
+      bz += sz;
+      tz = --nz > 0 ? bz * az - cz : kNever;
+      crossed = (lz & ~7) != 0;
       if (crossed) {
         block.z() += sz;
-        lz &= Grid::kInBlock;
+        lz &= 7;
       }
     }
-    if (n == steps_to_end && VoxelIndex((block.x() << kShift) + lx, (block.y() << kShift) + ly,
-                                        (block.z() << kShift) + lz) == key_end) {
-      return include_end ? visitCell(key_end) : true;
-    }
-    if (std::min(std::min(tx, ty), tz) > length) {
-      // Left the segment without entering the end cell (it ends on a face or an edge).
-      return include_end ? visitCell(key_end) : true;
-    }
     if (crossed) masks = writer.masksOf(block);
-    if (!visit(Grid::words(masks, lx), Grid::pattern(ly, lz))) return false;
+    if (!visit(freeWord(masks, lx), voxelBit(ly, lz))) return false;
   }
   return true;
 }
 
-// Visitors of march<3> (voxels). Whole rays: every voxel is free.
+// The same voxels as marchFromOrigin(origin_m, end_m, ...), visited in reverse order: from the one
+// before the end's voxel back to the origin's.
+template <typename Visit>
+bool marchFromEnd(const Eigen::Vector3d& origin_m, const Eigen::Vector3d& end_m, double voxel_size_m,
+                  BatchUpdates& writer, Visit visit) {
+  const RayWalk w(origin_m, end_m, voxel_size_m);
+  const long steps = w.steps();
+  if (steps == 0) return true;
+  constexpr double kNever = -std::numeric_limits<double>::infinity();
+  // The face behind on each axis (the one the walk from the origin crossed to get here), the t of
+  // crossing it, and the steps left on the axis.
+  double bx = w.key_end.x() + (w.step[0] < 0), by = w.key_end.y() + (w.step[1] < 0),
+         bz = w.key_end.z() + (w.step[2] < 0);
+  long nx = w.count[0], ny = w.count[1], nz = w.count[2];
+  double tx = nx > 0 ? w.faceT(0, bx) : kNever, ty = ny > 0 ? w.faceT(1, by) : kNever,
+         tz = nz > 0 ? w.faceT(2, bz) : kNever;
+  const double ax = w.a[0], ay = w.a[1], az = w.a[2], cx = w.c[0], cy = w.c[1], cz = w.c[2];
+  const int sx = w.step[0], sy = w.step[1], sz = w.step[2];
+  int lx = w.key_end.x() & 7, ly = w.key_end.y() & 7, lz = w.key_end.z() & 7;
+  BlockIndex block = blockOf(w.key_end);
+  BlockMasks* masks = nullptr;
+  bool crossed = true;  // the end voxel's block is looked up only if a voxel of it is visited
+  for (long n = 1; n <= steps; ++n) {
+    // The latest crossing first; ties to the lowest axis (the reverse of marchFromOrigin's order).
+    if (tx >= ty && tx >= tz) {
+      lx -= sx;
+      bx -= sx;
+      tx = --nx > 0 ? bx * ax - cx : kNever;
+      if ((lx & ~7) != 0) {
+        block.x() -= sx;
+        lx &= 7;
+        crossed = true;
+      }
+    } else if (ty >= tz) {
+      ly -= sy;
+      by -= sy;
+      ty = --ny > 0 ? by * ay - cy : kNever;
+      if ((ly & ~7) != 0) {
+        block.y() -= sy;
+        ly &= 7;
+        crossed = true;
+      }
+    } else {
+      lz -= sz;
+      bz -= sz;
+      tz = --nz > 0 ? bz * az - cz : kNever;
+      if ((lz & ~7) != 0) {
+        block.z() -= sz;
+        lz &= 7;
+        crossed = true;
+      }
+    }
+    if (crossed) {
+      masks = writer.masksOf(block);
+      crossed = false;
+    }
+    if (!visit(freeWord(masks, lx), voxelBit(ly, lz))) return false;
+  }
+  return true;
+}
+
+// Visitors. Whole rays: every voxel is free.
 struct CarveAll {
   bool operator()(uint64_t* word, uint64_t bit) const {
     *word |= bit;
     return true;
   }
 };
-// From the end back to the origin (the end voxel itself is not free), until stop_run voxels in a
-// row were already carved by earlier rays of the chunk: from there on they have carved (nearly)
-// the same path.
+// From the end back to the origin (marchFromEnd), until stop_run voxels in a row were already
+// carved by earlier rays of the chunk: from there on they have carved (nearly) the same path.
 struct CarveUntilRun {
   int stop_run;
   int run = 0;
-  bool at_end_voxel = true;
   bool operator()(uint64_t* word, uint64_t bit) {
-    if (at_end_voxel) {
-      at_end_voxel = false;
-      return true;
-    }
     // Without a branch on "already carved": it alternates irregularly along a ray.
     const int carved = (*word & bit) != 0;
     *word |= bit;
-    run = (run + 1) & -carved;
-    return run < stop_run;
-  }
-};
-
-// The counterpart of CarveUntilRun on 2-voxel cells (march<2>): stops after stop_run cells in a
-// row whose 8 voxels were all carved already.
-struct CarveCellsUntilRun {
-  int stop_run;
-  int run = 0;
-  bool operator()(uint64_t* words, uint64_t pattern) {
-    const int carved = ((words[0] & pattern) == pattern) & ((words[1] & pattern) == pattern);
-    words[0] |= pattern;
-    words[1] |= pattern;
     run = (run + 1) & -carved;
     return run < stop_run;
   }
@@ -190,20 +222,9 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
       const bool in_range = !limited || range <= max_range_m;
       const Eigen::Vector3d stop = in_range ? end : Eigen::Vector3d(origin + ray * (max_range_m / range));
       if (exact) {
-        march<3>(origin, stop, voxel_size_m, false, writer, CarveAll{});
+        marchFromOrigin(origin, stop, voxel_size_m, writer, CarveAll{});
       } else {
-        // Voxel by voxel for the last kFineVoxels before the end, then by 2-voxel cells (5.).
-        const double fine_m = RayBatch::kFineVoxels * voxel_size_m;
-        const double length = (stop - origin).norm();
-        if (length <= fine_m + 2.0 * voxel_size_m) {
-          march<3>(stop, origin, voxel_size_m, true, writer, CarveUntilRun{stop_run});
-        } else {
-          const Eigen::Vector3d coarse_start = stop + (origin - stop) * (fine_m / length);
-          if (march<3>(stop, coarse_start, voxel_size_m, false, writer, CarveUntilRun{stop_run})) {
-            march<2>(coarse_start, origin, 2.0 * voxel_size_m, true, writer,
-                     CarveCellsUntilRun{std::max(1, stop_run / 2)});
-          }
-        }
+        marchFromEnd(origin, stop, voxel_size_m, writer, CarveUntilRun{stop_run});
       }
       if (in_range) writer.setHit(endpoint);
     }

@@ -6,38 +6,35 @@
 //     endpoint voxel. 270k stereo points at 5 cm fall into a few tens of thousands of voxels, so
 //     this removes most of the work and changes nothing a 5 cm map can represent. The colour of an
 //     endpoint voxel is the mean of its points' colours.
-//  2. Rays are marched with a 3D DDA (the voxels of voxel_ray.h's walkVoxels, in a loop without
-//     branches on the stepping axis) into per-block bit masks (8x8x8 voxels = 512 bits per mask, a
-//     free mask and a hit mask), found through an open-addressing table only when the ray crosses
-//     into another block (about every 8 steps). The masks
-//     are the per-batch visited set, so each voxel is updated at most once per batch; a voxel both
-//     crossed and hit is a hit (occupied wins: free &= ~hit).
+//  2. Rays are marched with a 3D DDA (the voxels of the segment from the origin to the endpoint
+//     voxel's centre, ties as OctoMap's computeRayKeys) into per-block bit masks (8x8x8 voxels =
+//     512 bits per mask, a free mask and a hit mask), found through an open-addressing table only
+//     when the ray crosses into another block (about every 8 steps). The masks are the per-batch
+//     visited set, so each voxel is updated at most once per batch; a voxel both crossed and hit
+//     is a hit (occupied wins: free &= ~hit). The DDA takes the t of each voxel face it crosses
+//     from one formula of the face's index (not a running sum), so walking a ray from its end back
+//     to the origin visits exactly the voxels of the walk from the origin, whatever the rounding.
 //  3. Early stop (stop_run > 0): rays from one origin overlap heavily (a 400k-point frame at 5 cm
 //     makes ~9M DDA steps for ~0.45M distinct voxels), so each ray is marched from its end back
 //     towards the origin and stops after stop_run consecutive voxels already carved by earlier
-//     rays: from there those rays have carved (nearly) the same path to the origin. Rays that cross
-//     at one voxel and part again make a single carved voxel a poor signal: stop_run 1 loses 13 %
-//     of the free voxels, 4 loses 0.8 % (and leaves holes inside rooms that become false
-//     frontiers, tests/mapping/frontier/frontier_map_test.cpp), 16 loses 0.04 % with 99.999 % same states
-//     where both know (tests/mapping/integration/octomap_equivalence_test.cpp) at about half the work.
+//     rays: from there those rays have carved (nearly) the same path to the origin. Every voxel
+//     made free lies on the ray's exact path (2.), so the free set is a subset of stop_run 0's
+//     (OctoMap's): early stopping can leave a voxel unknown, never make one free that no ray
+//     crosses. Rays that cross at one voxel and part again make a single carved voxel a poor
+//     signal: stop_run 1 loses 13 % of the free voxels, 4 loses 0.8 % (and leaves holes inside
+//     rooms that become false frontiers, tests/mapping/frontier/frontier_map_test.cpp), 16 loses 0.04 %
+//     (tests/mapping/integration/octomap_equivalence_test.cpp) at about half the work.
 //     stop_run 0 marches every ray whole from the origin, like OctoMap's computeRayKeys:
-//     OctoMap's voxel sets (and no coarse clearing, 5.).
+//     OctoMap's voxel sets (up to rounding: OctoMap casts from float coordinates, 3e-5 of the
+//     free voxels differ on the laser scan of tests/mapping/integration/octomap_equivalence_test.cpp).
 //  4. Points are split into a fixed number of chunks (consecutive points: image bands), each
 //     deduplicated and marched into private masks by any thread and then OR-ed: the map is the same
 //     for any thread count (early stopping depends only on the chunk's own rays). An endpoint voxel
 //     spanning two bands is marched by both (the union is unchanged); its colour is merged.
-//  5. Coarse clearing (stop_run > 0 only): a ray is carved voxel by voxel for its last
-//     kFineVoxels = 16 voxels (0.8 m at 5 cm) before its end voxel, and from there to the origin
-//     by cells of 2x2x2 voxels (aligned to even indices, so 4x4x4 cells per block), all 8 voxels
-//     of each cell it crosses made free; it stops after stop_run / 2 cells in a row whose 8
-//     voxels were all carved already. So the free set differs from OctoMap's only there, farther
-//     than about 0.8 m - 0.17 m from any ray's end: a voxel within one cell (at most 2 sqrt(3)
-//     voxels) of a ray's far stretch is free although the ray misses it; hits of the batch still
-//     win. Half the steps on the long stretch, and neighbouring rays share whole cells sooner, so
-//     they stop sooner (integration: a third fewer instructions, docs/PERFORMANCE.md). Price: grazing rays can give a
-//     surface voxel seen in an earlier frame one extra miss (the bench map: 42264 -> 42220
-//     occupied voxels, 0.1 %); where both maps know a voxel, 99.99 % same state as OctoMap, and
-//     3 % more voxels known free than OctoMap (tests/mapping/integration/octomap_equivalence_test.cpp).
+// No coarse clearing: carving a ray's far stretch by 2x2x2 cells (all 8 voxels of a cell it
+// crosses made free) takes a third fewer instructions in bench/map_bench, but makes free voxels no
+// ray crossed, which a planner takes as safe: 4 % more than OctoMap's in the bench at 5 cm, 7 % at
+// 0.1 m, 74 % on octomap_equivalence_test's laser scan at 0.1 m.
 // Range rule: an endpoint centre farther than max_range_m carves free space to max_range_m along
 // its ray and records no hit (OctoMap's rule). Rays end at the endpoint voxel, exclusive.
 // Units: metres, world frame. Threads: one RayBatch per writer; build() uses OpenMP internally.
@@ -57,11 +54,11 @@ namespace cenote::mapping {
 // The updates (BatchUpdates: block masks, colours) of a batch of rays.
 class RayBatch {
  public:
-  static constexpr int kRayChunks = 16;  // fast mode; fixed so that results ignore the thread count
-  static constexpr int kFineVoxels = 16;  // fast mode: voxels before a ray's end carved one by one (5.)
+  static constexpr int kRayChunks = 16;  // early stop; fixed so that results ignore the thread count
 
   // Computes the updates of `batch`. The batch must already be checked (finite, in range).
-  // stop_run: see 3. above; 0 marches every ray whole (OctoMap's voxel sets).
+  // stop_run: see 3. above; 0 marches every ray whole (OctoMap's voxel sets); any stop_run gives
+  // a subset of stop_run 0's free voxels and the same hits.
   void build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads, int stop_run);
 
   // The updates of the last build(), read-only.

@@ -49,6 +49,7 @@ class MapHost {
   mapping::MapDelta clearBox(const mapping::Aabb& box_m);
   mapping::MapDelta clearSphere(const Eigen::Vector3d& centre_m, double radius_m);
   mapping::MapDelta cropToRadius(const Eigen::Vector3d& centre_m, double radius_m);
+  // Clear, crop and reset give the memory the map frees back to the system (malloc_trim).
   mapping::MapDelta reset();
   uint64_t batchesIntegrated() const;
 
@@ -65,8 +66,10 @@ class MapHost {
   uint64_t changesSeenWhenDerivedIdled() const;
 
  private:
+  // Runs `apply` on the writer thread and hands its delta on; forgets: it may free map memory
+  // (clear, crop, reset), which is then given back to the system.
   template <typename Change>
-  mapping::MapDelta change(Change&& apply);
+  mapping::MapDelta change(Change&& apply, bool forgets);
   void derivedLoop();
 
   std::unique_ptr<mapping::OccupancyMap> map_;

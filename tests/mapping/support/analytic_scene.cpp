@@ -134,6 +134,32 @@ DepthFrame renderDepth(const Scene& scene, const PinholeCamera& camera, const Ei
   return frame;
 }
 
+PointBatch renderScan(const Scene& scene, const LaserScanner& scanner, const Eigen::Isometry3d& T_world_scanner,
+                      double max_range_m, double noise_m, uint32_t seed) {
+  PointBatch batch;
+  batch.origin = T_world_scanner.translation();
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, noise_m > 0.0 ? noise_m : 1.0);
+  batch.points.reserve(static_cast<size_t>(scanner.rings) * scanner.columns);
+  for (int r = 0; r < scanner.rings; ++r) {
+    const double elevation =
+        scanner.rings == 1 ? scanner.min_elevation_rad
+                           : scanner.min_elevation_rad + (scanner.max_elevation_rad - scanner.min_elevation_rad) * r /
+                                                             (scanner.rings - 1);
+    for (int c = 0; c < scanner.columns; ++c) {
+      const double azimuth = scanner.azimuth_offset_rad + 2.0 * M_PI * c / scanner.columns;
+      const Eigen::Vector3d d_scanner(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+                                      std::sin(elevation));
+      const Eigen::Vector3d d = (T_world_scanner.linear() * d_scanner).normalized();
+      const auto t = scene.intersect(batch.origin, d, max_range_m);
+      if (!t) continue;
+      const double range = *t + (noise_m > 0.0 ? noise(rng) : 0.0);
+      batch.points.push_back((batch.origin + range * d).cast<float>());
+    }
+  }
+  return batch;
+}
+
 Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
   const Eigen::Vector3d z = (target - position).normalized();
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();

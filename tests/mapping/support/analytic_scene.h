@@ -65,6 +65,22 @@ PointBatch renderBatch(const Scene& scene, const PinholeCamera& camera, const Ei
 DepthFrame renderDepth(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_world_cam,
                        double max_depth_m, double noise_m = 0.0, uint32_t seed = 1);
 
+// A spinning multi-beam laser scanner (lidar): `rings` beams at elevations evenly spaced in
+// [min_elevation_rad, max_elevation_rad] (from the scanner's x-y plane, +z up), each sampled at
+// `columns` azimuths evenly spaced over a full turn, starting at azimuth_offset_rad.
+struct LaserScanner {
+  int rings = 32;
+  int columns = 1024;
+  double min_elevation_rad = -0.5;
+  double max_elevation_rad = 0.2;
+  double azimuth_offset_rad = 0.0;
+};
+
+// One point per beam whose ray hits a surface within max_range_m (others give none, as a laser
+// without a return), ring by ring. noise_m adds Gaussian noise along the beam (0: exact). No colours.
+PointBatch renderScan(const Scene& scene, const LaserScanner& scanner, const Eigen::Isometry3d& T_world_scanner,
+                      double max_range_m, double noise_m = 0.0, uint32_t seed = 1);
+
 // A camera at `position` looking at `target` (world up: +z unless looking along it).
 Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
 
