@@ -1,6 +1,5 @@
 // MapHost's distance field and frontiers: brought up to date for a distance query (which reads its
-// own writes), followed periodically only while such queries keep coming; and the SerialWorker
-// that runs the map's changes.
+// own writes), followed periodically only while such queries keep coming.
 #include "server/host/map_host.h"
 
 #include <gtest/gtest.h>
@@ -11,7 +10,6 @@
 #include <vector>
 
 #include "common/error.h"
-#include "server/host/serial_worker.h"
 
 namespace cenote::server {
 namespace {
@@ -100,21 +98,6 @@ TEST(MapHostDerived, AfterTheFollowWindowChangesWaitForTheNextQuery) {
   ASSERT_TRUE(host->waitForDerived(std::chrono::system_clock::now() + 30s));
   EXPECT_EQ(host->derivedUpdates(), 2u);
   EXPECT_NEAR(distanceAt(*host, {0.5, 1.5, 0.0}), 0.525, 0.05);
-}
-
-TEST(SerialWorker, RunsJobsInOrderAndRefusesJobsAfterFinish) {
-  SerialWorker worker(0);
-  std::vector<int> order;
-  for (int i = 0; i < 3; ++i) worker.run([&] { order.push_back(i); });
-  EXPECT_EQ(order, (std::vector<int>{0, 1, 2}));
-  EXPECT_THROW(worker.run([] { throw Error("bad batch"); }), Error);  // a job's error reaches its caller
-  worker.finish();
-  try {
-    worker.run([] { return 1; });
-    ADD_FAILURE() << "run() after finish() returned";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("map writer stopped"), std::string::npos) << e.what();
-  }
 }
 
 }  // namespace
