@@ -303,6 +303,7 @@ TEST_F(MapClientQueryTest, FrontiersLieOnTheEdgeOfTheObservedRegionAndEqualTheIn
   ASSERT_EQ(nearest.size(), std::min<size_t>(2, got.size()));
   EXPECT_EQ(nearest[0].num_voxels, got[0].num_voxels);
   const Box far_side{{1.0, -2.0, -2.0}, {3.0, 2.0, 2.0}};
+  ASSERT_FALSE(map.frontiers({kOrigin_m, far_side, 0}).empty()) << "premise of the loop: the region has frontiers";
   for (const Frontier& f : map.frontiers({kOrigin_m, far_side, 0})) {
     EXPECT_GE(f.centroid_m.x(), 1.0) << "frontier " << f.id << " outside the region";
   }
