@@ -5,7 +5,6 @@
 #include <filesystem>
 #include <fstream>
 
-#include "common/config_error.h"
 
 namespace cenote {
 namespace {
@@ -56,15 +55,6 @@ TEST(LoadYamlFile, MissingFileAndBrokenYamlAreErrors) {
   const std::string path = testing::TempDir() + "/broken.yaml";
   std::ofstream(path) << "stereo: {window_px: [1, 2\n";
   EXPECT_THROW(loadYamlFile(path), Error);
-}
-
-TEST(ConfigErrors, FormatsKeyValueAndRule) {
-  ConfigErrors errors("stereo");
-  errors.check(false, "num_disparities", 300, "must be a multiple of 16 in [16, 512]");
-  errors.check(true, "window_px", 3, "never shown");
-  const auto list = errors.take();
-  ASSERT_EQ(list.size(), 1u);
-  EXPECT_EQ(list[0].toString(), "stereo.num_disparities = 300: must be a multiple of 16 in [16, 512]");
 }
 
 }  // namespace

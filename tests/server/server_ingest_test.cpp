@@ -206,6 +206,18 @@ TEST_F(SimulatedDive, BadFramesAreRejectedWithTheirStatusAndTheMapIsUnchanged) {
   ASSERT_TRUE(stubs.query->GetMapInfo(info_context.get(), v1::MapInfoRequest(), &info).ok());
   EXPECT_EQ(info.map_version(), 0u);
   EXPECT_EQ(info.occupied() + info.free(), 0u);
+
+  // Positive control: the unchanged frame is processed, so the rejections above came from what
+  // each case broke, not from a stream that refuses every frame.
+  auto good_context = contextWithDeadline();
+  auto good_frames = stubs.ingest->StreamFrames(good_context.get());
+  v1::StereoFrame again = good;
+  again.set_timestamp_s(t += 0.1);
+  ASSERT_TRUE(good_frames->Write(again));
+  ASSERT_TRUE(good_frames->Read(&ack));
+  EXPECT_EQ(ack.outcome(), v1::FRAME_OUTCOME_PROCESSED) << ack.message();
+  good_frames->WritesDone();
+  EXPECT_TRUE(good_frames->Finish().ok());
 }
 
 TEST(ServerWithoutCalibration, StreamFramesFailsWithFailedPrecondition) {
@@ -317,6 +329,14 @@ TEST(ServerPointIngest, OversizedAndBrokenBatchesAreRefusedAndTheMapIsUnchanged)
   }
   poses->WritesDone();
   EXPECT_TRUE(poses->Finish().ok());
+
+  // Positive control: a good batch of the same shape goes into the same map, so the map stayed
+  // empty above because the batches were refused, not because nothing ever reaches it.
+  ASSERT_TRUE(call(wallBatch(2.0, 0.2, 0.05, 1.0)).ok());
+  auto after_context = contextWithDeadline();
+  ASSERT_TRUE(stubs.query->GetMapInfo(after_context.get(), v1::MapInfoRequest(), &info).ok());
+  EXPECT_GT(info.map_version(), 0u);
+  EXPECT_GT(info.occupied(), 0u);
   fs::remove(config);
 }
 

@@ -35,6 +35,8 @@ done
 # Same seed, same bytes; the thread count does not matter.
 OMP_NUM_THREADS=1 "$cenote" sim --scene reef --frames 2 --width 200 --height 150 --seed 3 --out "$work/one" --quiet >/dev/null
 OMP_NUM_THREADS=2 "$cenote" sim --scene reef --frames 2 --width 200 --height 150 --seed 3 --out "$work/two" --quiet >/dev/null
+# (two empty folders would be the same too: the images must be there)
+[[ $(ls "$work/one/mav0/cam0/data" | grep -c '\.png$') -eq 2 ]] || fail "1 thread: no images to compare"
 diff -r "$work/one" "$work/two" >/dev/null || fail "1 and 2 threads wrote different files"
 
 # A config file's sim: section, overridden by options.

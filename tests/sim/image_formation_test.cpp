@@ -100,6 +100,8 @@ TEST(Exposure, RenderImageIsExposeImageOfRenderRadiance) {
   const cv::Mat radiance = renderRadiance(sim.scene(), sim.texture(), sim.rig().camera, T, vis, T);
   const cv::Mat a = exposeImage(radiance, 1.3f, 2.0f, 77);
   const cv::Mat b = renderImage(sim.scene(), sim.texture(), sim.rig().camera, T, vis, T, 1.3f, 2.0f, 77);
+  ASSERT_EQ(a.size(), cv::Size(203, 150));  // two empty images would compare equal too
+  ASSERT_GT(cv::countNonZero(a.reshape(1)), a.rows * a.cols / 2) << "mostly black image";
   ASSERT_EQ(a.size(), b.size());
   EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
 }

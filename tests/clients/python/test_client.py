@@ -322,6 +322,7 @@ class AdminTest(ServerCase):
         self.assertEqual(self.client.info().occupied, 0)
 
     def test_reset(self):
+        self.assertGreater(self.client.info().occupied, 0)  # premise: there is a map to reset
         before = self.client.info().map_version
         change = self.client.reset()
         self.assertGreater(change.map_version, before)
@@ -331,6 +332,9 @@ class AdminTest(ServerCase):
 
     def test_subscribe_gets_the_map_then_changes(self):
         info = self.client.info()
+        # premise: the snapshot's counts are compared with a map that holds the wall
+        self.assertEqual(info.occupied, (2 * WALL_HALF + 1) ** 2)
+        self.assertGreater(info.free, 0)
         updates = self.client.subscribe(timeout_s=30.0)
         occupied = free = 0
         for update in updates:

@@ -7,7 +7,6 @@
 #include <random>
 
 #include "common/error.h"
-#include "eval/cloud/voxel_downsample.h"
 
 namespace cenote::eval {
 namespace {
@@ -102,17 +101,6 @@ TEST(CloudMetrics, TwoMillionPointsMatchBruteForceOnASubsetWhateverTheThreads) {
   const std::vector<double> single = nearestDistances(head, target);
   omp_set_num_threads(threads);
   for (size_t i = 0; i < head.size(); ++i) ASSERT_EQ(single[i], distances[i]) << "source point " << i;
-}
-
-TEST(VoxelDownsample, ZeroKeepsPointsAndVoxelAveragesThem) {
-  const std::vector<Eigen::Vector3f> points = {{0.1f, 0.1f, 0.1f}, {0.3f, 0.3f, 0.3f}, {1.5f, 0, 0}, {-0.5f, 0, 0}};
-  EXPECT_EQ(voxelDownsample(points, 0.0), points);
-  const auto down = voxelDownsample(points, 1.0);
-  ASSERT_EQ(down.size(), 3u);
-  EXPECT_TRUE(down[0].isApprox(Eigen::Vector3f(-0.5f, 0, 0)));
-  EXPECT_TRUE(down[1].isApprox(Eigen::Vector3f(0.2f, 0.2f, 0.2f)));
-  EXPECT_TRUE(down[2].isApprox(Eigen::Vector3f(1.5f, 0, 0)));
-  EXPECT_THROW(voxelDownsample(points, -1.0), Error);
 }
 
 }  // namespace

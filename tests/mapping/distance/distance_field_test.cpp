@@ -27,6 +27,8 @@ std::vector<VoxelIndex> occupiedVoxels(const OccupancyMap& map) {
 // than rounding (the field's distance is to some real obstacle). Returns the largest error.
 double checkAgainstBruteForce(const OccupancyMap& map, const DistanceField& field, int n) {
   const std::vector<VoxelIndex> occupied = occupiedVoxels(map);
+  // Premise: with no obstacle, field and brute force are both max_distance everywhere.
+  EXPECT_GT(occupied.size(), 10u) << "no obstacles to measure distances to";
   const double s = map.voxelSize();
   double worst = 0.0;
   size_t exact = 0, total = 0;

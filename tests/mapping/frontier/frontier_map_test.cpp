@@ -114,6 +114,8 @@ TEST(FrontierMap, LargeClustersAreSplitAndRegionOfInterestLimits) {
     EXPECT_LE(extent.maxCoeff(), 1.0 + 1e-9) << "cluster " << cl.id;
   }
   EXPECT_LT(limited.numFrontierVoxels(), frontiers.numFrontierVoxels());
+  // Premise of the loop: the region holds frontiers (an empty list would pass it).
+  EXPECT_FALSE(limited.clusters(Eigen::Vector3d::Zero()).empty());
   for (const auto& cl : limited.clusters(Eigen::Vector3d::Zero())) EXPECT_LE(cl.bounds_m.max_m.x(), 4.5 + 1e-9);
 }
 

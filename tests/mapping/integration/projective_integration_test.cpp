@@ -90,6 +90,17 @@ TEST(ProjectiveIntegration, PixelsWithoutDepthCarveNothing) {
     const Eigen::Vector3d p = frame.T_world_cam.translation() + t * centre_ray.normalized();
     EXPECT_EQ(acc.state(map.toIndex(p)), VoxelState::kUnknown) << "at " << t << " m along the hole's centre ray";
   }
+  // Positive control: without the hole the same samples are carved free, so "unknown" above is the
+  // hole's doing and not a ray that would never have reached them.
+  OccupancyMap full(config());
+  full.integrateDepth(test::renderDepth(floorScene(), camera, floorPose(), 12.0));
+  const auto full_acc = full.constAccessor();
+  int carved = 0, samples = 0;
+  for (double t = 0.8; t < 3.0; t += 0.2, ++samples) {
+    const Eigen::Vector3d p = frame.T_world_cam.translation() + t * centre_ray.normalized();
+    carved += full_acc.state(full.toIndex(p)) == VoxelState::kFree;
+  }
+  EXPECT_EQ(carved, samples) << "without the hole, " << carved << " of " << samples << " samples are free";
 }
 
 // The same view by rays (ray_stop_run 0, every ray whole) and by projection. The hits are the same
@@ -145,6 +156,8 @@ TEST(ProjectiveIntegration, SameMapForAnyThreadCount) {
   const MapDelta da = one.integrateDepth(frame), db = three.integrateDepth(frame);
   EXPECT_EQ(da.changed_blocks, db.changed_blocks);
   EXPECT_EQ(da.voxels_updated, db.voxels_updated);
+  ASSERT_GT(one.stats().occupied, 0u);  // premise: two empty maps would be equal too
+  ASSERT_GT(one.stats().free, 0u);
   EXPECT_EQ(one.stats().free, three.stats().free);
   EXPECT_EQ(one.stats().occupied, three.stats().occupied);
 }
@@ -172,6 +185,10 @@ TEST(ProjectiveIntegration, BadFramesAreRejectedAndLeaveTheMapUnchanged) {
   }
   EXPECT_EQ(map.version(), 0u);
   EXPECT_EQ(map.stats().free + map.stats().occupied, 0u);
+  // Positive control: the frame they were made from does change the map.
+  map.integrateDepth(good);
+  EXPECT_GT(map.version(), 0u);
+  EXPECT_GT(map.stats().occupied, 0u);
 }
 
 }  // namespace

@@ -35,6 +35,8 @@ std::unique_ptr<OccupancyMap> sceneMap() {
 // Every known voxel of `a` has the same state in `b`, and both know as many voxels.
 void expectSameStates(const OccupancyMap& a, const OccupancyMap& b) {
   const MapStats sa = a.stats(), sb = b.stats();
+  EXPECT_GT(sa.occupied, 0u) << "premise: the map compared is not empty";
+  EXPECT_GT(sa.free, 0u) << "premise: the map compared is not empty";
   EXPECT_EQ(sa.occupied, sb.occupied);
   EXPECT_EQ(sa.free, sb.free);
   auto acc_a = a.constAccessor();

@@ -132,6 +132,7 @@ TEST(FusionWindow, EmitsTheMiddleFrameOnceFullAndSlides) {
   const FusedFrame* first = window.push(seq.noisy[2]);
   ASSERT_NE(first, nullptr);
   EXPECT_EQ(first->frame.t_s, seq.noisy[1].t_s);
+  EXPECT_GT(first->points.size(), 1000u);  // premise: not 0 points for 0 confident pixels
   EXPECT_EQ(first->points.size(), static_cast<size_t>(cv::countNonZero(first->frame.confidence)));
   EXPECT_EQ(first->points.colors.size(), first->points.size());
   EXPECT_TRUE(first->points.origin.isApprox(seq.noisy[1].T_world_cam.translation()));

@@ -137,6 +137,7 @@ TEST(Runner, VoxelDownsamplingKeepsExactlyOnePointPerOccupiedVoxel) {
   std::set<std::tuple<float, float, float>> occupied, kept;
   for (const auto& p : io::readPly(f.out_dir + "_all/points.ply").points) occupied.insert(key(p));
   for (const auto& p : io::readPly(f.out_dir + "/points.ply").points) kept.insert(key(p));
+  ASSERT_GT(occupied.size(), 100u) << "premise: two empty clouds would be equal too";
   EXPECT_EQ(r.points_written, occupied.size());
   EXPECT_EQ(kept.size(), r.points_written) << "two points in one voxel";
   EXPECT_EQ(kept, occupied);
@@ -186,11 +187,15 @@ TEST(BoundedQueue, BlocksTheProducerWhenFullAndDrainsAfterClose) {
   BoundedQueue<int> q(2);
   EXPECT_TRUE(q.push(1));
   EXPECT_TRUE(q.push(2));
-  std::atomic<bool> third_pushed{false};
+  std::atomic<bool> third_pushed{false}, producer_started{false};
   std::thread producer([&] {
+    producer_started = true;
     q.push(3);
     third_pushed = true;
   });
+  // Premise of the check below: the producer has reached push(), so "not pushed yet" is the
+  // queue holding it back, not a thread that had not run yet.
+  while (!producer_started.load()) std::this_thread::yield();
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
   EXPECT_FALSE(third_pushed.load()) << "a full queue must hold the producer back";
   EXPECT_EQ(q.pop().value(), 1);

@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
@@ -62,6 +63,9 @@ SyntheticPair slantedPlane(int width, int height, double d0, double a, double b,
 
 void expectBitIdentical(const DisparityMap& a, const DisparityMap& b, const std::string& what) {
   ASSERT_EQ(a.disparity.size(), b.disparity.size());
+  // Premise: two empty maps, or two maps with no valid pixel, would be "identical" too.
+  ASSERT_FALSE(a.disparity.empty()) << what;
+  EXPECT_GT(cv::countNonZero(a.disparity < std::numeric_limits<float>::infinity()), 0) << what << ": no valid pixel";
   int mismatches = 0;
   for (int y = 0; y < a.disparity.rows; ++y) {
     for (int x = 0; x < a.disparity.cols; ++x) {

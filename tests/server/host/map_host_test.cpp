@@ -1,6 +1,5 @@
 // MapHost's distance field and frontiers: brought up to date for a distance query (which reads its
-// own writes), followed periodically only while such queries keep coming; and the SerialWorker
-// that runs the map's changes.
+// own writes), followed periodically only while such queries keep coming.
 #include "server/host/map_host.h"
 
 #include <gtest/gtest.h>
@@ -17,7 +16,6 @@
 #include <vector>
 
 #include "common/error.h"
-#include "server/host/serial_worker.h"
 
 namespace cenote::server {
 namespace {
@@ -172,21 +170,6 @@ TEST(MapHostMemory, CropGivesTheRemovedBlocksMemoryBackToTheSystem) {
       << " MB after the crop (map " << kept_bytes / kMiB << " MB)";
   std::cout << "resident memory: " << before / kMiB << " MB before, " << filled / kMiB << " MB filled, " << after / kMiB
             << " MB after the crop to one ball of two (map " << kept_bytes / kMiB << " MB)\n";
-}
-
-TEST(SerialWorker, RunsJobsInOrderAndRefusesJobsAfterFinish) {
-  SerialWorker worker(0);
-  std::vector<int> order;
-  for (int i = 0; i < 3; ++i) worker.run([&] { order.push_back(i); });
-  EXPECT_EQ(order, (std::vector<int>{0, 1, 2}));
-  EXPECT_THROW(worker.run([] { throw Error("bad batch"); }), Error);  // a job's error reaches its caller
-  worker.finish();
-  try {
-    worker.run([] { return 1; });
-    ADD_FAILURE() << "run() after finish() returned";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("map writer stopped"), std::string::npos) << e.what();
-  }
 }
 
 }  // namespace
