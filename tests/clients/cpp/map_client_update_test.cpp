@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -257,6 +258,25 @@ TEST(MapClientUpdates, AdminEditsAndSnapshots) {
     EXPECT_EQ(loaded->stats().free, reference.stats().free) << path;
   }
   EXPECT_NO_THROW(map.snapshot("scene.bt"));
+  // The format follows the extension (mapping/io/map_file_format.h): a download named .bt is an
+  // OctoMap tree, not a VDB under that name (issue 14).
+  const std::string local_bt = server.directory() + "/downloaded.bt";
+  map.downloadSnapshot(local_bt);
+  std::string first_line;
+  std::getline(std::ifstream(local_bt), first_line);
+  EXPECT_EQ(first_line, "# Octomap OcTree binary file");
+  EXPECT_EQ(mapping::loadMap(local_bt)->stats().occupied, reference.stats().occupied);
+  for (const auto& [path, format] : {std::pair{"scene.vdb", SnapshotFormat::kPointsPly}, std::pair{"mesh.ply", SnapshotFormat::kFromExtension},
+                                     std::pair{"scene.xyz", SnapshotFormat::kFromExtension}}) {
+    try {
+      map.snapshot(path, format);
+      ADD_FAILURE() << path << " was written";
+    } catch (const RpcError& e) {
+      EXPECT_EQ(e.code(), grpc::StatusCode::INVALID_ARGUMENT) << e.what();
+      EXPECT_EQ(e.message().rfind(std::string(path) + ": ", 0), 0u) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(server.snapshotDirectory() + "/" + path)) << path;
+  }
   try {
     map.snapshot("../escape.vdb");
     ADD_FAILURE() << "a snapshot path with .. was accepted";
