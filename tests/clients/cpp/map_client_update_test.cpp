@@ -266,7 +266,7 @@ TEST(MapClientUpdates, AdminEditsAndSnapshots) {
   std::getline(std::ifstream(local_bt), first_line);
   EXPECT_EQ(first_line, "# Octomap OcTree binary file");
   EXPECT_EQ(mapping::loadMap(local_bt)->stats().occupied, reference.stats().occupied);
-  for (const auto& [path, format] : {std::pair{"scene.vdb", SnapshotFormat::kPointsPly}, std::pair{"mesh.ply", SnapshotFormat::kFromExtension},
+  for (const auto& [path, format] : {std::pair{"refused.vdb", SnapshotFormat::kPointsPly}, std::pair{"mesh.ply", SnapshotFormat::kFromExtension},
                                      std::pair{"scene.xyz", SnapshotFormat::kFromExtension}}) {
     try {
       map.snapshot(path, format);
