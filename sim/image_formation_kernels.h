@@ -1,5 +1,5 @@
 // image_formation_kernels.h: the per-row SIMD kernels behind image_formation.h: Highway, compiled
-// once per instruction set and chosen at run time. Internal to pipeline/sim.
+// once per instruction set and chosen at run time. Internal to sim/.
 //   shadeRadianceRow()  renderRadiance(): the model of sim_scene.h (SceneLighting) and
 //                       image_formation.h (SurfaceTexture; the scalar surfaceAlbedo() is the
 //                       reference for the texture part)

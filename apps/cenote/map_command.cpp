@@ -4,7 +4,8 @@
 //       --max-range (-m; <= 0 unlimited), --sensor-model HIT MISS (-sensor), --clamping MIN MAX
 //       (-clamping), --max-scans (-n). Defaults come from --config's `map:` section (5 cm, 10 m).
 //   map info MAP                  resolution, bounds, voxel counts by state, memory
-//   map export MAP --mesh|--points out.ply, --bt|--ot|--vdb out
+//   map export MAP --mesh out.ply, --points out.ply|out.pcd, --bt|--ot|--vdb out: the option names
+//       the format and the extension must agree with it (mapping/io/map_file_format.h)
 //   map query MAP --state X,Y,Z | --segment X,Y,Z,X,Y,Z[,RADIUS] [--stop-at-unknown]
 //                 | --distance X,Y,Z [--max-distance M] | --frontiers [--position X,Y,Z]
 //       distances and frontiers are computed from the whole loaded map (DistanceField::rebuild,
@@ -22,6 +23,7 @@
 #include "mapping/io/map_io.h"
 #include "mapping/io/scan_graph.h"
 #include "mapping/query/map_query.h"
+#include "io/cloud/pcd_io.h"
 #include "io/cloud/ply_io.h"
 
 namespace cenote::apps {
@@ -129,25 +131,49 @@ struct ExportOptions {
   std::string map, mesh, points, bt, ot, vdb;
 };
 
+// The format of one export option's file: the option's, which the extension must agree with.
+// --points takes PLY or PCD, as the extension says.
+MapFileFormat exportFormat(const std::string& option, const std::string& path, MapFileFormat format) {
+  try {
+    if (format == MapFileFormat::kPointsPly && mapFileFormatOf(path) == MapFileFormat::kPointsPcd) return MapFileFormat::kPointsPcd;
+    return resolveMapFileFormat(path, format);
+  } catch (const Error& e) {
+    throw Error(option + " " + path + ": " + e.what());
+  }
+}
+
 void runExport(const ExportOptions& o) {
-  const auto map = loadMap(o.map);
-  int outputs = 0;
-  if (!o.mesh.empty()) {
-    const MeshStats m = exportMeshPly(*map, o.mesh);
-    std::printf("wrote %s: %zu vertices, %zu triangles\n", o.mesh.c_str(), m.vertices, m.triangles);
-    ++outputs;
+  const std::pair<const char*, MapFileFormat> kinds[] = {
+      {"--mesh", MapFileFormat::kMeshPly}, {"--points", MapFileFormat::kPointsPly}, {"--bt", MapFileFormat::kBt},
+      {"--ot", MapFileFormat::kOt},        {"--vdb", MapFileFormat::kVdb}};
+  const std::string* paths[] = {&o.mesh, &o.points, &o.bt, &o.ot, &o.vdb};
+  std::vector<std::pair<std::string, MapFileFormat>> outputs;
+  for (size_t i = 0; i < std::size(kinds); ++i) {
+    if (!paths[i]->empty()) outputs.emplace_back(*paths[i], exportFormat(kinds[i].first, *paths[i], kinds[i].second));
   }
-  if (!o.points.empty()) {
-    std::printf("wrote %s: %zu occupied voxel centres\n", o.points.c_str(), exportOccupiedPointsPly(*map, o.points));
-    ++outputs;
+  if (outputs.empty()) throw Error("map export: give at least one of --mesh, --points, --bt, --ot, --vdb");
+  const auto map = loadMap(o.map);  // after the checks: a bad name fails before the load
+  for (const auto& [path, format] : outputs) {
+    switch (format) {
+      case MapFileFormat::kMeshPly: {
+        const MeshStats m = exportMeshPly(*map, path);
+        std::printf("wrote %s: %zu vertices, %zu triangles\n", path.c_str(), m.vertices, m.triangles);
+        break;
+      }
+      case MapFileFormat::kPointsPly:
+        std::printf("wrote %s: %zu occupied voxel centres\n", path.c_str(), exportOccupiedPointsPly(*map, path));
+        break;
+      case MapFileFormat::kPointsPcd: {
+        const PointBatch centres = occupiedVoxelCentres(*map);
+        io::writePcd(path, centres.points, centres.colors);
+        std::printf("wrote %s: %zu occupied voxel centres\n", path.c_str(), centres.size());
+        break;
+      }
+      default:
+        saveMap(*map, path);
+        std::printf("wrote %s\n", path.c_str());
+    }
   }
-  for (const std::string* out : {&o.bt, &o.ot, &o.vdb}) {
-    if (out->empty()) continue;
-    saveMap(*map, *out);
-    std::printf("wrote %s\n", out->c_str());
-    ++outputs;
-  }
-  if (outputs == 0) throw Error("map export: give at least one of --mesh, --points, --bt, --ot, --vdb");
 }
 
 struct QueryOptions {
@@ -259,13 +285,13 @@ void registerMapCommand(CLI::App& app) {
   info->callback([info_path] { printInfo(*info_path); });
 
   auto ex = std::make_shared<ExportOptions>();
-  CLI::App* exp = map->add_subcommand("export", "Convert a map: mesh or voxel PLY, .bt, .ot, .vdb");
+  CLI::App* exp = map->add_subcommand("export", "Convert a map: mesh or voxel PLY, voxel PCD, .bt, .ot, .vdb");
   exp->add_option("map", ex->map, "map file (.vdb, .bt, .ot)")->required();
-  exp->add_option("--mesh", ex->mesh, "triangle mesh of occupied space, PLY with vertex colours");
-  exp->add_option("--points", ex->points, "occupied voxel centres, coloured PLY");
-  exp->add_option("--bt", ex->bt, "OctoMap binary tree");
-  exp->add_option("--ot", ex->ot, "OctoMap colour tree");
-  exp->add_option("--vdb", ex->vdb, "OpenVDB file");
+  exp->add_option("--mesh", ex->mesh, "triangle mesh of occupied space, PLY with vertex colours (.ply, .mesh.ply)");
+  exp->add_option("--points", ex->points, "occupied voxel centres with colours: PLY (.ply, .points.ply) or PCL's PCD (.pcd)");
+  exp->add_option("--bt", ex->bt, "OctoMap binary tree (.bt)");
+  exp->add_option("--ot", ex->ot, "OctoMap colour tree (.ot)");
+  exp->add_option("--vdb", ex->vdb, "OpenVDB file (.vdb)");
   exp->callback([ex] { runExport(*ex); });
 
   auto q = std::make_shared<QueryOptions>();

@@ -90,7 +90,7 @@ void run(const RunOptions& o) {
   const std::string report_path = (std::filesystem::path(o.out) / "report.json").string();
   std::ofstream(report_path) << report.toJson();
   std::cout << report.toTable();
-  std::cout << "outputs: " << o.out << "/points.ply, " << report_path;
+  std::cout << "outputs: " << o.out << "/" << pipeline::pointsFileName(runner.config().run) << ", " << report_path;
   if (runner.config().run.write_depth) std::cout << ", " << o.out << "/depth/";
   if (map) {
     mapping::saveMap(*map, o.map);

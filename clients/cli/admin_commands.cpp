@@ -2,6 +2,7 @@
 //   stats                          server statistics: frames, voxels, memory, stage and call timings
 //   snapshot PATH [--format F]     writes the map on the server (PATH relative to its snapshot dir)
 //   snapshot --download FILE       streams the map to a local file
+//       the format follows the extension (mapping/io/map_file_format.h); --format must agree with it
 //   watch [--count N] [--region MIN MAX]   one line per map update
 //   integrate --points-file F --origin X,Y,Z   one point batch (already in the world frame)
 //   clear-box MIN MAX | clear-sphere CENTRE RADIUS | crop CENTRE RADIUS | reset
@@ -10,6 +11,8 @@
 
 #include "clients/cli/cli_input.h"
 #include "clients/cli/commands.h"
+#include "common/error.h"
+#include "mapping/io/map_file_format.h"
 
 namespace cenote::cli {
 
@@ -17,14 +20,13 @@ namespace {
 
 using ull = unsigned long long;
 
+// The names of mapping/io/map_file_format.h ("" = from the extension).
 client::SnapshotFormat parseFormat(const std::string& name) {
-  static const std::map<std::string, client::SnapshotFormat> formats = {
-      {"", client::SnapshotFormat::kFromExtension},      {"vdb", client::SnapshotFormat::kVdb},
-      {"bt", client::SnapshotFormat::kBt},               {"ot", client::SnapshotFormat::kOt},
-      {"mesh-ply", client::SnapshotFormat::kMeshPly},    {"points-ply", client::SnapshotFormat::kPointsPly}};
-  const auto it = formats.find(name);
-  if (it == formats.end()) throw CliError("--format " + name + ": expected vdb, bt, ot, mesh-ply or points-ply");
-  return it->second;
+  try {
+    return static_cast<client::SnapshotFormat>(mapping::parseMapFileFormat(name));
+  } catch (const Error& e) {
+    throw CliError(std::string("--") + e.what());
+  }
 }
 
 void printChange(const char* what, const client::ChangeResult& r) {
@@ -69,14 +71,15 @@ void registerSnapshot(CLI::App& app, Connection& connection) {
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("snapshot", "Write the map on the server, or --download it to a local file");
-  cmd->add_option("path", o->path, "File name under the server's snapshot directory (.vdb .bt .ot .ply)");
-  auto* download = cmd->add_option("--download", o->download, "Local file to stream the map into instead");
-  cmd->add_option("--format", o->format, "vdb, bt, ot, mesh-ply, points-ply (default: from the extension; vdb for --download)");
+  cmd->add_option("path", o->path, "File name under the server's snapshot directory; its extension names the format (" +
+                                       mapping::mapFileFormatTable() + ")");
+  auto* download = cmd->add_option("--download", o->download, "Local file to stream the map into instead (format as for PATH)");
+  cmd->add_option("--format", o->format,
+                  "vdb, bt, ot, mesh-ply, points-ply, points-pcd: must agree with the extension (needed for a plain .ply)");
   download->excludes(cmd->get_option("path"));
   cmd->callback([o, &connection] {
     if (!o->download.empty()) {
-      const auto format = o->format.empty() ? client::SnapshotFormat::kVdb : parseFormat(o->format);
-      const uint64_t bytes = connection.client().downloadSnapshot(o->download, format);
+      const uint64_t bytes = connection.client().downloadSnapshot(o->download, parseFormat(o->format));
       std::printf("downloaded %s: %llu bytes\n", o->download.c_str(), static_cast<ull>(bytes));
       return;
     }

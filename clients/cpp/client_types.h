@@ -144,8 +144,11 @@ struct ServerStats {
   double last_snapshot_age_s = -1.0;  // -1: none yet
 };
 
-// As admin.proto's SnapshotFormat; kFromExtension picks it from the path.
-enum class SnapshotFormat { kFromExtension = 0, kVdb = 1, kBt = 2, kOt = 3, kMeshPly = 4, kPointsPly = 5 };
+// As admin.proto's SnapshotFormat (and mapping/io/map_file_format.h, whose table decides): the
+// format follows the path's extension, kFromExtension takes it from there, and any other value
+// must agree with it (.vdb .bt .ot .mesh.ply .points.ply .pcd; a plain .ply needs kMeshPly or
+// kPointsPly).
+enum class SnapshotFormat { kFromExtension = 0, kVdb = 1, kBt = 2, kOt = 3, kMeshPly = 4, kPointsPly = 5, kPointsPcd = 6 };
 
 struct SnapshotResult {
   std::string path;  // absolute path written on the server

@@ -9,6 +9,8 @@
 #include "clients/cpp/batching.h"
 #include "clients/cpp/detail/client_impl.h"
 #include "clients/cpp/detail/wire.h"
+#include "common/error.h"
+#include "mapping/io/map_file_format.h"
 #include "proto/grpc_runtime.h"
 
 namespace cenote::client {
@@ -221,18 +223,36 @@ BatchAck MapClient::integratePoints(const PointBatch& batch) {
 
 // ---- Admin ----
 
+namespace {
+
+static_assert(static_cast<int>(SnapshotFormat::kPointsPcd) == v1::SNAPSHOT_FORMAT_POINTS_PCD &&
+                  static_cast<int>(SnapshotFormat::kPointsPcd) == static_cast<int>(mapping::MapFileFormat::kPointsPcd),
+              "SnapshotFormat, admin.proto's SnapshotFormat and mapping::MapFileFormat share their numbers");
+
+// The format of `path` by mapping/io/map_file_format.h's rule, as the server would decide it.
+SnapshotFormat resolveFormat(const std::string& path, SnapshotFormat format) {
+  try {
+    return static_cast<SnapshotFormat>(mapping::resolveMapFileFormat(path, static_cast<mapping::MapFileFormat>(format)));
+  } catch (const Error& e) {
+    throw RpcError(grpc::StatusCode::INVALID_ARGUMENT, e.what());
+  }
+}
+
+}  // namespace
+
 SnapshotResult MapClient::snapshot(const std::string& path, SnapshotFormat format) {
   v1::SnapshotRequest request;
   v1::SnapshotReply reply;
   request.set_path(path);
-  request.set_format(static_cast<v1::SnapshotFormat>(format));
+  request.set_format(static_cast<v1::SnapshotFormat>(resolveFormat(path, format)));
   impl_->unary(*impl_->admin, &v1::Admin::Stub::Snapshot, request, reply);
   return {reply.path(), reply.bytes(), reply.map_version()};
 }
 
 uint64_t MapClient::downloadSnapshot(const std::string& local_path, SnapshotFormat format) {
   v1::SnapshotRequest request;
-  request.set_format(static_cast<v1::SnapshotFormat>(format));
+  request.set_format(static_cast<v1::SnapshotFormat>(resolveFormat(local_path, format)));
+  request.set_path(std::filesystem::path(local_path).filename().string());  // the server checks it too
   grpc::ClientContext context;
   // A whole map can take far longer than one query: ten deadlines.
   impl_->prepare(context, 10.0 * impl_->options.deadline_s);

@@ -98,11 +98,15 @@ class MapClient {
   void watch(const SubscribeOptions& options, const std::function<bool(const MapUpdate&)>& on_update);
 
   // ---- Admin ----
-  // Writes the map on the server under its snapshot directory (path relative to it).
+  // Writes the map on the server under its snapshot directory (path relative to it), in the
+  // format the extension names. @throws RpcError INVALID_ARGUMENT, before any call, when the
+  // extension names no format or another one than `format` (client_types.h).
   SnapshotResult snapshot(const std::string& path, SnapshotFormat format = SnapshotFormat::kFromExtension);
-  // Streams the map to a local file (written to `<path>.part`, then renamed). @return bytes written.
-  // @throws RpcError, or std::runtime_error when the local file cannot be written.
-  uint64_t downloadSnapshot(const std::string& local_path, SnapshotFormat format = SnapshotFormat::kVdb);
+  // Streams the map to a local file (written to `<path>.part`, then renamed) in the format its
+  // extension names, as snapshot(): "m.bt" is an OctoMap tree. @return bytes written.
+  // @throws RpcError (INVALID_ARGUMENT before any call for a refused extension or format), or
+  //         std::runtime_error when the local file cannot be written.
+  uint64_t downloadSnapshot(const std::string& local_path, SnapshotFormat format = SnapshotFormat::kFromExtension);
   ChangeResult clearBox(const Box& box);
   ChangeResult clearSphere(const Eigen::Vector3d& centre_m, double radius_m);
   // Forgets everything outside the sphere.

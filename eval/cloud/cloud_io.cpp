@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "io/cloud/pcd_io.h"
 
 namespace cenote::eval {
 namespace {
@@ -295,134 +296,10 @@ Cloud readPlyCloud(const std::string& path) {
 }
 
 Cloud readPcdCloud(const std::string& path) {
-  std::ifstream in = openOrThrow(path);
-  const std::string data = readAll(in);
-  size_t pos = 0;
-  std::vector<std::string> fields;
-  std::vector<int> sizes, counts;
-  std::vector<char> types;
-  long points = -1, width = -1, height = 1;
-  std::string kind;
-  int line_number = 0;
-  while (pos < data.size()) {
-    size_t end = data.find('\n', pos);
-    if (end == std::string::npos) end = data.size();
-    std::string line = data.substr(pos, end - pos);
-    pos = end + 1;
-    ++line_number;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty() || line[0] == '#') continue;
-    const std::string where = path + ": PCD header line " + std::to_string(line_number) + " '" + line + "': ";
-    std::istringstream words(line);
-    std::string key;
-    words >> key;
-    std::string word;
-    if (key == "FIELDS") {
-      while (words >> word) fields.push_back(word);
-    } else if (key == "SIZE" || key == "COUNT") {
-      std::vector<int>& out = key == "SIZE" ? sizes : counts;
-      while (words >> word) {
-        int v = 0;
-        const auto [p, ec] = std::from_chars(word.data(), word.data() + word.size(), v);
-        if (ec != std::errc() || p != word.data() + word.size() || v <= 0) throw Error(where + "'" + word + "' is not a positive integer");
-        out.push_back(v);
-      }
-    } else if (key == "TYPE") {
-      while (words >> word) {
-        if (word != "F" && word != "I" && word != "U") throw Error(where + "type '" + word + "' is not F, I or U");
-        types.push_back(word[0]);
-      }
-    } else if (key == "WIDTH") {
-      words >> width;
-    } else if (key == "HEIGHT") {
-      words >> height;
-    } else if (key == "POINTS") {
-      words >> points;
-      if (!words || points < 0) throw Error(where + "POINTS must be a number >= 0");
-    } else if (key == "DATA") {
-      words >> kind;
-      break;
-    } else if (key != "VERSION" && key != "VIEWPOINT") {
-      throw Error(where + "unknown PCD header keyword");
-    }
-  }
-  if (kind.empty()) {
-    throw Error(path + ": not a PCD file (no DATA line in the header)");
-  }
-  if (kind == "binary_compressed") {
-    throw Error(path + ": PCD DATA binary_compressed is not supported; convert it to binary or ascii (pcl_convert_pcd_ascii_binary)");
-  }
-  if (kind != "ascii" && kind != "binary") throw Error(path + ": PCD DATA '" + kind + "' is not ascii or binary");
-  if (counts.empty()) counts.assign(fields.size(), 1);
-  if (sizes.size() != fields.size() || types.size() != fields.size() || counts.size() != fields.size()) {
-    throw Error(path + ": PCD header FIELDS, SIZE, TYPE and COUNT have different lengths");
-  }
-  if (points < 0) points = width * height;
-  if (points < 0) throw Error(path + ": PCD header has no POINTS (nor WIDTH and HEIGHT)");
-  int ix = -1, iy = -1, iz = -1;
-  std::vector<size_t> offsets;
-  size_t record = 0, columns = 0;
-  std::vector<size_t> column;
-  for (size_t i = 0; i < fields.size(); ++i) {
-    if (fields[i] == "x") ix = static_cast<int>(i);
-    if (fields[i] == "y") iy = static_cast<int>(i);
-    if (fields[i] == "z") iz = static_cast<int>(i);
-    if (types[i] == 'F' && sizes[i] != 4 && sizes[i] != 8) throw Error(path + ": PCD field '" + fields[i] + "' of type F must have SIZE 4 or 8");
-    if (types[i] != 'F' && sizes[i] != 1 && sizes[i] != 2 && sizes[i] != 4) {
-      throw Error(path + ": PCD field '" + fields[i] + "' of type " + types[i] + " must have SIZE 1, 2 or 4");
-    }
-    offsets.push_back(record);
-    column.push_back(columns);
-    record += static_cast<size_t>(sizes[i]) * counts[i];
-    columns += counts[i];
-  }
-  if (ix < 0 || iy < 0 || iz < 0) throw Error(path + ": PCD FIELDS has no x, y and z");
-  const auto typeOf = [&](int i) {
-    if (types[i] == 'F') return sizes[i] == 4 ? ScalarType::kFloat32 : ScalarType::kFloat64;
-    const bool u = types[i] == 'U';
-    return sizes[i] == 1 ? (u ? ScalarType::kUint8 : ScalarType::kInt8)
-                         : sizes[i] == 2 ? (u ? ScalarType::kUint16 : ScalarType::kInt16)
-                                         : (u ? ScalarType::kUint32 : ScalarType::kInt32);
-  };
+  io::PcdPoints pcd = io::readPcd(path);
   Cloud cloud;
-  cloud.points.reserve(static_cast<size_t>(points));
-  if (kind == "binary") {
-    const size_t bytes = record * static_cast<size_t>(points);
-    if (pos > data.size() || data.size() - pos < bytes) {
-      throw Error(path + ": PCD binary data is truncated (" + std::to_string(points) + " points of " +
-                  std::to_string(record) + " bytes announced)");
-    }
-    for (long i = 0; i < points; ++i) {
-      const char* r = data.data() + pos + record * i;
-      addPoint(cloud, decode(r + offsets[ix], typeOf(ix), false), decode(r + offsets[iy], typeOf(iy), false),
-               decode(r + offsets[iz], typeOf(iz), false));
-    }
-    return cloud;
-  }
-  // ASCII: one point per line; PCL writes "nan" for missing values, which strtod reads.
-  long read = 0;
-  std::vector<double> values(columns);
-  while (read < points && pos < data.size()) {
-    size_t end = data.find('\n', pos);
-    if (end == std::string::npos) end = data.size();
-    const std::string line = data.substr(pos, end - pos);
-    pos = end + 1;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    TokenReader tokens(line, 0);
-    for (size_t c = 0; c < columns; ++c) {
-      if (!tokens.next(values[c])) {
-        throw Error(path + ": PCD point " + std::to_string(read) + ": " +
-                    (tokens.bad().empty() ? "expected " + std::to_string(columns) + " values"
-                                          : "'" + tokens.bad() + "' is not a number"));
-      }
-    }
-    addPoint(cloud, values[column[ix]], values[column[iy]], values[column[iz]]);
-    ++read;
-  }
-  if (read < points) {
-    throw Error(path + ": PCD file is truncated (" + std::to_string(points) + " points announced, " +
-                std::to_string(read) + " found)");
-  }
+  cloud.points = std::move(pcd.points);
+  cloud.non_finite_dropped = pcd.non_finite_dropped;
   return cloud;
 }
 

@@ -20,12 +20,6 @@ namespace {
 
 using openvdb::Coord;
 
-std::string extensionOf(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 // Writes through `write(temp_path)`, then renames over `path`.
 template <typename Write>
 void writeAtomically(const std::string& path, Write&& write) {
@@ -304,11 +298,12 @@ void writePly(const std::string& path, const std::vector<PlyVertex>& vertices,
 }  // namespace
 
 MapFormat mapFormatOf(const std::string& path) {
-  const std::string ext = extensionOf(path);
-  if (ext == ".vdb") return MapFormat::kVdb;
-  if (ext == ".bt") return MapFormat::kBt;
-  if (ext == ".ot") return MapFormat::kOt;
-  throw Error("map file " + path + ": extension must be .vdb, .bt or .ot");
+  switch (mapFileFormatOf(path)) {
+    case MapFileFormat::kVdb: return MapFormat::kVdb;
+    case MapFileFormat::kBt: return MapFormat::kBt;
+    case MapFileFormat::kOt: return MapFormat::kOt;
+    default: throw Error("map file " + path + ": extension must be .vdb, .bt or .ot");
+  }
 }
 
 void saveMap(const OccupancyMap& map, const std::string& path, const std::string& frame_id) {
@@ -331,20 +326,32 @@ std::unique_ptr<OccupancyMap> loadMap(const std::string& path, const MapConfig& 
   return nullptr;
 }
 
-size_t exportOccupiedPointsPly(const OccupancyMap& map, const std::string& path) {
-  std::vector<PlyVertex> vertices;
+PointBatch occupiedVoxelCentres(const OccupancyMap& map) {
+  PointBatch batch;
   forEachKnown(map, [&](const VoxelIndex& ijk, float l, const OccupancyMap::ConstAccessor& acc) {
     if (!map.model().isOccupied(l)) return;
-    const Eigen::Vector3d c = map.toPoint(ijk);
     std::array<uint8_t, 3> rgb{200, 200, 200};
     acc.color(ijk, rgb);
-    vertices.push_back({static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z()), rgb[0], rgb[1], rgb[2]});
+    batch.points.push_back(map.toPoint(ijk).cast<float>());
+    batch.colors.push_back(rgb);
   });
+  return batch;
+}
+
+size_t exportOccupiedPointsPly(const OccupancyMap& map, const std::string& path) {
+  resolveMapFileFormat(path, MapFileFormat::kPointsPly);
+  const PointBatch centres = occupiedVoxelCentres(map);
+  std::vector<PlyVertex> vertices(centres.size());
+  for (size_t i = 0; i < centres.size(); ++i) {
+    const Eigen::Vector3f& p = centres.points[i];
+    vertices[i] = {p.x(), p.y(), p.z(), centres.colors[i][0], centres.colors[i][1], centres.colors[i][2]};
+  }
   writePly(path, vertices, {});
   return vertices.size();
 }
 
 MeshStats exportMeshPly(const OccupancyMap& map, const std::string& path) {
+  resolveMapFileFormat(path, MapFileFormat::kMeshPly);
   auto occupancy = openvdb::FloatGrid::create(0.0f);
   occupancy->setTransform(detail::makeTransform(map.voxelSize()));
   {

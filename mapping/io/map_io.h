@@ -8,6 +8,8 @@
 //  mesh  PLY triangle mesh of the occupied voxels' outer surface (OpenVDB volumeToMesh on a 0/1
 //        occupancy grid at iso 0.5), vertex colours from the nearest coloured occupied voxel.
 //  points PLY of occupied voxel centres with their colours.
+// Which extension names which format: map_file_format.h (the one table); every function here refuses
+// a path whose extension names another format.
 // Every write goes to a temporary file beside the target that is renamed over it at the end: a crash
 // never leaves a half-written map. Units: metres, world frame.
 // Threads: saving and exporting read the map through a ConstAccessor-like shared lock (integration
@@ -17,13 +19,15 @@
 #include <memory>
 #include <string>
 
+#include "common/point_batch.h"
+#include "mapping/io/map_file_format.h"
 #include "mapping/occupancy_map.h"
 
 namespace cenote::mapping {
 
 enum class MapFormat { kVdb, kBt, kOt };
 
-// From the file extension (.vdb, .bt, .ot). @throws Error for anything else.
+// From the file extension (.vdb, .bt, .ot; map_file_format.h). @throws Error for anything else.
 MapFormat mapFormatOf(const std::string& path);
 
 // @throws Error when the file cannot be written (the message names the path and the reason).
@@ -37,8 +41,14 @@ struct MeshStats {
   size_t vertices = 0;
   size_t triangles = 0;
 };
+// `path`: .mesh.ply or a plain .ply. @throws Error for another extension or a failed write.
 MeshStats exportMeshPly(const OccupancyMap& map, const std::string& path);
-// @return the number of points written.
+// `path`: .points.ply or a plain .ply. @return the number of points written.
+// @throws Error for another extension or a failed write.
 size_t exportOccupiedPointsPly(const OccupancyMap& map, const std::string& path);
+// The occupied voxels' centres (world metres) with their colours (grey 200 where none was seen), in
+// the order of the known blocks; origin zero. What exportOccupiedPointsPly writes, for other formats
+// (PCD: io/cloud/pcd_io.h). Empty map: empty batch.
+PointBatch occupiedVoxelCentres(const OccupancyMap& map);
 
 }  // namespace cenote::mapping

@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include "common/error.h"
+#include "io/cloud/pcd_io.h"
+
 namespace cenote::pipeline {
 namespace {
 
@@ -11,24 +14,44 @@ uint64_t voxelKey(const Eigen::Vector3f& p, double voxel_m) {
   return axis(p.x()) | (axis(p.y()) << 21) | (axis(p.z()) << 42);
 }
 
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() > suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
 }  // namespace
 
-PointOutput::PointOutput(const std::string& path, double voxel_m)
-    : voxel_m_(voxel_m), writer_(std::make_unique<io::PlyWriter>(path)) {}
+PointOutput::PointOutput(const std::string& path, double voxel_m) : path_(path), voxel_m_(voxel_m) {
+  if (endsWith(path, ".ply")) {
+    writer_ = std::make_unique<io::PlyWriter>(path);
+  } else if (!endsWith(path, ".pcd")) {
+    throw Error("point output " + path + ": the extension must be .ply or .pcd");
+  }
+}
 
 void PointOutput::append(const PointBatch& batch) {
+  const std::array<uint8_t, 3> grey = {128, 128, 128};
   if (voxel_m_ <= 0.0) {
-    writer_->append(batch);
+    if (writer_) {
+      writer_->append(batch);
+    } else {
+      pcd_points_.points.insert(pcd_points_.points.end(), batch.points.begin(), batch.points.end());
+      if (batch.hasColor()) {
+        pcd_points_.colors.insert(pcd_points_.colors.end(), batch.colors.begin(), batch.colors.end());
+      } else {
+        pcd_points_.colors.resize(pcd_points_.points.size(), grey);
+      }
+    }
     written_ += batch.size();
     return;
   }
-  const std::array<uint8_t, 3> grey = {128, 128, 128};
   for (size_t i = 0; i < batch.size(); ++i) {
     voxels_.try_emplace(voxelKey(batch.points[i], voxel_m_), Voxel{batch.points[i], batch.hasColor() ? batch.colors[i] : grey});
   }
 }
 
 void PointOutput::close() {
+  if (closed_) return;
+  closed_ = true;
   if (voxel_m_ > 0.0) {
     PointBatch all;
     all.points.reserve(voxels_.size());
@@ -37,10 +60,18 @@ void PointOutput::close() {
       all.points.push_back(voxel.point);
       all.colors.push_back(voxel.color);
     }
-    writer_->append(all);
     written_ = all.size();
+    if (writer_) {
+      writer_->append(all);
+    } else {
+      pcd_points_ = std::move(all);
+    }
   }
-  writer_->close();
+  if (writer_) {
+    writer_->close();
+  } else {
+    io::writePcd(path_, pcd_points_.points, pcd_points_.colors);
+  }
 }
 
 }  // namespace cenote::pipeline

@@ -12,6 +12,9 @@ std::vector<ConfigError> RunConfig::validate() const {
   errors.check(keyframe_translation_m >= 0.0, "keyframe_translation_m", keyframe_translation_m, "must be >= 0");
   errors.check(keyframe_rotation_deg >= 0.0, "keyframe_rotation_deg", keyframe_rotation_deg, "must be >= 0");
   errors.check(points_voxel_m >= 0.0, "points_voxel_m", points_voxel_m, "must be >= 0 (0 = every point)");
+  errors.check(points_format == "ply" || points_format == "pcd", "points_format", points_format, "must be ply or pcd");
+  errors.check(outlier_neighbours >= 0, "outlier_neighbours", outlier_neighbours, "must be >= 0 (0 = off)");
+  errors.check(outlier_stddev_mul > 0.0, "outlier_stddev_mul", outlier_stddev_mul, "must be > 0");
   errors.check(max_frames >= 0, "max_frames", max_frames, "must be >= 0 (0 = all)");
   return errors.take();
 }
@@ -27,8 +30,13 @@ void RunConfig::read(YamlSection& section) {
   section.read("fuse", fuse);
   section.read("write_depth", write_depth);
   section.read("points_voxel_m", points_voxel_m);
+  section.read("points_format", points_format);
+  section.read("outlier_neighbours", outlier_neighbours);
+  section.read("outlier_stddev_mul", outlier_stddev_mul);
   section.read("max_frames", max_frames);
 }
+
+std::string pointsFileName(const RunConfig& config) { return "points." + config.points_format; }
 
 const char* toString(PoseFrame frame) {
   switch (frame) {

@@ -30,11 +30,20 @@ struct RunConfig {
                                         // the window size is fusion.num_views
   bool write_depth = false;             // per-frame depth / confidence PFM maps in out/depth/
   double points_voxel_m = 0.0;          // > 0: one point per voxel of this size in points.ply
+  std::string points_format = "ply";    // ply: out/points.ply, streamed; pcd: out/points.pcd (PCL's
+                                        // PCD, written at the end: see runner/point_output.h)
+  int outlier_neighbours = 0;           // > 0: PCL's statistical outlier removal of each fused frame
+                                        // over this many neighbours (fusion/outlier_removal.h), before
+                                        // the points file and the map; 0: off
+  double outlier_stddev_mul = 1.0;      // ... keeps points within mean + this many standard deviations
   int max_frames = 0;                   // 0 = all
 
   std::vector<ConfigError> validate() const;
   void read(YamlSection& section);
 };
+
+// "points.ply" or "points.pcd", as points_format says.
+std::string pointsFileName(const RunConfig& config);
 
 const char* toString(PoseFrame frame);
 // "auto", "body" or "camera". @throws cenote::Error otherwise.

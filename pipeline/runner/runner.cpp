@@ -13,6 +13,7 @@
 #include "common/error.h"
 #include "pipeline/calibration/rectifier.h"
 #include "io/image/image_io.h"
+#include "pipeline/fusion/outlier_removal.h"
 #include "pipeline/runner/frame_pipeline.h"
 #include "pipeline/frame/frame_admission.h"
 #include "pipeline/runner/point_output.h"
@@ -66,7 +67,7 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   fs::create_directories(out_dir, ec);
   if (ec) throw Error("cannot create output folder " + out_dir + ": " + ec.message());
   if (rc.write_depth) fs::create_directories(fs::path(out_dir) / "depth", ec);
-  PointOutput points((fs::path(out_dir) / "points.ply").string(), rc.points_voxel_m);
+  PointOutput points((fs::path(out_dir) / pointsFileName(rc)).string(), rc.points_voxel_m);
 
   const Rectifier rectifier(dataset.calibration());
 
@@ -126,6 +127,9 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
         io::writePfm(base + ".conf.pfm", item->frame.confidence);
         // The rectified left image beside its maps (JPEG: a tenth of a PNG's encoding time).
         if (!item->frame.color.empty()) io::writeImage(base + ".jpg", item->frame.color);
+      }
+      if (rc.outlier_neighbours > 0) {
+        item->points = removeStatisticalOutliers(item->points, rc.outlier_neighbours, rc.outlier_stddev_mul);
       }
       points.append(item->points);
       output_timer.add(msSince(t0));

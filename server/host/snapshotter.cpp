@@ -2,21 +2,32 @@
 
 #include "common/error.h"
 #include "mapping/io/map_io.h"
+#include "io/cloud/pcd_io.h"
 #include "server/wire/status_error.h"
 
 namespace cenote::server {
 namespace fs = std::filesystem;
 
-v1::SnapshotFormat snapshotFormatOf(const std::string& path) {
-  auto endsWith = [&](const std::string& suffix) {
-    return path.size() >= suffix.size() && path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
-  };
-  if (endsWith(".vdb")) return v1::SNAPSHOT_FORMAT_VDB;
-  if (endsWith(".bt")) return v1::SNAPSHOT_FORMAT_BT;
-  if (endsWith(".ot")) return v1::SNAPSHOT_FORMAT_OT;
-  if (endsWith(".mesh.ply") || endsWith("_mesh.ply")) return v1::SNAPSHOT_FORMAT_MESH_PLY;
-  if (endsWith(".ply")) return v1::SNAPSHOT_FORMAT_POINTS_PLY;
-  return v1::SNAPSHOT_FORMAT_UNSPECIFIED;
+namespace {
+
+static_assert(static_cast<int>(mapping::MapFileFormat::kPointsPcd) == v1::SNAPSHOT_FORMAT_POINTS_PCD &&
+                  static_cast<int>(mapping::MapFileFormat::kMeshPly) == v1::SNAPSHOT_FORMAT_MESH_PLY &&
+                  static_cast<int>(mapping::MapFileFormat::kVdb) == v1::SNAPSHOT_FORMAT_VDB,
+              "mapping::MapFileFormat numbers are admin.proto's SnapshotFormat values");
+
+}  // namespace
+
+v1::SnapshotFormat resolveSnapshotFormat(const std::string& path, v1::SnapshotFormat format) {
+  if (!v1::SnapshotFormat_IsValid(format)) {
+    throw invalidArgument("path " + path + ", format " + std::to_string(static_cast<int>(format)) +
+                          ": not a snapshot format (" + mapping::mapFileFormatTable() + ")");
+  }
+  try {
+    return static_cast<v1::SnapshotFormat>(
+        mapping::resolveMapFileFormat(path, static_cast<mapping::MapFileFormat>(format)));
+  } catch (const Error& e) {
+    throw invalidArgument("path " + path + ", format " + v1::SnapshotFormat_Name(format) + ": " + e.what());
+  }
 }
 
 Snapshotter::Snapshotter(const MapHost& host, std::string directory, std::string frame_id, double period_s)
@@ -50,10 +61,7 @@ fs::path Snapshotter::write(const std::string& relative_path, v1::SnapshotFormat
       throw StatusError(grpc::StatusCode::PERMISSION_DENIED, "path " + relative_path + " leaves the snapshot directory");
     }
   }
-  if (format == v1::SNAPSHOT_FORMAT_UNSPECIFIED) format = snapshotFormatOf(relative_path);
-  if (format == v1::SNAPSHOT_FORMAT_UNSPECIFIED) {
-    throw invalidArgument("path " + relative_path + ": no format given and the extension is none of .vdb .bt .ot .ply");
-  }
+  format = resolveSnapshotFormat(relative_path, format);
   const fs::path target = directory_ / relative;
   std::error_code ec;
   fs::create_directories(target.parent_path(), ec);
@@ -62,20 +70,20 @@ fs::path Snapshotter::write(const std::string& relative_path, v1::SnapshotFormat
 }
 
 void Snapshotter::writeTo(const fs::path& path, v1::SnapshotFormat format) {
+  format = resolveSnapshotFormat(path.filename().string(), format);
   std::lock_guard<std::mutex> lock(write_mutex_);
   const mapping::OccupancyMap& map = host_.map();
-  const std::string extension = format == v1::SNAPSHOT_FORMAT_VDB ? ".vdb" : format == v1::SNAPSHOT_FORMAT_BT ? ".bt" : ".ot";
   switch (format) {
     case v1::SNAPSHOT_FORMAT_VDB:
     case v1::SNAPSHOT_FORMAT_BT:
-    case v1::SNAPSHOT_FORMAT_OT:
-      if (snapshotFormatOf(path.string()) != format) {
-        throw invalidArgument("path " + path.filename().string() + " does not end in " + extension + " for this format");
-      }
-      mapping::saveMap(map, path.string(), frame_id_);
-      break;
+    case v1::SNAPSHOT_FORMAT_OT: mapping::saveMap(map, path.string(), frame_id_); break;
     case v1::SNAPSHOT_FORMAT_MESH_PLY: mapping::exportMeshPly(map, path.string()); break;
     case v1::SNAPSHOT_FORMAT_POINTS_PLY: mapping::exportOccupiedPointsPly(map, path.string()); break;
+    case v1::SNAPSHOT_FORMAT_POINTS_PCD: {
+      const PointBatch centres = mapping::occupiedVoxelCentres(map);
+      io::writePcd(path.string(), centres.points, centres.colors);
+      break;
+    }
     default: throw invalidArgument("format " + std::to_string(static_cast<int>(format)) + " is not a snapshot format");
   }
 }

@@ -25,10 +25,12 @@ class Snapshotter {
   Snapshotter(const MapHost& host, std::string directory, std::string frame_id, double period_s);
   ~Snapshotter();
 
-  // Writes `relative_path` (format from `format`, or from the extension when unspecified) under the
-  // snapshot directory. @return the absolute path. @throws StatusError for a refused path or format.
+  // Writes `relative_path` under the snapshot directory, in the format its extension names
+  // (resolveSnapshotFormat). @return the absolute path. @throws StatusError for a refused path
+  // (PERMISSION_DENIED) or a format the extension does not name (INVALID_ARGUMENT).
   std::filesystem::path write(const std::string& relative_path, v1::SnapshotFormat format);
-  // Writes to an absolute path chosen by the server (downloads, the periodic snapshot).
+  // Writes to an absolute path chosen by the server (downloads, the periodic snapshot); its
+  // extension must name `format` as for write().
   void writeTo(const std::filesystem::path& path, v1::SnapshotFormat format);
   // The periodic / shutdown snapshot: <directory>/map.vdb, when the map changed since the last one.
   void writeLatest();
@@ -54,7 +56,10 @@ class Snapshotter {
   std::thread thread_;
 };
 
-// The format a path's extension names (.vdb .bt .ot .mesh.ply / _mesh.ply .ply); UNSPECIFIED when none.
-v1::SnapshotFormat snapshotFormatOf(const std::string& path);
+// The format of a snapshot file: mapping::resolveMapFileFormat (mapping/io/map_file_format.h) on the
+// wire's enum. @throws StatusError INVALID_ARGUMENT naming the path and the format, e.g.
+//   "path map.vdb, format SNAPSHOT_FORMAT_POINTS_PLY: map.vdb: the extension .vdb means format vdb,
+//    not points-ply (...)"
+v1::SnapshotFormat resolveSnapshotFormat(const std::string& path, v1::SnapshotFormat format);
 
 }  // namespace cenote::server

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "mapping/io/map_file_format.h"
 #include "pipeline/runner/runner.h"
 #include "server/wire/wire.h"
 
@@ -51,14 +52,19 @@ grpc::Status AdminService::Snapshot(grpc::ServerContext* context, const v1::Snap
 grpc::Status AdminService::DownloadSnapshot(grpc::ServerContext* context, const v1::SnapshotRequest* request,
                                             grpc::ServerWriter<v1::FileChunk>* writer) {
   return guard_.run(context, "Admin/DownloadSnapshot", [&] {
+    // Older clients send no file name: the format asked for, VDB when none.
     v1::SnapshotFormat format = request->format();
-    if (format == v1::SNAPSHOT_FORMAT_UNSPECIFIED) format = snapshotFormatOf(request->path());
-    if (format == v1::SNAPSHOT_FORMAT_UNSPECIFIED) format = v1::SNAPSHOT_FORMAT_VDB;
-    static const char* kNames[] = {"", "map.vdb", "map.bt", "map.ot", "map_mesh.ply", "map_points.ply"};
-    if (format < 1 || format > 5) throw invalidArgument("format " + std::to_string(format) + " is not a snapshot format");
+    if (!request->path().empty()) {
+      format = resolveSnapshotFormat(fs::path(request->path()).filename().string(), format);
+    } else if (format == v1::SNAPSHOT_FORMAT_UNSPECIFIED) {
+      format = v1::SNAPSHOT_FORMAT_VDB;
+    } else if (!v1::SnapshotFormat_IsValid(format)) {
+      throw invalidArgument("format " + std::to_string(static_cast<int>(format)) + " is not a snapshot format");
+    }
+    const std::string name = std::string("map") + mapping::extensionOf(static_cast<mapping::MapFileFormat>(format));
     // A private temporary file in the snapshot directory, removed when the download ends.
     static std::atomic<uint64_t> downloads{0};
-    const fs::path temp = snapshots_.directory() / (".download." + std::to_string(++downloads) + "." + kNames[format]);
+    const fs::path temp = snapshots_.directory() / (".download." + std::to_string(++downloads) + "." + name);
     struct Remove {
       fs::path path;
       ~Remove() {
@@ -78,7 +84,7 @@ grpc::Status AdminService::DownloadSnapshot(grpc::ServerContext* context, const 
       chunk.set_offset(offset);
       chunk.set_total_bytes(total);
       chunk.set_data(buffer.data(), n);
-      if (offset == 0) chunk.set_file_name(kNames[format]);
+      if (offset == 0) chunk.set_file_name(name);
       if (!writer->Write(chunk)) return grpc::Status(grpc::StatusCode::CANCELLED, "client went away during the download");
       offset += n;
     } while (offset < total && in);

@@ -17,6 +17,24 @@ grep -q "resolution: 0.05 m" <<<"$info"
 occupied=$(sed -n 's/.*voxels: \([0-9]*\) occupied.*/\1/p' <<<"$info")
 test "$occupied" -gt 1000
 
+# PCD through PCL (io/cloud/pcd_io.h): the occupied voxel centres, as many as `map info` counts,
+# read back by `cenote eval` (PCL's reader) as the same points as the PLY's.
+out=$("$cenote" map export "$dir/ours.vdb" --points "$dir/points.pcd")
+grep -qF "wrote $dir/points.pcd: $occupied occupied voxel centres" <<<"$out" || { echo "$out"; exit 1; }
+grep -aqx "POINTS $occupied" "$dir/points.pcd" || { echo "points.pcd: no POINTS $occupied"; exit 1; }
+grep -aqx "DATA binary" "$dir/points.pcd"
+ev=$("$cenote" eval cloud --source "$dir/points.pcd" --target "$dir/points.ply" --voxel 0.001)
+grep -Eq "points \(source / target\) +$occupied / $occupied\b" <<<"$ev" || { echo "$ev"; exit 1; }
+grep -Eq "precision .*100\.00 %" <<<"$ev" || { echo "$ev"; exit 1; }
+# The option names the format and the extension must agree (mapping/io/map_file_format.h): an error
+# naming option and file, nothing written.
+for bad in "--points $dir/p.vdb" "--bt $dir/x.vdb" "--mesh $dir/m.points.ply" "--vdb $dir/x.ply" "--points $dir/p.xyz"; do
+  # shellcheck disable=SC2086
+  if "$cenote" map export "$dir/ours.vdb" $bad 2>"$dir/err"; then echo "map export $bad: accepted"; exit 1; fi
+  grep -qF -- "$bad: " "$dir/err" || { echo "map export $bad printed: $(cat "$dir/err")"; exit 1; }
+  test ! -e "${bad#* }" || { echo "map export $bad wrote ${bad#* }"; exit 1; }
+done
+
 # .bt written and read back: the same number of occupied voxels.
 bt_occupied=$("$cenote" map info "$dir/ours.bt" | sed -n 's/.*voxels: \([0-9]*\) occupied.*/\1/p')
 test "$bt_occupied" -eq "$occupied" || { echo ".bt has $bt_occupied occupied voxels, .vdb $occupied"; exit 1; }

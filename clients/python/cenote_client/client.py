@@ -20,7 +20,7 @@ from .errors import CenoteError, from_rpc_error, status_name
 from .types import (Ack, Block, BoxCounts, Change, Collisions, Extract, Frontier, IntegrateResult, MapInfo, MapUpdate,
                     MethodStats, SnapshotResult, StageTiming, Stats)
 
-SNAPSHOT_FORMATS = {"vdb": 1, "bt": 2, "ot": 3, "mesh_ply": 4, "points_ply": 5}
+SNAPSHOT_FORMATS = {"vdb": 1, "bt": 2, "ot": 3, "mesh_ply": 4, "points_ply": 5, "points_pcd": 6}
 _MAX_MESSAGE_BYTES = 64 * 1024 * 1024
 
 
@@ -44,16 +44,50 @@ def _np3(v):
     return np.array([v.x, v.y, v.z], dtype=np.float64)
 
 
-def _snapshot_format(fmt, path=""):
+# The table of mapping/io/map_file_format.h, which the server and the C++ clients use: the format
+# follows the extension, and a format given must agree with it (a plain .ply needs one).
+# tests/mapping/io/map_file_format_cases.txt checks this copy against the C++ one.
+_EXTENSIONS = ((".vdb", 1), (".bt", 2), (".ot", 3), (".mesh.ply", 4), (".points.ply", 5), (".pcd", 6))
+_FORMAT_NAMES = {v: k.replace("_", "-") for k, v in SNAPSHOT_FORMATS.items()}
+_TABLE = ", ".join(f"{ext} {_FORMAT_NAMES[f]}" for ext, f in _EXTENSIONS) + ", .ply mesh-ply or points-ply as given"
+
+
+def _format_number(fmt):
     if fmt is None:
-        ext = os.path.splitext(path)[1].lower()
-        return {".vdb": 1, ".bt": 2, ".ot": 3}.get(ext, 0)
+        return 0
     if isinstance(fmt, str):
         key = fmt.lower().replace(".", "").replace("-", "_")
         if key not in SNAPSHOT_FORMATS:
             raise ValueError(f"format: {fmt!r} is not one of {sorted(SNAPSHOT_FORMATS)}")
         return SNAPSHOT_FORMATS[key]
     return int(fmt)
+
+
+def _snapshot_format(fmt, path, method="Admin/Snapshot"):
+    """The SnapshotFormat number of path by the table above; raises CenoteError INVALID_ARGUMENT
+    (the server's code for the same refusal) for an unknown extension, a plain .ply without a
+    format, or a format the extension disagrees with."""
+    requested = _format_number(fmt)
+    name = os.path.basename(path).lower()
+    named = next((f for ext, f in _EXTENSIONS if name.endswith(ext) and len(name) > len(ext)), 0)
+    plain_ply = named == 0 and name.endswith(".ply") and len(name) > 4
+    ext = os.path.splitext(path)[1]
+    ext_text = f"the extension {ext}" if ext else "no extension"
+    if requested == 0:
+        if named:
+            return named
+        if plain_ply:
+            raise CenoteError("INVALID_ARGUMENT", f"{path}: a .ply file holds a mesh or points: name it .mesh.ply or "
+                              ".points.ply, or give the format mesh-ply or points-ply", method)
+        raise CenoteError("INVALID_ARGUMENT", f"{path}: {ext_text} names no map file format ({_TABLE})", method)
+    if requested == named or (plain_ply and requested in (4, 5)):
+        return requested
+    wanted = _FORMAT_NAMES.get(requested, str(requested))
+    if named == 0 and not plain_ply:
+        raise CenoteError("INVALID_ARGUMENT", f"{path}: {ext_text} does not match format {wanted} ({_TABLE})", method)
+    means = "mesh-ply or points-ply" if plain_ply else _FORMAT_NAMES[named]
+    raise CenoteError("INVALID_ARGUMENT", f"{path}: {ext_text} means format {means}, not {wanted} "
+                      f"(the format follows the extension: {_TABLE})", method)
 
 
 def _read_bytes(value):
@@ -390,18 +424,23 @@ class MapClient:
 
     # -- admin ------------------------------------------------------------------------------------
     def snapshot(self, path, format=None):
-        """Writes the map on the server under its snapshot directory (path relative to it);
-        format: "vdb", "bt", "ot", "mesh_ply", "points_ply" or None (from the extension)."""
+        """Writes the map on the server under its snapshot directory (path relative to it) in the
+        format its extension names; format: "vdb", "bt", "ot", "mesh_ply", "points_ply",
+        "points_pcd" or None (from the extension); one given must agree with the extension.
+        Raises CenoteError INVALID_ARGUMENT, before any call, when it does not."""
         req = self.pb.admin.SnapshotRequest(path=path, format=_snapshot_format(format, path))
         r = self._call("Admin/Snapshot", self._admin.Snapshot, req)
         return SnapshotResult(r.path, r.bytes, r.map_version)
 
     def download_snapshot(self, dest=None, format=None, timeout_s=None):
         """Streams the map file from the server. dest given: written there (atomically, through
-        dest + ".part") and its path returned; else the file's bytes. format as in snapshot(),
-        from dest's extension when None, else VDB."""
-        fmt = _snapshot_format(format, dest or "") or SNAPSHOT_FORMATS["vdb"]
-        req = self.pb.admin.SnapshotRequest(format=fmt)
+        dest + ".part") and its path returned, in the format dest's extension names, as in
+        snapshot(); else the file's bytes, in format (VDB when None)."""
+        if dest is None:
+            req = self.pb.admin.SnapshotRequest(format=_format_number(format) or SNAPSHOT_FORMATS["vdb"])
+        else:
+            fmt = _snapshot_format(format, dest, "Admin/DownloadSnapshot")
+            req = self.pb.admin.SnapshotRequest(path=os.path.basename(dest), format=fmt)
         data, total = bytearray(), None
         try:
             for chunk in self._admin.DownloadSnapshot(req, timeout=timeout_s or max(self.timeout_s, 60.0),

@@ -60,6 +60,20 @@ expect_output "^wrote .*wall.vdb" -- snapshot wall.vdb
 [[ -s "$work/snapshots/wall.vdb" ]] || fail "snapshot: no $work/snapshots/wall.vdb"
 expect_output "^downloaded" -- snapshot --download "$work/local.vdb"
 [[ -s "$work/local.vdb" ]] || fail "snapshot --download wrote nothing"
+# The format follows the extension (mapping/io/map_file_format.h; issue 14): a download named .bt is
+# an OctoMap tree, mesh.ply says which PLY it is, and a --format the extension disagrees with is refused.
+expect_output "^downloaded" -- snapshot --download "$work/local.bt"
+[[ "$(head -n 1 "$work/local.bt")" == "# Octomap OcTree binary file" ]] || fail "snapshot --download local.bt: $(head -c 40 "$work/local.bt")"
+expect_output "^wrote .*wall.mesh.ply" -- snapshot wall.mesh.ply
+grep -aq "^element face " "$work/snapshots/wall.mesh.ply" || fail "wall.mesh.ply has no faces"
+for refused in "mesh.ply" "wall.vdb --format points-ply" "wall.xyz"; do
+  status=0
+  # shellcheck disable=SC2086
+  cli snapshot $refused >"$work/stdout" 2>"$work/stderr" || status=$?
+  [[ $status -ne 0 ]] && grep -q "^error: INVALID_ARGUMENT: ${refused%% *}: " "$work/stderr" ||
+    fail "snapshot $refused: exit $status, $(cat "$work/stderr")"
+done
+[[ ! -e "$work/snapshots/mesh.ply" && ! -e "$work/snapshots/wall.xyz" ]] || fail "a refused snapshot was written"
 
 # Failed calls: the status name and message on stderr, a non-zero exit, and the map unchanged.
 cenote_wrong() { "$cenote" --server "$server" --token wrong-token "$@"; }

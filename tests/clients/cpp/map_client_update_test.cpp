@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -263,6 +264,25 @@ TEST(MapClientUpdates, AdminEditsAndSnapshots) {
   // Not only no error: the file is there and holds the map.
   ASSERT_TRUE(std::filesystem::exists(server.snapshotDirectory() + "/scene.bt"));
   EXPECT_EQ(mapping::loadMap(server.snapshotDirectory() + "/scene.bt")->stats().occupied, reference.stats().occupied);
+  // The format follows the extension (mapping/io/map_file_format.h): a download named .bt is an
+  // OctoMap tree, not a VDB under that name (issue 14).
+  const std::string local_bt = server.directory() + "/downloaded.bt";
+  map.downloadSnapshot(local_bt);
+  std::string first_line;
+  std::getline(std::ifstream(local_bt), first_line);
+  EXPECT_EQ(first_line, "# Octomap OcTree binary file");
+  EXPECT_EQ(mapping::loadMap(local_bt)->stats().occupied, reference.stats().occupied);
+  for (const auto& [path, format] : {std::pair{"refused.vdb", SnapshotFormat::kPointsPly}, std::pair{"mesh.ply", SnapshotFormat::kFromExtension},
+                                     std::pair{"scene.xyz", SnapshotFormat::kFromExtension}}) {
+    try {
+      map.snapshot(path, format);
+      ADD_FAILURE() << path << " was written";
+    } catch (const RpcError& e) {
+      EXPECT_EQ(e.code(), grpc::StatusCode::INVALID_ARGUMENT) << e.what();
+      EXPECT_EQ(e.message().rfind(std::string(path) + ": ", 0), 0u) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(server.snapshotDirectory() + "/" + path)) << path;
+  }
   try {
     map.snapshot("../escape.vdb");
     ADD_FAILURE() << "a snapshot path with .. was accepted";

@@ -299,6 +299,16 @@ class AdminTest(ServerCase):
         path = os.path.join(self.server.dir, "downloaded.vdb")
         self.assertEqual(self.client.download_snapshot(path), path)
         self.assertGreater(os.path.getsize(path), 0)
+        # the format follows the local file's extension: an OctoMap tree, not a VDB named .bt (issue 14)
+        bt_path = os.path.join(self.server.dir, "downloaded.bt")
+        self.client.download_snapshot(bt_path)
+        with open(bt_path, "rb") as f:
+            self.assertEqual(f.read(), on_disk)
+        for path, fmt in (("map.vdb", "points_ply"), ("mesh.ply", None), ("map.xyz", None)):
+            with self.assertRaises(CenoteError) as ctx:
+                self.client.snapshot(path, format=fmt)
+            self.assertEqual(ctx.exception.code, "INVALID_ARGUMENT", str(ctx.exception))
+            self.assertIn(path, ctx.exception.message)
         for bad in ("../escape.vdb", "/tmp/absolute.vdb"):
             with self.assertRaises(CenoteError) as ctx:
                 self.client.snapshot(bad)

@@ -115,11 +115,14 @@ TEST(CloudIo, MalformedFilesNameTheFileAndTheProblem) {
             std::string::npos) << errorOf(dir / "trunc.ply");
   std::ofstream(dir / "z.pcd") << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nPOINTS 1\n"
                                   "DATA binary_compressed\n";
-  EXPECT_NE(errorOf(dir / "z.pcd").find("binary_compressed is not supported"), std::string::npos);
+  // PCD goes through PCL's reader (io/cloud/pcd_io.h): binary_compressed is read, a body
+  // shorter than announced is refused naming the file.
+  EXPECT_EQ(errorOf(dir / "z.pcd"), "cannot read " + (dir / "z.pcd") + " as PCD: pcl::PCDReader failed (-1; its message "
+                                    "is printed above): a malformed header, a truncated body or not a PCD file");
   std::ofstream(dir / "few.pcd") << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 3\nHEIGHT 1\nPOINTS 3\n"
                                     "DATA ascii\n1 2 3\n";
-  EXPECT_NE(errorOf(dir / "few.pcd").find("few.pcd: PCD file is truncated (3 points announced, 1 found)"),
-            std::string::npos) << errorOf(dir / "few.pcd");
+  EXPECT_EQ(errorOf(dir / "few.pcd").rfind("cannot read " + (dir / "few.pcd") + " as PCD: pcl::PCDReader failed", 0), 0u)
+      << errorOf(dir / "few.pcd");
   std::ofstream(dir / "x.txt") << "hello\n";
   EXPECT_NE(errorOf(dir / "x.txt").find("neither a PLY nor a PCD"), std::string::npos);
 }

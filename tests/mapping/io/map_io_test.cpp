@@ -122,6 +122,40 @@ TEST(MapIo, MeshAndPointsPlyHaveHeaderAndCounts) {
   EXPECT_GT(header_end, mesh.vertices * 15 + mesh.triangles * 13);
 }
 
+TEST(MapIo, ExportsRefuseAnExtensionNamingAnotherFormat) {
+  TempDir dir;
+  const auto map = sceneMap();
+  for (const char* name : {"m.points.ply", "m.vdb", "m.pcd", "m.xyz"}) {
+    EXPECT_THROW(exportMeshPly(*map, dir.file(name)), Error) << name;
+    EXPECT_FALSE(fs::exists(dir.file(name))) << name;
+  }
+  for (const char* name : {"m.mesh.ply", "m.bt", "m.pcd"}) {
+    try {
+      exportOccupiedPointsPly(*map, dir.file(name));
+      ADD_FAILURE() << name << " written as points PLY";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(name) + ": the extension "), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(dir.file(name))) << name;
+  }
+  EXPECT_NO_THROW(exportMeshPly(*map, dir.file("m.mesh.ply")));
+  EXPECT_EQ(exportOccupiedPointsPly(*map, dir.file("m.points.ply")), map->stats().occupied);
+}
+
+TEST(MapIo, OccupiedVoxelCentresAreTheOccupiedVoxels) {
+  const auto map = sceneMap();
+  const PointBatch centres = occupiedVoxelCentres(*map);
+  ASSERT_EQ(centres.size(), map->stats().occupied);
+  ASSERT_EQ(centres.colors.size(), centres.size());
+  const auto acc = map->constAccessor();
+  for (size_t i = 0; i < centres.size(); ++i) {
+    const VoxelIndex ijk = map->toIndex(centres.points[i].cast<double>());
+    ASSERT_EQ(acc.state(ijk), VoxelState::kOccupied) << "point " << i;
+    ASSERT_LT((map->toPoint(ijk).cast<float>() - centres.points[i]).norm(), 1e-6f) << "point " << i << " is no centre";
+  }
+  EXPECT_TRUE(occupiedVoxelCentres(OccupancyMap(MapConfig{})).empty());
+}
+
 TEST(MapIo, ErrorsNameThePath) {
   TempDir dir;
   const auto map = sceneMap();

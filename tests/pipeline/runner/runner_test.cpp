@@ -9,7 +9,9 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "io/cloud/pcd_io.h"
 #include "io/cloud/ply_io.h"
+#include "pipeline/fusion/outlier_removal.h"
 #include "pipeline/runner/bounded_queue.h"
 #include "tests/support/plane_sequence.h"
 
@@ -143,6 +145,48 @@ TEST(Runner, VoxelDownsamplingKeepsExactlyOnePointPerOccupiedVoxel) {
   EXPECT_EQ(kept, occupied);
 }
 
+TEST(Runner, PcdOutputHoldsThePointsOfThePlyOutput) {
+  Fixture f = makeFixture("runner_pcd");
+  const std::atomic<bool> stop{false};
+  PipelineConfig c = smallConfig();
+  Runner(c).run(*f.dataset, f.trajectory, f.out_dir + "_ply", stop);
+  c.run.points_format = "pcd";
+  const RunReport r = Runner(c).run(*f.dataset, f.trajectory, f.out_dir, stop);
+  EXPECT_FALSE(fs::exists(f.out_dir + "/points.ply"));
+  const io::PlyPoints ply = io::readPly(f.out_dir + "_ply/points.ply");
+  const io::PcdPoints pcd = io::readPcd(f.out_dir + "/points.pcd");
+  ASSERT_GT(ply.points.size(), 0u);
+  EXPECT_EQ(r.points_written, ply.points.size());
+  EXPECT_EQ(pcd.points, ply.points);
+  EXPECT_EQ(pcd.colors, ply.colors);
+}
+
+TEST(Runner, OutlierRemovalFiltersEachFusedFrameBeforeTheFileAndTheMap) {
+  Fixture f = makeFixture("runner_sor");
+  const std::atomic<bool> stop{false};
+  PipelineConfig c = smallConfig();
+  std::vector<PointBatch> fused;
+  Runner(c).run(*f.dataset, f.trajectory, f.out_dir + "_all", stop, [&](const PointBatch& b) { fused.push_back(b); });
+  c.run.outlier_neighbours = 8;
+  c.run.outlier_stddev_mul = 1.0;
+  size_t sunk = 0;
+  const RunReport r = Runner(c).run(*f.dataset, f.trajectory, f.out_dir, stop, [&](const PointBatch& b) { sunk += b.size(); });
+  std::vector<Eigen::Vector3f> expected;
+  for (const PointBatch& b : fused) {
+    const PointBatch kept = removeStatisticalOutliers(b, 8, 1.0);
+    expected.insert(expected.end(), kept.points.begin(), kept.points.end());
+  }
+  size_t all = 0;
+  for (const PointBatch& b : fused) all += b.size();
+  const io::PlyPoints cloud = io::readPly(f.out_dir + "/points.ply");
+  EXPECT_EQ(cloud.points, expected) << "each frame filtered on its own, in order";
+  EXPECT_EQ(r.points_written, expected.size());
+  EXPECT_EQ(sunk, expected.size()) << "the map gets the filtered points";
+  EXPECT_LT(expected.size(), all);
+  Runner(c).run(*f.dataset, f.trajectory, f.out_dir + "_again", stop);
+  EXPECT_EQ(io::readPly(f.out_dir + "_again/points.ply").points, cloud.points) << "not deterministic";
+}
+
 TEST(RunReport, JsonHasTheDocumentedKeys) {
   Fixture f = makeFixture("runner_json");
   const std::atomic<bool> stop{false};
@@ -168,6 +212,13 @@ TEST(RunConfig, DefaultsAreValidAndBadValuesAreNamed) {
   PipelineConfig bad;
   bad.run = c;
   EXPECT_THROW(Runner{bad}, Error);
+  RunConfig points;
+  points.points_format = "las";
+  points.outlier_neighbours = -1;
+  points.outlier_stddev_mul = 0.0;
+  EXPECT_EQ(formatConfigErrors(points.validate()),
+            "run.points_format = las: must be ply or pcd\nrun.outlier_neighbours = -1: must be >= 0 (0 = off)\n"
+            "run.outlier_stddev_mul = 0: must be > 0");
 }
 
 TEST(PipelineConfig, DefaultYamlLoadsAndUnknownKeysAreErrors) {
