@@ -14,7 +14,9 @@ YamlSection::YamlSection(const YAML::Node& node, std::string path, std::string f
 YamlSection YamlSection::section(const std::string& key) {
   seen_.insert(key);
   YAML::Node child = (node_ && !node_.IsNull()) ? node_[key] : YAML::Node();
-  return YamlSection(child, path_.empty() ? key : path_ + "." + key, file_);
+  YamlSection sub(child, path_.empty() ? key : path_ + "." + key, file_);
+  sub.defaults_ = defaults_;
+  return sub;
 }
 
 void YamlSection::finish() const {

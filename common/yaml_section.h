@@ -6,12 +6,26 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <functional>
+#include <map>
 #include <set>
+#include <sstream>
 #include <string>
 
 #include "common/error.h"
 
 namespace cenote {
+
+// The values that read() found in the variables it was given (a default-constructed config's
+// defaults), by dotted key ("stereo.lr_check"): what lets a test compare config/default.yaml with
+// the code's defaults key by key, including keys added later.
+struct YamlDefaults {
+  struct Entry {
+    std::string shown;                               // the value as text
+    std::function<bool(const YAML::Node&)> equals;   // whether a YAML value reads as the same value
+  };
+  std::map<std::string, Entry> entries;
+};
 
 class YamlSection {
  public:
@@ -25,6 +39,7 @@ class YamlSection {
   template <typename T>
   void read(const std::string& key, T& value) {
     seen_.insert(key);
+    if (defaults_ != nullptr) record(key, value);
     if (!node_ || node_.IsNull()) return;
     const YAML::Node child = node_[key];
     if (!child) return;
@@ -42,6 +57,10 @@ class YamlSection {
   // @throws Error naming every key of the mapping that was never read.
   void finish() const;
 
+  // From now on, each read() (here and in sections made from this one) first records the value
+  // its variable holds into `defaults` (not owned; must outlive the section).
+  void recordDefaults(YamlDefaults* defaults) { defaults_ = defaults; }
+
  private:
   template <typename T>
   static const char* typeName() {
@@ -51,6 +70,21 @@ class YamlSection {
     else return "a string";
   }
 
+  template <typename T>
+  void record(const std::string& key, const T& value) {
+    std::ostringstream shown;
+    shown << std::boolalpha << value;
+    defaults_->entries[path_.empty() ? key : path_ + "." + key] = {
+        shown.str(), [value](const YAML::Node& node) {
+          try {
+            return node.as<T>() == value;
+          } catch (const YAML::Exception&) {
+            return false;
+          }
+        }};
+  }
+
+  YamlDefaults* defaults_ = nullptr;
   YAML::Node node_;
   std::string path_;
   std::string file_;

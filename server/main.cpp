@@ -60,7 +60,7 @@ std::shared_ptr<const pipeline::Rectifier> rectifierFrom(const std::string& cali
   if (fs::is_directory(calibration)) {
     return std::make_shared<const pipeline::Rectifier>(pipeline::openDataset(calibration)->calibration());
   }
-  return std::make_shared<const pipeline::Rectifier>(pipeline::readStereoCalibration(calibration));
+  return std::make_shared<const pipeline::Rectifier>(pipeline::readCalibrationFile(calibration));
 }
 
 std::shared_ptr<grpc::ServerCredentials> credentialsFrom(const Options& o) {

@@ -25,7 +25,7 @@ std::atomic<bool> g_stop{false};
 extern "C" void onInterrupt(int) { g_stop = true; }
 
 struct RunOptions {
-  std::string dataset, format = "auto", trajectory, trajectory_format, pose_frame, config, out, map;
+  std::string dataset, format = "auto", trajectory, trajectory_format, trajectory_times, pose_frame, config, out, map;
   int fusion_views = 0, max_frames = -1;
   bool write_depth = false, report = false;
   double voxel_m = -1.0, keyframe_translation_m = -1.0, keyframe_rotation_deg = -1.0;
@@ -74,19 +74,25 @@ void run(const RunOptions& o) {
   }
   const std::unique_ptr<pipeline::StereoDataset> dataset =
       pipeline::openDataset(o.dataset, pipeline::parseDatasetFormat(o.format));
-  const io::Trajectory trajectory =
-      pipeline::cameraTrajectory(*dataset, o.trajectory, o.trajectory_format, runner.config().run.pose_frame);
-  std::cerr << dataset->describe() << "; trajectory " << trajectory.name() << " (" << trajectory.size() << " poses)\n";
+  const pipeline::CameraTrajectory camera = pipeline::loadCameraTrajectory(
+      *dataset, {o.trajectory, o.trajectory_format, o.trajectory_times, runner.config().run.pose_frame});
+  const io::Trajectory& trajectory = camera.trajectory;
+  std::cerr << dataset->describe() << "; trajectory " << trajectory.name() << " (" << trajectory.size() << " poses, "
+            << camera.fileFrame() << " poses" << (camera.frame_assumed ? ", assumed" : "") << ")\n";
+  if (camera.frame_assumed) std::cerr << "note: " << camera.note << "\n";
 
   g_stop = false;
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
   ProgressBar bar("cenote run");
-  const pipeline::RunReport report =
+  pipeline::RunReport report =
       runner.run(*dataset, trajectory, o.out, g_stop, sink, [&bar](size_t done, size_t total) { bar.update(done, total); });
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
 
+  report.pose_frame = camera.fileFrame();
+  report.pose_frame_assumed = camera.frame_assumed;
+  report.pose_frame_hint = camera.note;
   const std::string report_path = (std::filesystem::path(o.out) / "report.json").string();
   std::ofstream(report_path) << report.toJson();
   std::cout << report.toTable();
@@ -110,6 +116,8 @@ void registerRunCommand(CLI::App& app) {
   cmd->add_option("--trajectory", o->trajectory, "Poses (TUM, EuRoC CSV or KITTI); default: the dataset's ground truth");
   cmd->add_option("--trajectory-format", o->trajectory_format, "Trajectory format (default: detected)")
       ->check(CLI::IsMember({"tum", "euroc", "kitti"}));
+  cmd->add_option("--trajectory-times", o->trajectory_times,
+                  "Times of KITTI poses (one a line, seconds); default: the KITTI sequence's times.txt");
   cmd->add_option("--pose-frame", o->pose_frame, "What the poses describe (default: the format's convention)")
       ->check(CLI::IsMember({"auto", "body", "camera"}));
   cmd->add_option("--config", o->config, "YAML configuration (sections stereo, fusion, run)");

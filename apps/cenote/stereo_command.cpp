@@ -59,7 +59,7 @@ void run(const StereoOptions& o) {
   double focal_px = o.focal_px, baseline_m = o.baseline_m;
   cv::Mat left = frame.left, right = frame.right;
   if (!o.calib.empty()) {
-    const pipeline::Rectifier rectifier(pipeline::readStereoCalibration(o.calib));
+    const pipeline::Rectifier rectifier(pipeline::readCalibrationFile(o.calib, frame.left.size()));
     const pipeline::RectifiedPair pair = rectifier.rectify(frame);
     left = pair.left;
     right = pair.right;
@@ -108,7 +108,7 @@ void registerStereoCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("stereo", "Disparity, confidence and depth of one stereo pair");
   cmd->add_option("--left", options->left, "Left image")->required();
   cmd->add_option("--right", options->right, "Right image")->required();
-  cmd->add_option("--calib", options->calib, "Stereo calibration YAML (raw pairs are rectified)");
+  cmd->add_option("--calib", options->calib, "Stereo calibration: OpenCV YAML, EuRoC cam0/sensor.yaml (+ cam1), KITTI calib.txt (raw pairs are rectified)");
   cmd->add_option("--config", options->config, "YAML file with a `stereo:` section");
   cmd->add_option("--disparities", options->disparities, "Number of disparities (multiple of 16)");
   cmd->add_option("--min-disparity", options->min_disparity, "First disparity searched");

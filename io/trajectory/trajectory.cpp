@@ -131,7 +131,10 @@ std::optional<Eigen::Isometry3d> Trajectory::poseAt(double t_s, double max_gap_s
   if (after == poses_.end() || after == poses_.begin()) return std::nullopt;
   const StampedPose& a = *std::prev(after);
   const StampedPose& b = *after;
-  if (b.t_s - a.t_s > max_gap_s) return std::nullopt;
+  // The gap is compared with kSameTime of slack: a 10 Hz stream stamped in seconds since 1970 has
+  // gaps of 0.1 s only to within 1e-7 s (the spacing of doubles near 1.7e9), so a plain `>` would
+  // reject about half of the gaps that are exactly max_gap_s.
+  if (b.t_s - a.t_s > max_gap_s + kSameTime) return std::nullopt;
   const double s = (t_s - a.t_s) / (b.t_s - a.t_s);
   const Eigen::Quaterniond qa(a.T_world_cam.linear()), qb(b.T_world_cam.linear());
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();

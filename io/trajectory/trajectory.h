@@ -6,7 +6,7 @@
 // the dataset's extrinsics (transformedBy) to get the camera's trajectory.
 //
 // Interpolation never guesses: a pose exists at t only between two samples that bracket t and are
-// at most `max_gap_s` apart (or at a sample's own timestamp, within 1 microsecond).
+// at most `max_gap_s` apart, within 1 microsecond (or at a sample's own timestamp, within 1 microsecond).
 // Threads: immutable after construction; share freely.
 #pragma once
 

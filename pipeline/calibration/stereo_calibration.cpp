@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "io/image/image_io.h"
 
 namespace cenote::pipeline {
 namespace {
@@ -247,6 +248,74 @@ StereoCalibration readKittiCalibration(const std::string& path, const cv::Size& 
   c.rectified_geometry = geometryFromProjections(P[0], P[1], image_size);
   c.validate();
   return c;
+}
+
+namespace {
+
+enum class CalibrationFileKind { kOpenCv, kEuroc, kKitti };
+
+// KITTI: a line "P0:" (or P1..P3) followed by 12 numbers (OpenCV's rectified layout has "P1:" keys
+// too, followed by a matrix); EuRoC / Kalibr: T_BS and intrinsics keys.
+CalibrationFileKind calibrationFileKind(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  bool t_bs = false, intrinsics = false;
+  while (std::getline(in, line)) {
+    if (line.size() > 2 && line[0] == 'P' && line[1] >= '0' && line[1] <= '3' && line[2] == ':') {
+      std::istringstream values(line.substr(3));
+      int numbers = 0;
+      for (double v; values >> v;) ++numbers;
+      if (numbers == 12) return CalibrationFileKind::kKitti;
+    }
+    t_bs = t_bs || line.rfind("T_BS:", 0) == 0;
+    intrinsics = intrinsics || line.rfind("intrinsics:", 0) == 0;
+  }
+  return t_bs && intrinsics ? CalibrationFileKind::kEuroc : CalibrationFileKind::kOpenCv;
+}
+
+}  // namespace
+
+StereoCalibration readCalibrationFile(const std::string& path, cv::Size image_size) {
+  namespace fs = std::filesystem;
+  requireFile(path);
+  if (fs::is_directory(path)) {
+    throw Error(path + ": is a folder; a calibration file is expected (OpenCV stereo YAML, EuRoC cam0/sensor.yaml, "
+                       "KITTI calib.txt)");
+  }
+  const fs::path dir = fs::path(path).parent_path();
+  switch (calibrationFileKind(path)) {
+    case CalibrationFileKind::kKitti: {
+      const bool colour = fs::is_directory(dir / "image_2") && fs::is_directory(dir / "image_3");
+      const fs::path first = dir / (colour ? "image_2" : "image_0") / "000000.png";
+      if (fs::exists(first)) image_size = io::readImage(first.string(), cv::IMREAD_UNCHANGED).size();
+      if (image_size.empty()) {
+        throw Error(path + ": a KITTI calib.txt has no image size, and there is no " + first.string() +
+                    " beside it to take it from");
+      }
+      return readKittiCalibration(path, image_size, colour ? "P2" : "P0", colour ? "P3" : "P1");
+    }
+    case CalibrationFileKind::kEuroc: {
+      if (dir.filename() != "cam0") {
+        throw Error(path + ": an EuRoC / Kalibr sensor.yaml describes one camera; give the left camera's, "
+                           "<mav0>/cam0/sensor.yaml, with cam1/sensor.yaml beside it");
+      }
+      const fs::path right = dir.parent_path() / "cam1" / fs::path(path).filename();
+      if (!fs::exists(right)) {
+        throw Error(path + ": the right camera's " + right.string() + " is missing (an EuRoC / Kalibr sensor.yaml "
+                           "describes one camera)");
+      }
+      return readEurocSensorPair(path, right.string());
+    }
+    case CalibrationFileKind::kOpenCv:
+      break;
+  }
+  try {
+    return readStereoCalibration(path);
+  } catch (const Error& e) {
+    throw Error(std::string(e.what()) +
+                " (calibration files read: OpenCV stereo YAML with image_width, image_height, K1 D1 K2 D2 R T or P1 "
+                "P2; EuRoC / Kalibr cam0/sensor.yaml beside cam1/sensor.yaml; KITTI calib.txt)");
+  }
 }
 
 }  // namespace cenote::pipeline

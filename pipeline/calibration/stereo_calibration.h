@@ -51,6 +51,19 @@ StereoCalibration readEurocSensorPair(const std::string& left_sensor_yaml,
 // Camera-to-body transform (T_BS) of one EuRoC sensor.yaml. @throws cenote::Error.
 cv::Matx44d readEurocBodyFromSensor(const std::string& sensor_yaml);
 
+// Any stereo calibration file cenote reads, recognised by its content; what `cenote stereo
+// --calib` and `cenote-server --calibration` take:
+//   KITTI calib.txt (rows "P0: ..."): rows P2 / P3 when its folder holds image_2 and image_3 (the
+//     colour pair, as KittiDataset), else P0 / P1; the image size is that of the folder's first
+//     left image, else `image_size`;
+//   EuRoC / Kalibr sensor.yaml (T_BS, intrinsics): the left camera's, <mav0>/cam0/sensor.yaml,
+//     read with its sibling <mav0>/cam1/sensor.yaml (readEurocSensorPair);
+//   otherwise OpenCV FileStorage YAML (readStereoCalibration).
+// @param image_size the size of the images to rectify, for a KITTI file beside no images (it has
+//        no size of its own); empty: unknown.
+// @throws cenote::Error naming the file, and for an unrecognised one the formats that are read.
+StereoCalibration readCalibrationFile(const std::string& path, cv::Size image_size = {});
+
 // KITTI `calib.txt` (rectified): rows "P0: 12 numbers" ...; `left`/`right` name the rows
 // ("P0"/"P1" grey, "P2"/"P3" colour). @throws cenote::Error.
 StereoCalibration readKittiCalibration(const std::string& path, const cv::Size& image_size,

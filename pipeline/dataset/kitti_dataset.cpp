@@ -85,7 +85,17 @@ std::optional<TrajectorySource> KittiDataset::defaultTrajectory() const {
   const fs::path seq = dir.filename().empty() ? dir.parent_path().filename() : dir.filename();
   const fs::path poses = dir.parent_path().parent_path() / "poses" / (seq.string() + ".txt");
   if (!fs::exists(poses)) return std::nullopt;
-  return TrajectorySource{poses.string(), io::TrajectoryFormat::kKitti, (fs::path(dir_) / "times.txt").string(), true};
+  return trajectoryFile(poses.string(), io::TrajectoryFormat::kKitti);
+}
+
+TrajectorySource KittiDataset::trajectoryFile(const std::string& path, io::TrajectoryFormat format) const {
+  TrajectorySource source = StereoDataset::trajectoryFile(path, format);
+  if (format == io::TrajectoryFormat::kKitti) {
+    source.kitti_times = (fs::path(dir_) / "times.txt").string();
+    source.describes_body = true;  // camera 0, which T_body_cam takes to the left camera
+    source.frame_assumed = false;
+  }
+  return source;
 }
 
 std::string KittiDataset::describe() const {

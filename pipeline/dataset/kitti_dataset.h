@@ -27,6 +27,8 @@ class KittiDataset final : public StereoDataset {
   const StereoCalibration& calibration() const override { return calibration_; }
   Eigen::Isometry3d T_body_cam() const override { return T_body_cam_; }
   std::optional<TrajectorySource> defaultTrajectory() const override;
+  // KITTI poses: timed by times.txt, of camera 0 (composed with T_body_cam); TUM: the left camera.
+  TrajectorySource trajectoryFile(const std::string& path, io::TrajectoryFormat format) const override;
   std::string describe() const override;
 
  private:

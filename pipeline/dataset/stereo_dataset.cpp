@@ -16,6 +16,15 @@ DatasetFormat parseDatasetFormat(const std::string& name) {
   throw Error("dataset format '" + name + "': must be auto, euroc or kitti");
 }
 
+TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::TrajectoryFormat format) const {
+  TrajectorySource source;
+  source.path = path;
+  source.format = format;
+  source.describes_body = format == io::TrajectoryFormat::kEuroc;
+  source.frame_assumed = format != io::TrajectoryFormat::kEuroc;
+  return source;
+}
+
 std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetFormat format) {
   if (!fs::exists(path)) throw Error("dataset " + path + ": no such folder");
   if (format == DatasetFormat::kAuto) {

@@ -24,6 +24,9 @@ struct TrajectorySource {
   io::TrajectoryFormat format = io::TrajectoryFormat::kTum;
   std::string kitti_times;  // KITTI only
   bool describes_body = false;  // true: poses of the body (IMU); false: of the left camera
+  // true: the format does not say which frame its poses describe (TUM; KITTI poses outside a KITTI
+  // sequence), so describes_body is the format's habit (the camera), not a fact of the file.
+  bool frame_assumed = false;
 };
 
 class StereoDataset {
@@ -44,6 +47,12 @@ class StereoDataset {
   virtual Eigen::Isometry3d T_body_cam() const = 0;
   // The ground-truth / reference trajectory found inside the dataset, if any.
   virtual std::optional<TrajectorySource> defaultTrajectory() const = 0;
+  // How this dataset reads a trajectory file of `format` that the user names (`cenote run
+  // --trajectory`): the times of a format without timestamps (KITTI: the sequence's times.txt) and
+  // which frame its poses describe (EuRoC CSV: the body; KITTI poses on a KITTI sequence: camera 0,
+  // the frame T_body_cam starts from; TUM: the camera, assumed). The dataset's own file named by
+  // its path gives the same source as defaultTrajectory().
+  virtual TrajectorySource trajectoryFile(const std::string& path, io::TrajectoryFormat format) const;
   virtual std::string describe() const = 0;
 };
 

@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <mutex>
@@ -188,6 +189,11 @@ std::string RunReport::toJson() const {
                          {"unreadable", skipped_unreadable}};
   j["points_written"] = points_written;
   j["interrupted"] = interrupted;
+  if (!pose_frame.empty()) {
+    j["pose_frame"] = pose_frame;
+    j["pose_frame_assumed"] = pose_frame_assumed;
+    if (!pose_frame_hint.empty()) j["pose_frame_hint"] = pose_frame_hint;
+  }
   j["wall_s"] = wall_s;
   j["fps"] = fps;
   j["peak_memory_mb"] = peak_memory_mb;
@@ -220,22 +226,52 @@ std::string RunReport::toTable() const {
   return t.str();
 }
 
-io::Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
-                            const std::string& trajectory_format, PoseFrame pose_frame) {
+CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const TrajectoryRequest& request) {
   TrajectorySource source;
-  if (!trajectory_path.empty()) {
-    source.path = trajectory_path;
-    source.format = trajectory_format.empty() ? io::detectTrajectoryFormat(trajectory_path) : io::parseTrajectoryFormat(trajectory_format);
-    source.describes_body = source.format == io::TrajectoryFormat::kEuroc;
+  if (!request.path.empty()) {
+    const io::TrajectoryFormat format =
+        request.format.empty() ? io::detectTrajectoryFormat(request.path) : io::parseTrajectoryFormat(request.format);
+    source = dataset.trajectoryFile(request.path, format);
   } else if (const std::optional<TrajectorySource> own = dataset.defaultTrajectory()) {
     source = *own;
   } else {
     throw Error("no trajectory: " + dataset.describe() + " has no ground truth; give one with --trajectory");
   }
-  if (pose_frame == PoseFrame::kBody) source.describes_body = true;
-  if (pose_frame == PoseFrame::kCamera) source.describes_body = false;
+  if (!request.times.empty()) {
+    if (source.format != io::TrajectoryFormat::kKitti) {
+      throw Error("trajectory times " + request.times + ": only KITTI poses take a times file; " + source.path +
+                  " is " + io::toString(source.format) + ", which carries its own timestamps");
+    }
+    source.kitti_times = request.times;
+  }
+  if (source.format == io::TrajectoryFormat::kKitti && source.kitti_times.empty()) {
+    throw Error("trajectory " + source.path +
+                ": KITTI poses carry no timestamps and this dataset has no times.txt; give them with "
+                "--trajectory-times FILE (one time a line, seconds)");
+  }
+  CameraTrajectory out;
+  out.file_describes_body = source.describes_body;
+  if (request.pose_frame == PoseFrame::kBody) out.file_describes_body = true;
+  if (request.pose_frame == PoseFrame::kCamera) out.file_describes_body = false;
+  const Eigen::Isometry3d T_body_cam = dataset.T_body_cam();
+  const bool extrinsics_matter = !T_body_cam.isApprox(Eigen::Isometry3d::Identity(), 1e-12);
+  out.frame_assumed = request.pose_frame == PoseFrame::kAuto && source.frame_assumed && extrinsics_matter;
+  if (out.frame_assumed) {
+    char offset[96];
+    std::snprintf(offset, sizeof(offset), "%.3f m and %.1f deg", T_body_cam.translation().norm(),
+                  Eigen::AngleAxisd(T_body_cam.linear()).angle() * 180.0 / M_PI);
+    out.note = std::string("poses of ") + source.path + " taken as " + out.fileFrame() + " poses: a " +
+               io::toString(source.format) + " file does not say which frame it describes, and the camera sits " +
+               offset + " from the body of " + dataset.describe() + "; pass --pose-frame body if they are body (IMU) poses";
+  }
   const io::Trajectory trajectory = io::Trajectory::read(source.path, source.format, source.kitti_times);
-  return source.describes_body ? trajectory.transformedBy(dataset.T_body_cam()) : trajectory;
+  out.trajectory = out.file_describes_body ? trajectory.transformedBy(T_body_cam) : trajectory;
+  return out;
+}
+
+io::Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
+                            const std::string& trajectory_format, PoseFrame pose_frame) {
+  return loadCameraTrajectory(dataset, {trajectory_path, trajectory_format, "", pose_frame}).trajectory;
 }
 
 double peakMemoryMb() {

@@ -39,6 +39,11 @@ struct RunReport {
   size_t skipped_unreadable = 0;
   size_t points_written = 0;
   bool interrupted = false;
+  // What the trajectory's poses were taken to describe ("camera" or "body"; empty: not set) and
+  // whether that was assumed (CameraTrajectory::frame_assumed), with the hint printed for it.
+  std::string pose_frame;
+  bool pose_frame_assumed = false;
+  std::string pose_frame_hint;
   double wall_s = 0.0;
   double fps = 0.0;              // frames processed per second of wall time
   double peak_memory_mb = 0.0;   // resident set, high-water mark of the process
@@ -72,9 +77,36 @@ class Runner {
   PipelineConfig config_;
 };
 
-// The trajectory of the dataset's left camera: `trajectory_path` (format detected from the file
-// unless given) or the dataset's own; body poses are composed with the dataset's T_body_cam.
-// @throws cenote::Error when there is no trajectory at all or it cannot be read.
+// Which trajectory a run uses (the options of `cenote run`).
+struct TrajectoryRequest {
+  std::string path;          // empty: the dataset's own ground truth
+  std::string format;        // "tum", "euroc", "kitti"; empty: detected from the file
+  std::string times;         // times of a format without timestamps (KITTI); empty: the dataset's
+                             // own (a KITTI sequence's times.txt)
+  PoseFrame pose_frame = PoseFrame::kAuto;
+};
+
+// The trajectory of the dataset's raw left camera, and how it was made.
+struct CameraTrajectory {
+  io::Trajectory trajectory;       // T_world_cam of the raw left camera
+  bool file_describes_body = false;  // the file's poses were composed with T_body_cam
+  // true: pose_frame was auto, the format does not say which frame its poses describe (TUM; KITTI
+  // outside a KITTI sequence) and the dataset's T_body_cam is not the identity, so the choice
+  // (the camera) changes the map; `note` then says so and how to choose.
+  bool frame_assumed = false;
+  std::string note;                // one line for a person; empty when nothing was assumed
+  const char* fileFrame() const { return file_describes_body ? "body" : "camera"; }
+};
+
+// The trajectory of the dataset's left camera: `request.path` (read the way the dataset reads its
+// own files, StereoDataset::trajectoryFile: a KITTI sequence times KITTI poses with its times.txt
+// and applies its cam0-to-camera offset, exactly as for its default trajectory) or the dataset's
+// own; body poses are composed with the dataset's T_body_cam.
+// @throws cenote::Error when there is no trajectory at all, it cannot be read, KITTI poses have no
+//         times, or `request.times` is given for a format that has its own timestamps.
+CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const TrajectoryRequest& request);
+
+// loadCameraTrajectory(dataset, {trajectory_path, trajectory_format, "", pose_frame}).trajectory.
 io::Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
                             const std::string& trajectory_format, PoseFrame pose_frame);
 

@@ -50,8 +50,9 @@ struct StereoConfig {
   bool subpixel = true;        // parabola through the aggregated costs at d-1, d, d+1
   bool pkrn_exclude_neighbours = true;  // second minimum taken outside d*-1..d*+1 (see stereo_matcher.h)
   double min_confidence = 0.0; // PKRN below this marks the pixel invalid; PKRN >= 1, so 0 keeps all
-  bool lr_check = false;       // left-right consistency check on integer disparities
-  bool invalidate_truncated = false;  // mark invalid the left columns x < min_d + D - 1, whose
+  bool lr_check = true;        // left-right consistency check on integer disparities (mapping wants
+                               // few, right points; config/default.yaml documents every default)
+  bool invalidate_truncated = true;   // mark invalid the left columns x < min_d + D - 1, whose
                                // search range is cut by the image border: their true match may lie
                                // outside the right image (OpenCV's behaviour; for mapping)
   int lr_max_diff_px = 1;      // allowed |d_left - d_right| with lr_check

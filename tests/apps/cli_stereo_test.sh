@@ -61,4 +61,73 @@ expect_error 1 "calib.yaml" stereo --left "$work/left.png" --right "$work/right.
 printf 'stereo:\n  window_sise: 3\n' >"$work/config.yaml"
 expect_error 1 "unknown configuration key(s): stereo.window_sise" stereo --left "$work/left.png" --right "$work/right.png" --config "$work/config.yaml" --out-disparity "$work/x.pfm"
 
+# 3. One set of defaults: no --config gives what config/default.yaml gives (left-right check and
+#    truncated columns included), byte for byte.
+"$cenote" stereo --left "$work/left.png" --right "$work/right.png" --disparities 16 --out-disparity "$work/plain.pfm" \
+  >/dev/null 2>&1 || fail "stereo without --config failed"
+"$cenote" stereo --left "$work/left.png" --right "$work/right.png" --disparities 16 --out-disparity "$work/file.pfm" \
+  --config "$source_dir/config/default.yaml" >/dev/null 2>&1 || fail "stereo with config/default.yaml failed"
+cmp -s "$work/plain.pfm" "$work/file.pfm" || fail "stereo without --config differs from --config config/default.yaml"
+
+# 4. Every calibration layout the runner reads, from the file alone, written from the formats' docs:
+#    the 120x80 pair above, f = 100 px, baseline 0.1 m, so depth = 100 * 0.1 / 7 m at the centre.
+depth_at_centre() {
+  /usr/bin/python3 - "$1" <<'PY'
+import struct, sys
+data = open(sys.argv[1], "rb").read()
+lines = data.split(b"\n", 3)
+w, h = map(int, lines[1].split())
+print(struct.unpack_from("<f", lines[3], ((h - 1 - 40) * w + 60) * 4)[0])
+PY
+}
+#    KITTI odometry calib.txt: rectified 3x4 projection rows P0..P3 (P1 = K [I | (-b, 0, 0)]).
+mkdir -p "$work/kitti"
+{
+  echo "P0: 1.000000e+02 0.000000e+00 6.000000e+01 0.000000e+00 0.000000e+00 1.000000e+02 4.000000e+01 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00"
+  echo "P1: 1.000000e+02 0.000000e+00 6.000000e+01 -1.000000e+01 0.000000e+00 1.000000e+02 4.000000e+01 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00"
+  echo "P2: 1.000000e+02 0.000000e+00 6.000000e+01 0.000000e+00 0.000000e+00 1.000000e+02 4.000000e+01 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00"
+  echo "P3: 1.000000e+02 0.000000e+00 6.000000e+01 -1.000000e+01 0.000000e+00 1.000000e+02 4.000000e+01 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00"
+  echo "Tr: 1 0 0 0 0 1 0 0 0 0 1 0"
+} >"$work/kitti/calib.txt"
+"$cenote" stereo --left "$work/left.png" --right "$work/right.png" --disparities 16 --calib "$work/kitti/calib.txt" \
+  --out-disparity "$work/k.pfm" --out-depth "$work/kz.pfm" >"$work/kitti.txt" 2>&1 ||
+  fail "stereo --calib calib.txt (KITTI) failed: $(cat "$work/kitti.txt")"
+/usr/bin/python3 -c "import sys; z = float(sys.argv[1]); sys.exit(0 if abs(z - 10.0 / 7.0) < 0.05 else 1)" \
+  "$(depth_at_centre "$work/kz.pfm")" || fail "KITTI calib.txt: depth $(depth_at_centre "$work/kz.pfm") m, expected 1.43"
+#    EuRoC sensor.yaml: T_BS (camera to body, 4x4 row-major), intrinsics [fu, fv, cu, cv], resolution
+#    [w, h], radial-tangential distortion; the right camera 0.1 m along the left camera's x.
+mkdir -p "$work/mav0/cam0" "$work/mav0/cam1"
+for cam in 0 1; do
+  x=$([ $cam = 0 ] && echo 0.0 || echo 0.1)
+  cat >"$work/mav0/cam$cam/sensor.yaml" <<YAML
+%YAML:1.0
+sensor_type: camera
+comment: cam$cam, written by hand
+T_BS:
+  cols: 4
+  rows: 4
+  data: [1.0, 0.0, 0.0, $x, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]
+rate_hz: 20
+resolution: [120, 80]
+camera_model: pinhole
+intrinsics: [100.0, 100.0, 59.5, 39.5] #fu, fv, cu, cv
+distortion_model: radial-tangential
+distortion_coefficients: [0.0, 0.0, 0.0, 0.0]
+YAML
+done
+"$cenote" stereo --left "$work/left.png" --right "$work/right.png" --disparities 16 --calib "$work/mav0/cam0/sensor.yaml" \
+  --out-disparity "$work/e.pfm" --out-depth "$work/ez.pfm" >"$work/euroc.txt" 2>&1 ||
+  fail "stereo --calib mav0/cam0/sensor.yaml (EuRoC) failed: $(cat "$work/euroc.txt")"
+/usr/bin/python3 -c "import sys; z = float(sys.argv[1]); sys.exit(0 if abs(z - 10.0 / 7.0) < 0.05 else 1)" \
+  "$(depth_at_centre "$work/ez.pfm")" || fail "EuRoC sensor.yaml: depth $(depth_at_centre "$work/ez.pfm") m, expected 1.43"
+expect_error 1 "cam1/sensor.yaml: an EuRoC / Kalibr sensor.yaml describes one camera; give the left camera's" stereo --left "$work/left.png" \
+  --right "$work/right.png" --calib "$work/mav0/cam1/sensor.yaml" --out-disparity "$work/x.pfm"
+
+# 5. `cenote calibrate --help` shows the board defaults.
+"$cenote" calibrate --help >"$work/calibrate_help.txt" 2>&1
+# (CLI11 prints a default as TYPE=VALUE: `--board TEXT=9x6`.)
+for option in '--board [A-Z:]*=9x6' '--square [A-Z:]*=0.025' '--left-prefix [A-Z:]*=left' '--right-prefix [A-Z:]*=right'; do
+  grep -qE -- "$option" "$work/calibrate_help.txt" || fail "calibrate --help: no $option in: $(cat "$work/calibrate_help.txt")"
+done
+
 echo "cli_stereo_test: all checks passed"

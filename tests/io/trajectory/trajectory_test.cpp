@@ -97,5 +97,37 @@ TEST(Trajectory, MalformedFilesAreErrorsNamingFileAndLine) {
   EXPECT_THROW(parseTrajectoryFormat("colmap"), Error);
 }
 
+// 10 Hz poses stamped like a real recording (nanoseconds since 1970, read into seconds): gaps of
+// exactly 0.1 s, which doubles near 1.4e9 s represent only to within 2.4e-7 s.
+std::string writeEpochPoses(const std::string& name, int count, int64_t period_ns) {
+  std::string text;
+  for (int i = 0; i < count; ++i) {
+    const int64_t t_ns = 1403636579000000000LL + i * period_ns;
+    text += std::to_string(t_ns) + "," + std::to_string(0.1 * i) + ",0,0,1,0,0,0\n";
+  }
+  return write(name, text);
+}
+
+TEST(Trajectory, GapsOfExactlyMaxGapAreBridgedAtEpochTimestamps) {
+  const Trajectory t = Trajectory::read(writeEpochPoses("epoch10hz.csv", 50, 100000000), TrajectoryFormat::kEuroc);
+  // Frames 1 ms after each pose (a camera clock a little behind the VIO's): every one between two
+  // samples exactly max_gap_s = 0.1 s apart.
+  int posed = 0;
+  for (int i = 0; i < 49; ++i) {
+    const double t_s = (1403636579000000000LL + i * 100000000LL + 1000000LL) * 1e-9;
+    const auto pose = t.poseAt(t_s, 0.1);
+    if (!pose) {
+      ADD_FAILURE() << "frame " << i << " (t = " << t_s << " s): no pose between samples 0.1 s apart";
+      continue;
+    }
+    ++posed;
+    EXPECT_NEAR(pose->translation().x(), 0.1 * i + 0.001, 1e-5) << "frame " << i;
+  }
+  EXPECT_EQ(posed, 49);
+  // A gap a little over max_gap_s (0.1 s + 10 us) is still refused: the slack is 1 us.
+  const Trajectory wide = Trajectory::read(writeEpochPoses("epoch_wide.csv", 3, 100010000), TrajectoryFormat::kEuroc);
+  EXPECT_FALSE(wide.poseAt(1403636579.05, 0.1));
+}
+
 }  // namespace
 }  // namespace cenote::io

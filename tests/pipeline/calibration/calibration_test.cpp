@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -115,6 +117,124 @@ TEST(StereoCalibration, KittiCalibTxtRowsGiveRectifiedGeometry) {
   EXPECT_TRUE(c.rectified);
   EXPECT_NEAR(c.rectified_geometry.baseline_m, 0.537165, 1e-5);
   EXPECT_THROW(readKittiCalibration(temp("calib.txt"), cv::Size(1241, 376), "P2", "P3"), Error);
+}
+
+// readCalibrationFile: each layout the runner reads, from a file alone, as `cenote stereo --calib`
+// and `cenote-server --calibration` take it.
+const char* kKittiCalib00 =
+    "P0: 7.188560000000e+02 0.000000000000e+00 6.071928000000e+02 0.000000000000e+00 0.000000000000e+00 "
+    "7.188560000000e+02 1.852157000000e+02 0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 "
+    "1.000000000000e+00 0.000000000000e+00\n"
+    "P1: 7.188560000000e+02 0.000000000000e+00 6.071928000000e+02 -3.861448000000e+02 0.000000000000e+00 "
+    "7.188560000000e+02 1.852157000000e+02 0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 "
+    "1.000000000000e+00 0.000000000000e+00\n"
+    "P2: 7.188560000000e+02 0.000000000000e+00 6.071928000000e+02 4.538225000000e+01 0.000000000000e+00 "
+    "7.188560000000e+02 1.852157000000e+02 -1.130887000000e-01 0.000000000000e+00 0.000000000000e+00 "
+    "1.000000000000e+00 3.779761000000e-03\n"
+    "P3: 7.188560000000e+02 0.000000000000e+00 6.071928000000e+02 -3.372877000000e+02 0.000000000000e+00 "
+    "7.188560000000e+02 1.852157000000e+02 2.369057000000e+00 0.000000000000e+00 0.000000000000e+00 "
+    "1.000000000000e+00 4.915215000000e-03\n"
+    "Tr: 4.276802385584e-04 -9.999672484946e-01 -8.084491683471e-03 -1.198459927713e-02 -7.210626507497e-03 "
+    "8.081198471645e-03 -9.999413164504e-01 -5.403984729748e-02 9.999738645903e-01 4.859485810390e-04 "
+    "-7.206933692422e-03 -2.921968648686e-01\n";
+
+std::string freshDir(const std::string& name) {
+  const std::string dir = temp(name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+TEST(CalibrationFile, OpenCvYamlIsReadAsBeforeIncludingItsRectifiedP1P2Layout) {
+  writeStereoCalibration(temp("any_rig.yaml"), exampleRig());
+  const StereoCalibration c = readCalibrationFile(temp("any_rig.yaml"));
+  EXPECT_EQ(c.image_size, cv::Size(640, 480));
+  EXPECT_LT(cv::norm(c.T - exampleRig().T), 1e-12);
+  std::ofstream(temp("any_rect.yaml")) << "%YAML:1.0\nimage_width: 1241\nimage_height: 376\n"
+                                          "P1: !!opencv-matrix\n  rows: 3\n  cols: 4\n  dt: d\n"
+                                          "  data: [718.856, 0, 607.1928, 0, 0, 718.856, 185.2157, 0, 0, 0, 1, 0]\n"
+                                          "P2: !!opencv-matrix\n  rows: 3\n  cols: 4\n  dt: d\n"
+                                          "  data: [718.856, 0, 607.1928, -386.1448, 0, 718.856, 185.2157, 0, 0, 0, 1, 0]\n";
+  EXPECT_NEAR(readCalibrationFile(temp("any_rect.yaml")).rectified_geometry.baseline_m, 386.1448 / 718.856, 1e-12);
+}
+
+TEST(CalibrationFile, EurocCam0SensorYamlIsReadWithItsCam1Sibling) {
+  const std::string mav0 = freshDir("calib_euroc/mav0");
+  std::filesystem::create_directories(mav0 + "/cam0");
+  std::filesystem::create_directories(mav0 + "/cam1");
+  writeEurocSensor(mav0 + "/cam0/sensor.yaml",
+                   "0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975, "
+                   "0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768, "
+                   "-0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949, 0.0, 0.0, 0.0, 1.0",
+                   "458.654, 457.296, 367.215, 248.375", "-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05");
+  const std::string cam0 = mav0 + "/cam0/sensor.yaml", cam1 = mav0 + "/cam1/sensor.yaml";
+  try {
+    readCalibrationFile(cam0);
+    FAIL() << "one camera's sensor.yaml was read as a stereo rig";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), cam0 + ": the right camera's " + cam1 +
+                                         " is missing (an EuRoC / Kalibr sensor.yaml describes one camera)");
+  }
+  writeEurocSensor(cam1,
+                   "0.0125552670891, -0.999755099723, 0.0182237714554, -0.0198435579556, "
+                   "0.999598781151, 0.0130119051815, 0.0251588363115, 0.0453689425024, "
+                   "-0.0253898008918, 0.0179005838253, 0.999517347078, 0.00786212447038, 0.0, 0.0, 0.0, 1.0",
+                   "457.587, 456.134, 379.999, 255.238", "-0.28368365, 0.07451284, -0.00010473, -3.55590700e-05");
+  const StereoCalibration c = readCalibrationFile(cam0);
+  EXPECT_EQ(c.image_size, cv::Size(752, 480));
+  EXPECT_DOUBLE_EQ(c.right.K(1, 2), 255.238);
+  EXPECT_NEAR(cv::norm(c.T), 0.1101, 5e-4);  // MH_01's published baseline
+  try {
+    readCalibrationFile(cam1);
+    FAIL() << "the right camera's file was taken as the left";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), cam1 + ": an EuRoC / Kalibr sensor.yaml describes one camera; give the left "
+                                            "camera's, <mav0>/cam0/sensor.yaml, with cam1/sensor.yaml beside it");
+  }
+}
+
+TEST(CalibrationFile, KittiCalibTxtTakesTheColourRowsAndImageSizeOfItsSequence) {
+  const std::string seq = freshDir("calib_kitti/00");
+  std::ofstream(seq + "/calib.txt") << kKittiCalib00;
+  // Alone: no image size of its own.
+  try {
+    readCalibrationFile(seq + "/calib.txt");
+    FAIL() << "a KITTI calib.txt without an image size was read";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), seq + "/calib.txt: a KITTI calib.txt has no image size, and there is no " + seq +
+                                         "/image_0/000000.png beside it to take it from");
+  }
+  // Alone with the size of the images: the grey pair P0 / P1, baseline 386.1448 / 718.856 m.
+  const StereoCalibration grey = readCalibrationFile(seq + "/calib.txt", cv::Size(1241, 376));
+  EXPECT_TRUE(grey.rectified);
+  EXPECT_NEAR(grey.rectified_geometry.baseline_m, 0.537165, 1e-6);
+  // In its sequence folder with image_2 / image_3: the colour pair P2 / P3, the images' size.
+  std::filesystem::create_directories(seq + "/image_2");
+  std::filesystem::create_directories(seq + "/image_3");
+  cv::imwrite(seq + "/image_2/000000.png", cv::Mat(376, 1241, CV_8UC3, cv::Scalar(1, 2, 3)));
+  const StereoCalibration colour = readCalibrationFile(seq + "/calib.txt");
+  EXPECT_EQ(colour.image_size, cv::Size(1241, 376));
+  EXPECT_NEAR(colour.rectified_geometry.baseline_m, (45.38225 + 337.2877) / 718.856, 1e-6);
+}
+
+TEST(CalibrationFile, UnrecognisedFileSaysWhichLayoutsAreRead) {
+  std::ofstream(temp("notes.txt")) << "left camera: 500 px\n";
+  try {
+    readCalibrationFile(temp("notes.txt"));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(" (calibration files read: OpenCV stereo YAML with image_width, "
+                                         "image_height, K1 D1 K2 D2 R T or P1 P2; EuRoC / Kalibr cam0/sensor.yaml "
+                                         "beside cam1/sensor.yaml; KITTI calib.txt)"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    readCalibrationFile(temp("absent.yaml"));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "calibration file not found: " + temp("absent.yaml"));
+  }
 }
 
 // Draws a small bright blob at a sub-pixel position.

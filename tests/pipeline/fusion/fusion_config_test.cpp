@@ -124,8 +124,8 @@ TEST(FusionConfig, DefaultYamlSectionIsValidAndMatchesTheDefaults) {
   EXPECT_EQ(c.support_radius, d.support_radius);
   EXPECT_EQ(c.min_fused_confidence, d.min_fused_confidence);
   EXPECT_EQ(c.min_input_confidence, d.min_input_confidence);
-  EXPECT_TRUE(std::isinf(d.max_depth_m));
-  EXPECT_EQ(c.max_depth_m, 4.0);
+  EXPECT_EQ(c.max_depth_m, d.max_depth_m);
+  EXPECT_EQ(d.max_depth_m, 4.0);
 }
 
 }  // namespace

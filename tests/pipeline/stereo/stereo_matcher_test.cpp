@@ -273,6 +273,8 @@ TEST(StereoMatcher, PixelsWithoutRightMatchAreInvalidNotZero) {
   StereoConfig config;
   config.num_disparities = 16;
   config.min_disparity_px = 8;
+  config.invalidate_truncated = false;  // the columns x < min_d only (the truncated ones: below),
+  config.lr_check = false;              // and what the left image alone gives
   StereoMatcher matcher(config);
   const DisparityMap map = matcher.match(pair.left, pair.right);
   for (int y = 0; y < 40; ++y) {
