@@ -21,12 +21,15 @@ namespace cenote::server {
 
 class Snapshotter {
  public:
+  // Removes stale temporary files left by a crashed process (removeStaleTemporaries).
   // @throws cenote::Error when the directory cannot be created.
   Snapshotter(const MapHost& host, std::string directory, std::string frame_id, double period_s);
   ~Snapshotter();
 
   // Writes `relative_path` (format from `format`, or from the extension when unspecified) under the
-  // snapshot directory. @return the absolute path. @throws StatusError for a refused path or format.
+  // snapshot directory. @return the absolute path. @throws StatusError for a refused path or format;
+  // cenote::Error of the map writer's kind when the write fails (IoError; ResourceExhaustedError
+  // for a full disk).
   std::filesystem::path write(const std::string& relative_path, v1::SnapshotFormat format);
   // Writes to an absolute path chosen by the server (downloads, the periodic snapshot).
   void writeTo(const std::filesystem::path& path, v1::SnapshotFormat format);
@@ -37,6 +40,9 @@ class Snapshotter {
   // Seconds since the last snapshot; nullopt when none has been written.
   std::optional<double> lastSnapshotAge() const;
   const std::filesystem::path& directory() const { return directory_; }
+  // Removes temporary files (common/atomic_file.h) that a write cut short by a crash left in the
+  // snapshot directory; called at construction, before any write of this process starts.
+  void removeStaleTemporaries();
 
  private:
   void periodicLoop();
