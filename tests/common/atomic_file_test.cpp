@@ -8,18 +8,14 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "tests/support/scratch_dir.h"
+
 namespace cenote {
 namespace {
 
 namespace fs = std::filesystem;
 
-// A fresh, empty directory under the test program's scratch directory.
-fs::path freshDirectory(const std::string& name) {
-  const fs::path dir = fs::path(testing::TempDir()) / ("atomic_file_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path freshDirectory(const std::string& name) { return test::freshScratchDirectory("atomic_file_test_" + name); }
 
 std::string contentsOf(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -70,32 +66,33 @@ TEST(AtomicFile, MissingDirectoryIsAnIoErrorThatNamesTheTarget) {
   EXPECT_EQ(filesIn(dir), 0u);
 }
 
+// The Error that writeAtomically throws when its writer writes half a file, then throws `thrown`.
+template <typename Exception>
+Error errorOfHalfWrite(const std::string& path, Durability durability, const Exception& thrown) {
+  try {
+    writeAtomically(path, durability, [&](const std::string& temp) {
+      std::ofstream(temp) << "half";
+      throw thrown;
+    });
+  } catch (const Error& e) {
+    return e;
+  }
+  ADD_FAILURE() << "the writer's exception was swallowed";
+  return Error("");
+}
+
 TEST(AtomicFile, FailedWriterLeavesNeitherTargetNorTemporary) {
   const fs::path dir = freshDirectory("failed");
   const std::string path = (dir / "map.vdb").string();
   // A cenote::Error from the writer passes unchanged.
-  try {
-    writeAtomically(path, Durability::kDurable, [&](const std::string& temp) {
-      std::ofstream(temp) << "half";
-      throw ResourceExhaustedError("map: too many voxels");
-    });
-    FAIL() << "the writer's error was swallowed";
-  } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "map: too many voxels");
-    EXPECT_EQ(e.kind(), ErrorKind::kResourceExhausted);
-  }
+  const Error passed = errorOfHalfWrite(path, Durability::kDurable, ResourceExhaustedError("map: too many voxels"));
+  EXPECT_STREQ(passed.what(), "map: too many voxels");
+  EXPECT_EQ(passed.kind(), ErrorKind::kResourceExhausted);
   EXPECT_EQ(filesIn(dir), 0u);
   // Any other exception becomes "cannot write <path>: <what>", an I/O failure.
-  try {
-    writeAtomically(path, Durability::kFast, [&](const std::string& temp) {
-      std::ofstream(temp) << "half";
-      throw std::runtime_error("library said no");
-    });
-    FAIL() << "the writer's exception was swallowed";
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), "cannot write " + path + ": library said no");
-    EXPECT_EQ(e.kind(), ErrorKind::kIoFailure);
-  }
+  const Error wrapped = errorOfHalfWrite(path, Durability::kFast, std::runtime_error("library said no"));
+  EXPECT_EQ(std::string(wrapped.what()), "cannot write " + path + ": library said no");
+  EXPECT_EQ(wrapped.kind(), ErrorKind::kIoFailure);
   EXPECT_EQ(filesIn(dir), 0u);
 }
 

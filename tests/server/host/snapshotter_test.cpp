@@ -9,18 +9,14 @@
 
 #include "common/atomic_file.h"
 #include "server/access/call_guard.h"
+#include "tests/support/scratch_dir.h"
 
 namespace cenote::server {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path freshDirectory(const std::string& name) {
-  const fs::path dir = fs::path(testing::TempDir()) / ("snapshotter_test_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path freshDirectory(const std::string& name) { return test::freshScratchDirectory("snapshotter_test_" + name); }
 
 std::unique_ptr<MapHost> makeHost() {
   return std::make_unique<MapHost>(std::make_unique<mapping::OccupancyMap>(mapping::MapConfig{}), MapHostOptions{});
