@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "common/median.h"
 #include "pipeline/fusion/back_projection.h"
 #include "pipeline/fusion/depth_fusion.h"
 #include "tests/support/fusion_reference.h"
@@ -42,10 +43,6 @@ Stages medianStages(const std::function<Stages()>& run, int repeat) {
     points.push_back(s.points_ms);
     total.push_back(s.total());
   }
-  auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-  };
   // The total is the median of the totals, not the sum of medians.
   Stages m{median(render), median(fuse), median(points)};
   m.points_ms = median(total) - m.render_ms - m.fuse_ms;

@@ -41,6 +41,7 @@
 #include <ctime>
 #include <vector>
 
+#include "common/median.h"
 #include "mapping/distance/distance_field.h"
 #include "mapping/frontier/frontier_map.h"
 #include "mapping/integration/depth_frame.h"
@@ -111,10 +112,6 @@ double cpuMs(clockid_t clock) {
 }
 double threadCpuMs() { return cpuMs(CLOCK_THREAD_CPUTIME_ID); }
 
-double median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 // The first frame starts from an empty map: left out when there are others.
 double medianAfterFirst(std::vector<double> v) {
   if (v.size() > 1) v.erase(v.begin());

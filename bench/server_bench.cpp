@@ -42,6 +42,7 @@
 #include <unistd.h>
 
 #include "clients/cpp/map_client.h"
+#include "common/median.h"
 #include "mapping/occupancy_map.h"
 #include "mapping/query/map_query.h"
 #include "tests/clients/cpp/server_process.h"
@@ -170,11 +171,6 @@ double throughput(int threads, double seconds, const std::function<void(int, int
   stop = true;
   for (auto& w : workers) w.join();
   return static_cast<double>(total) / (usSince(t0) / 1e6);
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
 void row(const char* what, double server, double idle, double local, const char* target, bool met, int decimals = 1) {

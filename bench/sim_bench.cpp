@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "common/median.h"
 #include "sim/image_formation.h"
 #include "sim/rasterizer.h"
 #include "sim/sim_dataset.h"
@@ -28,11 +29,6 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 double ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 }  // namespace
 

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "common/median.h"
 #include "pipeline/stereo/stereo_matcher.h"
 #include "tests/support/test_data.h"
 
@@ -45,11 +46,6 @@ double processCpuMs() {
   timespec t{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
   return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
 }
 
 Timing medianMs(const std::function<void()>& run, int repeat) {

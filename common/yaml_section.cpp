@@ -33,7 +33,7 @@ void YamlSection::finish() const {
 }
 
 YAML::Node loadYamlFile(const std::string& path) {
-  if (!std::filesystem::exists(path)) throw Error("config file not found: " + path);
+  if (!std::filesystem::exists(path)) throw NotFoundError("config file not found: " + path);
   try {
     return YAML::LoadFile(path);
   } catch (const YAML::Exception& e) {

@@ -20,6 +20,7 @@
 #include <iostream>
 #include <pthread.h>
 
+#include "common/atomic_file.h"
 #include "common/error.h"
 #include "common/text_file.h"
 #include "mapping/io/map_io.h"
@@ -143,9 +144,8 @@ int serve(const Options& o) {
   std::cout << "cenote-server listening on " << host_part << ":" << port << (token.empty() ? "" : " (token required)")
             << "; " << cpus.describe() << std::endl;
   if (!o.port_file.empty()) {
-    const std::string temp = o.port_file + ".tmp";
-    std::ofstream(temp) << port << "\n";
-    fs::rename(temp, o.port_file);  // appears whole: a test polling for it never reads half
+    // Appears whole: a test polling for it never reads half.
+    writeFileAtomically(o.port_file, std::to_string(port) + "\n", Durability::kFast);
   }
 
   int signal = 0;

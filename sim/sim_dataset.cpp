@@ -10,6 +10,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "common/atomic_file.h"
 #include "common/error.h"
 #include "io/image/image_io.h"
 #include "io/cloud/ply_io.h"
@@ -27,19 +28,9 @@ void makeDirectory(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw Error("cannot create directory " + dir.string() + (ec ? ": " + ec.message() : ""));
 }
 
-// Writes `text` to `path` through a temporary file.
+// Writes `text` to `path` through a temporary file; durable (a dive's metadata is written once).
 void writeText(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw Error("cannot write " + path.string() + ": cannot create file");
-    out << text;
-    out.close();
-    if (!out) throw Error("cannot write " + path.string() + ": write failed (disk full?)");
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) throw Error("cannot write " + path.string() + ": " + ec.message());
+  writeFileAtomically(path.string(), text, Durability::kDurable);
 }
 
 std::string seconds(int64_t t_ns) {

@@ -16,6 +16,7 @@
 
 #include "apps/cenote/commands.h"
 #include "common/error.h"
+#include "common/text_parse.h"
 #include "common/yaml_section.h"
 #include "common/pose_check.h"
 #include "pipeline/fusion/fusion_window.h"
@@ -67,14 +68,8 @@ pipeline::FusionConfig makeConfig(const FuseOptions& o) {
 
 Eigen::Matrix3d parseIntrinsics(const std::string& text) {
   std::vector<double> values;
-  std::stringstream in(text);
   std::string item;
-  while (std::getline(in, item, ',')) {
-    char* end = nullptr;
-    const double v = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0') throw Error("--intrinsics '" + text + "': '" + item + "' is not a number");
-    values.push_back(v);
-  }
+  if (!parseNumberList(text, ',', values, &item)) throw Error("--intrinsics '" + text + "': '" + item + "' is not a number");
   if (values.size() != 4) throw Error("--intrinsics '" + text + "': expected FX,FY,CX,CY (4 numbers)");
   Eigen::Matrix3d K;
   K << values[0], 0.0, values[2], 0.0, values[1], values[3], 0.0, 0.0, 1.0;

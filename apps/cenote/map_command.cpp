@@ -17,6 +17,7 @@
 
 #include "apps/cenote/commands.h"
 #include "common/error.h"
+#include "common/text_parse.h"
 #include "common/yaml_section.h"
 #include "mapping/distance/distance_field.h"
 #include "mapping/frontier/frontier_map.h"
@@ -33,17 +34,8 @@ using namespace cenote::mapping;
 
 std::vector<double> parseNumbers(const std::string& text, const std::string& option) {
   std::vector<double> values;
-  std::stringstream in(text);
   std::string item;
-  while (std::getline(in, item, ',')) {
-    try {
-      size_t used = 0;
-      values.push_back(std::stod(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw Error(option + " " + text + ": '" + item + "' is not a number");
-    }
-  }
+  if (!parseNumberList(text, ',', values, &item)) throw Error(option + " " + text + ": '" + item + "' is not a number");
   return values;
 }
 

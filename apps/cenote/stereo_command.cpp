@@ -7,6 +7,7 @@
 
 #include "apps/cenote/commands.h"
 #include "common/error.h"
+#include "common/median.h"
 #include "common/yaml_section.h"
 #include "pipeline/calibration/rectifier.h"
 #include "io/image/image_io.h"
@@ -43,12 +44,6 @@ pipeline::StereoConfig makeConfig(const StereoOptions& o) {
   if (!o.search.empty()) config.search = pipeline::parseSearchMode(o.search);
   if (o.lr_check) config.lr_check = true;
   return config;
-}
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 void run(const StereoOptions& o) {

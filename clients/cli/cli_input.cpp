@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/text_parse.h"
+
 namespace cenote::cli {
 
 namespace {
@@ -33,11 +35,10 @@ bool parseThree(std::string text, const std::string& separators, Eigen::Vector3d
 }  // namespace
 
 Eigen::Vector3d parsePoint(const std::string& text, const std::string& what) {
-  Eigen::Vector3d p;
-  if (text.find_first_of(" \t") != std::string::npos || !parseThree(text, ",", p)) {
-    throw CliError(what + " '" + text + "': expected X,Y,Z (three numbers in metres, comma-separated)");
-  }
-  return p;
+  const std::optional<Eigen::Vector3d> p = text.find_first_of(" \t") == std::string::npos ? cenote::parsePoint(text)
+                                                                                          : std::nullopt;
+  if (!p) throw CliError(what + " '" + text + "': expected X,Y,Z (three numbers in metres, comma-separated)");
+  return *p;
 }
 
 std::vector<Eigen::Vector3d> readPointsFile(const std::string& path) {

@@ -77,7 +77,7 @@ std::string readAll(std::ifstream& in) {
 std::ifstream openOrThrow(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    throw Error("cannot read " + path + ": " + (fs::exists(path) ? "not readable" : "no such file"));
+    throwReadError(path, "not readable");
   }
   return in;
 }

@@ -35,7 +35,7 @@ long parseField(std::istream& in, const std::string& path, const char* what) {
 cv::Mat readColmapArray(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    throw Error("cannot read " + path + ": " + (std::filesystem::exists(path) ? "permission denied" : "no such file"));
+    throwReadError(path);
   }
   const long width = parseField(in, path, "width");
   const long height = parseField(in, path, "height");

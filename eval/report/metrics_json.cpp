@@ -5,6 +5,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "common/atomic_file.h"
 #include "common/error.h"
 
 namespace cenote::eval {
@@ -120,17 +121,7 @@ std::string toJson(const TrajectoryEvaluation& e, const JsonInputs& inputs) {
 }
 
 void writeTextFile(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    if (!out) throw Error("cannot write " + path + ": cannot create file");
-    out << text;
-    out.close();
-    if (!out) throw Error("cannot write " + path + ": write failed (disk full?)");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error("cannot write " + path + ": " + ec.message());
+  writeFileAtomically(path, text, Durability::kDurable);
 }
 
 }  // namespace cenote::eval

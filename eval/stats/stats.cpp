@@ -6,16 +6,6 @@
 
 namespace cenote::eval {
 
-double medianInPlace(std::vector<double>& values) {
-  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  const double upper = values[mid];
-  if (values.size() % 2 == 1) return upper;
-  const double lower = *std::max_element(values.begin(), values.begin() + mid);
-  return 0.5 * (lower + upper);
-}
-
 ErrorSummary summarize(std::vector<double> values) {
   ErrorSummary s;
   s.count = values.size();

@@ -8,11 +8,13 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/median.h"
+
 namespace cenote::eval {
 
 // Median of `values` (mean of the two middle values for an even count); NaN when empty.
-// Reorders `values`.
-double medianInPlace(std::vector<double>& values);
+// Reorders `values`. The one median of the project, in common/median.h.
+using cenote::medianInPlace;
 
 // Mean, median, RMSE and maximum of `values`; all NaN when empty.
 struct ErrorSummary {

@@ -55,7 +55,7 @@ const char* toString(TrajectoryFileFormat format) {
 
 TrajectoryFileFormat detectTrajectoryFileFormat(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw Error("cannot read trajectory " + path + ": " + (fs::exists(path) ? "not readable" : "no such file"));
+  if (!in) throwReadError(path, "not readable", "trajectory ");
   if (fs::path(path).filename() == "images.txt") return TrajectoryFileFormat::kColmap;
   std::string line;
   while (std::getline(in, line)) {
@@ -74,7 +74,7 @@ TrajectoryFileFormat detectTrajectoryFileFormat(const std::string& path) {
 
 std::vector<io::StampedPose> readColmapImagesTxt(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw Error("cannot read " + path + ": " + (fs::exists(path) ? "not readable" : "no such file"));
+  if (!in) throwReadError(path, "not readable");
   std::vector<io::StampedPose> poses;
   std::vector<std::string> names;
   std::string line;

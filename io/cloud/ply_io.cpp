@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/atomic_file.h"
 #include "common/error.h"
 
 namespace cenote::io {
@@ -21,16 +22,22 @@ constexpr size_t kBytesPerPoint = 3 * sizeof(float) + 3;
 constexpr std::array<uint8_t, 3> kGrey = {128, 128, 128};
 constexpr size_t kWriteBehindBytes = size_t{8} << 20;
 
-// The header has a fixed size whatever the count: the count is right-aligned in a 20-digit field
-// made of a comment line's padding, so close() can rewrite it in place.
+// The header of every PLY cenote writes. `comments` are whole lines; triangles adds the face element.
+std::string plyHeader(const std::string& comments, size_t vertices, size_t triangles) {
+  std::string text = "ply\nformat binary_little_endian 1.0\n" + comments;
+  text += "element vertex " + std::to_string(vertices) + "\n";
+  text += "property float x\nproperty float y\nproperty float z\n";
+  text += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  if (triangles > 0) text += "element face " + std::to_string(triangles) + "\nproperty list uchar int vertex_indices\n";
+  text += "end_header\n";
+  return text;
+}
+
+// The streaming writer's header has a fixed size whatever the count: the count is right-aligned in
+// a 20-digit field made of a comment line's padding, so close() can rewrite it in place.
 std::string header(size_t count) {
   const std::string digits = std::to_string(count);
-  std::string text = "ply\nformat binary_little_endian 1.0\ncomment written by cenote\n";
-  text += "comment " + std::string(20 - digits.size(), '.') + "\n";
-  text += "element vertex " + digits + "\n";
-  text += "property float x\nproperty float y\nproperty float z\n";
-  text += "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
-  return text;
+  return plyHeader("comment written by cenote\ncomment " + std::string(20 - digits.size(), '.') + "\n", count, 0);
 }
 
 void packPoint(char* dst, const Eigen::Vector3f& p, const std::array<uint8_t, 3>& rgb) {
@@ -40,9 +47,9 @@ void packPoint(char* dst, const Eigen::Vector3f& p, const std::array<uint8_t, 3>
 
 }  // namespace
 
-PlyWriter::PlyWriter(std::string path) : path_(std::move(path)) {
-  fd_ = ::open((path_ + ".tmp").c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd_ < 0) throw Error("cannot write " + path_ + ": cannot create file (" + std::strerror(errno) + ")");
+PlyWriter::PlyWriter(std::string path) : path_(std::move(path)), temp_path_(temporaryPathFor(path_)) {
+  fd_ = ::open(temp_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throwWriteError(path_, std::string("cannot create file (") + std::strerror(errno) + ")", errno);
   const std::string text = header(0);
   try {
     writeAll(text.data(), text.size());
@@ -55,15 +62,17 @@ PlyWriter::PlyWriter(std::string path) : path_(std::move(path)) {
 PlyWriter::~PlyWriter() {
   if (closed_) return;
   if (fd_ >= 0) ::close(fd_);
-  std::error_code ec;
-  std::filesystem::remove(path_ + ".tmp", ec);
+  detail::removeQuietly(temp_path_);
 }
 
 void PlyWriter::writeAll(const char* data, size_t size) {
   while (size > 0) {
     const ssize_t n = ::write(fd_, data, size);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) throw Error("cannot write " + path_ + ": write failed (" + std::strerror(n < 0 ? errno : ENOSPC) + ")");
+    if (n <= 0) {
+      const int err = n < 0 ? errno : ENOSPC;
+      throwWriteError(path_, std::string("write failed (") + std::strerror(err) + ")", err);
+    }
     data += n;
     size -= static_cast<size_t>(n);
     written_bytes_ += static_cast<size_t>(n);
@@ -107,12 +116,11 @@ void PlyWriter::close() {
   const bool closed = ::close(fd_) == 0;
   fd_ = -1;
   if (!header_written || !closed) {
-    throw Error("cannot write " + path_ + ": write failed (" + std::strerror(header_written ? errno : header_errno) + ")");
+    const int err = header_written ? errno : header_errno;
+    throwWriteError(path_, std::string("write failed (") + std::strerror(err) + ")", err);
   }
-  std::error_code ec;
-  std::filesystem::rename(path_ + ".tmp", path_, ec);
-  if (ec) throw Error("cannot write " + path_ + ": " + ec.message());
-  closed_ = true;
+  closed_ = true;  // commitTemporary removes the temporary file itself when it fails
+  detail::commitTemporary(temp_path_, path_, Durability::kDurable);
 }
 
 void writePly(const std::string& path, const std::vector<Eigen::Vector3f>& points,
@@ -129,9 +137,38 @@ void writePly(const std::string& path, const std::vector<Eigen::Vector3f>& point
   writer.close();
 }
 
+void writePlyMesh(const std::string& path, const std::vector<Eigen::Vector3f>& points,
+                  const std::vector<std::array<uint8_t, 3>>& colors,
+                  const std::vector<std::array<uint32_t, 3>>& triangles, const std::string& comment) {
+  if (!colors.empty() && colors.size() != points.size()) {
+    throw Error("writePly " + path + ": " + std::to_string(points.size()) + " points but " +
+                std::to_string(colors.size()) + " colours");
+  }
+  const auto check = [&](const std::ostream& out) {
+    if (!out) throwWriteError(path, std::strerror(errno), errno);
+  };
+  writeAtomically(path, Durability::kDurable, [&](const std::string& temp) {
+    std::ofstream out(temp, std::ios::binary);
+    check(out);
+    out << plyHeader("comment " + comment + "\n", points.size(), triangles.size());
+    std::vector<char> vertex(kBytesPerPoint);
+    for (size_t i = 0; i < points.size(); ++i) {
+      packPoint(vertex.data(), points[i], colors.empty() ? kGrey : colors[i]);
+      out.write(vertex.data(), static_cast<std::streamsize>(vertex.size()));
+    }
+    for (const auto& t : triangles) {
+      const uint8_t three = 3;
+      out.write(reinterpret_cast<const char*>(&three), 1);
+      out.write(reinterpret_cast<const char*>(t.data()), 12);
+    }
+    out.flush();
+    check(out);
+  });
+}
+
 PlyPoints readPly(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("cannot read " + path + ": " + (std::filesystem::exists(path) ? "permission denied" : "no such file"));
+  if (!in) throwReadError(path);
   std::string line;
   std::getline(in, line);
   if (line != "ply") throw Error(path + ": not a PLY file (first line is not 'ply')");

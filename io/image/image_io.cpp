@@ -1,5 +1,6 @@
 #include "io/image/image_io.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -10,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "common/atomic_file.h"
 #include "common/error.h"
 #include "io/image/png_decoder.h"
 #include "io/image/png_encoder.h"
@@ -19,40 +21,30 @@ namespace {
 
 constexpr double kMillimetresPerMetre = 1000.0;  // 16-bit depth PNGs store millimetres
 
-std::string temporaryPath(const std::string& path) { return path + ".tmp"; }
-
-void commit(const std::string& tmp, const std::string& path) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error("cannot write " + path + ": " + ec.message());
-  }
-}
-
 }  // namespace
 
 void writePfm(const std::string& path, const cv::Mat& image) {
   if (image.type() != CV_32FC1 && image.type() != CV_32FC3) {
     throw Error("writePfm " + path + ": image must be CV_32FC1 or CV_32FC3");
   }
-  const std::string tmp = temporaryPath(path);
-  std::ofstream out(tmp, std::ios::binary);
-  if (!out) throw Error("cannot write " + path + ": cannot create file");
-  const int channels = image.channels();
-  out << (channels == 3 ? "PF" : "Pf") << "\n" << image.cols << " " << image.rows << "\n-1\n";
-  for (int y = image.rows - 1; y >= 0; --y) {
-    out.write(reinterpret_cast<const char*>(image.ptr<float>(y)),
-              static_cast<std::streamsize>(image.cols) * channels * sizeof(float));
-  }
-  out.close();
-  if (!out) throw Error("cannot write " + path + ": write failed (disk full?)");
-  commit(tmp, path);
+  // Per-frame output (depth maps of every frame): no fsync (common/atomic_file.h).
+  writeAtomically(path, Durability::kFast, [&](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throwWriteError(path, "cannot create file", errno);
+    const int channels = image.channels();
+    out << (channels == 3 ? "PF" : "Pf") << "\n" << image.cols << " " << image.rows << "\n-1\n";
+    for (int y = image.rows - 1; y >= 0; --y) {
+      out.write(reinterpret_cast<const char*>(image.ptr<float>(y)),
+                static_cast<std::streamsize>(image.cols) * channels * sizeof(float));
+    }
+    out.close();
+    if (!out) throwWriteError(path, "write failed (disk full?)", errno);
+  });
 }
 
 cv::Mat readPfm(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("cannot read " + path + ": " + (std::filesystem::exists(path) ? "permission denied" : "no such file"));
+  if (!in) throwReadError(path);
   std::string magic;
   int width = 0, height = 0;
   double scale = 0.0;
@@ -111,12 +103,12 @@ cv::Mat readDepthPng16(const std::string& path) {
 }
 
 cv::Mat readImage(const std::string& path, int flags) {
-  if (!std::filesystem::exists(path)) throw Error("cannot read image " + path + ": no such file");
+  if (!std::filesystem::exists(path)) throw NotFoundError("cannot read image " + path + ": no such file");
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   std::vector<uint8_t> bytes(in ? static_cast<std::size_t>(in.tellg()) : 0);
   in.seekg(0);
   if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()))) {
-    throw Error("cannot read image " + path + ": read failed");
+    throw IoError("cannot read image " + path + ": read failed");
   }
   // 8-bit PNGs (what stereo sequences are made of) through libdeflate; everything else, and any
   // PNG it does not handle, through OpenCV. Both give the same pixels.
@@ -147,13 +139,8 @@ void writeImage(const std::string& path, const cv::Mat& image) {
     }
     if (!ok) throw Error("cannot encode " + path);
   }
-  const std::string tmp = temporaryPath(path);
-  std::ofstream out(tmp, std::ios::binary);
-  if (!out) throw Error("cannot write " + path + ": cannot create file");
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  out.close();
-  if (!out) throw Error("cannot write " + path + ": write failed (disk full?)");
-  commit(tmp, path);
+  // Per-frame output (images and depth PNGs of every frame): no fsync (common/atomic_file.h).
+  writeFileAtomically(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), Durability::kFast);
 }
 
 cv::Mat colorizeMap(const cv::Mat& map, double min_value, double max_value) {

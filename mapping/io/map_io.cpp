@@ -12,34 +12,15 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/atomic_file.h"
 #include "common/error.h"
+#include "io/cloud/ply_io.h"
 #include "mapping/detail/map_impl.h"
 
 namespace cenote::mapping {
 namespace {
 
 using openvdb::Coord;
-
-// Writes through `write(temp_path)`, then renames over `path`.
-template <typename Write>
-void writeAtomically(const std::string& path, Write&& write) {
-  const std::string temp = path + ".tmp." + std::to_string(::getpid());
-  try {
-    write(temp);
-  } catch (const Error&) {
-    std::remove(temp.c_str());
-    throw;
-  } catch (const std::exception& e) {
-    std::remove(temp.c_str());
-    throw Error("cannot write " + path + ": " + e.what());
-  }
-  std::error_code ec;
-  std::filesystem::rename(temp, path, ec);
-  if (ec) {
-    std::remove(temp.c_str());
-    throw Error("cannot write " + path + ": " + ec.message());
-  }
-}
 
 // The map as the grids of a .vdb file, readable by any OpenVDB tool: log_odds (a standard FloatGrid
 // holding copies of the map's leaves) and color (Int32Grid, active where some point hit).
@@ -91,10 +72,6 @@ void fromFileGrids(openvdb::FloatGrid& log_odds, openvdb::Int32Grid& color, deta
   }
 }
 
-void checkStream(const std::ostream& out, const std::string& path) {
-  if (!out) throw Error("cannot write " + path + ": " + std::strerror(errno));
-}
-
 // Known voxels with their log-odds, under the map's shared lock.
 template <typename Visit>
 void forEachKnown(const OccupancyMap& map, Visit&& visit) {
@@ -135,7 +112,7 @@ void setSensorModel(Tree& tree, const MapConfig& c) {
 }
 
 void saveOctomap(const OccupancyMap& map, const std::string& path, bool full) {
-  writeAtomically(path, [&](const std::string& temp) {
+  writeAtomically(path, Durability::kDurable, [&](const std::string& temp) {
     if (full) {
       octomap::ColorOcTree tree(map.voxelSize());
       setSensorModel(tree, map.config());
@@ -146,7 +123,7 @@ void saveOctomap(const OccupancyMap& map, const std::string& path, bool full) {
         if (acc.color(ijk, rgb)) node->setColor(rgb[0], rgb[1], rgb[2]);
       });
       tree.updateInnerOccupancy();
-      if (!tree.write(temp)) throw Error("cannot write " + path);
+      if (!tree.write(temp)) throw IoError("cannot write " + path);
     } else {
       octomap::OcTree tree(map.voxelSize());
       setSensorModel(tree, map.config());
@@ -155,7 +132,7 @@ void saveOctomap(const OccupancyMap& map, const std::string& path, bool full) {
         tree.setNodeValue(keyOf(ijk), l, true);
       });
       tree.updateInnerOccupancy();
-      if (!tree.writeBinary(temp)) throw Error("cannot write " + path);
+      if (!tree.writeBinary(temp)) throw IoError("cannot write " + path);
     }
   });
 }
@@ -177,7 +154,7 @@ void saveVdb(const OccupancyMap& map, const std::string& path, const std::string
   meta.insertMeta("cenote:occupied_threshold", openvdb::DoubleMetadata(c.occupied_threshold));
   meta.insertMeta("cenote:max_range_m", openvdb::DoubleMetadata(c.max_range_m));
   meta.insertMeta("cenote:frame_id", openvdb::StringMetadata(frame_id));
-  writeAtomically(path, [&](const std::string& temp) {
+  writeAtomically(path, Durability::kDurable, [&](const std::string& temp) {
     openvdb::io::File file(temp);
     file.write(grids, meta);
     file.close();
@@ -252,7 +229,7 @@ std::unique_ptr<OccupancyMap> fromOctree(const Tree& tree, const MapConfig& defa
 }
 
 std::unique_ptr<OccupancyMap> loadOctomap(const std::string& path, const MapConfig& defaults, bool binary) {
-  if (!std::filesystem::exists(path)) throw Error("cannot read " + path + ": no such file");
+  if (!std::filesystem::exists(path)) throw NotFoundError("cannot read " + path + ": no such file");
   if (binary) {
     octomap::OcTree tree(0.1);
     if (!tree.readBinary(path)) throw Error("cannot read " + path + ": not an OctoMap binary tree (.bt)");
@@ -272,27 +249,14 @@ struct PlyVertex {
 
 void writePly(const std::string& path, const std::vector<PlyVertex>& vertices,
               const std::vector<std::array<uint32_t, 3>>& triangles) {
-  writeAtomically(path, [&](const std::string& temp) {
-    std::ofstream out(temp, std::ios::binary);
-    checkStream(out, path);
-    out << "ply\nformat binary_little_endian 1.0\ncomment cenote occupancy map\n"
-        << "element vertex " << vertices.size()
-        << "\nproperty float x\nproperty float y\nproperty float z\n"
-           "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-    if (!triangles.empty()) out << "element face " << triangles.size() << "\nproperty list uchar int vertex_indices\n";
-    out << "end_header\n";
-    for (const PlyVertex& v : vertices) {
-      out.write(reinterpret_cast<const char*>(&v.x), 12);
-      out.write(reinterpret_cast<const char*>(&v.r), 3);
-    }
-    for (const auto& t : triangles) {
-      const uint8_t three = 3;
-      out.write(reinterpret_cast<const char*>(&three), 1);
-      out.write(reinterpret_cast<const char*>(t.data()), 12);
-    }
-    out.flush();
-    checkStream(out, path);
-  });
+  // io/cloud/ply_io.h writes every PLY of cenote (OpenCV-free target cenote_io_cloud).
+  std::vector<Eigen::Vector3f> points(vertices.size());
+  std::vector<std::array<uint8_t, 3>> colors(vertices.size());
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    points[i] = Eigen::Vector3f(vertices[i].x, vertices[i].y, vertices[i].z);
+    colors[i] = {vertices[i].r, vertices[i].g, vertices[i].b};
+  }
+  io::writePlyMesh(path, points, colors, triangles, "cenote occupancy map");
 }
 
 }  // namespace
@@ -316,7 +280,7 @@ void saveMap(const OccupancyMap& map, const std::string& path, const std::string
 
 std::unique_ptr<OccupancyMap> loadMap(const std::string& path, const MapConfig& defaults) {
   const MapFormat format = mapFormatOf(path);
-  if (!std::filesystem::exists(path)) throw Error("cannot read " + path + ": no such file");
+  if (!std::filesystem::exists(path)) throw NotFoundError("cannot read " + path + ": no such file");
   openvdb::initialize();
   switch (format) {
     case MapFormat::kVdb: return loadVdb(path, defaults);

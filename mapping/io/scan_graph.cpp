@@ -10,7 +10,7 @@
 namespace cenote::mapping {
 
 int readScanGraph(const std::string& path, int max_scans, const std::function<void(const PointBatch&)>& visit) {
-  if (!std::filesystem::is_regular_file(path)) throw Error("cannot read " + path + ": no such file");
+  if (!std::filesystem::is_regular_file(path)) throw NotFoundError("cannot read " + path + ": no such file");
   std::ifstream in(path, std::ios::binary);
   octomap::ScanGraph graph;
   if (!in || !graph.readBinary(in) || graph.size() == 0) {

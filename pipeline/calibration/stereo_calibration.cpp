@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/atomic_file.h"
 #include "common/error.h"
 #include "io/image/image_io.h"
 
@@ -13,7 +14,7 @@ namespace cenote::pipeline {
 namespace {
 
 void requireFile(const std::string& path) {
-  if (!std::filesystem::exists(path)) throw Error("calibration file not found: " + path);
+  if (!std::filesystem::exists(path)) throw NotFoundError("calibration file not found: " + path);
 }
 
 cv::Mat readMatrix(const cv::FileStorage& fs, const std::string& path,
@@ -123,18 +124,16 @@ StereoCalibration readStereoCalibration(const std::string& path) {
 }
 
 void writeStereoCalibration(const std::string& path, const StereoCalibration& c) {
-  const std::string tmp = path + ".tmp.yaml";
-  {
-    cv::FileStorage fs(tmp, cv::FileStorage::WRITE);
-    if (!fs.isOpened()) throw Error("cannot write " + path);
+  // YAML whatever the extension, as before (the temporary file keeps the target's extension).
+  writeAtomically(path, Durability::kDurable, [&](const std::string& tmp) {
+    cv::FileStorage fs(tmp, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+    if (!fs.isOpened()) throw IoError("cannot write " + path);
     fs << "image_width" << c.image_size.width << "image_height" << c.image_size.height;
     fs << "K1" << cv::Mat(c.left.K) << "D1" << cv::Mat(c.left.distortion, true);
     fs << "K2" << cv::Mat(c.right.K) << "D2" << cv::Mat(c.right.distortion, true);
     fs << "R" << cv::Mat(c.R) << "T" << cv::Mat(c.T);
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error("cannot write " + path + ": " + ec.message());
+    fs.release();
+  });
 }
 
 namespace {

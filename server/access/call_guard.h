@@ -2,8 +2,9 @@
 //  - the bearer token (metadata `authorization: Bearer <token>`), checked first: a missing or wrong
 //    token gets UNAUTHENTICATED and the handler never runs, so nothing is touched;
 //  - the deadline: a call whose deadline has already passed gets DEADLINE_EXCEEDED unrun;
-//  - errors: a StatusError keeps its code, a cenote::Error (bad input found by the map or the
-//    pipeline) becomes INVALID_ARGUMENT, anything else INTERNAL; the message always says what;
+//  - errors: a StatusError keeps its code, a cenote::Error gets the code of its kind
+//    (statusCodeOf in server/wire/status_error.h: bad input INVALID_ARGUMENT, a failed write
+//    INTERNAL, a full disk RESOURCE_EXHAUSTED, ...), anything else INTERNAL; the message always says what;
 //  - statistics: calls, errors and latency percentiles per method (Admin.GetStats).
 // Threads: run() from any number of handler threads at once.
 #pragma once
@@ -72,7 +73,7 @@ class CallGuard {
       } catch (const StatusError& e) {
         status = e.status();
       } catch (const Error& e) {
-        status = grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, e.what());
+        status = toStatusError(e).status();
       } catch (const std::exception& e) {
         status = grpc::Status(grpc::StatusCode::INTERNAL, std::string(method) + ": " + e.what());
       }

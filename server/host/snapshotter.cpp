@@ -1,5 +1,8 @@
 #include "server/host/snapshotter.h"
 
+#include <cstdio>
+
+#include "common/atomic_file.h"
 #include "common/error.h"
 #include "mapping/io/map_io.h"
 #include "io/cloud/pcd_io.h"
@@ -35,10 +38,21 @@ Snapshotter::Snapshotter(const MapHost& host, std::string directory, std::string
   std::error_code ec;
   fs::create_directories(directory_, ec);
   if (ec) throw Error("snapshot directory " + directory_.string() + " cannot be created: " + ec.message());
+  removeStaleTemporaries();
   if (period_s_ > 0.0) thread_ = std::thread([this] { periodicLoop(); });
 }
 
 Snapshotter::~Snapshotter() { stop(); }
+
+void Snapshotter::removeStaleTemporaries() {
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(directory_, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!it->is_regular_file(ec) || !isTemporaryPath(it->path().string())) continue;
+    std::fprintf(stderr, "cenote-server: removing %s, left by a snapshot that did not finish\n", it->path().c_str());
+    std::error_code remove_ec;
+    fs::remove(it->path(), remove_ec);
+  }
+}
 
 void Snapshotter::stop() {
   {

@@ -21,13 +21,15 @@ namespace cenote::server {
 
 class Snapshotter {
  public:
+  // Removes stale temporary files left by a crashed process (removeStaleTemporaries).
   // @throws cenote::Error when the directory cannot be created.
   Snapshotter(const MapHost& host, std::string directory, std::string frame_id, double period_s);
   ~Snapshotter();
 
   // Writes `relative_path` under the snapshot directory, in the format its extension names
   // (resolveSnapshotFormat). @return the absolute path. @throws StatusError for a refused path
-  // (PERMISSION_DENIED) or a format the extension does not name (INVALID_ARGUMENT).
+  // (PERMISSION_DENIED) or a format the extension does not name (INVALID_ARGUMENT); cenote::Error
+  // of the map writer's kind when the write fails (IoError; ResourceExhaustedError for a full disk).
   std::filesystem::path write(const std::string& relative_path, v1::SnapshotFormat format);
   // Writes to an absolute path chosen by the server (downloads, the periodic snapshot); its
   // extension must name `format` as for write().
@@ -39,6 +41,9 @@ class Snapshotter {
   // Seconds since the last snapshot; nullopt when none has been written.
   std::optional<double> lastSnapshotAge() const;
   const std::filesystem::path& directory() const { return directory_; }
+  // Removes temporary files (common/atomic_file.h) that a write cut short by a crash left in the
+  // snapshot directory; called at construction, before any write of this process starts.
+  void removeStaleTemporaries();
 
  private:
   void periodicLoop();

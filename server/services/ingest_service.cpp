@@ -106,7 +106,7 @@ class FrameStream {
       try {
         item = admission_.admit(raw, decision.T_world_raw);
       } catch (const Error& e) {
-        throw invalidArgument(e.what());
+        throw toStatusError(e);
       }
       timings_.add("decode_rectify", msSince(t0));
       if (!stages_.push(std::move(item))) return false;
@@ -264,7 +264,7 @@ grpc::Status IngestService::StreamPoints(grpc::ServerContext* context,
       } catch (const StatusError& e) {
         reject(ack, e);
       } catch (const Error& e) {
-        reject(ack, invalidArgument(e.what()));
+        reject(ack, toStatusError(e));
       }
       return true;
     });

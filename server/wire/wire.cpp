@@ -65,7 +65,7 @@ Eigen::Isometry3d finitePose(const v1::Pose& pose, const std::string& what) {
   try {
     checkPose(T, what);
   } catch (const Error& e) {
-    throw invalidArgument(e.what());
+    throw toStatusError(e);
   }
   return T;
 }

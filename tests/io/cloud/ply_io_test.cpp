@@ -6,6 +6,7 @@
 #include <fstream>
 #include <random>
 
+#include "common/atomic_file.h"
 #include "common/error.h"
 
 namespace cenote::io {
@@ -102,7 +103,7 @@ TEST(PlyIo, UnclosedWriterLeavesNoFile) {
     PlyWriter writer(path);
   }
   EXPECT_FALSE(std::filesystem::exists(path));
-  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  EXPECT_FALSE(std::filesystem::exists(temporaryPathFor(path)));
 }
 
 TEST(PlyIo, ReadRejectsOtherFilesWithAClearMessage) {

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/atomic_file.h"
 #include "common/error.h"
 #include "tests/mapping/support/analytic_scene.h"
 
@@ -76,7 +77,7 @@ TEST(MapIo, VdbRoundTripKeepsStatesProbabilitiesColoursAndModel) {
   ASSERT_TRUE(a.color(wall, ca));
   ASSERT_TRUE(b.color(wall, cb));
   EXPECT_EQ(ca, cb);
-  EXPECT_FALSE(fs::exists(dir.file("map.vdb.tmp." + std::to_string(::getpid()))));
+  EXPECT_FALSE(fs::exists(temporaryPathFor(dir.file("map.vdb"))));
 }
 
 TEST(MapIo, BtRoundTripKeepsStatesAndOctomapReadsIt) {

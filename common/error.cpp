@@ -1,0 +1,37 @@
+#include "common/error.h"
+
+#include <cerrno>
+#include <filesystem>
+
+namespace cenote {
+
+const char* toString(ErrorKind kind) {
+  switch (kind) {
+    case ErrorKind::kInvalidArgument: return "invalid argument";
+    case ErrorKind::kNotFound: return "not found";
+    case ErrorKind::kResourceExhausted: return "resource exhausted";
+    case ErrorKind::kIoFailure: return "I/O failure";
+    case ErrorKind::kFailedPrecondition: return "failed precondition";
+  }
+  return "unknown";
+}
+
+ErrorKind ioErrorKind(int errno_value, bool missing_is_not_found) {
+  if (errno_value == ENOSPC || errno_value == EDQUOT) return ErrorKind::kResourceExhausted;
+  if (errno_value == ENOENT && missing_is_not_found) return ErrorKind::kNotFound;
+  return ErrorKind::kIoFailure;
+}
+
+void throwWriteError(const std::string& path, const std::string& reason, int errno_value) {
+  const std::string message = "cannot write " + path + ": " + reason;
+  if (ioErrorKind(errno_value) == ErrorKind::kResourceExhausted) throw ResourceExhaustedError(message);
+  throw IoError(message);
+}
+
+void throwReadError(const std::string& path, const std::string& unreadable, const std::string& what) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw NotFoundError("cannot read " + what + path + ": no such file");
+  throw IoError("cannot read " + what + path + ": " + unreadable);
+}
+
+}  // namespace cenote
