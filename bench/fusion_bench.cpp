@@ -80,7 +80,8 @@ int main(int argc, char** argv) {
   std::printf("800x600 reef scene with stereo noise; median of %d runs; cenote on %d threads, the plain "
               "implementation on 1\n\n",
               repeat, threads);
-  std::printf("| N_f | implementation | threads | render ms | fuse ms | copy + points ms | total ms/frame | plain / this |\n");
+  std::printf(
+      "| N_f | implementation | threads | render ms | fuse ms | copy + points ms | total ms/frame | plain / this |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (int n_views : {3, 5}) {
     pipeline::FusionConfig config;
@@ -126,8 +127,8 @@ int main(int argc, char** argv) {
     const Stages one = ours(1);
     const Stages many = ours(threads);
     auto row = [&](const char* name, int n_threads, const Stages& s, bool has_points) {
-      std::printf("| %d | %s | %d | %.2f | %.2f | %s | %.2f | %.1fx |\n", n_views, name, n_threads, s.render_ms,
-                  s.fuse_ms, has_points ? std::to_string(s.points_ms).substr(0, 4).c_str() : "-", s.total(),
+      std::printf("| %d | %s | %d | %.2f | %.2f | %s | %.2f | %.1fx |\n", n_views, name, n_threads, s.render_ms, s.fuse_ms,
+                  has_points ? std::to_string(s.points_ms).substr(0, 4).c_str() : "-", s.total(),
                   plain.total() / s.total());
     };
     row("plain (Eigen double, per-pixel lists)", 1, plain, false);

@@ -124,8 +124,8 @@ double mean(const std::vector<double>& v) { return std::accumulate(v.begin(), v.
 struct UpdateTimes {
   std::vector<double> frontier_ms, frontier_cpu_ms, distance_ms, distance_cpu_ms;
   size_t num_clusters = 0, num_frontier_voxels = 0;
-  uint64_t cluster_fingerprint = 0;  // FNV-1a over the clusters' counts, centroids and directions
-  uint64_t distance_fingerprint = 0; // FNV-1a over the field's queries at every voxel centre near the map
+  uint64_t cluster_fingerprint = 0;   // FNV-1a over the clusters' counts, centroids and directions
+  uint64_t distance_fingerprint = 0;  // FNV-1a over the field's queries at every voxel centre near the map
 };
 
 // FNV-1a: the fingerprints this bench prints to compare versions of the map code.
@@ -191,7 +191,8 @@ UpdateTimes timeUpdates(const std::vector<PointBatch>& frames, const MapConfig& 
   auto mix = [&h](double v) { fnvMixBytes(h, static_cast<uint64_t>(std::llround(v * 1e6))); };
   for (const auto& c : clusters) {
     mix(static_cast<double>(c.num_voxels));
-    for (int i = 0; i < 3; ++i) mix(c.centroid_m[i]), mix(c.direction[i]), mix(c.bounds_m.min_m[i]), mix(c.bounds_m.max_m[i]);
+    for (int i = 0; i < 3; ++i)
+      mix(c.centroid_m[i]), mix(c.direction[i]), mix(c.bounds_m.min_m[i]), mix(c.bounds_m.max_m[i]);
   }
   out.cluster_fingerprint = h;
   if (with_distance) out.distance_fingerprint = distanceFingerprint(live, field);
@@ -309,7 +310,8 @@ void reportClears(const std::vector<PointBatch>& frames, const MapConfig& config
         const VoxelIndex ijk = voxelOfOffset(block, offset);
         std::array<uint8_t, 3> rgb{};
         const bool coloured = acc.color(ijk, rgb);
-        const uint64_t v = static_cast<uint64_t>(acc.state(ijk)) | coloured << 2 | rgb[0] << 3 | rgb[1] << 11 | rgb[2] << 19;
+        const uint64_t v = static_cast<uint64_t>(acc.state(ijk)) | coloured << 2 | rgb[0] << 3 | rgb[1] << 11 |
+                           rgb[2] << 19;
         fingerprint = (fingerprint ^ v) * kFnvPrime;  // a voxel's word at once
       }
     }
@@ -351,8 +353,8 @@ VoxelSetDiff compareVoxelSets(const OccupancyMap& map, const octomap::OcTree& tr
     const double size = it.getSize();
     const int n = static_cast<int>(std::lround(size / s));
     const octomap::point3d c = it.getCoordinate();
-    const VoxelIndex first = map.toIndex(Eigen::Vector3d(c.x() - size / 2 + s / 2, c.y() - size / 2 + s / 2,
-                                                         c.z() - size / 2 + s / 2));
+    const VoxelIndex first = map.toIndex(
+        Eigen::Vector3d(c.x() - size / 2 + s / 2, c.y() - size / 2 + s / 2, c.z() - size / 2 + s / 2));
     std::vector<uint64_t>& out = tree.isNodeOccupied(*it) ? octo_occupied : octo_free;
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j)
@@ -522,7 +524,8 @@ void runFull(const Options& o, const BenchView& view, const std::vector<PointBat
     const Eigen::Vector3d start(std::uniform_real_distribution<double>(0.0, 0.3 * num_frames)(rng), 0.0, 0.0);
     const double yaw = angle(rng), pitch = -0.1 + 0.2 * angle(rng);
     s.start_m = start;
-    s.end_m = start + 10.0 * Eigen::Vector3d(std::cos(pitch) * std::cos(yaw), std::cos(pitch) * std::sin(yaw), std::sin(pitch));
+    s.end_m = start +
+              10.0 * Eigen::Vector3d(std::cos(pitch) * std::cos(yaw), std::cos(pitch) * std::sin(yaw), std::sin(pitch));
   }
   // One untimed pass first: both timed passes below then find the map equally warm in cache (the
   // batch ran cold before the single calls, which made it look slower per segment).
@@ -557,7 +560,8 @@ void runFull(const Options& o, const BenchView& view, const std::vector<PointBat
               "%.0f cm voxels, %.0f m max range; %d threads; OctoMap %s, insertPointCloud with discretize on.\n\n",
               num_frames, points / 1000.0 / frames.size(), voxel_m * 100, max_range_m, threads, "1.9.7");
   std::printf("| measure | cenote | OctoMap | ratio |\n|---|---|---|---|\n");
-  std::printf("| integration, ms/frame (%d threads) | %.1f | %.1f | %.1fx |\n", threads, ours_ms, octo_ms, octo_ms / ours_ms);
+  std::printf("| integration, ms/frame (%d threads) | %.1f | %.1f | %.1fx |\n", threads, ours_ms, octo_ms,
+              octo_ms / ours_ms);
   std::printf("| integration, ms/frame (1 thread) | %.1f | %.1f | %.1fx |\n", ours_1t_ms, octo_ms, octo_ms / ours_1t_ms);
   std::printf("| projective integration of the same views as depth images, ms/frame (%d threads) | %.1f | %.1f | %.1fx |\n",
               threads, projective_ms, octo_ms, octo_ms / projective_ms);
@@ -566,19 +570,20 @@ void runFull(const Options& o, const BenchView& view, const std::vector<PointBat
               ours_lookups / octo_lookups);
   std::printf("| voxel lookups in batches of 4096 (ConstAccessor::states), M/s (1 thread) | %.1f | %.1f | %.1fx |\n",
               ours_batched_lookups / 1e6, octo_lookups / 1e6, ours_batched_lookups / octo_lookups);
-  std::printf("| 10 m segment check, us (batch of %zu) | %.2f | %.2f (castRay) | %.1fx |\n", segments.size(), ours_segment_us,
-              octo_segment_us, octo_segment_us / ours_segment_us);
+  std::printf("| 10 m segment check, us (batch of %zu) | %.2f | %.2f (castRay) | %.1fx |\n", segments.size(),
+              ours_segment_us, octo_segment_us, octo_segment_us / ours_segment_us);
   std::printf("| 10 m segment check, us (batch of 1) | %.2f | | |\n", ours_segment_single_us);
   std::printf("| frontier update, ms/frame (incremental; median, mean with the first frame) | %.1f (%.1f) | | |\n",
               frontier_ms, frontier_mean_ms);
   std::printf("| distance field update, ms/frame (incremental, %.1f m max; median, mean) | %.1f (%.1f) | | |\n",
               MapConfig{}.max_distance_m, distance_ms, distance_mean_ms);
-  std::printf("\nMap: %llu occupied, %llu free voxels (OctoMap: %zu leaf nodes); segments hitting: %zu ours, %zu OctoMap "
-              "castRay (which also stops at unknown: counts differ by design); lookups saw %zu (batched %zu) / %zu occupied; "
-              "%zu frontier clusters at the end; projective integration: %llu free voxels.\n",
-              static_cast<unsigned long long>(stats.occupied), static_cast<unsigned long long>(stats.free),
-              tree.getNumLeafNodes(), ours_hits, octo_hits, occupied_seen, occupied_seen_batched, octo_occupied, num_clusters,
-              static_cast<unsigned long long>(projective_free));
+  std::printf(
+      "\nMap: %llu occupied, %llu free voxels (OctoMap: %zu leaf nodes); segments hitting: %zu ours, %zu OctoMap "
+      "castRay (which also stops at unknown: counts differ by design); lookups saw %zu (batched %zu) / %zu occupied; "
+      "%zu frontier clusters at the end; projective integration: %llu free voxels.\n",
+      static_cast<unsigned long long>(stats.occupied), static_cast<unsigned long long>(stats.free), tree.getNumLeafNodes(),
+      ours_hits, octo_hits, occupied_seen, occupied_seen_batched, octo_occupied, num_clusters,
+      static_cast<unsigned long long>(projective_free));
   std::printf("Voxel sets against OctoMap's (pruned leaves expanded): OctoMap %zu free, %zu occupied; %zu voxels free "
               "here but not in OctoMap, %zu free in OctoMap but not here, %zu occupied in one map only.\n",
               diff.octo_free, diff.octo_occupied, diff.free_not_octo_free, diff.octo_free_not_free, diff.occupied_differ);

@@ -75,8 +75,8 @@ cenote::PointBatch renderFrame(const mapping::test::Scene& scene, int width, int
   camera.cy = (height - 1) / 2.0;
   const Eigen::Vector3d position(0.3 * index, 0.05 * index, 0.0);
   const Eigen::Vector3d target = position + Eigen::Vector3d(std::cos(kPitch), 0.0, -std::sin(kPitch));
-  cenote::PointBatch batch =
-      mapping::test::renderBatch(scene, camera, mapping::test::lookAt(position, target), 12.0, 0.01, 100 + index);
+  cenote::PointBatch batch = mapping::test::renderBatch(scene, camera, mapping::test::lookAt(position, target), 12.0, 0.01,
+                                                        100 + index);
   batch.t_s = index / 15.0;
   return batch;
 }
@@ -258,7 +258,8 @@ int main(int argc, char** argv) {
       std::string config_path;
       if (map_threads > 0) {
         // The server's map with the same ray-marching thread count as the local one.
-        config_path = (std::filesystem::temp_directory_path() / ("server_bench_" + std::to_string(getpid()) + ".yaml")).string();
+        config_path =
+            (std::filesystem::temp_directory_path() / ("server_bench_" + std::to_string(getpid()) + ".yaml")).string();
         std::ofstream(config_path) << "map:\n  num_threads: " << map_threads << "\n";
         server_options.extra_args = {"--config", config_path};
       }
@@ -284,8 +285,7 @@ int main(int argc, char** argv) {
     // from them in random directions.
     std::mt19937 rng(42);
     std::uniform_real_distribution<double> ux(info.bounds.min_m.x(), info.bounds.max_m.x()),
-        uy(info.bounds.min_m.y(), info.bounds.max_m.y()), uz(info.bounds.min_m.z(), info.bounds.max_m.z()),
-        dir(-1.0, 1.0);
+        uy(info.bounds.min_m.y(), info.bounds.max_m.y()), uz(info.bounds.min_m.z(), info.bounds.max_m.z()), dir(-1.0, 1.0);
     std::vector<Eigen::Vector3d> points(4096);
     std::vector<client::Segment> segments(4096);
     std::vector<mapping::SegmentQuery> local_segments(4096);
@@ -327,7 +327,8 @@ int main(int argc, char** argv) {
       out.segment = latency(calls, [&](int i) { planner.segments({segments[pick(i)]}); });
       const double server_cpu0 = processCpuSeconds(server_pid), client_cpu0 = processCpuSeconds(getpid());
       const auto qps_t0 = Clock::now();
-      out.state_qps = throughput(8, seconds, [&](int t, int i) { clients[static_cast<size_t>(t)]->voxels({points[pick(i * 8 + t)]}); });
+      out.state_qps = throughput(8, seconds,
+                                 [&](int t, int i) { clients[static_cast<size_t>(t)]->voxels({points[pick(i * 8 + t)]}); });
       const double queries = out.state_qps * usSince(qps_t0) / 1e6;
       out.server_cpu_us = (processCpuSeconds(server_pid) - server_cpu0) * 1e6 / queries;
       out.client_cpu_us = (processCpuSeconds(getpid()) - client_cpu0) * 1e6 / queries;
@@ -360,9 +361,10 @@ int main(int argc, char** argv) {
     {
       Ingestor ingest([&](int) { local.integrate(frames[next_frame()]); });
       local_figures.state = latency(calls, [&](int i) { mapping::queryVoxels(local, {points[pick(i)]}); });
-      local_figures.segment = latency(calls, [&](int i) { mapping::checkSegments(local, {local_segments[pick(i)]}, false); });
-      local_figures.state_qps =
-          throughput(8, seconds, [&](int t, int i) { mapping::queryVoxels(local, {points[pick(i * 8 + t)]}); });
+      local_figures.segment = latency(calls,
+                                      [&](int i) { mapping::checkSegments(local, {local_segments[pick(i)]}, false); });
+      local_figures.state_qps = throughput(8, seconds,
+                                           [&](int t, int i) { mapping::queryVoxels(local, {points[pick(i * 8 + t)]}); });
       local_figures.segment_qps = throughput(
           8, seconds, [&](int t, int i) { mapping::checkSegments(local, {local_segments[pick(i * 8 + t)]}, false); });
       std::vector<double> integrate_ms, query_ms;
@@ -381,13 +383,14 @@ int main(int argc, char** argv) {
     }
 
     const client::ServerStats stats = map.stats();
-    std::printf("server_bench: %s, %u hardware threads, map threads %d; map %.2f M voxels (%.1f MB); background ingest at 15 Hz of "
-                "%zu-point frames (%zu on average): %d frames over gRPC (slowest IntegratePoints %.0f ms), %d in "
-                "process (slowest integrate %.0f ms)\n",
-                server ? "own cenote-server on loopback" : target.c_str(), std::thread::hardware_concurrency(), map_threads,
-                static_cast<double>(stats.occupied + stats.free) / 1e6, static_cast<double>(stats.map_memory_bytes) / 1e6,
-                frames.empty() ? size_t{0} : frames.front().size(), frame_points / std::max(1, num_frames), rpc.frames,
-                rpc.ingest_max_ms, local_figures.frames, local_figures.ingest_max_ms);
+    std::printf(
+        "server_bench: %s, %u hardware threads, map threads %d; map %.2f M voxels (%.1f MB); background ingest at 15 Hz of "
+        "%zu-point frames (%zu on average): %d frames over gRPC (slowest IntegratePoints %.0f ms), %d in "
+        "process (slowest integrate %.0f ms)\n",
+        server ? "own cenote-server on loopback" : target.c_str(), std::thread::hardware_concurrency(), map_threads,
+        static_cast<double>(stats.occupied + stats.free) / 1e6, static_cast<double>(stats.map_memory_bytes) / 1e6,
+        frames.empty() ? size_t{0} : frames.front().size(), frame_points / std::max(1, num_frames), rpc.frames,
+        rpc.ingest_max_ms, local_figures.frames, local_figures.ingest_max_ms);
     std::printf("the 100k-point batch: %zu of the %zu points of a 480x360 frame (rays up to 10 m)\n", big.size(),
                 big_frame_points);
     if (server_pid > 0) {
@@ -402,10 +405,12 @@ int main(int argc, char** argv) {
                   idle_cost > 0 ? std::thread::hardware_concurrency() * 1e6 / idle_cost : 0.0,
                   std::thread::hardware_concurrency());
     }
-    std::printf("\n| measure | server, 15 Hz ingest | server, idle | in process, 15 Hz ingest | ratio (ingest) | target | met |\n");
+    std::printf(
+        "\n| measure | server, 15 Hz ingest | server, idle | in process, 15 Hz ingest | ratio (ingest) | target | met |\n");
     std::printf("|---|---|---|---|---|---|---|\n");
     row("single-point state, p50 µs", rpc.state.p50, idle.state.p50, local_figures.state.p50, "", true);
-    row("single-point state, p99 µs", rpc.state.p99, idle.state.p99, local_figures.state.p99, "<= 1000", rpc.state.p99 <= 1000.0);
+    row("single-point state, p99 µs", rpc.state.p99, idle.state.p99, local_figures.state.p99, "<= 1000",
+        rpc.state.p99 <= 1000.0);
     row("single segment (2 m), p50 µs", rpc.segment.p50, idle.segment.p50, local_figures.segment.p50, "", true);
     row("single segment (2 m), p99 µs", rpc.segment.p99, idle.segment.p99, local_figures.segment.p99, "<= 1000",
         rpc.segment.p99 <= 1000.0);

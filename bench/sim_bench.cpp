@@ -41,7 +41,8 @@ int main(int argc, char** argv) {
   app.add_option("--scene", which, "scene")->capture_default_str()->check(CLI::IsMember({"cave", "reef", "wreck", "all"}));
   CLI11_PARSE(app, argc, argv);
   omp_set_num_threads(threads);
-  std::printf("| scene | triangles | scene build ms | rasterise ms | radiance ms | expose ms | frame ms | dataset ms/frame |\n");
+  std::printf(
+      "| scene | triangles | scene build ms | rasterise ms | radiance ms | expose ms | frame ms | dataset ms/frame |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const char* name : {"cave", "reef", "wreck"}) {
     if (which != "all" && which != name) continue;
@@ -76,7 +77,7 @@ int main(int argc, char** argv) {
                 1000.0 * summary.wall_s / frames);
     std::fflush(stdout);
   }
-  std::printf("\n%d threads, %d frames per scene, 800x600, both cameras; stage figures are medians over frames.\n",
-              threads, frames);
+  std::printf("\n%d threads, %d frames per scene, 800x600, both cameras; stage figures are medians over frames.\n", threads,
+              frames);
   return 0;
 }

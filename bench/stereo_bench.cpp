@@ -37,8 +37,8 @@ struct Input {
 };
 
 struct Timing {
-  double wall_ms = 0.0;  // median
-  double cpu_ms = 0.0;   // median CPU time of the process (every thread)
+  double wall_ms = 0.0;       // median
+  double cpu_ms = 0.0;        // median CPU time of the process (every thread)
   double best_wall_ms = 0.0;  // fastest run: the least disturbed by other work on the machine
 };
 
@@ -113,8 +113,7 @@ int main(int argc, char** argv) {
       Timing t;
     };
     std::vector<Row> rows;
-    auto ours = [&](const char* name, pipeline::MatchingCost cost, int window, int paths,
-                    pipeline::SearchMode search) {
+    auto ours = [&](const char* name, pipeline::MatchingCost cost, int window, int paths, pipeline::SearchMode search) {
       pipeline::StereoConfig c;
       c.search = search;
       c.num_disparities = in.disparities;
@@ -144,10 +143,9 @@ int main(int argc, char** argv) {
     opencv("OpenCV StereoSGBM MODE_SGBM_3WAY", cv::StereoSGBM::MODE_SGBM_3WAY);
     const Timing three_way = rows.back().t;
     for (const Row& r : rows) {
-      std::printf("| %s | %d | %s | %.1f | %.0f | %.2fx | %.1f | %.2fx | %.1f | %.2fx |\n", in.name.c_str(),
-                  in.disparities, r.name.c_str(), r.t.wall_ms, cells / (r.t.wall_ms * 1e3),
-                  three_way.wall_ms / r.t.wall_ms, r.t.cpu_ms, three_way.cpu_ms / r.t.cpu_ms, r.t.best_wall_ms,
-                  three_way.best_wall_ms / r.t.best_wall_ms);
+      std::printf("| %s | %d | %s | %.1f | %.0f | %.2fx | %.1f | %.2fx | %.1f | %.2fx |\n", in.name.c_str(), in.disparities,
+                  r.name.c_str(), r.t.wall_ms, cells / (r.t.wall_ms * 1e3), three_way.wall_ms / r.t.wall_ms, r.t.cpu_ms,
+                  three_way.cpu_ms / r.t.cpu_ms, r.t.best_wall_ms, three_way.best_wall_ms / r.t.best_wall_ms);
     }
   }
   return 0;

@@ -13,10 +13,10 @@
 namespace cenote {
 
 struct PointBatch {
-  double t_s = 0.0;                                   // time of the frame the points come from
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();   // camera centre in the world frame
-  std::vector<Eigen::Vector3f> points;                // world frame
-  std::vector<std::array<uint8_t, 3>> colors;         // RGB, one per point; empty when uncoloured
+  double t_s = 0.0;                                  // time of the frame the points come from
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // camera centre in the world frame
+  std::vector<Eigen::Vector3f> points;               // world frame
+  std::vector<std::array<uint8_t, 3>> colors;        // RGB, one per point; empty when uncoloured
 
   size_t size() const { return points.size(); }
   bool empty() const { return points.empty(); }

@@ -25,8 +25,8 @@ void checkPose(const Eigen::Isometry3d& T_world_cam, const std::string& what) {
 }
 
 void checkIntrinsics(const Eigen::Matrix3d& K, const std::string& what) {
-  const bool ok = K.allFinite() && K(0, 0) > 0.0 && K(1, 1) > 0.0 && K(0, 1) == 0.0 && K(1, 0) == 0.0 &&
-                  K(2, 0) == 0.0 && K(2, 1) == 0.0 && K(2, 2) == 1.0;
+  const bool ok = K.allFinite() && K(0, 0) > 0.0 && K(1, 1) > 0.0 && K(0, 1) == 0.0 && K(1, 0) == 0.0 && K(2, 0) == 0.0 &&
+                  K(2, 1) == 0.0 && K(2, 2) == 1.0;
   if (!ok) {
     std::ostringstream text;
     text << what << ": intrinsic matrix must be [fx 0 cx; 0 fy cy; 0 0 1] with fx, fy > 0, got [" << K.row(0) << "; "

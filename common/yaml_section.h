@@ -21,8 +21,8 @@ namespace cenote {
 // the code's defaults key by key, including keys added later.
 struct YamlDefaults {
   struct Entry {
-    std::string shown;                               // the value as text
-    std::function<bool(const YAML::Node&)> equals;   // whether a YAML value reads as the same value
+    std::string shown;                              // the value as text
+    std::function<bool(const YAML::Node&)> equals;  // whether a YAML value reads as the same value
   };
   std::map<std::string, Entry> entries;
 };
@@ -46,8 +46,7 @@ class YamlSection {
     try {
       value = child.as<T>();
     } catch (const YAML::Exception&) {
-      throw Error(file_ + ": " + path_ + "." + key + " = '" + YAML::Dump(child) +
-                  "': expected " + typeName<T>());
+      throw Error(file_ + ": " + path_ + "." + key + " = '" + YAML::Dump(child) + "': expected " + typeName<T>());
     }
   }
 
@@ -74,14 +73,13 @@ class YamlSection {
   void record(const std::string& key, const T& value) {
     std::ostringstream shown;
     shown << std::boolalpha << value;
-    defaults_->entries[path_.empty() ? key : path_ + "." + key] = {
-        shown.str(), [value](const YAML::Node& node) {
-          try {
-            return node.as<T>() == value;
-          } catch (const YAML::Exception&) {
-            return false;
-          }
-        }};
+    defaults_->entries[path_.empty() ? key : path_ + "." + key] = {shown.str(), [value](const YAML::Node& node) {
+                                                                     try {
+                                                                       return node.as<T>() == value;
+                                                                     } catch (const YAML::Exception&) {
+                                                                       return false;
+                                                                     }
+                                                                   }};
   }
 
   YamlDefaults* defaults_ = nullptr;

@@ -16,24 +16,24 @@ class YamlSection;
 namespace cenote::mapping {
 
 struct MapConfig {
-  double voxel_size_m = 0.05;         // voxel side, in [0.001, 10]; fixed for the life of a map
-  double prob_hit = 0.7;              // occupancy probability after one hit from unknown, in (0.5, 1)
-  double prob_miss = 0.4;             // ... after one miss (ray passing through), in (0, 0.5)
-  double clamp_min = 0.12;            // log-odds clamped to [logit(clamp_min), logit(clamp_max)];
-  double clamp_max = 0.97;            //   0 < clamp_min < prob_miss, prob_hit < clamp_max < 1
-  double occupied_threshold = 0.5;    // occupied when p >= this; in (clamp_min, clamp_max)
-  double max_range_m = 10.0;          // rays longer are carved to this range with no hit; <= 0: unlimited
-  int ray_stop_run = 16;              // a ray, marched from its end, stops after this many voxels in a
-                                      // row already carved this batch (integration/ray_batch.h): it
-                                      // may leave voxels of the ray unknown, never makes free one the
-                                      // whole ray does not cross; 0: march whole rays, OctoMap's voxel
-                                      // sets; in [0, 1000]
-  int publish_blocks = 64;            // blocks written per exclusive lock: readers wait at most for this
-  int num_threads = 0;                // ray marching threads; 0 = OpenMP default. The map is the same
-                                      // for any thread count (set union of the rays' voxels)
-  double max_distance_m = 2.0;        // distance field: beyond this, distance() reports this, in (0, 100]
-  int frontier_min_voxels = 10;       // frontier clusters with fewer voxels are dropped; >= 1
-  double frontier_max_extent_m = 2.0; // larger clusters are split along their main axis (PCA); > 0
+  double voxel_size_m = 0.05;          // voxel side, in [0.001, 10]; fixed for the life of a map
+  double prob_hit = 0.7;               // occupancy probability after one hit from unknown, in (0.5, 1)
+  double prob_miss = 0.4;              // ... after one miss (ray passing through), in (0, 0.5)
+  double clamp_min = 0.12;             // log-odds clamped to [logit(clamp_min), logit(clamp_max)];
+  double clamp_max = 0.97;             //   0 < clamp_min < prob_miss, prob_hit < clamp_max < 1
+  double occupied_threshold = 0.5;     // occupied when p >= this; in (clamp_min, clamp_max)
+  double max_range_m = 10.0;           // rays longer are carved to this range with no hit; <= 0: unlimited
+  int ray_stop_run = 16;               // a ray, marched from its end, stops after this many voxels in a
+                                       // row already carved this batch (integration/ray_batch.h): it
+                                       // may leave voxels of the ray unknown, never makes free one the
+                                       // whole ray does not cross; 0: march whole rays, OctoMap's voxel
+                                       // sets; in [0, 1000]
+  int publish_blocks = 64;             // blocks written per exclusive lock: readers wait at most for this
+  int num_threads = 0;                 // ray marching threads; 0 = OpenMP default. The map is the same
+                                       // for any thread count (set union of the rays' voxels)
+  double max_distance_m = 2.0;         // distance field: beyond this, distance() reports this, in (0, 100]
+  int frontier_min_voxels = 10;        // frontier clusters with fewer voxels are dropped; >= 1
+  double frontier_max_extent_m = 2.0;  // larger clusters are split along their main axis (PCA); > 0
 
   LogOddsModel logOddsModel() const;
   // Every failed rule, empty when valid.

@@ -60,9 +60,9 @@ openvdb::math::Transform::Ptr makeTransform(double voxel_size_m) {
 
 namespace {
 
-using openvdb::Coord;
 using detail::LeafIndex;
 using detail::LeafRef;
+using openvdb::Coord;
 
 Coord coordOf(const VoxelIndex& ijk) { return Coord(ijk.x(), ijk.y(), ijk.z()); }
 
@@ -200,8 +200,8 @@ void OccupancyMap::checkBatch(const PointBatch& batch) const {
   if (batch.empty()) throw Error("map: empty point batch (t = " + std::to_string(batch.t_s) + " s): nothing to integrate");
   const double limit_m = kMaxVoxelIndex * voxelSize();
   if (!batch.origin.allFinite() || (batch.origin.array().abs() >= limit_m).any()) {
-    throw Error("map: batch origin " + formatPoint(batch.origin) + " must be finite and within " +
-                std::to_string(limit_m) + " m of 0 (t = " + std::to_string(batch.t_s) + " s)");
+    throw Error("map: batch origin " + formatPoint(batch.origin) + " must be finite and within " + std::to_string(limit_m) +
+                " m of 0 (t = " + std::to_string(batch.t_s) + " s)");
   }
   if (batch.hasColor() && batch.colors.size() != batch.points.size()) {
     throw Error("map: batch has " + std::to_string(batch.colors.size()) + " colours for " +
@@ -219,8 +219,8 @@ void OccupancyMap::checkBatch(const PointBatch& batch) const {
     const Eigen::Vector3f& p = batch.points[i];
     if (!p.allFinite() || (p.array().abs() >= limit_f).any()) {
       throw Error("map: point " + std::to_string(i) + " of the batch is " + formatPoint(p.cast<double>()) +
-                  ": must be finite and within " + std::to_string(limit_m) + " m of 0 (t = " +
-                  std::to_string(batch.t_s) + " s)");
+                  ": must be finite and within " + std::to_string(limit_m) + " m of 0 (t = " + std::to_string(batch.t_s) +
+                  " s)");
     }
   }
 }
@@ -387,8 +387,7 @@ MapDelta OccupancyMap::removeVoxels(const VoxelBox& candidates, bool everywhere,
     impl_->projective_scratch = ProjectiveBatch();
   }
   const VoxelBox candidate_blocks{blockOf(candidates.min), blockOf(candidates.max)};
-  impl_->color.eraseIf([&](const BlockIndex& block) { return everywhere || candidate_blocks.contains(block); },
-                       removed);
+  impl_->color.eraseIf([&](const BlockIndex& block) { return everywhere || candidate_blocks.contains(block); }, removed);
   finishDelta(delta, s);
   impl_->version.fetch_add(1);
   return delta;

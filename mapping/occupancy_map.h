@@ -34,8 +34,8 @@
 
 namespace cenote::mapping {
 
-struct DepthFrame;    // integration/depth_frame.h
-class BatchUpdates;   // integration/batch_updates.h
+struct DepthFrame;   // integration/depth_frame.h
+class BatchUpdates;  // integration/batch_updates.h
 
 namespace detail {
 struct MapImpl;
@@ -45,7 +45,7 @@ class MapAccess;
 
 // The 512 voxels of one block, copied out of the map (read with ConstAccessor::readBlock).
 struct BlockView {
-  std::array<uint64_t, 8> known{};      // bit offsetInBlock(ijk): observed
+  std::array<uint64_t, 8> known{};             // bit offsetInBlock(ijk): observed
   std::array<float, kBlockVoxels> log_odds{};  // meaningful where known
 };
 
@@ -56,7 +56,7 @@ struct MapStats {
   uint64_t unknown_in_bounds = 0;  // never-observed voxels inside the bounding box of known ones
   VoxelBox bounds;                 // of the known voxels
   Aabb bounds_m;
-  uint64_t memory_bytes = 0;       // of the log-odds grid (OpenVDB memUsage) and the colours
+  uint64_t memory_bytes = 0;  // of the log-odds grid (OpenVDB memUsage) and the colours
 };
 
 class OccupancyMap {
@@ -131,8 +131,7 @@ class OccupancyMap {
     bool readBlock(const BlockIndex& block, BlockView& view) const;
     // Known and occupied bits of one block (bit offsetInBlock(ijk)), without copying its values;
     // false (both all zero) when the block holds no known voxel.
-    bool readBlockMasks(const BlockIndex& block, std::array<uint64_t, 8>& known,
-                        std::array<uint64_t, 8>& occupied) const;
+    bool readBlockMasks(const BlockIndex& block, std::array<uint64_t, 8>& known, std::array<uint64_t, 8>& occupied) const;
     const OccupancyMap& map() const { return *map_; }
 
    private:

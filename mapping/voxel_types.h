@@ -16,7 +16,7 @@ namespace cenote::mapping {
 using VoxelIndex = Eigen::Vector3i;
 using BlockIndex = Eigen::Vector3i;
 
-inline constexpr int kBlockShift = 3;            // 8 voxels per block side
+inline constexpr int kBlockShift = 3;  // 8 voxels per block side
 inline constexpr int kBlockSide = 1 << kBlockShift;
 inline constexpr int kBlockVoxels = kBlockSide * kBlockSide * kBlockSide;
 // Voxels a map holds lie within +-kMaxVoxelIndex of 0 on each axis (52 km at 5 cm, 1 km at 1 mm):
@@ -36,9 +36,7 @@ inline BlockIndex blockOf(const VoxelIndex& ijk) {
   return BlockIndex(ijk.x() >> kBlockShift, ijk.y() >> kBlockShift, ijk.z() >> kBlockShift);
 }
 // Offset of a voxel inside its block, x slowest (OpenVDB leaf order): ((x*8)+y)*8+z.
-inline int offsetInBlock(const VoxelIndex& ijk) {
-  return ((ijk.x() & 7) << 6) | ((ijk.y() & 7) << 3) | (ijk.z() & 7);
-}
+inline int offsetInBlock(const VoxelIndex& ijk) { return ((ijk.x() & 7) << 6) | ((ijk.y() & 7) << 3) | (ijk.z() & 7); }
 inline VoxelIndex voxelOfOffset(const BlockIndex& block, int offset) {
   return VoxelIndex((block.x() << kBlockShift) + (offset >> 6), (block.y() << kBlockShift) + ((offset >> 3) & 7),
                     (block.z() << kBlockShift) + (offset & 7));

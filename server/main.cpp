@@ -99,7 +99,8 @@ sigset_t blockShutdownSignals() {
 int serve(const Options& o) {
   const sigset_t signals = blockShutdownSignals();
   const ServerSettings settings = settingsFrom(o);
-  const std::string token = settings.server.token_file.empty() ? "" : readTokenFile(settings.server.token_file, "token file");
+  const std::string token = settings.server.token_file.empty() ? ""
+                                                               : readTokenFile(settings.server.token_file, "token file");
   CallGuard guard{Authenticator(token)};
   if (!setProcessTimeSlice(settings.server.time_slice_ms)) {
     std::fprintf(stderr, "cenote-server: the kernel refused server.time_slice_ms %g; running with its default\n",

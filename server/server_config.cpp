@@ -23,15 +23,14 @@ std::vector<ConfigError> ServerConfig::validate() const {
                "must be in [1, 64]");
   errors.check(min_pollers >= 1 && min_pollers <= max_pollers, "min_pollers", min_pollers, "must be in [1, max_pollers]");
   errors.check(max_pollers >= 1 && max_pollers <= 1024, "max_pollers", max_pollers, "must be in [1, 1024]");
-  errors.check(time_slice_ms == 0.0 || (time_slice_ms >= 0.1 && time_slice_ms <= 100.0), "time_slice_ms",
-               time_slice_ms, "must be 0 (kernel default) or in [0.1, 100]");
+  errors.check(time_slice_ms == 0.0 || (time_slice_ms >= 0.1 && time_slice_ms <= 100.0), "time_slice_ms", time_slice_ms,
+               "must be 0 (kernel default) or in [0.1, 100]");
   errors.check(query_cpus >= 0 && query_cpus <= CPU_SETSIZE, "query_cpus", query_cpus,
                "must be in [0, " + std::to_string(CPU_SETSIZE) + "] (0: gRPC threads not pinned)");
   errors.check(host.ingest_nice >= 0 && host.ingest_nice <= 19, "ingest_nice", host.ingest_nice, "must be in [0, 19]");
-  errors.check(host.derived_nice >= 0 && host.derived_nice <= 19, "derived_nice", host.derived_nice,
-               "must be in [0, 19]");
-  errors.check(host.derived_period_s >= 0.0 && host.derived_period_s <= 3600.0, "derived_period_s",
-               host.derived_period_s, "must be in [0, 3600]");
+  errors.check(host.derived_nice >= 0 && host.derived_nice <= 19, "derived_nice", host.derived_nice, "must be in [0, 19]");
+  errors.check(host.derived_period_s >= 0.0 && host.derived_period_s <= 3600.0, "derived_period_s", host.derived_period_s,
+               "must be in [0, 3600]");
   errors.check(host.derived_follow_s >= 0.0, "derived_follow_s", host.derived_follow_s, "must be >= 0");
   errors.check(limits.max_message_bytes >= 1 << 20 && limits.max_message_bytes <= (int64_t{1} << 31) - 1,
                "limits.max_message_bytes", limits.max_message_bytes, "must be in [1 MiB, 2 GiB)");

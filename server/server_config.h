@@ -21,36 +21,36 @@ namespace cenote::server {
 
 // What one request may ask for. Beyond a limit: RESOURCE_EXHAUSTED naming it.
 struct RequestLimits {
-  int64_t max_message_bytes = 64 << 20;   // of any request or reply (gRPC's receive limit)
-  int64_t max_batch = 100000;             // points / boxes / segments / rays in one query
-  int64_t max_points_per_batch = 1000000; // points in one ingested point batch
-  int64_t max_box_voxels = 10000000;      // voxels in one box query or extract
-  int64_t max_image_pixels = 4096 * 4096; // of one stereo image
-  int64_t max_poses = 100000;             // streamed poses kept (200 Hz for over 8 minutes)
+  int64_t max_message_bytes = 64 << 20;    // of any request or reply (gRPC's receive limit)
+  int64_t max_batch = 100000;              // points / boxes / segments / rays in one query
+  int64_t max_points_per_batch = 1000000;  // points in one ingested point batch
+  int64_t max_box_voxels = 10000000;       // voxels in one box query or extract
+  int64_t max_image_pixels = 4096 * 4096;  // of one stereo image
+  int64_t max_poses = 100000;              // streamed poses kept (200 Hz for over 8 minutes)
 };
 
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  // loopback unless asked otherwise
-  std::string token_file;                   // bearer token (first line); empty: no authentication
-  std::string snapshot_dir = "snapshots";   // Admin.Snapshot writes under it; the periodic and
-                                            // shutdown snapshot is <snapshot_dir>/map.vdb
-  double snapshot_period_s = 60.0;          // 0: only on shutdown and on request
+  std::string token_file;                  // bearer token (first line); empty: no authentication
+  std::string snapshot_dir = "snapshots";  // Admin.Snapshot writes under it; the periodic and
+                                           // shutdown snapshot is <snapshot_dir>/map.vdb
+  double snapshot_period_s = 60.0;         // 0: only on shutdown and on request
   bool snapshot_on_shutdown = true;
-  std::string calibration;                  // stereo rig for StreamFrames: calibration YAML or dataset folder
-  std::string frame_id = "world";           // the map's frame, written into snapshots
-  double pose_wait_s = 1.0;                 // a frame without pose waits this long for a later pose
-  double pose_history_s = 60.0;             // poses older than this (before the newest) are dropped
-  double pose_max_jump_s = 60.0;            // a pose further than this after the stream's clock is refused
-  int max_frame_streams = 2;                // concurrent StreamFrames calls (each runs a pipeline)
-  int completion_queues = 1;                // gRPC's sync server: completion queues,
-  int min_pollers = 2;                      //   and threads polling each (handlers run on them;
-  int max_pollers = 16;                     //   more are made while calls wait; see server/main.cpp)
-  double time_slice_ms = 0.1;               // CPU time slice of every server thread (cpu_scheduling.h);
-                                            // 0: the kernel's default
-  int query_cpus = 1;                       // CPUs of gRPC's threads, the last ones (cpu_placement.h);
-                                            // 0: not pinned
-  MapHostOptions host;                      // keys max_subscriber_lag, ingest_nice, derived_nice,
-                                            // derived_period_s, derived_follow_s
+  std::string calibration;         // stereo rig for StreamFrames: calibration YAML or dataset folder
+  std::string frame_id = "world";  // the map's frame, written into snapshots
+  double pose_wait_s = 1.0;        // a frame without pose waits this long for a later pose
+  double pose_history_s = 60.0;    // poses older than this (before the newest) are dropped
+  double pose_max_jump_s = 60.0;   // a pose further than this after the stream's clock is refused
+  int max_frame_streams = 2;       // concurrent StreamFrames calls (each runs a pipeline)
+  int completion_queues = 1;       // gRPC's sync server: completion queues,
+  int min_pollers = 2;             //   and threads polling each (handlers run on them;
+  int max_pollers = 16;            //   more are made while calls wait; see server/main.cpp)
+  double time_slice_ms = 0.1;      // CPU time slice of every server thread (cpu_scheduling.h);
+                                   // 0: the kernel's default
+  int query_cpus = 1;              // CPUs of gRPC's threads, the last ones (cpu_placement.h);
+                                   // 0: not pinned
+  MapHostOptions host;             // keys max_subscriber_lag, ingest_nice, derived_nice,
+                                   // derived_period_s, derived_follow_s
   RequestLimits limits;
 
   std::vector<ConfigError> validate() const;

@@ -10,18 +10,17 @@ namespace cenote::sim::detail {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kBehindStart_m = 2.5;   // tunnel behind the first pose
-constexpr double kAheadOfEnd_m = 10.0;   // tunnel beyond the last pose (the light reaches ~6 m)
-constexpr double kTaper_m = 1.5;         // the tunnel closes over this length at both ends
-constexpr double kMaxRadius_m = 2.6;     // bounds the tessellation around the tunnel
+constexpr double kBehindStart_m = 2.5;  // tunnel behind the first pose
+constexpr double kAheadOfEnd_m = 10.0;  // tunnel beyond the last pose (the light reaches ~6 m)
+constexpr double kTaper_m = 1.5;        // the tunnel closes over this length at both ends
+constexpr double kMaxRadius_m = 2.6;    // bounds the tessellation around the tunnel
 
 struct Tunnel {
   uint64_t seed;
   double phase[4];
 
   Eigen::Vector3d center(double s) const {
-    return {s, 1.5 * std::sin(s / 5.0 + phase[0]) + 0.6 * std::sin(s / 2.2 + phase[1]),
-            0.5 * std::sin(s / 3.5 + phase[2])};
+    return {s, 1.5 * std::sin(s / 5.0 + phase[0]) + 0.6 * std::sin(s / 2.2 + phase[1]), 0.5 * std::sin(s / 3.5 + phase[2])};
   }
   // Unit tangent, right-hand side and up of the centreline (world z is never along the tunnel).
   void frame(double s, Eigen::Vector3d& tangent, Eigen::Vector3d& side, Eigen::Vector3d& up) const {

@@ -18,8 +18,8 @@ constexpr int kGammaLevels = 4096;
 
 SurfaceTexture::SurfaceTexture(uint64_t seed) : fine(kFineSize, hash64(seed, 1)), coarse(kCoarseSize, hash64(seed, 2)) {}
 
-Eigen::Array3f surfaceAlbedo(const SimScene& scene, const SurfaceTexture& texture, const Eigen::Vector3f& p,
-                             int triangle, float footprint_m) {
+Eigen::Array3f surfaceAlbedo(const SimScene& scene, const SurfaceTexture& texture, const Eigen::Vector3f& p, int triangle,
+                             float footprint_m) {
   float u, v;
   switch (static_cast<TexturePlane>(scene.mesh.shading_codes[triangle] & 3)) {
     case TexturePlane::kXY: u = p.x(), v = p.y(); break;

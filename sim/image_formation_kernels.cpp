@@ -157,9 +157,9 @@ HWY_INLINE void shadePixels(const RadianceSetup& s, int x, float ray_y, const in
   using T = SurfaceTexture;
   const VF mix = hn::MulAdd(hn::Set(df, T::kFineWeight), layer(s.fine),
                             hn::Mul(hn::Set(df, 1.0f - T::kFineWeight), layer(s.coarse)));
-  const VF value = hn::Min(hn::Set(df, 1.0f), hn::Max(hn::Zero(df), hn::MulAdd(hn::Set(df, T::kContrast),
-                                                                              hn::Sub(mix, hn::Set(df, 0.5f)),
-                                                                              hn::Set(df, 0.5f))));
+  const VF value = hn::Min(
+      hn::Set(df, 1.0f),
+      hn::Max(hn::Zero(df), hn::MulAdd(hn::Set(df, T::kContrast), hn::Sub(mix, hn::Set(df, 0.5f)), hn::Set(df, 0.5f))));
   const VF shade = hn::MulAdd(hn::Set(df, 1.0f - T::kMinShade), value, hn::Set(df, T::kMinShade));
 
   // Light: rig lamp (spot, inverse square, attenuated on its way) and sunlight from above.
@@ -194,7 +194,8 @@ HWY_INLINE void shadePixels(const RadianceSetup& s, int x, float ray_y, const in
     const VF transmission = fastExp(df, hn::Neg(hn::Mul(beta, range)));
     const VF backscatter = hn::Set(df, s.backscatter[c]);
     const VF lit = hn::Mul(hn::Mul(albedo, irradiance), transmission);
-    radiance[c] = hn::IfThenElse(valid, hn::MulAdd(backscatter, hn::Sub(hn::Set(df, 1.0f), transmission), lit), backscatter);
+    radiance[c] = hn::IfThenElse(valid, hn::MulAdd(backscatter, hn::Sub(hn::Set(df, 1.0f), transmission), lit),
+                                 backscatter);
   }
   hn::StoreInterleaved3(radiance[0], radiance[1], radiance[2], df, out);
 }

@@ -31,9 +31,9 @@ struct TextureLayer {
 struct RadianceSetup {
   int width = 0;
   float fx = 0, fy = 0, cx = 0, cy = 0;
-  float R[9] = {};  // camera to world rotation, row-major
-  const float* normals = nullptr;          // SceneMesh::normals, 3 floats per triangle
-  const int32_t* shading_codes = nullptr;  // SceneMesh::shading_codes
+  float R[9] = {};                                           // camera to world rotation, row-major
+  const float* normals = nullptr;                            // SceneMesh::normals, 3 floats per triangle
+  const int32_t* shading_codes = nullptr;                    // SceneMesh::shading_codes
   float albedo[3][static_cast<int>(Material::kCount)] = {};  // base colour per channel (B, G, R), material
   TextureLayer fine, coarse;
   float beta[3] = {}, backscatter[3] = {};  // per channel, SceneLighting

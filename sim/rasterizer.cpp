@@ -21,8 +21,8 @@ constexpr int kNarrowRowPixels = 4;  // triangles at most this wide are drawn wi
 // One screen-space triangle to draw, with the inverse-depth plane of its mesh triangle.
 struct RasterTriangle {
   double x[3], y[3];
-  double a, b, c;     // 1 / Z = a x + b y + c
-  int32_t triangle;   // mesh index
+  double a, b, c;    // 1 / Z = a x + b y + c
+  int32_t triangle;  // mesh index
 };
 
 // Buffers of one rasterize() call, kept per thread so that their pages are reused.
@@ -73,8 +73,8 @@ int clipNear(const std::array<Eigen::Vector3d, 3>& in, double near, std::array<E
 // Writes the triangle's screen-space pieces (none when culled, two when the near plane cuts a
 // corner off) to `out`; @return how many.
 int setupTriangle(const SceneMesh& mesh, uint32_t t, const std::vector<Eigen::Vector3d>& cam_vertices,
-                  const std::vector<Eigen::Vector2d>& screen, uint32_t first_vertex, const PinholeCamera& cam,
-                  double near, RasterTriangle out[2]) {
+                  const std::vector<Eigen::Vector2d>& screen, uint32_t first_vertex, const PinholeCamera& cam, double near,
+                  RasterTriangle out[2]) {
   const auto& tri = mesh.triangles[t];
   const uint32_t i[3] = {tri[0] - first_vertex, tri[1] - first_vertex, tri[2] - first_vertex};
   const std::array<Eigen::Vector3d, 3> v = {cam_vertices[i[0]], cam_vertices[i[1]], cam_vertices[i[2]]};
@@ -196,8 +196,7 @@ void drawRows(const RasterTriangle& tri, const Edges& edges, int y_begin, int y_
 // Draws `tri` into rows [row0, row1): the z-test on the band's inverse-depth buffer (row-major,
 // `width` wide, row0 first); a pixel the triangle wins gets its mesh index and its exact depth
 // in `ids` and `depth` (same layout), so nothing needs to look the winner up again.
-void drawTriangle(const RasterTriangle& tri, int row0, int row1, int width, float* inv_depth, int32_t* ids,
-                  float* depth) {
+void drawTriangle(const RasterTriangle& tri, int row0, int row1, int width, float* inv_depth, int32_t* ids, float* depth) {
   double x[3] = {tri.x[0], tri.x[1], tri.x[2]}, y[3] = {tri.y[0], tri.y[1], tri.y[2]};
   const double area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
   if (area == 0.0 || !std::isfinite(area)) return;
@@ -258,8 +257,8 @@ VisibilityBuffer rasterize(const SceneMesh& mesh, const PinholeCamera& cam, cons
     projection.project(mesh, chunk, R, t, cam);
     RasterTriangle pieces[2];
     for (uint32_t tri = chunk.first_triangle; tri < chunk.first_triangle + chunk.num_triangles; ++tri) {
-      const int n = setupTriangle(mesh, tri, projection.cam_vertices, projection.screen, chunk.first_vertex, cam,
-                                  near_m, pieces);
+      const int n = setupTriangle(mesh, tri, projection.cam_vertices, projection.screen, chunk.first_vertex, cam, near_m,
+                                  pieces);
       for (int p = 0; p < n; ++p) emit(pieces[p]);
     }
   };

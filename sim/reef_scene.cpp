@@ -16,8 +16,8 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kRowLength_m = 8.0;
 constexpr double kRowSpacing_m = 1.6;
 constexpr int kRows = 4;
-constexpr double kAltitude_m = 2.6;     // camera height above the mean floor (z = 0)
-constexpr double kMargin_m = 6.0;       // floor beyond the path, what the tilted camera sees
+constexpr double kAltitude_m = 2.6;               // camera height above the mean floor (z = 0)
+constexpr double kMargin_m = 6.0;                 // floor beyond the path, what the tilted camera sees
 constexpr double kTilt_rad = 25.0 * kPi / 180.0;  // camera pitched forward from straight down
 
 struct CoralHead {
@@ -52,7 +52,8 @@ SimScene buildReef(const SimConfig& config, double path_length_m) {
   const int num_heads = static_cast<int>((x1 - x0) * (y1 - y0) * 0.35);
   for (int i = 0; i < num_heads; ++i) {
     CoralHead h;
-    h.center = {x0 + (x1 - x0) * hashToUnit(hash64(seed, 0xC0, i, 0)), y0 + (y1 - y0) * hashToUnit(hash64(seed, 0xC0, i, 1))};
+    h.center = {x0 + (x1 - x0) * hashToUnit(hash64(seed, 0xC0, i, 0)),
+                y0 + (y1 - y0) * hashToUnit(hash64(seed, 0xC0, i, 1))};
     h.radius_m = 0.2 + 0.5 * hashToUnit(hash64(seed, 0xC0, i, 2));
     h.height_m = h.radius_m * (0.5 + 0.9 * hashToUnit(hash64(seed, 0xC0, i, 3)));
     h.sponge = hashToUnit(hash64(seed, 0xC0, i, 4)) < 0.3;

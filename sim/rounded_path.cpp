@@ -39,8 +39,8 @@ RoundedPath::RoundedPath(const std::vector<Eigen::Vector2d>& w, double radius_m)
     const Eigen::Vector2d d = entry[j] - exit[i];
     const Eigen::Vector2d edge = w[j] - w[i];
     if (d.dot(edge) < -1e-9) {
-      throw Error("RoundedPath: corner radius " + std::to_string(radius_m) + " m does not fit edge " +
-                  std::to_string(i) + " (" + std::to_string(edge.norm()) + " m)");
+      throw Error("RoundedPath: corner radius " + std::to_string(radius_m) + " m does not fit edge " + std::to_string(i) +
+                  " (" + std::to_string(edge.norm()) + " m)");
     }
     Segment line;
     line.a = exit[i];

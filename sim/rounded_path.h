@@ -28,8 +28,8 @@ class RoundedPath {
     double start_s = 0.0, length = 0.0;
     bool arc = false;
     Eigen::Vector2d a = Eigen::Vector2d::Zero(), direction = Eigen::Vector2d::Zero();  // line: start, unit dir
-    Eigen::Vector2d center = Eigen::Vector2d::Zero();                                   // arc
-    double radius = 0.0, start_angle = 0.0, sweep = 0.0;                                 // arc, signed sweep
+    Eigen::Vector2d center = Eigen::Vector2d::Zero();                                  // arc
+    double radius = 0.0, start_angle = 0.0, sweep = 0.0;                               // arc, signed sweep
   };
   const Segment& find(double& s_m) const;
 

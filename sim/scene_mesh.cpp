@@ -26,8 +26,7 @@ Eigen::Vector3f SceneMesh::maxCorner() const {
   return m;
 }
 
-void MeshBuilder::addChunk(uint32_t first_vertex, uint32_t num_vertices, uint32_t first_triangle,
-                           uint32_t num_triangles) {
+void MeshBuilder::addChunk(uint32_t first_vertex, uint32_t num_vertices, uint32_t first_triangle, uint32_t num_triangles) {
   if (num_triangles == 0) return;
   MeshChunk chunk;
   chunk.first_vertex = first_vertex;
@@ -108,8 +107,7 @@ void MeshBuilder::addConvexPolygon(const std::vector<Eigen::Vector3d>& polygon, 
     mesh_.triangles.push_back({first_vertex, first_vertex + i, first_vertex + i + 1});
     mesh_.materials.push_back(material);
   }
-  addChunk(first_vertex, static_cast<uint32_t>(polygon.size()), first_triangle,
-           static_cast<uint32_t>(polygon.size() - 2));
+  addChunk(first_vertex, static_cast<uint32_t>(polygon.size()), first_triangle, static_cast<uint32_t>(polygon.size() - 2));
 }
 
 void MeshBuilder::addQuad(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
@@ -155,8 +153,8 @@ SceneMesh MeshBuilder::finish() {
   }
   mesh_.shading_codes.resize(mesh_.triangles.size());
   for (size_t t = 0; t < mesh_.triangles.size(); ++t) {
-    mesh_.shading_codes[t] =
-        4 * static_cast<int32_t>(mesh_.materials[t]) + static_cast<int32_t>(texturePlane(mesh_.normals[t]));
+    mesh_.shading_codes[t] = 4 * static_cast<int32_t>(mesh_.materials[t]) +
+                             static_cast<int32_t>(texturePlane(mesh_.normals[t]));
   }
   for (MeshChunk& chunk : mesh_.chunks) {
     Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = Eigen::Vector3f::Constant(-1e30f);
@@ -200,8 +198,8 @@ double distanceToMesh(const SceneMesh& mesh, const Eigen::Vector3d& p, double ma
     if ((p - chunk.center.cast<double>()).norm() > chunk.radius_m + max_distance_m) continue;
     for (uint32_t t = chunk.first_triangle; t < chunk.first_triangle + chunk.num_triangles; ++t) {
       const auto& tri = mesh.triangles[t];
-      const double d = pointTriangleDistance(p, mesh.vertices[tri[0]].cast<double>(),
-                                             mesh.vertices[tri[1]].cast<double>(), mesh.vertices[tri[2]].cast<double>());
+      const double d = pointTriangleDistance(p, mesh.vertices[tri[0]].cast<double>(), mesh.vertices[tri[1]].cast<double>(),
+                                             mesh.vertices[tri[2]].cast<double>());
       best = std::min(best, d);
     }
   }

@@ -13,13 +13,12 @@ std::vector<ConfigError> SimConfig::validate() const {
   errors.check(width_px >= 64 && width_px <= 4096, "width_px", width_px, "must be in [64, 4096]");
   errors.check(height_px >= 64 && height_px <= 4096, "height_px", height_px, "must be in [64, 4096]");
   errors.check(rate_hz > 0.0 && rate_hz <= 1000.0, "rate_hz", rate_hz, "must be in (0, 1000]");
-  errors.check(groundtruth_rate_hz >= rate_hz && groundtruth_rate_hz <= 10000.0, "groundtruth_rate_hz",
-               groundtruth_rate_hz, "must be in [rate_hz, 10000]");
+  errors.check(groundtruth_rate_hz >= rate_hz && groundtruth_rate_hz <= 10000.0, "groundtruth_rate_hz", groundtruth_rate_hz,
+               "must be in [rate_hz, 10000]");
   errors.check(seed >= 0, "seed", seed, "must be >= 0");
   errors.check(baseline_m > 0.0 && baseline_m <= 2.0, "baseline_m", baseline_m, "must be in (0, 2]");
   errors.check(hfov_deg >= 20.0 && hfov_deg <= 150.0, "hfov_deg", hfov_deg, "must be in [20, 150]");
-  errors.check(exposure_ratio >= 0.1 && exposure_ratio <= 10.0, "exposure_ratio", exposure_ratio,
-               "must be in [0.1, 10]");
+  errors.check(exposure_ratio >= 0.1 && exposure_ratio <= 10.0, "exposure_ratio", exposure_ratio, "must be in [0.1, 10]");
   errors.check(noise_sigma >= 0.0 && noise_sigma <= 50.0, "noise_sigma", noise_sigma, "must be in [0, 50]");
   errors.check(speed_m_s > 0.0 && speed_m_s <= 5.0, "speed_m_s", speed_m_s, "must be in (0, 5]");
   errors.check(turbidity >= 0.0 && turbidity <= 10.0, "turbidity", turbidity, "must be in [0, 10]");

@@ -21,21 +21,21 @@ enum class SimSceneKind { kCave, kReef, kWreck };
 
 struct SimConfig {
   SimSceneKind scene = SimSceneKind::kCave;
-  int num_frames = 100;             // stereo pairs rendered; [1, 100000]
-  int width_px = 800;               // image size; [64, 4096] each
+  int num_frames = 100;  // stereo pairs rendered; [1, 100000]
+  int width_px = 800;    // image size; [64, 4096] each
   int height_px = 600;
-  double rate_hz = 15.0;            // camera rate; (0, 1000]
+  double rate_hz = 15.0;               // camera rate; (0, 1000]
   double groundtruth_rate_hz = 200.0;  // EuRoC ground-truth rate; >= rate_hz, <= 10000
-  int64_t seed = 1;                 // scene shape, texture and sensor noise; >= 0
-  double baseline_m = 0.12;         // stereo baseline; (0, 2]
-  double hfov_deg = 80.0;           // horizontal field of view (fx = fy); [20, 150]
-  double exposure_ratio = 1.0;      // right camera gain / left camera gain; [0.1, 10]
-  double noise_sigma = 2.0;         // Gaussian sensor noise, grey levels; [0, 50]
-  double speed_m_s = 0.4;           // vehicle speed along the trajectory; (0, 5]
-  double turbidity = 1.0;           // scales attenuation and backscatter of the scene's water; [0, 10]
-  double k1 = 0.0, k2 = 0.0;        // radial distortion of both cameras (rendered through it); |k| <= 1
-  double mesh_spacing_m = 0.04;     // tessellation of curved surfaces; [0.005, 0.5]
-  double surface_spacing_m = 0.015; // point spacing of groundtruth/surface.ply; [0.002, 0.2]
+  int64_t seed = 1;                    // scene shape, texture and sensor noise; >= 0
+  double baseline_m = 0.12;            // stereo baseline; (0, 2]
+  double hfov_deg = 80.0;              // horizontal field of view (fx = fy); [20, 150]
+  double exposure_ratio = 1.0;         // right camera gain / left camera gain; [0.1, 10]
+  double noise_sigma = 2.0;            // Gaussian sensor noise, grey levels; [0, 50]
+  double speed_m_s = 0.4;              // vehicle speed along the trajectory; (0, 5]
+  double turbidity = 1.0;              // scales attenuation and backscatter of the scene's water; [0, 10]
+  double k1 = 0.0, k2 = 0.0;           // radial distortion of both cameras (rendered through it); |k| <= 1
+  double mesh_spacing_m = 0.04;        // tessellation of curved surfaces; [0.005, 0.5]
+  double surface_spacing_m = 0.015;    // point spacing of groundtruth/surface.ply; [0.002, 0.2]
 
   // Every failed rule, empty when valid.
   std::vector<ConfigError> validate() const;

@@ -62,8 +62,8 @@ std::string sensorYaml(const Simulator& sim, int camera) {
   y << "intrinsics: [" << rig.camera.fx << ", " << rig.camera.fy << ", " << rig.camera.cx << ", " << rig.camera.cy
     << "] #fu, fv, cu, cv\n";
   y << "distortion_model: radial-tangential\n";
-  y << "distortion_coefficients: [" << rig.distortion[0] << ", " << rig.distortion[1] << ", " << rig.distortion[2]
-    << ", " << rig.distortion[3] << "]\n";
+  y << "distortion_coefficients: [" << rig.distortion[0] << ", " << rig.distortion[1] << ", " << rig.distortion[2] << ", "
+    << rig.distortion[3] << "]\n";
   return y.str();
 }
 
@@ -71,8 +71,8 @@ void appendTum(std::ostringstream& out, int64_t t_ns, const Eigen::Isometry3d& T
   const Eigen::Quaterniond q(T.linear());
   const Eigen::Vector3d p = T.translation();
   char line[256];
-  std::snprintf(line, sizeof(line), "%s %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", seconds(t_ns).c_str(), p.x(), p.y(),
-                p.z(), q.x(), q.y(), q.z(), q.w());
+  std::snprintf(line, sizeof(line), "%s %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", seconds(t_ns).c_str(), p.x(), p.y(), p.z(),
+                q.x(), q.y(), q.z(), q.w());
   out << line;
 }
 
@@ -92,15 +92,16 @@ void writeGroundTruth(const Simulator& sim, const fs::path& dir) {
     const auto t_ns = static_cast<int64_t>(std::llround(k * 1e9 / rate));
     const double t_s = t_ns * 1e-9;
     const Eigen::Isometry3d T = sim.T_world_body(t_s);
-    const Eigen::Vector3d v =
-        (sim.T_world_body(t_s + kStep_s).translation() - sim.T_world_body(t_s - kStep_s).translation()) / (2 * kStep_s);
+    const Eigen::Vector3d v = (sim.T_world_body(t_s + kStep_s).translation() -
+                               sim.T_world_body(t_s - kStep_s).translation()) /
+                              (2 * kStep_s);
     Eigen::Quaterniond q(T.linear());
     if (q.w() < 0) q.coeffs() = -q.coeffs();
     const Eigen::Vector3d p = T.translation();
     char line[512];
     std::snprintf(line, sizeof(line), "%lld,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,0,0,0,0,0,0\n",
-                  static_cast<long long>(kSimStartTimeNs + t_ns), p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(),
-                  v.x(), v.y(), v.z());
+                  static_cast<long long>(kSimStartTimeNs + t_ns), p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z(), v.x(),
+                  v.y(), v.z());
     csv << line;
     appendTum(tum, kSimStartTimeNs + t_ns, T);
   }
@@ -121,8 +122,8 @@ void sampleTriangle(const Simulator& sim, size_t t, double spacing_m, std::vecto
                           static_cast<int>(std::ceil(longest / (2.0 * spacing_m)))});
   auto add = [&](float u, float v) {
     const Eigen::Vector3f p = a + u * (b - a) + v * (c - a);
-    const Eigen::Array3f albedo =
-        surfaceAlbedo(sim.scene(), sim.texture(), p, static_cast<int>(t), static_cast<float>(spacing_m));
+    const Eigen::Array3f albedo = surfaceAlbedo(sim.scene(), sim.texture(), p, static_cast<int>(t),
+                                                static_cast<float>(spacing_m));
     std::array<uint8_t, 3> rgb;
     for (int ch = 0; ch < 3; ++ch) {
       rgb[ch] = static_cast<uint8_t>(std::lround(255.0f * std::pow(std::clamp(albedo[2 - ch], 0.0f, 1.0f), 1.0f / 2.2f)));

@@ -19,9 +19,8 @@ Eigen::Matrix3d lookRotation(const Eigen::Vector3d& forward, const Eigen::Vector
 
 namespace detail {
 
-SceneLighting sunlitWater(double turbidity, const Eigen::Array3f& attenuation_per_m,
-                          const Eigen::Array3f& backscatter, float surface_z_m,
-                          const Eigen::Array3f& downwelling_per_m) {
+SceneLighting sunlitWater(double turbidity, const Eigen::Array3f& attenuation_per_m, const Eigen::Array3f& backscatter,
+                          float surface_z_m, const Eigen::Array3f& downwelling_per_m) {
   const auto t = static_cast<float>(turbidity);
   SceneLighting light;
   light.attenuation_per_m = attenuation_per_m * t;

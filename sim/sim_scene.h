@@ -24,13 +24,13 @@ struct SceneLighting {
   Eigen::Array3f attenuation_per_m = {0.06f, 0.08f, 0.40f};  // beta_c (B, G, R): red fades first
   Eigen::Array3f backscatter = {0.0f, 0.0f, 0.0f};           // B_c, veiling light at infinite range
   bool rig_light = false;
-  Eigen::Vector3d light_in_cam0 = {0.0, -0.15, 0.0};          // light position on the rig, cam0 frame
-  float rig_intensity = 1.0f;                                 // I, at 1 m on axis
+  Eigen::Vector3d light_in_cam0 = {0.0, -0.15, 0.0};  // light position on the rig, cam0 frame
+  float rig_intensity = 1.0f;                         // I, at 1 m on axis
   bool sun = false;
-  Eigen::Array3f sun_irradiance = {1.0f, 1.0f, 1.0f};         // S_c just below the water surface
-  Eigen::Array3f downwelling_per_m = {0.05f, 0.07f, 0.35f};   // Kd_c
-  float surface_z_m = 10.0f;                                  // world z of the water surface
-  float ambient = 0.35f;                                      // share of sunlight that is diffuse
+  Eigen::Array3f sun_irradiance = {1.0f, 1.0f, 1.0f};        // S_c just below the water surface
+  Eigen::Array3f downwelling_per_m = {0.05f, 0.07f, 0.35f};  // Kd_c
+  float surface_z_m = 10.0f;                                 // world z of the water surface
+  float ambient = 0.35f;                                     // share of sunlight that is diffuse
 };
 
 struct SimScene {
@@ -58,9 +58,8 @@ SimScene buildWreck(const SimConfig& config, double path_length_m);
 void setDefaultAlbedo(SimScene& scene);
 // Open water lit by the sun (reef, wreck): attenuation and downwelling scale with turbidity, the
 // backscatter with min(1, turbidity) and a 0.35 share; no rig light.
-SceneLighting sunlitWater(double turbidity, const Eigen::Array3f& attenuation_per_m,
-                          const Eigen::Array3f& backscatter, float surface_z_m,
-                          const Eigen::Array3f& downwelling_per_m);
+SceneLighting sunlitWater(double turbidity, const Eigen::Array3f& attenuation_per_m, const Eigen::Array3f& backscatter,
+                          float surface_z_m, const Eigen::Array3f& downwelling_per_m);
 }  // namespace detail
 
 }  // namespace cenote::sim

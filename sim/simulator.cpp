@@ -13,8 +13,8 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kExposurePercentile = 95.0;
-constexpr float kExposureTarget = 0.8f;     // linear value of that percentile in the first left image
-constexpr double kMaxCanvasScale = 3.0;     // the pinhole canvas behind a distorted image, at most
+constexpr float kExposureTarget = 0.8f;  // linear value of that percentile in the first left image
+constexpr double kMaxCanvasScale = 3.0;  // the pinhole canvas behind a distorted image, at most
 
 // Normalised undistorted coordinates of a distorted normalised point (radial k1, k2) by
 // fixed-point iteration; false when it does not converge (distortion too strong at that radius).
@@ -107,7 +107,7 @@ Simulator::Simulator(const SimConfig& config) : config_(config) {
       for (int x = 0; x < cam.width; ++x) {
         const cv::Vec2f r = undistorted_rays_.at<cv::Vec2f>(y, x);
         render_map_.at<cv::Vec2f>(y, x) = cv::Vec2f(static_cast<float>(r[0] * cam.fx + render_camera_.cx),
-                                                     static_cast<float>(r[1] * cam.fy + render_camera_.cy));
+                                                    static_cast<float>(r[1] * cam.fy + render_camera_.cy));
       }
     }
   }

@@ -28,7 +28,7 @@ namespace cenote::sim {
 inline constexpr int64_t kSimStartTimeNs = 1'700'000'000'000'000'000;
 
 struct SimRig {
-  PinholeCamera camera;  // both cameras
+  PinholeCamera camera;            // both cameras
   std::vector<double> distortion;  // radial-tangential k1, k2, p1, p2 of both cameras
   double baseline_m = 0.0;
   Eigen::Isometry3d T_body_cam0 = Eigen::Isometry3d::Identity();
@@ -37,14 +37,14 @@ struct SimRig {
 
 struct SimFrame {
   int index = 0;
-  int64_t t_ns = 0;   // absolute timestamp
-  double t_s = 0.0;   // since the first frame
-  cv::Mat left, right;       // CV_8UC3 BGR, as recorded (distorted when the rig has distortion)
-  cv::Mat depth;             // CV_32F left camera, metres along the optical axis, +inf = no surface
-                             // (with distortion also where the pixel's exact ray passes through no
-                             // triangle seen by the 5 x 5 nearest pinhole pixels, which happens where
-                             // triangles are smaller than a pixel: no ground truth, never a wrong one)
-  cv::Mat left_triangles;    // CV_32S mesh triangle seen by each left pixel, -1 = none
+  int64_t t_ns = 0;        // absolute timestamp
+  double t_s = 0.0;        // since the first frame
+  cv::Mat left, right;     // CV_8UC3 BGR, as recorded (distorted when the rig has distortion)
+  cv::Mat depth;           // CV_32F left camera, metres along the optical axis, +inf = no surface
+                           // (with distortion also where the pixel's exact ray passes through no
+                           // triangle seen by the 5 x 5 nearest pinhole pixels, which happens where
+                           // triangles are smaller than a pixel: no ground truth, never a wrong one)
+  cv::Mat left_triangles;  // CV_32S mesh triangle seen by each left pixel, -1 = none
   Eigen::Isometry3d T_world_body, T_world_cam0, T_world_cam1;
 };
 

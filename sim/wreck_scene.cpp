@@ -13,13 +13,13 @@ namespace cenote::sim::detail {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kHalfLength_m = 7.0;   // hull along x
-constexpr double kHalfBeam_m = 2.0;     // hull along y
-constexpr double kBowStart_m = 4.0;     // x where the sides start to taper to the bow
-constexpr double kKeel_m = -0.8;        // hull bottom (buried)
-constexpr double kDeck_m = 2.2;         // deck height above the floor
-constexpr double kStandOff_m = 3.2;     // path distance from the hull's sides
-constexpr double kAltitude_m = 2.8;     // camera height above the floor
+constexpr double kHalfLength_m = 7.0;             // hull along x
+constexpr double kHalfBeam_m = 2.0;               // hull along y
+constexpr double kBowStart_m = 4.0;               // x where the sides start to taper to the bow
+constexpr double kKeel_m = -0.8;                  // hull bottom (buried)
+constexpr double kDeck_m = 2.2;                   // deck height above the floor
+constexpr double kStandOff_m = 3.2;               // path distance from the hull's sides
+constexpr double kAltitude_m = 2.8;               // camera height above the floor
 constexpr double kTilt_rad = 22.0 * kPi / 180.0;  // camera pitched down from horizontal
 
 }  // namespace
@@ -33,12 +33,15 @@ SimScene buildWreck(const SimConfig& config, double path_length_m) {
   const double list = (4.0 + 4.0 * hashToUnit(hash64(seed, 0x3EC, 0))) * kPi / 180.0;
   const double yaw = (hashToUnit(hash64(seed, 0x3EC, 1)) - 0.5) * 10.0 * kPi / 180.0;
   const Eigen::Matrix3d R = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(list, Eigen::Vector3d::UnitX())).toRotationMatrix();
+                             Eigen::AngleAxisd(list, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
   auto hull = [&](double x, double y, double z) { return Eigen::Vector3d(R * Eigen::Vector3d(x, y, z)); };
 
   // Outline of the deck, counter-clockwise seen from above: square stern, tapered bow.
-  const std::vector<Eigen::Vector2d> outline = {{-kHalfLength_m, -kHalfBeam_m}, {kBowStart_m, -kHalfBeam_m},
-                                                {kHalfLength_m, 0.0}, {kBowStart_m, kHalfBeam_m},
+  const std::vector<Eigen::Vector2d> outline = {{-kHalfLength_m, -kHalfBeam_m},
+                                                {kBowStart_m, -kHalfBeam_m},
+                                                {kHalfLength_m, 0.0},
+                                                {kBowStart_m, kHalfBeam_m},
                                                 {-kHalfLength_m, kHalfBeam_m}};
   for (size_t i = 0; i < outline.size(); ++i) {
     const Eigen::Vector2d a = outline[i], b = outline[(i + 1) % outline.size()];
@@ -56,12 +59,12 @@ SimScene buildWreck(const SimConfig& config, double path_length_m) {
     builder.addBox(hull(x, y, z), R * Eigen::Vector3d(dx, 0, 0), R * Eigen::Vector3d(0, dy, 0),
                    R * Eigen::Vector3d(0, 0, dz), m, cell);
   };
-  box(-5.5, -1.3, kDeck_m, 3.5, 2.6, 1.6, Material::kHull);          // deckhouse
-  box(-4.8, -1.0, kDeck_m + 1.6, 2.0, 2.0, 1.0, Material::kRust);    // bridge
-  box(1.8, -0.12, kDeck_m, 0.24, 0.24, 3.0, Material::kRust);        // mast
-  box(-0.8, -1.0, kDeck_m, 1.8, 2.0, 0.35, Material::kHull);         // hatch cover
-  box(2.8, -0.8, kDeck_m, 0.9, 1.6, 0.3, Material::kRust);           // winch housing
-  for (int k = 0; k < 6; ++k) {                                      // hull ribs, proud of the plating
+  box(-5.5, -1.3, kDeck_m, 3.5, 2.6, 1.6, Material::kHull);        // deckhouse
+  box(-4.8, -1.0, kDeck_m + 1.6, 2.0, 2.0, 1.0, Material::kRust);  // bridge
+  box(1.8, -0.12, kDeck_m, 0.24, 0.24, 3.0, Material::kRust);      // mast
+  box(-0.8, -1.0, kDeck_m, 1.8, 2.0, 0.35, Material::kHull);       // hatch cover
+  box(2.8, -0.8, kDeck_m, 0.9, 1.6, 0.3, Material::kRust);         // winch housing
+  for (int k = 0; k < 6; ++k) {                                    // hull ribs, proud of the plating
     const double x = -6.0 + 2.0 * k;
     box(x, -kHalfBeam_m - 0.08, kKeel_m, 0.12, 0.08, kDeck_m - kKeel_m, Material::kRust);
     box(x, kHalfBeam_m, kKeel_m, 0.12, 0.08, kDeck_m - kKeel_m, Material::kRust);
@@ -70,7 +73,8 @@ SimScene buildWreck(const SimConfig& config, double path_length_m) {
   // Sea floor: sand with ripples and a scour around the hull, scattered rocks and debris.
   const double extent_x = kHalfLength_m + kStandOff_m + 5.0, extent_y = kHalfBeam_m + kStandOff_m + 5.0;
   const double spacing = 1.6 * config.mesh_spacing_m;  // the sand is smoother than reef or rock
-  const int nx = static_cast<int>(std::ceil(2 * extent_x / spacing)), ny = static_cast<int>(std::ceil(2 * extent_y / spacing));
+  const int nx = static_cast<int>(std::ceil(2 * extent_x / spacing)),
+            ny = static_cast<int>(std::ceil(2 * extent_y / spacing));
   auto floor = [&](double x, double y) {
     return 0.25 * fbm3(x / 3.0, y / 3.0, 0.5, seed + 31, 3) + 0.06 * fbm3(x / 0.4, y / 0.4, 0.5, seed + 32, 3) +
            0.02 * std::sin(2.0 * kPi * (0.9 * x + 0.4 * y) / 0.5);
@@ -105,8 +109,7 @@ SimScene buildWreck(const SimConfig& config, double path_length_m) {
 
   // Counter-clockwise around the hull, which stays on the left; the camera looks left and down.
   const double px = kHalfLength_m + kStandOff_m, py = kHalfBeam_m + kStandOff_m;
-  auto path = std::make_shared<RoundedPath>(
-      std::vector<Eigen::Vector2d>{{-px, -py}, {px, -py}, {px, py}, {-px, py}}, 2.5);
+  auto path = std::make_shared<RoundedPath>(std::vector<Eigen::Vector2d>{{-px, -py}, {px, -py}, {px, py}, {-px, py}}, 2.5);
   const double speed = config.speed_m_s;
   scene.T_world_cam0 = [path, speed](double t_s) {
     const double s = speed * t_s;

@@ -98,7 +98,8 @@ void writeOutputs(const OutputOptions& o, const std::string& json, const std::st
 void checkOutputs(const OutputOptions& o) {
   if (!o.json.empty()) {
     const fs::path parent = fs::path(o.json).parent_path();
-    if (!parent.empty() && !fs::is_directory(parent)) throw Error("--json " + o.json + ": folder " + parent.string() + " does not exist");
+    if (!parent.empty() && !fs::is_directory(parent))
+      throw Error("--json " + o.json + ": folder " + parent.string() + " does not exist");
   }
 }
 
@@ -283,8 +284,9 @@ void registerEvalCommand(CLI::App& app) {
       ->capture_default_str();
   depth->add_option("--max-depth", d->max_depth_m, "Compare only depths up to this, metres (0 = all)")
       ->capture_default_str();
-  depth->add_option("--name-tolerance", d->name_tolerance,
-                    "Pair numeric names (timestamps) this close when no name matches exactly (0 = exact)")
+  depth
+      ->add_option("--name-tolerance", d->name_tolerance,
+                   "Pair numeric names (timestamps) this close when no name matches exactly (0 = exact)")
       ->capture_default_str();
   depth->add_option("--heatmaps", d->heatmaps, "With --plot: error maps of this many frames (best..worst)")
       ->capture_default_str()

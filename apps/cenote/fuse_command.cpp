@@ -69,7 +69,8 @@ pipeline::FusionConfig makeConfig(const FuseOptions& o) {
 Eigen::Matrix3d parseIntrinsics(const std::string& text) {
   std::vector<double> values;
   std::string item;
-  if (!parseNumberList(text, ',', values, &item)) throw Error("--intrinsics '" + text + "': '" + item + "' is not a number");
+  if (!parseNumberList(text, ',', values, &item))
+    throw Error("--intrinsics '" + text + "': '" + item + "' is not a number");
   if (values.size() != 4) throw Error("--intrinsics '" + text + "': expected FX,FY,CX,CY (4 numbers)");
   Eigen::Matrix3d K;
   K << values[0], 0.0, values[2], 0.0, values[1], values[3], 0.0, 0.0, 1.0;
@@ -107,8 +108,8 @@ std::vector<InputFrame> listFrames(const FuseOptions& o, const io::TumTrajectory
     const auto pose = trajectory.lookup(frame.t_s, o.pose_tolerance_s);
     if (!pose) {
       std::ostringstream text;
-      text << "no pose in " << o.trajectory << " within " << o.pose_tolerance_s << " s of t = " << frame.stamp
-           << " (" << (fs::path(o.depth_dir) / (frame.stamp + kDepthSuffix)).string() << ")";
+      text << "no pose in " << o.trajectory << " within " << o.pose_tolerance_s << " s of t = " << frame.stamp << " ("
+           << (fs::path(o.depth_dir) / (frame.stamp + kDepthSuffix)).string() << ")";
       throw Error(text.str());
     }
     frame.T_world_cam = pose->T_world_cam;
@@ -131,8 +132,8 @@ pipeline::DepthFrame loadFrame(const FuseOptions& o, const InputFrame& in, const
   if (fs::exists(conf_path)) {
     frame.confidence = io::readPfm(conf_path);
     if (frame.confidence.type() != CV_32FC1 || frame.confidence.size() != frame.depth.size()) {
-      throw Error(conf_path + " is " + sizeText(frame.confidence) + " (or not single-channel) but " + depth_path +
-                  " is " + sizeText(frame.depth));
+      throw Error(conf_path + " is " + sizeText(frame.confidence) + " (or not single-channel) but " + depth_path + " is " +
+                  sizeText(frame.depth));
     }
   } else {
     frame.confidence = cv::Mat(frame.depth.size(), CV_32F, cv::Scalar(1.0f));
@@ -189,9 +190,9 @@ void run(const FuseOptions& o) {
     ++fused_frames;
   }
   ply.close();
-  std::cout << "fused " << fused_frames << " of " << frames.size() << " frames (" << config.num_views
-            << " views), " << ply.count() << " points written to " << (fs::path(o.out) / "points.ply").string()
-            << ", fusion " << fusion_ms / std::max<size_t>(1, frames.size()) << " ms/frame\n";
+  std::cout << "fused " << fused_frames << " of " << frames.size() << " frames (" << config.num_views << " views), "
+            << ply.count() << " points written to " << (fs::path(o.out) / "points.ply").string() << ", fusion "
+            << fusion_ms / std::max<size_t>(1, frames.size()) << " ms/frame\n";
 }
 
 }  // namespace
@@ -199,8 +200,7 @@ void run(const FuseOptions& o) {
 void registerFuseCommand(CLI::App& app) {
   auto options = std::make_shared<FuseOptions>();
   CLI::App* cmd = app.add_subcommand("fuse", "Fuse a folder of depth maps with poses into cleaner depth and points");
-  cmd->add_option("--depth-dir", options->depth_dir, "Folder of <timestamp>.depth.pfm (+ optional .conf.pfm)")
-      ->required();
+  cmd->add_option("--depth-dir", options->depth_dir, "Folder of <timestamp>.depth.pfm (+ optional .conf.pfm)")->required();
   cmd->add_option("--trajectory", options->trajectory, "TUM trajectory (t tx ty tz qx qy qz qw), camera to world")
       ->required();
   cmd->add_option("--intrinsics", options->intrinsics, "Pinhole intrinsics FX,FY,CX,CY in pixels")->required();

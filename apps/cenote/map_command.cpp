@@ -97,17 +97,18 @@ void runIntegrate(const IntegrateOptions& o) {
   saveMap(map, o.out, o.frame_id);
   const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const MapStats s = map.stats();
-  std::printf("integrated %zu scans, %zu points in %.3f s (%.1f ms/scan integrating); %llu occupied, %llu free voxels; wrote %s (%.3f s in all)\n",
-              scans, points, integrate_s, scans ? 1000.0 * integrate_s / scans : 0.0,
-              static_cast<unsigned long long>(s.occupied), static_cast<unsigned long long>(s.free), o.out.c_str(), total_s);
+  std::printf(
+      "integrated %zu scans, %zu points in %.3f s (%.1f ms/scan integrating); %llu occupied, %llu free voxels; wrote %s (%.3f s in all)\n",
+      scans, points, integrate_s, scans ? 1000.0 * integrate_s / scans : 0.0, static_cast<unsigned long long>(s.occupied),
+      static_cast<unsigned long long>(s.free), o.out.c_str(), total_s);
 }
 
 void printInfo(const std::string& path) {
   const auto map = loadMap(path);
   const MapStats s = map->stats();
   const MapConfig& c = map->config();
-  std::printf("map %s\n  resolution: %g m\n  sensor model: hit %g, miss %g, clamping [%g, %g], occupied >= %g\n", path.c_str(),
-              s.voxel_size_m, c.prob_hit, c.prob_miss, c.clamp_min, c.clamp_max, c.occupied_threshold);
+  std::printf("map %s\n  resolution: %g m\n  sensor model: hit %g, miss %g, clamping [%g, %g], occupied >= %g\n",
+              path.c_str(), s.voxel_size_m, c.prob_hit, c.prob_miss, c.clamp_min, c.clamp_max, c.occupied_threshold);
   if (s.bounds.isEmpty()) {
     std::printf("  empty\n");
   } else {
@@ -127,7 +128,8 @@ struct ExportOptions {
 // --points takes PLY or PCD, as the extension says.
 MapFileFormat exportFormat(const std::string& option, const std::string& path, MapFileFormat format) {
   try {
-    if (format == MapFileFormat::kPointsPly && mapFileFormatOf(path) == MapFileFormat::kPointsPcd) return MapFileFormat::kPointsPcd;
+    if (format == MapFileFormat::kPointsPly && mapFileFormatOf(path) == MapFileFormat::kPointsPcd)
+      return MapFileFormat::kPointsPcd;
     return resolveMapFileFormat(path, format);
   } catch (const Error& e) {
     throw Error(option + " " + path + ": " + e.what());
@@ -135,9 +137,11 @@ MapFileFormat exportFormat(const std::string& option, const std::string& path, M
 }
 
 void runExport(const ExportOptions& o) {
-  const std::pair<const char*, MapFileFormat> kinds[] = {
-      {"--mesh", MapFileFormat::kMeshPly}, {"--points", MapFileFormat::kPointsPly}, {"--bt", MapFileFormat::kBt},
-      {"--ot", MapFileFormat::kOt},        {"--vdb", MapFileFormat::kVdb}};
+  const std::pair<const char*, MapFileFormat> kinds[] = {{"--mesh", MapFileFormat::kMeshPly},
+                                                         {"--points", MapFileFormat::kPointsPly},
+                                                         {"--bt", MapFileFormat::kBt},
+                                                         {"--ot", MapFileFormat::kOt},
+                                                         {"--vdb", MapFileFormat::kVdb}};
   const std::string* paths[] = {&o.mesh, &o.points, &o.bt, &o.ot, &o.vdb};
   std::vector<std::pair<std::string, MapFileFormat>> outputs;
   for (size_t i = 0; i < std::size(kinds); ++i) {
@@ -161,9 +165,7 @@ void runExport(const ExportOptions& o) {
         std::printf("wrote %s: %zu occupied voxel centres\n", path.c_str(), centres.size());
         break;
       }
-      default:
-        saveMap(*map, path);
-        std::printf("wrote %s\n", path.c_str());
+      default: saveMap(*map, path); std::printf("wrote %s\n", path.c_str());
     }
   }
 }
@@ -190,8 +192,8 @@ void printDistances(const OccupancyMap& map, const QueryOptions& o) {
     if (!d.within_max) {
       std::printf("distance %s: beyond %.3f m (no occupied voxel nearer)\n", o.distances[i].c_str(), d.distance_m);
     } else {
-      std::printf("distance %s: %.3f m, gradient %.3f,%.3f,%.3f\n", o.distances[i].c_str(), d.distance_m,
-                  d.gradient.x(), d.gradient.y(), d.gradient.z());
+      std::printf("distance %s: %.3f m, gradient %.3f,%.3f,%.3f\n", o.distances[i].c_str(), d.distance_m, d.gradient.x(),
+                  d.gradient.y(), d.gradient.z());
     }
   }
 }
@@ -280,7 +282,8 @@ void registerMapCommand(CLI::App& app) {
   CLI::App* exp = map->add_subcommand("export", "Convert a map: mesh or voxel PLY, voxel PCD, .bt, .ot, .vdb");
   exp->add_option("map", ex->map, "map file (.vdb, .bt, .ot)")->required();
   exp->add_option("--mesh", ex->mesh, "triangle mesh of occupied space, PLY with vertex colours (.ply, .mesh.ply)");
-  exp->add_option("--points", ex->points, "occupied voxel centres with colours: PLY (.ply, .points.ply) or PCL's PCD (.pcd)");
+  exp->add_option("--points", ex->points,
+                  "occupied voxel centres with colours: PLY (.ply, .points.ply) or PCL's PCD (.pcd)");
   exp->add_option("--bt", ex->bt, "OctoMap binary tree (.bt)");
   exp->add_option("--ot", ex->ot, "OctoMap colour tree (.ot)");
   exp->add_option("--vdb", ex->vdb, "OpenVDB file (.vdb)");
@@ -292,8 +295,10 @@ void registerMapCommand(CLI::App& app) {
   query->add_option("--state", q->states, "X,Y,Z: state and probability of the voxel (repeatable)");
   query->add_option("--segment", q->segments, "X,Y,Z,X,Y,Z[,RADIUS]: first occupied voxel (repeatable)");
   query->add_flag("--stop-at-unknown", q->stop_at_unknown, "segments end at the first unknown voxel");
-  query->add_option("--distance", q->distances, "X,Y,Z: distance to the nearest occupied voxel, with gradient (repeatable)");
-  query->add_option("--max-distance", q->max_distance_m, "distance field's maximum distance in metres (map.max_distance_m)");
+  query->add_option("--distance", q->distances,
+                    "X,Y,Z: distance to the nearest occupied voxel, with gradient (repeatable)");
+  query->add_option("--max-distance", q->max_distance_m,
+                    "distance field's maximum distance in metres (map.max_distance_m)");
   query->add_flag("--frontiers", q->frontiers, "frontier clusters: free voxels next to unknown, nearest first");
   query->add_option("--position", q->position, "X,Y,Z: position the frontiers are sorted by (default 0,0,0)");
   query->add_option("--frontier-min-voxels", q->frontier_min_voxels, "smaller frontier clusters are dropped");

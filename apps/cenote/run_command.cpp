@@ -72,8 +72,8 @@ void run(const RunOptions& o) {
       if (!batch.empty()) map->integrate(batch);
     };
   }
-  const std::unique_ptr<pipeline::StereoDataset> dataset =
-      pipeline::openDataset(o.dataset, pipeline::parseDatasetFormat(o.format));
+  const std::unique_ptr<pipeline::StereoDataset> dataset = pipeline::openDataset(o.dataset,
+                                                                                 pipeline::parseDatasetFormat(o.format));
   const pipeline::CameraTrajectory camera = pipeline::loadCameraTrajectory(
       *dataset, {o.trajectory, o.trajectory_format, o.trajectory_times, runner.config().run.pose_frame});
   const io::Trajectory& trajectory = camera.trajectory;
@@ -85,8 +85,8 @@ void run(const RunOptions& o) {
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
   ProgressBar bar("cenote run");
-  pipeline::RunReport report =
-      runner.run(*dataset, trajectory, o.out, g_stop, sink, [&bar](size_t done, size_t total) { bar.update(done, total); });
+  pipeline::RunReport report = runner.run(*dataset, trajectory, o.out, g_stop, sink,
+                                          [&bar](size_t done, size_t total) { bar.update(done, total); });
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
 

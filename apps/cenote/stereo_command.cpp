@@ -61,9 +61,8 @@ void run(const StereoOptions& o) {
     focal_px = pair.geometry.fx;
     baseline_m = pair.geometry.baseline_m;
   } else if (left.size() != right.size()) {
-    throw Error("stereo: right image " + o.right + " is " + std::to_string(right.cols) + "x" +
-                std::to_string(right.rows) + " but left image " + o.left + " is " + std::to_string(left.cols) +
-                "x" + std::to_string(left.rows));
+    throw Error("stereo: right image " + o.right + " is " + std::to_string(right.cols) + "x" + std::to_string(right.rows) +
+                " but left image " + o.left + " is " + std::to_string(left.cols) + "x" + std::to_string(left.rows));
   }
   if (!o.out_depth.empty() && !(focal_px > 0.0 && baseline_m > 0.0)) {
     throw Error("stereo: --out-depth needs --calib (or --focal-px and --baseline-m)");
@@ -88,8 +87,8 @@ void run(const StereoOptions& o) {
   }
   if (!o.out_preview.empty()) {
     const auto& c = matcher.config();
-    io::writeImage(o.out_preview, io::colorizeMap(result.disparity, c.min_disparity_px,
-                                                              c.min_disparity_px + c.num_disparities));
+    io::writeImage(o.out_preview,
+                   io::colorizeMap(result.disparity, c.min_disparity_px, c.min_disparity_px + c.num_disparities));
   }
   const int valid = cv::countNonZero(result.confidence > 0.0f);
   std::cout << "disparity " << left.cols << "x" << left.rows << ", valid "
@@ -103,14 +102,17 @@ void registerStereoCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("stereo", "Disparity, confidence and depth of one stereo pair");
   cmd->add_option("--left", options->left, "Left image")->required();
   cmd->add_option("--right", options->right, "Right image")->required();
-  cmd->add_option("--calib", options->calib, "Stereo calibration: OpenCV YAML, EuRoC cam0/sensor.yaml (+ cam1), KITTI calib.txt (raw pairs are rectified)");
+  cmd->add_option(
+      "--calib", options->calib,
+      "Stereo calibration: OpenCV YAML, EuRoC cam0/sensor.yaml (+ cam1), KITTI calib.txt (raw pairs are rectified)");
   cmd->add_option("--config", options->config, "YAML file with a `stereo:` section");
   cmd->add_option("--disparities", options->disparities, "Number of disparities (multiple of 16)");
   cmd->add_option("--min-disparity", options->min_disparity, "First disparity searched");
   cmd->add_option("--cost", options->cost, "Matching cost")->check(CLI::IsMember({"sad", "census"}));
   cmd->add_option("--window", options->window, "Cost window side (SAD 1..9 odd, census 3 or 5)");
   cmd->add_option("--paths", options->paths, "SGM paths")->check(CLI::IsMember({4, 8}));
-  cmd->add_option("--search", options->search, "Disparities searched: full range, or a band around a match of the shrunk pair")
+  cmd->add_option("--search", options->search,
+                  "Disparities searched: full range, or a band around a match of the shrunk pair")
       ->check(CLI::IsMember({"full", "band"}));
   cmd->add_flag("--lr-check", options->lr_check, "Left-right consistency check");
   cmd->add_option("--focal-px", options->focal_px, "Focal length for depth without --calib");

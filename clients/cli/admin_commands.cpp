@@ -42,8 +42,8 @@ void registerStats(CLI::App& app, Connection& connection) {
                 static_cast<ull>(s.frames_received), static_cast<ull>(s.frames_processed),
                 static_cast<ull>(s.frames_skipped), static_cast<ull>(s.frames_rejected));
     std::printf("batches_integrated: %llu\nposes_received: %llu\nvoxels: %llu occupied, %llu free\n",
-                static_cast<ull>(s.batches_integrated), static_cast<ull>(s.poses_received),
-                static_cast<ull>(s.occupied), static_cast<ull>(s.free));
+                static_cast<ull>(s.batches_integrated), static_cast<ull>(s.poses_received), static_cast<ull>(s.occupied),
+                static_cast<ull>(s.free));
     std::printf("memory: map %.2f MB, process %.2f MB\nmap_version: %llu\nsubscribers: %llu\n",
                 static_cast<double>(s.map_memory_bytes) / 1e6, static_cast<double>(s.process_memory_bytes) / 1e6,
                 static_cast<ull>(s.map_version), static_cast<ull>(s.subscribers));
@@ -53,8 +53,8 @@ void registerStats(CLI::App& app, Connection& connection) {
       std::printf("last_snapshot: %.1f s ago\n", s.last_snapshot_age_s);
     }
     for (const auto& stage : s.stages) {
-      std::printf("stage %s: median %.3f ms, p95 %.3f ms, %llu runs\n", stage.name.c_str(), stage.median_ms,
-                  stage.p95_ms, static_cast<ull>(stage.count));
+      std::printf("stage %s: median %.3f ms, p95 %.3f ms, %llu runs\n", stage.name.c_str(), stage.median_ms, stage.p95_ms,
+                  static_cast<ull>(stage.count));
     }
     for (const auto& m : s.methods) {
       std::printf("call %s: %llu calls, %llu errors, p50 %.3f ms, p99 %.3f ms\n", m.method.c_str(),
@@ -71,9 +71,11 @@ void registerSnapshot(CLI::App& app, Connection& connection) {
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("snapshot", "Write the map on the server, or --download it to a local file");
-  cmd->add_option("path", o->path, "File name under the server's snapshot directory; its extension names the format (" +
-                                       mapping::mapFileFormatTable() + ")");
-  auto* download = cmd->add_option("--download", o->download, "Local file to stream the map into instead (format as for PATH)");
+  cmd->add_option("path", o->path,
+                  "File name under the server's snapshot directory; its extension names the format (" +
+                      mapping::mapFileFormatTable() + ")");
+  auto* download = cmd->add_option("--download", o->download,
+                                   "Local file to stream the map into instead (format as for PATH)");
   cmd->add_option("--format", o->format,
                   "vdb, bt, ot, mesh-ply, points-ply, points-pcd: must agree with the extension (needed for a plain .ply)");
   download->excludes(cmd->get_option("path"));
@@ -159,8 +161,8 @@ void registerEdits(CLI::App& app, Connection& connection) {
   clear_box->add_option("min", (*box)[0], "X,Y,Z")->required();
   clear_box->add_option("max", (*box)[1], "X,Y,Z")->required();
   clear_box->callback([box, &connection] {
-    printChange("clear-box", connection.client().clearBox({parsePoint((*box)[0], "clear-box MIN"),
-                                                           parsePoint((*box)[1], "clear-box MAX")}));
+    printChange("clear-box", connection.client().clearBox(
+                                 {parsePoint((*box)[0], "clear-box MIN"), parsePoint((*box)[1], "clear-box MAX")}));
   });
 
   struct Sphere {
@@ -172,8 +174,8 @@ void registerEdits(CLI::App& app, Connection& connection) {
   clear_sphere->add_option("centre", sphere->centre, "X,Y,Z")->required();
   clear_sphere->add_option("radius", sphere->radius_m, "Metres")->required();
   clear_sphere->callback([sphere, &connection] {
-    printChange("clear-sphere", connection.client().clearSphere(parsePoint(sphere->centre, "clear-sphere CENTRE"),
-                                                                sphere->radius_m));
+    printChange("clear-sphere",
+                connection.client().clearSphere(parsePoint(sphere->centre, "clear-sphere CENTRE"), sphere->radius_m));
   });
 
   auto keep = std::make_shared<Sphere>();

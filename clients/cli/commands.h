@@ -17,8 +17,8 @@ struct Connection {
   std::string token;
   std::string token_file;
   double deadline_s = 10.0;
-  bool tls = false;            // TLS with the system's roots
-  std::string tls_ca;          // TLS with this PEM root (implies tls)
+  bool tls = false;               // TLS with the system's roots
+  std::string tls_ca;             // TLS with this PEM root (implies tls)
   std::string tls_cert, tls_key;  // client certificate and key for mutual TLS (imply tls)
   // Made at the first call, after parsing. @throws CliError for an unreadable token file.
   client::MapClient& client();

@@ -177,8 +177,8 @@ void registerInfo(CLI::App& app, Connection& connection) {
                 static_cast<unsigned long long>(info.free));
     std::printf("prob_hit: %g\nprob_miss: %g\nclamp: %g %g\noccupied_threshold: %g\nmax_range_m: %g\n"
                 "max_distance_m: %g\nmap_version: %llu\n",
-                info.prob_hit, info.prob_miss, info.clamp_min, info.clamp_max, info.occupied_threshold,
-                info.max_range_m, info.max_distance_m, static_cast<unsigned long long>(info.map_version));
+                info.prob_hit, info.prob_miss, info.clamp_min, info.clamp_max, info.occupied_threshold, info.max_range_m,
+                info.max_distance_m, static_cast<unsigned long long>(info.map_version));
   });
 }
 

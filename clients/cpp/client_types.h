@@ -63,8 +63,8 @@ struct Collision {
 };
 
 struct DistanceResult {
-  double distance_m = 0.0;                              // max_distance_m when nothing is nearer
-  Eigen::Vector3d gradient = Eigen::Vector3d::Zero();   // unit, away from the obstacle; zero at max
+  double distance_m = 0.0;                             // max_distance_m when nothing is nearer
+  Eigen::Vector3d gradient = Eigen::Vector3d::Zero();  // unit, away from the obstacle; zero at max
   bool within_max = false;
 };
 
@@ -79,8 +79,8 @@ struct Frontier {
 
 struct FrontierQuery {
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // clusters come sorted by distance from here
-  Box region;               // only clusters whose centroid lies in it; empty: everywhere
-  uint32_t max_clusters = 0;  // 0: all
+  Box region;                                            // only clusters whose centroid lies in it; empty: everywhere
+  uint32_t max_clusters = 0;                             // 0: all
 };
 
 // Voxels of a box (ExtractVoxels): parallel arrays, one entry per voxel.
@@ -243,7 +243,7 @@ struct MapUpdate {
   uint64_t sequence = 0;  // the map's version after this change
   bool snapshot = false;  // part of a full-map snapshot
   bool snapshot_complete = false;
-  bool resync = false;    // this snapshot replaces everything the subscriber had
+  bool resync = false;  // this snapshot replaces everything the subscriber had
   Box changed_bounds;
   double voxel_size_m = 0.0;
   std::vector<UpdateBlock> blocks;

@@ -91,8 +91,7 @@ class MapClient {
   // ---- Updates ----
   // Calls on_update for every MapUpdate (the full map first) from a background thread, until
   // the Subscription is cancelled or destroyed, or the stream ends.
-  std::unique_ptr<Subscription> subscribe(const SubscribeOptions& options,
-                                          std::function<void(const MapUpdate&)> on_update);
+  std::unique_ptr<Subscription> subscribe(const SubscribeOptions& options, std::function<void(const MapUpdate&)> on_update);
   // The same on the calling thread: returns when on_update returns false (cancelling the stream)
   // or the server ends the stream. @throws RpcError when the stream fails.
   void watch(const SubscribeOptions& options, const std::function<bool(const MapUpdate&)>& on_update);

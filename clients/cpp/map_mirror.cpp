@@ -91,9 +91,9 @@ std::vector<std::pair<Eigen::Vector3i, VoxelState>> MapMirror::knownVoxels() con
     for (int offset = 0; offset < 512; ++offset) {
       const VoxelState s = states[static_cast<size_t>(offset)];
       if (s == VoxelState::kUnknown) continue;
-      out.emplace_back(Eigen::Vector3i(block.x() * 8 + (offset >> 6), block.y() * 8 + ((offset >> 3) & 7),
-                                       block.z() * 8 + (offset & 7)),
-                       s);
+      out.emplace_back(
+          Eigen::Vector3i(block.x() * 8 + (offset >> 6), block.y() * 8 + ((offset >> 3) & 7), block.z() * 8 + (offset & 7)),
+          s);
     }
   }
   return out;

@@ -204,7 +204,8 @@ void Subscription::wait() {
 void MapClient::watch(const SubscribeOptions& options, const std::function<bool(const MapUpdate&)>& on_update) {
   grpc::ClientContext context;
   impl_->prepare(context, 0.0);
-  std::unique_ptr<grpc::ClientReader<v1::MapUpdate>> reader = impl_->updates->Subscribe(&context, subscribeRequest(options));
+  std::unique_ptr<grpc::ClientReader<v1::MapUpdate>> reader = impl_->updates->Subscribe(&context,
+                                                                                        subscribeRequest(options));
   v1::MapUpdate message;
   MapUpdate update;
   bool stopped = false;

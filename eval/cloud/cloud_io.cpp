@@ -36,11 +36,11 @@ int sizeOf(ScalarType t) {
 
 bool parsePlyType(const std::string& name, ScalarType& t) {
   static const std::pair<const char*, ScalarType> kNames[] = {
-      {"char", ScalarType::kInt8},     {"int8", ScalarType::kInt8},       {"uchar", ScalarType::kUint8},
-      {"uint8", ScalarType::kUint8},   {"short", ScalarType::kInt16},     {"int16", ScalarType::kInt16},
-      {"ushort", ScalarType::kUint16}, {"uint16", ScalarType::kUint16},   {"int", ScalarType::kInt32},
-      {"int32", ScalarType::kInt32},   {"uint", ScalarType::kUint32},     {"uint32", ScalarType::kUint32},
-      {"float", ScalarType::kFloat32}, {"float32", ScalarType::kFloat32}, {"double", ScalarType::kFloat64},
+      {"char", ScalarType::kInt8},      {"int8", ScalarType::kInt8},       {"uchar", ScalarType::kUint8},
+      {"uint8", ScalarType::kUint8},    {"short", ScalarType::kInt16},     {"int16", ScalarType::kInt16},
+      {"ushort", ScalarType::kUint16},  {"uint16", ScalarType::kUint16},   {"int", ScalarType::kInt32},
+      {"int32", ScalarType::kInt32},    {"uint", ScalarType::kUint32},     {"uint32", ScalarType::kUint32},
+      {"float", ScalarType::kFloat32},  {"float32", ScalarType::kFloat32}, {"double", ScalarType::kFloat64},
       {"float64", ScalarType::kFloat64}};
   for (const auto& [n, type] : kNames) {
     if (name == n) {
@@ -58,14 +58,46 @@ double decode(const char* src, ScalarType t, bool swap) {
   std::memcpy(bytes, src, n);
   if (swap) std::reverse(bytes, bytes + n);
   switch (t) {
-    case ScalarType::kInt8: { int8_t v; std::memcpy(&v, bytes, 1); return v; }
-    case ScalarType::kUint8: { uint8_t v; std::memcpy(&v, bytes, 1); return v; }
-    case ScalarType::kInt16: { int16_t v; std::memcpy(&v, bytes, 2); return v; }
-    case ScalarType::kUint16: { uint16_t v; std::memcpy(&v, bytes, 2); return v; }
-    case ScalarType::kInt32: { int32_t v; std::memcpy(&v, bytes, 4); return v; }
-    case ScalarType::kUint32: { uint32_t v; std::memcpy(&v, bytes, 4); return v; }
-    case ScalarType::kFloat32: { float v; std::memcpy(&v, bytes, 4); return v; }
-    case ScalarType::kFloat64: { double v; std::memcpy(&v, bytes, 8); return v; }
+    case ScalarType::kInt8: {
+      int8_t v;
+      std::memcpy(&v, bytes, 1);
+      return v;
+    }
+    case ScalarType::kUint8: {
+      uint8_t v;
+      std::memcpy(&v, bytes, 1);
+      return v;
+    }
+    case ScalarType::kInt16: {
+      int16_t v;
+      std::memcpy(&v, bytes, 2);
+      return v;
+    }
+    case ScalarType::kUint16: {
+      uint16_t v;
+      std::memcpy(&v, bytes, 2);
+      return v;
+    }
+    case ScalarType::kInt32: {
+      int32_t v;
+      std::memcpy(&v, bytes, 4);
+      return v;
+    }
+    case ScalarType::kUint32: {
+      uint32_t v;
+      std::memcpy(&v, bytes, 4);
+      return v;
+    }
+    case ScalarType::kFloat32: {
+      float v;
+      std::memcpy(&v, bytes, 4);
+      return v;
+    }
+    case ScalarType::kFloat64: {
+      double v;
+      std::memcpy(&v, bytes, 8);
+      return v;
+    }
   }
   return 0.0;
 }
@@ -195,7 +227,8 @@ Cloud readPlyCloud(const std::string& path) {
   }
   if (!ended) throw Error(path + ": PLY header has no end_header");
   if (format.empty()) throw Error(path + ": PLY header has no format line");
-  const auto vertex = std::find_if(elements.begin(), elements.end(), [](const PlyElement& e) { return e.name == "vertex"; });
+  const auto vertex = std::find_if(elements.begin(), elements.end(),
+                                   [](const PlyElement& e) { return e.name == "vertex"; });
   if (vertex == elements.end()) throw Error(path + ": PLY file has no 'vertex' element");
   int ix = -1, iy = -1, iz = -1;
   for (size_t i = 0; i < vertex->properties.size(); ++i) {
@@ -219,8 +252,9 @@ Cloud readPlyCloud(const std::string& path) {
         for (size_t k = 0; k < e->properties.size(); ++k) {
           double v = 0.0;
           auto fail = [&] {
-            throw Error(path + ": PLY " + e->name + " " + std::to_string(i) + " of " + std::to_string(e->count) +
-                        (tokens.bad().empty() ? ": file ends early (truncated)" : ": '" + tokens.bad() + "' is not a number"));
+            throw Error(
+                path + ": PLY " + e->name + " " + std::to_string(i) + " of " + std::to_string(e->count) +
+                (tokens.bad().empty() ? ": file ends early (truncated)" : ": '" + tokens.bad() + "' is not a number"));
           };
           if (!tokens.next(v)) fail();
           if (e->properties[k].is_list) {
@@ -312,7 +346,8 @@ Cloud readCloud(const std::string& path) {
   std::string first;
   std::getline(in, first);
   if (first.rfind("ply", 0) == 0) return readPlyCloud(path);
-  if (first.rfind("#", 0) == 0 || first.rfind("VERSION", 0) == 0 || first.rfind("FIELDS", 0) == 0) return readPcdCloud(path);
+  if (first.rfind("#", 0) == 0 || first.rfind("VERSION", 0) == 0 || first.rfind("FIELDS", 0) == 0)
+    return readPcdCloud(path);
   throw Error(path + ": neither a PLY nor a PCD file (by extension and first line)");
 }
 

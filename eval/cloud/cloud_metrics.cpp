@@ -21,8 +21,8 @@ struct PointsAdaptor {
   }
 };
 
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>, PointsAdaptor, 3,
-                                                   uint32_t>;
+using KdTree =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>, PointsAdaptor, 3, uint32_t>;
 constexpr size_t kLeafSize = 10;
 
 // Fraction of sorted `values` strictly below t.

@@ -36,13 +36,13 @@ struct CloudEvaluation {
   double accuracy_m = 0.0, completeness_m = 0.0;
   double accuracy_median_m = 0.0, completeness_median_m = 0.0;
   double precision = 0.0, recall = 0.0, fscore = 0.0;  // at threshold_m
-  std::vector<CurvePoint> curve;                        // over curve thresholds, increasing
-  LogHistogram source_histogram, target_histogram;      // of the two distance sets
+  std::vector<CurvePoint> curve;                       // over curve thresholds, increasing
+  LogHistogram source_histogram, target_histogram;     // of the two distance sets
 };
 
 struct CloudEvaluationOptions {
-  double threshold_m = 0.1;     // the paper's 0.1 m
-  double curve_max_m = 0.0;     // curve from curve_max_m / curve_steps to curve_max_m; 0: 5 x threshold
+  double threshold_m = 0.1;  // the paper's 0.1 m
+  double curve_max_m = 0.0;  // curve from curve_max_m / curve_steps to curve_max_m; 0: 5 x threshold
   int curve_steps = 50;
 };
 

@@ -34,9 +34,8 @@ std::vector<Eigen::Vector3f> voxelDownsample(const std::vector<Eigen::Vector3f>&
     }
     keyed[i].index = static_cast<uint32_t>(i);
   }
-  std::sort(keyed.begin(), keyed.end(), [](const Keyed& a, const Keyed& b) {
-    return a.key != b.key ? a.key < b.key : a.index < b.index;
-  });
+  std::sort(keyed.begin(), keyed.end(),
+            [](const Keyed& a, const Keyed& b) { return a.key != b.key ? a.key < b.key : a.index < b.index; });
   std::vector<Eigen::Vector3f> result;
   for (size_t begin = 0; begin < keyed.size();) {
     size_t end = begin;

@@ -42,8 +42,8 @@ cv::Mat readColmapArray(const std::string& path) {
   const long channels = parseField(in, path, "channels");
   if (width <= 0 || height <= 0 || channels <= 0 || width > kMaxSide || height > kMaxSide || channels > kMaxChannels) {
     throw Error(path + ": COLMAP array header " + std::to_string(width) + "&" + std::to_string(height) + "&" +
-                std::to_string(channels) + "& is out of range (sides 1.." + std::to_string(kMaxSide) +
-                ", channels 1.." + std::to_string(kMaxChannels) + ")");
+                std::to_string(channels) + "& is out of range (sides 1.." + std::to_string(kMaxSide) + ", channels 1.." +
+                std::to_string(kMaxChannels) + ")");
   }
   const size_t plane = static_cast<size_t>(width) * height;
   std::vector<float> data(plane * channels);
@@ -54,8 +54,8 @@ cv::Mat readColmapArray(const std::string& path) {
                 std::to_string(channels) + " floats announced, " + std::to_string(got) + " bytes of data)");
   }
   if (in.peek() != std::char_traits<char>::eof()) {
-    throw Error(path + ": COLMAP array has data past the " + std::to_string(width) + "x" + std::to_string(height) +
-                "x" + std::to_string(channels) + " floats its header announces");
+    throw Error(path + ": COLMAP array has data past the " + std::to_string(width) + "x" + std::to_string(height) + "x" +
+                std::to_string(channels) + " floats its header announces");
   }
   cv::Mat result(static_cast<int>(height), static_cast<int>(width), CV_32FC(static_cast<int>(channels)));
   for (long y = 0; y < height; ++y) {
@@ -68,7 +68,8 @@ cv::Mat readColmapArray(const std::string& path) {
 }
 
 void writeColmapArray(const std::string& path, const cv::Mat& array) {
-  if (array.depth() != CV_32F || array.empty()) throw Error("writeColmapArray " + path + ": array must be non-empty float32");
+  if (array.depth() != CV_32F || array.empty())
+    throw Error("writeColmapArray " + path + ": array must be non-empty float32");
   const int channels = array.channels();
   const size_t plane = static_cast<size_t>(array.cols) * array.rows;
   std::vector<float> data(plane * channels);

@@ -53,8 +53,8 @@ FrameDepthError compareFiles(const DepthFile& est_file, const DepthFile& ref_fil
   cv::Mat est = loadDepthMap(est_file);
   cv::Mat ref = loadDepthMap(ref_file);
   if (est.size() != ref.size()) {
-    throw Error("'" + name + "': estimate " + est_file.path + " is " + sizeText(est) + " but reference " +
-                ref_file.path + " is " + sizeText(ref));
+    throw Error("'" + name + "': estimate " + est_file.path + " is " + sizeText(est) + " but reference " + ref_file.path +
+                " is " + sizeText(ref));
   }
   prepare(est, 1.0, o.max_depth_m);
   prepare(ref, o.reference_scale, o.max_depth_m);
@@ -191,8 +191,8 @@ DepthEvaluation evaluateDepthFolders(const std::string& estimate_dir, const std:
     if (!matched_references.count(key)) evaluation.only_in_reference.push_back(key);
   }
   if (evaluation.frames.empty()) {
-    throw Error("no image name is in both " + estimate_dir + " (e.g. " + examples(estimates) + ") and " +
-                reference_dir + " (e.g. " + examples(references) + ")");
+    throw Error("no image name is in both " + estimate_dir + " (e.g. " + examples(estimates) + ") and " + reference_dir +
+                " (e.g. " + examples(references) + ")");
   }
   summarizeFrames(evaluation);
   return evaluation;

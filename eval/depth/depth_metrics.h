@@ -21,12 +21,12 @@ namespace cenote::eval {
 struct FrameDepthError {
   std::string name;
   DepthFile estimate_file, reference_file;  // where the maps came from (empty for compareDepthMaps)
-  int64_t estimate_px = 0;    // valid in the estimate
-  int64_t reference_px = 0;   // valid in the reference
-  int64_t common_px = 0;      // valid in both: the pixels compared
-  double sum_abs_m = 0.0;     // sum of |error| over common pixels
-  double mean_abs_m = 0.0;    // NaN when no common pixel
-  double median_abs_m = 0.0;  // NaN when no common pixel
+  int64_t estimate_px = 0;                  // valid in the estimate
+  int64_t reference_px = 0;                 // valid in the reference
+  int64_t common_px = 0;                    // valid in both: the pixels compared
+  double sum_abs_m = 0.0;                   // sum of |error| over common pixels
+  double mean_abs_m = 0.0;                  // NaN when no common pixel
+  double median_abs_m = 0.0;                // NaN when no common pixel
   double coverage() const { return reference_px > 0 ? static_cast<double>(common_px) / reference_px : 0.0; }
 };
 
@@ -50,11 +50,11 @@ struct DepthEvaluation {
   std::vector<FrameDepthError> frames;         // matched frames, sorted by name
   std::vector<std::string> only_in_estimate;   // names without a reference (not evaluated)
   std::vector<std::string> only_in_reference;  // names without an estimate (not evaluated)
-  double mae_m = 0.0;       // NaN when no pixel was compared
-  double mom_m = 0.0;       // NaN when no frame had a common pixel
-  double coverage = 0.0;    // in [0, 1]
+  double mae_m = 0.0;                          // NaN when no pixel was compared
+  double mom_m = 0.0;                          // NaN when no frame had a common pixel
+  double coverage = 0.0;                       // in [0, 1]
   int64_t common_px = 0;
-  LogHistogram histogram;   // of |error| over every common pixel
+  LogHistogram histogram;  // of |error| over every common pixel
 };
 
 // Matches the two folders' depth maps by name (depth_folder.h) and evaluates every pair.

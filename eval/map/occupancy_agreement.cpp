@@ -40,7 +40,9 @@ OccupancyAgreement summarizeAgreement(const OccupancyConfusion& c) {
 std::string toJson(const OccupancyAgreement& a, const OccupancyConfusion& c, const std::string& estimate,
                    const std::string& reference, double voxel_size_m) {
   nlohmann::ordered_json j;
-  const auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
+  const auto number = [](double v) {
+    return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+  };
   j["kind"] = "map";
   j["units"] = "fractions; voxel_size in metres";
   j["inputs"] = {{"estimate", estimate}, {"reference", reference}};
@@ -57,7 +59,8 @@ std::string toJson(const OccupancyAgreement& a, const OccupancyConfusion& c, con
   const char* names[] = {"unknown", "free", "occupied"};
   nlohmann::ordered_json table;
   for (int e = 0; e < 3; ++e) {
-    for (int r = 0; r < 3; ++r) table[std::string("estimate_") + names[e]][std::string("reference_") + names[r]] = c.counts[e][r];
+    for (int r = 0; r < 3; ++r)
+      table[std::string("estimate_") + names[e]][std::string("reference_") + names[r]] = c.counts[e][r];
   }
   j["confusion"] = table;
   return j.dump(2) + "\n";

@@ -21,9 +21,7 @@ enum class Occupancy : uint8_t { kUnknown = 0, kFree = 1, kOccupied = 2 };
 
 struct OccupancyConfusion {
   std::array<std::array<int64_t, 3>, 3> counts{};  // [estimate state][reference state]
-  void add(Occupancy estimate, Occupancy reference) {
-    ++counts[static_cast<int>(estimate)][static_cast<int>(reference)];
-  }
+  void add(Occupancy estimate, Occupancy reference) { ++counts[static_cast<int>(estimate)][static_cast<int>(reference)]; }
   int64_t at(Occupancy estimate, Occupancy reference) const {
     return counts[static_cast<int>(estimate)][static_cast<int>(reference)];
   }

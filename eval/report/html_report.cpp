@@ -124,8 +124,8 @@ std::string metricsTable(const Json& j, const std::string& file) {
     html += row("accuracy (source to target)", fmt(v("accuracy"), " m")) +
             row("completeness (target to source)", fmt(v("completeness"), " m")) +
             row("precision" + at, percent(v("precision"))) + row("recall" + at, percent(v("recall"))) +
-            row("F-score" + at, percent(v("fscore"))) + row("points (source / target)",
-                                                              fmt(v("source_points")) + " / " + fmt(v("target_points")));
+            row("F-score" + at, percent(v("fscore"))) +
+            row("points (source / target)", fmt(v("source_points")) + " / " + fmt(v("target_points")));
   } else if (kind == "trajectory") {
     html += row("ATE RMSE", fmt(v("ate_rmse"), " m")) + row("ATE mean", fmt(v("ate_mean"), " m")) +
             row("ATE median", fmt(v("ate_median"), " m")) + row("ATE max", fmt(v("ate_max"), " m")) +

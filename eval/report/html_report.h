@@ -18,8 +18,8 @@ namespace cenote::eval {
 
 struct HtmlReportOptions {
   std::string title = "cenote run report";
-  int max_samples = 3;           // frames shown in the samples section
-  int sample_width_px = 360;     // samples are scaled down to this width
+  int max_samples = 3;        // frames shown in the samples section
+  int sample_width_px = 360;  // samples are scaled down to this width
 };
 
 // Writes the page to out_path (default DIR/report.html). @return the path written.

@@ -84,7 +84,8 @@ std::string toJson(const CloudEvaluation& e, const JsonInputs& inputs) {
   j["target_points"] = e.target_points;
   Json curve = Json::array();
   for (const CurvePoint& c : e.curve) {
-    curve.push_back({{"threshold_m", c.threshold_m}, {"precision", c.precision}, {"recall", c.recall}, {"fscore", c.fscore}});
+    curve.push_back(
+        {{"threshold_m", c.threshold_m}, {"precision", c.precision}, {"recall", c.recall}, {"fscore", c.fscore}});
   }
   j["curve"] = curve;
   j["source_histogram"] = histogramJson(e.source_histogram);

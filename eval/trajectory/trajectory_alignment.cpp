@@ -27,8 +27,8 @@ const char* toString(Alignment alignment) {
   return "?";
 }
 
-AssociatedPositions associate(const std::vector<io::StampedPose>& estimate,
-                              const std::vector<io::StampedPose>& reference, double tolerance_s) {
+AssociatedPositions associate(const std::vector<io::StampedPose>& estimate, const std::vector<io::StampedPose>& reference,
+                              double tolerance_s) {
   if (!(tolerance_s >= 0.0) || !std::isfinite(tolerance_s)) {
     std::ostringstream text;
     text << "association tolerance " << tolerance_s << " s: must be finite and >= 0";

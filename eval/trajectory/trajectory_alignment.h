@@ -25,15 +25,15 @@ const char* toString(Alignment alignment);
 
 // Camera positions of associated poses, in estimate time order.
 struct AssociatedPositions {
-  std::vector<double> t_s;                   // the estimate's timestamps
-  std::vector<Eigen::Vector3d> estimate;     // p_world of the estimate, its own world frame
-  std::vector<Eigen::Vector3d> reference;    // p_world of the reference
+  std::vector<double> t_s;                 // the estimate's timestamps
+  std::vector<Eigen::Vector3d> estimate;   // p_world of the estimate, its own world frame
+  std::vector<Eigen::Vector3d> reference;  // p_world of the reference
   size_t unmatched_estimate = 0, unmatched_reference = 0;
 };
 
 // @throws cenote::Error when tolerance_s is negative or not finite.
-AssociatedPositions associate(const std::vector<io::StampedPose>& estimate,
-                              const std::vector<io::StampedPose>& reference, double tolerance_s);
+AssociatedPositions associate(const std::vector<io::StampedPose>& estimate, const std::vector<io::StampedPose>& reference,
+                              double tolerance_s);
 
 // p_ref = scale * R * p_est + t.
 struct Similarity {

@@ -134,7 +134,7 @@ std::vector<io::StampedPose> readColmapImagesTxt(const std::string& path) {
 }
 
 std::vector<io::StampedPose> readTrajectoryFile(const std::string& path, TrajectoryFileFormat format,
-                                                      const std::string& kitti_times) {
+                                                const std::string& kitti_times) {
   if (format == TrajectoryFileFormat::kAuto) format = detectTrajectoryFileFormat(path);
   if (!kitti_times.empty() && format != TrajectoryFileFormat::kKitti) {
     throw Error("a times file (" + kitti_times + ") applies to KITTI trajectories only, " + path + " is " +
@@ -144,9 +144,7 @@ std::vector<io::StampedPose> readTrajectoryFile(const std::string& path, Traject
   switch (format) {
     case TrajectoryFileFormat::kColmap: poses = readColmapImagesTxt(path); break;
     case TrajectoryFileFormat::kTum: poses = io::Trajectory::read(path, io::TrajectoryFormat::kTum).poses(); break;
-    case TrajectoryFileFormat::kEuroc:
-      poses = io::Trajectory::read(path, io::TrajectoryFormat::kEuroc).poses();
-      break;
+    case TrajectoryFileFormat::kEuroc: poses = io::Trajectory::read(path, io::TrajectoryFormat::kEuroc).poses(); break;
     case TrajectoryFileFormat::kKitti:
       poses = io::Trajectory::read(path, io::TrajectoryFormat::kKitti, kitti_times).poses();
       break;

@@ -30,7 +30,7 @@ TrajectoryFileFormat detectTrajectoryFileFormat(const std::string& path);
 // @throws cenote::Error naming the file and line of the first malformed entry, or when the file
 //         holds no pose.
 std::vector<io::StampedPose> readTrajectoryFile(const std::string& path, TrajectoryFileFormat format,
-                                                      const std::string& kitti_times = "");
+                                                const std::string& kitti_times = "");
 
 // COLMAP images.txt. @throws cenote::Error naming file and line (bad numbers, a quaternion whose
 //         norm is not 1, an image name that is not a timestamp, two images at one time).

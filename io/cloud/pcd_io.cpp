@@ -22,14 +22,54 @@ namespace fs = std::filesystem;
 // One scalar of a PCLPointCloud2 field as a double; false for a type we do not read.
 bool decodeScalar(const uint8_t* src, uint8_t datatype, double& value) {
   switch (datatype) {
-    case pcl::PCLPointField::INT8: { int8_t v; std::memcpy(&v, src, 1); value = v; return true; }
-    case pcl::PCLPointField::UINT8: { uint8_t v; std::memcpy(&v, src, 1); value = v; return true; }
-    case pcl::PCLPointField::INT16: { int16_t v; std::memcpy(&v, src, 2); value = v; return true; }
-    case pcl::PCLPointField::UINT16: { uint16_t v; std::memcpy(&v, src, 2); value = v; return true; }
-    case pcl::PCLPointField::INT32: { int32_t v; std::memcpy(&v, src, 4); value = v; return true; }
-    case pcl::PCLPointField::UINT32: { uint32_t v; std::memcpy(&v, src, 4); value = v; return true; }
-    case pcl::PCLPointField::FLOAT32: { float v; std::memcpy(&v, src, 4); value = v; return true; }
-    case pcl::PCLPointField::FLOAT64: { double v; std::memcpy(&v, src, 8); value = v; return true; }
+    case pcl::PCLPointField::INT8: {
+      int8_t v;
+      std::memcpy(&v, src, 1);
+      value = v;
+      return true;
+    }
+    case pcl::PCLPointField::UINT8: {
+      uint8_t v;
+      std::memcpy(&v, src, 1);
+      value = v;
+      return true;
+    }
+    case pcl::PCLPointField::INT16: {
+      int16_t v;
+      std::memcpy(&v, src, 2);
+      value = v;
+      return true;
+    }
+    case pcl::PCLPointField::UINT16: {
+      uint16_t v;
+      std::memcpy(&v, src, 2);
+      value = v;
+      return true;
+    }
+    case pcl::PCLPointField::INT32: {
+      int32_t v;
+      std::memcpy(&v, src, 4);
+      value = v;
+      return true;
+    }
+    case pcl::PCLPointField::UINT32: {
+      uint32_t v;
+      std::memcpy(&v, src, 4);
+      value = v;
+      return true;
+    }
+    case pcl::PCLPointField::FLOAT32: {
+      float v;
+      std::memcpy(&v, src, 4);
+      value = v;
+      return true;
+    }
+    case pcl::PCLPointField::FLOAT64: {
+      double v;
+      std::memcpy(&v, src, 8);
+      value = v;
+      return true;
+    }
     default: return false;
   }
 }
@@ -119,7 +159,8 @@ PcdPoints readPcd(const std::string& path) {
       throw Error("cannot read " + path + " as PCD: " + e.what());
     }
     if (status < 0 || header.fields.empty()) {
-      throw Error("cannot read " + path + " as PCD: pcl::PCDReader finds no PCD header (FIELDS, SIZE, TYPE, WIDTH, "
+      throw Error("cannot read " + path +
+                  " as PCD: pcl::PCDReader finds no PCD header (FIELDS, SIZE, TYPE, WIDTH, "
                   "POINTS, DATA)");
     }
     if (!findField(header, "x") || !findField(header, "y") || !findField(header, "z")) {
@@ -169,7 +210,8 @@ PcdPoints readPcd(const std::string& path) {
       if (rgb) {
         uint32_t packed;
         std::memcpy(&packed, point + rgb->offset, 4);
-        out.colors.push_back({static_cast<uint8_t>(packed >> 16), static_cast<uint8_t>(packed >> 8), static_cast<uint8_t>(packed)});
+        out.colors.push_back(
+            {static_cast<uint8_t>(packed >> 16), static_cast<uint8_t>(packed >> 8), static_cast<uint8_t>(packed)});
       }
     }
   }

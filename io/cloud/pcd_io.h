@@ -22,9 +22,9 @@ namespace cenote::io {
 enum class PcdEncoding { kAscii, kBinary, kBinaryCompressed };
 
 struct PcdPoints {
-  std::vector<Eigen::Vector3f> points;          // finite points only
-  std::vector<std::array<uint8_t, 3>> colors;   // RGB, one per point; empty when the file has no rgb/rgba
-  size_t non_finite_dropped = 0;                // points with a NaN or infinite coordinate (PCL's "missing")
+  std::vector<Eigen::Vector3f> points;         // finite points only
+  std::vector<std::array<uint8_t, 3>> colors;  // RGB, one per point; empty when the file has no rgb/rgba
+  size_t non_finite_dropped = 0;               // points with a NaN or infinite coordinate (PCL's "missing")
 };
 
 // Writes `points` (and `colors`, one per point, or none: then fields x y z only). An empty cloud

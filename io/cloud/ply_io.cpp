@@ -86,8 +86,7 @@ void PlyWriter::writeBehind() {
                     SYNC_FILE_RANGE_WRITE);
   if (flushed_bytes_ > dropped_bytes_) {
     const auto start = static_cast<off_t>(dropped_bytes_), length = static_cast<off_t>(flushed_bytes_ - dropped_bytes_);
-    ::sync_file_range(fd_, start, length,
-                      SYNC_FILE_RANGE_WAIT_BEFORE | SYNC_FILE_RANGE_WRITE | SYNC_FILE_RANGE_WAIT_AFTER);
+    ::sync_file_range(fd_, start, length, SYNC_FILE_RANGE_WAIT_BEFORE | SYNC_FILE_RANGE_WRITE | SYNC_FILE_RANGE_WAIT_AFTER);
     ::posix_fadvise(fd_, start, length, POSIX_FADV_DONTNEED);
     dropped_bytes_ = flushed_bytes_;
   }
@@ -129,8 +128,8 @@ void writePly(const std::string& path, const std::vector<Eigen::Vector3f>& point
   batch.points = points;
   batch.colors = colors;
   if (!colors.empty() && colors.size() != points.size()) {
-    throw Error("writePly " + path + ": " + std::to_string(points.size()) + " points but " +
-                std::to_string(colors.size()) + " colours");
+    throw Error("writePly " + path + ": " + std::to_string(points.size()) + " points but " + std::to_string(colors.size()) +
+                " colours");
   }
   PlyWriter writer(path);
   writer.append(batch);
@@ -138,11 +137,11 @@ void writePly(const std::string& path, const std::vector<Eigen::Vector3f>& point
 }
 
 void writePlyMesh(const std::string& path, const std::vector<Eigen::Vector3f>& points,
-                  const std::vector<std::array<uint8_t, 3>>& colors,
-                  const std::vector<std::array<uint32_t, 3>>& triangles, const std::string& comment) {
+                  const std::vector<std::array<uint8_t, 3>>& colors, const std::vector<std::array<uint32_t, 3>>& triangles,
+                  const std::string& comment) {
   if (!colors.empty() && colors.size() != points.size()) {
-    throw Error("writePly " + path + ": " + std::to_string(points.size()) + " points but " +
-                std::to_string(colors.size()) + " colours");
+    throw Error("writePly " + path + ": " + std::to_string(points.size()) + " points but " + std::to_string(colors.size()) +
+                " colours");
   }
   const auto check = [&](const std::ostream& out) {
     if (!out) throwWriteError(path, std::strerror(errno), errno);
@@ -200,8 +199,7 @@ PlyPoints readPly(const std::string& path) {
     }
   }
   if (line != "end_header") throw Error(path + ": PLY header has no end_header");
-  const std::vector<std::string> expected = {"float x",     "float y",       "float z",
-                                             "uchar red",   "uchar green",   "uchar blue"};
+  const std::vector<std::string> expected = {"float x", "float y", "float z", "uchar red", "uchar green", "uchar blue"};
   if (!binary_le || count < 0 || properties != expected) {
     throw Error(path + ": PLY layout is not 'float x y z, uchar red green blue' binary little-endian vertices");
   }

@@ -58,9 +58,9 @@ class PlyWriter {
   size_t count_ = 0;
   bool closed_ = false;
   std::vector<char> buffer_;
-  size_t written_bytes_ = 0;   // file size so far
-  size_t flushed_bytes_ = 0;   // [0, flushed_bytes_) handed to the disk
-  size_t dropped_bytes_ = 0;   // [0, dropped_bytes_) on disk and dropped from the cache
+  size_t written_bytes_ = 0;  // file size so far
+  size_t flushed_bytes_ = 0;  // [0, flushed_bytes_) handed to the disk
+  size_t dropped_bytes_ = 0;  // [0, dropped_bytes_) on disk and dropped from the cache
 };
 
 // One-shot write. @throws cenote::Error when points and colors differ in size (colors may be
@@ -73,8 +73,8 @@ void writePly(const std::string& path, const std::vector<Eigen::Vector3f>& point
 // `triangles` is not empty. @throws cenote::Error when points and colors differ in size, or
 // "cannot write <path>: <strerror>" (IoError; ResourceExhaustedError for a full disk).
 void writePlyMesh(const std::string& path, const std::vector<Eigen::Vector3f>& points,
-                  const std::vector<std::array<uint8_t, 3>>& colors,
-                  const std::vector<std::array<uint32_t, 3>>& triangles, const std::string& comment);
+                  const std::vector<std::array<uint8_t, 3>>& colors, const std::vector<std::array<uint32_t, 3>>& triangles,
+                  const std::string& comment);
 
 // Reads a file of the layout above. @throws cenote::Error when missing, truncated, or of another
 // format or layout (naming what was found).

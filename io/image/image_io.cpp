@@ -58,8 +58,7 @@ cv::Mat readPfm(const std::string& path) {
   cv::Mat image(height, width, channels == 3 ? CV_32FC3 : CV_32FC1);
   const bool swap = scale > 0.0;  // positive scale = big-endian data
   for (int y = height - 1; y >= 0; --y) {
-    in.read(reinterpret_cast<char*>(image.ptr<float>(y)),
-            static_cast<std::streamsize>(width) * channels * sizeof(float));
+    in.read(reinterpret_cast<char*>(image.ptr<float>(y)), static_cast<std::streamsize>(width) * channels * sizeof(float));
     if (!in) throw Error(path + ": PFM file is truncated");
     if (swap) {
       uint32_t* words = image.ptr<uint32_t>(y);

@@ -31,8 +31,7 @@ struct DecompressorDeleter {
 
 // One decompressor per thread, kept between calls (it holds about 10 KB of tables).
 libdeflate_decompressor* threadDecompressor() {
-  thread_local std::unique_ptr<libdeflate_decompressor, DecompressorDeleter> decompressor(
-      libdeflate_alloc_decompressor());
+  thread_local std::unique_ptr<libdeflate_decompressor, DecompressorDeleter> decompressor(libdeflate_alloc_decompressor());
   return decompressor.get();
 }
 
@@ -61,9 +60,7 @@ void unfilterSub(const uint8_t* in, uint8_t* out, std::size_t length) {
 // filter.
 bool unfilterRow(int filter, const uint8_t* in, uint8_t* out, const uint8_t* prev, std::size_t length, int bpp) {
   switch (filter) {
-    case 0:
-      std::memcpy(out, in, length);
-      return true;
+    case 0: std::memcpy(out, in, length); return true;
     case 1:
       if (bpp == 1) unfilterSub<1>(in, out, length);
       if (bpp == 3) unfilterSub<3>(in, out, length);
@@ -84,8 +81,7 @@ bool unfilterRow(int filter, const uint8_t* in, uint8_t* out, const uint8_t* pre
         out[i] = static_cast<uint8_t>(in[i] + paeth(has_left ? out[i - bpp] : 0, prev[i], has_left ? prev[i - bpp] : 0));
       }
       return true;
-    default:
-      return false;
+    default: return false;
   }
 }
 
@@ -137,8 +133,8 @@ cv::Mat decodePngFast(const uint8_t* data, std::size_t size) {
   libdeflate_decompressor* decompressor = threadDecompressor();
   if (!decompressor) return {};
   // A null actual size demands exactly raw.size() bytes: a short or long stream is an error.
-  if (libdeflate_zlib_decompress(decompressor, compressed.data(), compressed.size(), raw.data(), raw.size(),
-                                 nullptr) != LIBDEFLATE_SUCCESS) {
+  if (libdeflate_zlib_decompress(decompressor, compressed.data(), compressed.size(), raw.data(), raw.size(), nullptr) !=
+      LIBDEFLATE_SUCCESS) {
     return {};
   }
   cv::Mat image(height, width, CV_MAKETYPE(CV_8U, channels));

@@ -85,9 +85,9 @@ std::vector<uint8_t> encodePng(const cv::Mat& image) {
     appendBigEndian32(out, static_cast<uint32_t>(image.cols));
     appendBigEndian32(out, static_cast<uint32_t>(image.rows));
     const int channels = image.channels();
-    out.push_back(image.depth() == CV_16U ? 16 : 8);                  // bit depth
-    out.push_back(channels == 1 ? 0 : channels == 3 ? 2 : 6);         // grey, RGB, RGBA
-    out.insert(out.end(), {0, 0, 0});  // deflate, filter method 0, not interlaced
+    out.push_back(image.depth() == CV_16U ? 16 : 8);           // bit depth
+    out.push_back(channels == 1 ? 0 : channels == 3 ? 2 : 6);  // grey, RGB, RGBA
+    out.insert(out.end(), {0, 0, 0});                          // deflate, filter method 0, not interlaced
   });
   appendChunk(file, "IDAT", [&](std::vector<uint8_t>& out) { deflateRle(filtered.data(), filtered.size(), out); });
   appendChunk(file, "IEND", [](std::vector<uint8_t>&) {});

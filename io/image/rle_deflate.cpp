@@ -14,12 +14,12 @@ namespace {
 constexpr std::size_t kBlockBytes = 64 * 1024;  // one Huffman code per block (adapts to the content)
 constexpr int kEndOfBlock = 256;
 constexpr int kFirstLengthSymbol = 257;
-constexpr int kLiteralLengthSymbols = 286;      // 0-255 literals, 256 end of block, 257-285 lengths
-constexpr int kDistanceSymbols = 2;             // distance 1 (code 0), and code 1 to make a complete code
+constexpr int kLiteralLengthSymbols = 286;  // 0-255 literals, 256 end of block, 257-285 lengths
+constexpr int kDistanceSymbols = 2;         // distance 1 (code 0), and code 1 to make a complete code
 constexpr int kCodeLengthSymbols = 19;
-constexpr int kMinRun = 3, kMaxRun = 258;       // deflate's match lengths
-constexpr int kMaxCodeBits = 15;                // deflate's limit for literal/length and distance codes
-constexpr int kMaxCodeLengthBits = 7;           // and for the code of the code lengths
+constexpr int kMinRun = 3, kMaxRun = 258;  // deflate's match lengths
+constexpr int kMaxCodeBits = 15;           // deflate's limit for literal/length and distance codes
+constexpr int kMaxCodeLengthBits = 7;      // and for the code of the code lengths
 // The order in which a dynamic block header sends the code-length code (RFC 1951, 3.2.7).
 constexpr std::array<uint8_t, kCodeLengthSymbols> kCodeLengthOrder = {16, 17, 18, 0, 8,  7, 9,  6, 10, 5,
                                                                       11, 4,  12, 3, 13, 2, 14, 1, 15};
@@ -198,8 +198,8 @@ void writeCodeLengths(const HuffmanCode<kLiteralLengthSymbols>& literal_length, 
   int sent = kCodeLengthSymbols;
   while (sent > 4 && code_lengths.lengths[kCodeLengthOrder[sent - 1]] == 0) --sent;
 
-  out.put(kLiteralLengthSymbols - 257, 5);  // HLIT
-  out.put(kDistanceSymbols - 1, 5);         // HDIST
+  out.put(kLiteralLengthSymbols - 257, 5);      // HLIT
+  out.put(kDistanceSymbols - 1, 5);             // HDIST
   out.put(static_cast<uint32_t>(sent - 4), 4);  // HCLEN
   out.flush();
   for (int i = 0; i < sent; ++i) {

@@ -96,14 +96,16 @@ Trajectory readKitti(const std::string& path, const std::string& times_path) {
 
 }  // namespace
 
-Trajectory::Trajectory(std::vector<StampedPose> poses, std::string name) : poses_(std::move(poses)), name_(std::move(name)) {
+Trajectory::Trajectory(std::vector<StampedPose> poses, std::string name)
+    : poses_(std::move(poses)), name_(std::move(name)) {
   for (size_t i = 0; i < poses_.size(); ++i) {
     std::ostringstream what;
     what.precision(17);
     what << name_ << ": pose " << i << " (t = " << poses_[i].t_s << " s)";
     if (!std::isfinite(poses_[i].t_s)) throw Error(what.str() + ": timestamp is not finite");
     checkPose(poses_[i].T_world_cam, what.str());
-    if (i > 0 && !(poses_[i].t_s > poses_[i - 1].t_s)) throw Error(what.str() + ": timestamp is not after the previous one");
+    if (i > 0 && !(poses_[i].t_s > poses_[i - 1].t_s))
+      throw Error(what.str() + ": timestamp is not after the previous one");
   }
 }
 
@@ -113,10 +115,8 @@ Trajectory Trajectory::read(const std::string& path, TrajectoryFormat format, co
       const TumTrajectory tum = TumTrajectory::read(path);
       return Trajectory(tum.poses(), path);
     }
-    case TrajectoryFormat::kEuroc:
-      return readEuroc(path);
-    case TrajectoryFormat::kKitti:
-      return readKitti(path, kitti_times);
+    case TrajectoryFormat::kEuroc: return readEuroc(path);
+    case TrajectoryFormat::kKitti: return readKitti(path, kitti_times);
   }
   throw Error("unknown trajectory format");
 }
@@ -151,12 +151,9 @@ Trajectory Trajectory::transformedBy(const Eigen::Isometry3d& T_x_y) const {
 
 const char* toString(TrajectoryFormat format) {
   switch (format) {
-    case TrajectoryFormat::kTum:
-      return "tum";
-    case TrajectoryFormat::kEuroc:
-      return "euroc";
-    case TrajectoryFormat::kKitti:
-      return "kitti";
+    case TrajectoryFormat::kTum: return "tum";
+    case TrajectoryFormat::kEuroc: return "euroc";
+    case TrajectoryFormat::kKitti: return "kitti";
   }
   return "?";
 }

@@ -49,15 +49,14 @@ TumTrajectory TumTrajectory::parse(std::istream& in, const std::string& name) {
     const double norm = q.norm();
     if (std::abs(norm - 1.0) > kQuaternionNormTolerance) {
       std::ostringstream text;
-      text << where << "quaternion (qx qy qz qw) has norm " << norm << ", must be 1 (within "
-           << kQuaternionNormTolerance << ")";
+      text << where << "quaternion (qx qy qz qw) has norm " << norm << ", must be 1 (within " << kQuaternionNormTolerance
+           << ")";
       throw Error(text.str());
     }
     if (!trajectory.poses_.empty() && !(v[0] > trajectory.poses_.back().t_s)) {
       std::ostringstream text;
       text.precision(17);
-      text << where << "timestamp " << v[0] << " is not after the previous one (" << trajectory.poses_.back().t_s
-           << ")";
+      text << where << "timestamp " << v[0] << " is not after the previous one (" << trajectory.poses_.back().t_s << ")";
       throw Error(text.str());
     }
     StampedPose pose;

@@ -19,7 +19,9 @@ inline uint64_t packIndex(const Eigen::Vector3i& v) {
 inline bool inPackRange(const Eigen::Vector3i& v) {
   constexpr uint32_t kBias = 1u << 20;
   return ((static_cast<uint32_t>(v.x()) + kBias) | (static_cast<uint32_t>(v.y()) + kBias) |
-          (static_cast<uint32_t>(v.z()) + kBias)) >> 21 == 0;
+          (static_cast<uint32_t>(v.z()) + kBias)) >>
+             21 ==
+         0;
 }
 inline Eigen::Vector3i unpackIndex(uint64_t key) {
   constexpr int64_t kBias = 1 << 20;
@@ -65,7 +67,8 @@ class BlockTable {
   }
   size_t size() const { return size_; }
   size_t memoryBytes() const {
-    return keys_.capacity() * sizeof(uint64_t) + slots_.capacity() * sizeof(uint32_t) + order_.capacity() * sizeof(uint64_t);
+    return keys_.capacity() * sizeof(uint64_t) + slots_.capacity() * sizeof(uint32_t) +
+           order_.capacity() * sizeof(uint64_t);
   }
   // Key of slot s (slots are numbered in insertion order).
   uint64_t keyOf(uint32_t slot) const { return order_[slot]; }

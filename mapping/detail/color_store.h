@@ -138,7 +138,7 @@ class ColorStore {
   }
 
  private:
-  BlockTable table_;                // packed block index -> slot in blocks_
+  BlockTable table_;  // packed block index -> slot in blocks_
   std::vector<BlockColors> blocks_;
 };
 

@@ -42,9 +42,8 @@ inline uint64_t publishWordScalar(float* values, uint64_t known, uint64_t update
 // All-ones lanes for the set bits of a 4-bit group (bit i -> lane i).
 inline __m128 laneMask(unsigned bits4) {
   alignas(16) static constexpr uint32_t kLanes[16][4] = {
-      {0, 0, 0, 0}, {~0u, 0, 0, 0}, {0, ~0u, 0, 0}, {~0u, ~0u, 0, 0},
-      {0, 0, ~0u, 0}, {~0u, 0, ~0u, 0}, {0, ~0u, ~0u, 0}, {~0u, ~0u, ~0u, 0},
-      {0, 0, 0, ~0u}, {~0u, 0, 0, ~0u}, {0, ~0u, 0, ~0u}, {~0u, ~0u, 0, ~0u},
+      {0, 0, 0, 0},     {~0u, 0, 0, 0},     {0, ~0u, 0, 0},     {~0u, ~0u, 0, 0},    {0, 0, ~0u, 0},   {~0u, 0, ~0u, 0},
+      {0, ~0u, ~0u, 0}, {~0u, ~0u, ~0u, 0}, {0, 0, 0, ~0u},     {~0u, 0, 0, ~0u},    {0, ~0u, 0, ~0u}, {~0u, ~0u, 0, ~0u},
       {0, 0, ~0u, ~0u}, {~0u, 0, ~0u, ~0u}, {0, ~0u, ~0u, ~0u}, {~0u, ~0u, ~0u, ~0u}};
   return _mm_load_ps(reinterpret_cast<const float*>(kLanes[bits4 & 15]));
 }

@@ -76,7 +76,7 @@ class WaveQueue {
 }  // namespace
 
 struct DistanceField::Impl {
-  detail::BlockTable table;                   // block -> index in blocks (blocks are never freed)
+  detail::BlockTable table;  // block -> index in blocks (blocks are never freed)
   std::vector<std::unique_ptr<Block>> blocks;
   WaveQueue open;
   int max_dist2 = 0;
@@ -233,8 +233,7 @@ struct DistanceField::Impl {
   }
 };
 
-DistanceField::DistanceField(const OccupancyMap& map)
-    : map_(map), impl_(std::make_unique<Impl>()) {
+DistanceField::DistanceField(const OccupancyMap& map) : map_(map), impl_(std::make_unique<Impl>()) {
   max_distance_m_ = std::min(map.config().max_distance_m, kMaxOffsetVoxels * map.voxelSize());
   // Squared distances are integers (voxels^2): d2 > floor(max^2) <=> d2 > max^2.
   impl_->max_dist2 = static_cast<int>(std::floor(std::pow(max_distance_m_ / map.voxelSize(), 2)));

@@ -34,9 +34,9 @@
 namespace cenote::mapping {
 
 struct DistanceQuery {
-  double distance_m = 0.0;                            // max_distance_m when no obstacle is nearer
-  Eigen::Vector3d gradient = Eigen::Vector3d::Zero(); // unit, away from the obstacle; zero at max
-  bool within_max = false;                            // an obstacle lies within max_distance_m
+  double distance_m = 0.0;                             // max_distance_m when no obstacle is nearer
+  Eigen::Vector3d gradient = Eigen::Vector3d::Zero();  // unit, away from the obstacle; zero at max
+  bool within_max = false;                             // an obstacle lies within max_distance_m
 };
 
 class DistanceField {

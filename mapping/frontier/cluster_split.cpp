@@ -199,7 +199,12 @@ class Splitter {
 
   Splitter(const std::vector<BlockRun>& runs, const SplitParams& params, const VoxelIndex& ref, uint64_t& next_id,
            std::vector<FrontierCluster>& out)
-      : runs_(runs), params_(params), max_extent_voxels_(params.maxExtentVoxels()), ref_(ref), next_id_(next_id), out_(out) {}
+      : runs_(runs),
+        params_(params),
+        max_extent_voxels_(params.maxExtentVoxels()),
+        ref_(ref),
+        next_id_(next_id),
+        out_(out) {}
 
   // Splits the voxels of all runs, one chunk per run to start with.
   void splitAll() {

@@ -16,7 +16,7 @@ namespace cenote::mapping::detail {
 
 using BlockMask = std::array<uint64_t, 8>;  // bit offsetInBlock(ijk)
 
-inline constexpr uint64_t kLowBitOfEachByte = 0x0101010101010101ull;  // z = 0 (or w = 0) of each row
+inline constexpr uint64_t kLowBitOfEachByte = 0x0101010101010101ull;    // z = 0 (or w = 0) of each row
 inline constexpr uint64_t kHighBitOfEachByte = kLowBitOfEachByte << 7;  // z = 7 (or w = 7)
 
 inline bool isEmpty(const BlockMask& m) { return (m[0] | m[1] | m[2] | m[3] | m[4] | m[5] | m[6] | m[7]) == 0; }

@@ -14,7 +14,7 @@ namespace cenote::mapping {
 namespace {
 
 using Mask = detail::BlockMask;  // one bit per voxel of a block, bit offsetInBlock(ijk)
-using detail::kFaceOffsets;  // a voxel's face neighbours; the same offsets give a block's
+using detail::kFaceOffsets;      // a voxel's face neighbours; the same offsets give a block's
 
 // The 26 neighbour blocks' offsets.
 const std::array<BlockIndex, 26> kNeighbourBlocks = [] {
@@ -30,9 +30,9 @@ const std::array<BlockIndex, 26> kNeighbourBlocks = [] {
 // A 26-connected piece of one block's frontier, and the component it belongs to.
 // Fields in the order of use: joining reads the first cache line only, splitting the rest too.
 struct Piece {
-  uint32_t component = 0;      // 0: not yet assigned (during an update)
-  uint32_t node = 0;           // its union-find node during an update
-  detail::FaceLayers layers;   // of bits
+  uint32_t component = 0;     // 0: not yet assigned (during an update)
+  uint32_t node = 0;          // its union-find node during an update
+  detail::FaceLayers layers;  // of bits
   Mask bits{};
   detail::RunMoments moments;  // of bits
 };
@@ -192,11 +192,11 @@ struct FrontierMap::Impl {
   double s = 0.05;
   // Scratch of one update, kept for its capacity: each update clears it instead of allocating it.
   detail::BlockTable region_table, read_table;
-  std::vector<BlockIndex> region;      // changed blocks and their face neighbours, each once
+  std::vector<BlockIndex> region;       // changed blocks and their face neighbours, each once
   std::vector<uint8_t> inputs_changed;  // per region block: its states or a facing layer changed
-  std::vector<uint32_t> relabel;       // blocks with unassigned frontier voxels
-  std::vector<uint32_t> dirty;         // components taken apart
-  std::vector<uint32_t> queued;        // blocks labelled this update, each once
+  std::vector<uint32_t> relabel;        // blocks with unassigned frontier voxels
+  std::vector<uint32_t> dirty;          // components taken apart
+  std::vector<uint32_t> queued;         // blocks labelled this update, each once
   UnionFind sets;
   std::vector<std::pair<uint32_t, uint32_t>> nodes;  // union-find node -> (block slot, piece index)
   std::vector<Mask> new_pieces;

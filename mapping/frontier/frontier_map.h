@@ -29,7 +29,7 @@
 namespace cenote::mapping {
 
 struct FrontierCluster {
-  uint64_t id = 0;                                     // stable while the cluster is untouched
+  uint64_t id = 0;  // stable while the cluster is untouched
   size_t num_voxels = 0;
   Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();
   Aabb bounds_m;                                        // of the voxels (their faces)

@@ -21,7 +21,7 @@ struct DepthFrame {
   double t_s = 0.0;
   int width = 0;
   int height = 0;
-  double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;            // pixels; fx, fy > 0
+  double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;  // pixels; fx, fy > 0
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
   std::vector<float> depth_m;                  // width * height, row-major; <= 0 or non-finite: no depth
   std::vector<std::array<uint8_t, 3>> colors;  // RGB per pixel, or empty

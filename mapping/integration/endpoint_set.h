@@ -76,7 +76,7 @@ class EndpointSet {
  private:
   detail::BlockTable table_;  // voxel -> index in voxels_
   std::vector<VoxelIndex> voxels_;
-  std::vector<std::array<uint32_t, 4>> sums_;  // r, g, b, count per voxel
+  std::vector<std::array<uint32_t, 4>> sums_;                                      // r, g, b, count per voxel
   static inline const VoxelIndex kNoVoxel{std::numeric_limits<int>::min(), 0, 0};  // beyond any map
   VoxelIndex last_ = kNoVoxel;  // the voxel of the last add(), so a run of equal voxels skips the table
   uint32_t last_slot_ = 0;

@@ -25,9 +25,9 @@ namespace {
 // only when the walk crosses into another block (about every 8 steps).
 struct RayWalk {
   VoxelIndex key_origin, key_end;
-  int step[3];          // +-1 along the ray, 0 for an axis it never steps on
-  long count[3];        // steps on each axis from the origin's voxel to the end's
-  double a[3], c[3];    // t of face b on axis i: b a[i] - c[i]
+  int step[3];        // +-1 along the ray, 0 for an axis it never steps on
+  long count[3];      // steps on each axis from the origin's voxel to the end's
+  double a[3], c[3];  // t of face b on axis i: b a[i] - c[i]
 
   RayWalk(const Eigen::Vector3d& origin_m, const Eigen::Vector3d& end_m, double s)
       : key_origin(toVoxel(origin_m, s)), key_end(toVoxel(end_m, s)) {
@@ -113,16 +113,15 @@ bool marchFromOrigin(const Eigen::Vector3d& origin_m, const Eigen::Vector3d& end
 // The same voxels as marchFromOrigin(origin_m, end_m, ...), visited in reverse order: from the one
 // before the end's voxel back to the origin's.
 template <typename Visit>
-bool marchFromEnd(const Eigen::Vector3d& origin_m, const Eigen::Vector3d& end_m, double voxel_size_m,
-                  BatchUpdates& writer, Visit visit) {
+bool marchFromEnd(const Eigen::Vector3d& origin_m, const Eigen::Vector3d& end_m, double voxel_size_m, BatchUpdates& writer,
+                  Visit visit) {
   const RayWalk w(origin_m, end_m, voxel_size_m);
   const long steps = w.steps();
   if (steps == 0) return true;
   constexpr double kNever = -std::numeric_limits<double>::infinity();
   // The face behind on each axis (the one the walk from the origin crossed to get here), the t of
   // crossing it, and the steps left on the axis.
-  double bx = w.key_end.x() + (w.step[0] < 0), by = w.key_end.y() + (w.step[1] < 0),
-         bz = w.key_end.z() + (w.step[2] < 0);
+  double bx = w.key_end.x() + (w.step[0] < 0), by = w.key_end.y() + (w.step[1] < 0), bz = w.key_end.z() + (w.step[2] < 0);
   long nx = w.count[0], ny = w.count[1], nz = w.count[2];
   double tx = nx > 0 ? w.faceT(0, bx) : kNever, ty = ny > 0 ? w.faceT(1, by) : kNever,
          tz = nz > 0 ? w.faceT(2, bz) : kNever;

@@ -34,8 +34,8 @@ inline Eigen::Vector3d voxelCentre(const VoxelIndex& ijk, double voxel_size_m) {
 // segment check). Stops early when visit returns false. Returns false when stopped early.
 // The segment must be finite; its length in voxels bounds the work.
 template <typename Visit>
-bool walkVoxels(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double voxel_size_m,
-                bool include_end, Visit&& visit) {
+bool walkVoxels(const Eigen::Vector3d& start_m, const Eigen::Vector3d& end_m, double voxel_size_m, bool include_end,
+                Visit&& visit) {
   const VoxelIndex key_start = toVoxel(start_m, voxel_size_m);
   const VoxelIndex key_end = toVoxel(end_m, voxel_size_m);
   if (key_start == key_end) return include_end ? visit(key_end) : true;

@@ -33,7 +33,9 @@ bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() > suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-bool isPlainPly(const std::string& name) { return endsWith(name, ".ply") && mapFileFormatOf(name) == MapFileFormat::kUnspecified; }
+bool isPlainPly(const std::string& name) {
+  return endsWith(name, ".ply") && mapFileFormatOf(name) == MapFileFormat::kUnspecified;
+}
 
 std::string extensionText(const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();
@@ -64,8 +66,8 @@ MapFileFormat resolveMapFileFormat(const std::string& path, MapFileFormat reques
   if (named == requested) return requested;
   if (plain_ply && (requested == MapFileFormat::kMeshPly || requested == MapFileFormat::kPointsPly)) return requested;
   if (named == MapFileFormat::kUnspecified && !plain_ply) {
-    throw Error(path + ": " + extensionText(path) + " does not match format " + toString(requested) + ", which is written as " +
-                extensionOf(requested) + " (" + mapFileFormatTable() + ")");
+    throw Error(path + ": " + extensionText(path) + " does not match format " + toString(requested) +
+                ", which is written as " + extensionOf(requested) + " (" + mapFileFormatTable() + ")");
   }
   throw Error(path + ": " + extensionText(path) + " means format " +
               (plain_ply ? std::string("mesh-ply or points-ply") : std::string(toString(named))) + ", not " +

@@ -37,7 +37,8 @@ openvdb::GridPtrVec toFileGrids(const detail::MapImpl& impl, double voxel_size_m
   color->setTransform(detail::makeTransform(voxel_size_m));
   color->setName("color");
   auto acc = color->getAccessor();
-  impl.color.forEach([&](const VoxelIndex& ijk, int32_t packed) { acc.setValueOn(Coord(ijk.x(), ijk.y(), ijk.z()), packed); });
+  impl.color.forEach(
+      [&](const VoxelIndex& ijk, int32_t packed) { acc.setValueOn(Coord(ijk.x(), ijk.y(), ijk.z()), packed); });
   return {log_odds, color};
 }
 
@@ -50,9 +51,8 @@ void fromFileGrids(openvdb::FloatGrid& log_odds, openvdb::Int32Grid& color, deta
     const Coord o = leaf->origin();
     const VoxelIndex first(o.x(), o.y(), o.z());
     if (!inMapRange(first) || !inMapRange(first + VoxelIndex::Constant(kBlockSide - 1))) {
-      throw Error(path + ": voxel (" + std::to_string(o.x()) + ", " + std::to_string(o.y()) + ", " +
-                  std::to_string(o.z()) + ") lies beyond the " + std::to_string(kMaxVoxelIndex) +
-                  " voxels per axis a map holds");
+      throw Error(path + ": voxel (" + std::to_string(o.x()) + ", " + std::to_string(o.y()) + ", " + std::to_string(o.z()) +
+                  ") lies beyond the " + std::to_string(kMaxVoxelIndex) + " voxels per axis a map holds");
     }
     impl.log_odds->tree().addLeaf(new openvdb::FloatTree::LeafNodeType(*leaf));
   }
@@ -91,14 +91,15 @@ void forEachKnown(const OccupancyMap& map, Visit&& visit) {
 }
 
 octomap::OcTreeKey keyOf(const VoxelIndex& ijk) {
-  return octomap::OcTreeKey(static_cast<octomap::key_type>(ijk.x() + 32768), static_cast<octomap::key_type>(ijk.y() + 32768),
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(ijk.x() + 32768),
+                            static_cast<octomap::key_type>(ijk.y() + 32768),
                             static_cast<octomap::key_type>(ijk.z() + 32768));
 }
 
 void checkOctomapRange(const VoxelIndex& ijk) {
   if ((ijk.array() < -32768).any() || (ijk.array() > 32767).any()) {
-    throw Error("map: voxel (" + std::to_string(ijk.x()) + ", " + std::to_string(ijk.y()) + ", " +
-                std::to_string(ijk.z()) + ") lies outside OctoMap's 2^16 voxels per axis");
+    throw Error("map: voxel (" + std::to_string(ijk.x()) + ", " + std::to_string(ijk.y()) + ", " + std::to_string(ijk.z()) +
+                ") lies outside OctoMap's 2^16 voxels per axis");
   }
 }
 
@@ -218,7 +219,8 @@ std::unique_ptr<OccupancyMap> fromOctree(const Tree& tree, const MapConfig& defa
           acc.setValueOn(xyz, l);
           if constexpr (std::is_same_v<Tree, octomap::ColorOcTree>) {
             const auto col = it->getColor();
-            if (tree.isNodeOccupied(*it)) impl.color.set(first + VoxelIndex(i, j, k), detail::packColor({col.r, col.g, col.b}, 1));
+            if (tree.isNodeOccupied(*it))
+              impl.color.set(first + VoxelIndex(i, j, k), detail::packColor({col.r, col.g, col.b}, 1));
           }
         }
       }

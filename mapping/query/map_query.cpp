@@ -259,7 +259,8 @@ std::vector<CollisionResult> raycast(const OccupancyMap& map, const std::vector<
     }
     segments[i].start_m = rays[i].origin_m;
     // Beyond the map's range every voxel is unknown: the ray ends half a voxel before its edge.
-    const double edge = distanceToRangeEdge(rays[i].origin_m, rays[i].direction / n, mapRange_m(map)) - 0.5 * map.voxelSize();
+    const double edge = distanceToRangeEdge(rays[i].origin_m, rays[i].direction / n, mapRange_m(map)) -
+                        0.5 * map.voxelSize();
     segments[i].end_m = rays[i].origin_m + rays[i].direction * (std::clamp(edge, 0.0, max_range_m) / n);
   }
   return checkSegments(map, segments, stop_at_unknown);

@@ -54,12 +54,12 @@ struct SegmentQuery {
 Aabb boundsOf(const SegmentQuery& segment);
 
 struct CollisionResult {
-  bool hit = false;                  // an occupied voxel, before any unknown with stop_at_unknown
-  double hit_distance_m = 0.0;       // along the segment, from its start to the hit voxel's centre projection
+  bool hit = false;             // an occupied voxel, before any unknown with stop_at_unknown
+  double hit_distance_m = 0.0;  // along the segment, from its start to the hit voxel's centre projection
   VoxelIndex hit_voxel = VoxelIndex::Zero();
-  bool crossed_unknown = false;      // some unknown voxel lies before the hit (or anywhere when no hit)
-  double unknown_distance_m = 0.0;   // of the first unknown voxel, when crossed_unknown
-  bool stopped_at_unknown = false;   // stop_at_unknown and an unknown voxel came first: not free to pass
+  bool crossed_unknown = false;     // some unknown voxel lies before the hit (or anywhere when no hit)
+  double unknown_distance_m = 0.0;  // of the first unknown voxel, when crossed_unknown
+  bool stopped_at_unknown = false;  // stop_at_unknown and an unknown voxel came first: not free to pass
   // Safe to travel: no occupied voxel and, with stop_at_unknown, no unknown one.
   bool isClear() const { return !hit && !stopped_at_unknown; }
 };

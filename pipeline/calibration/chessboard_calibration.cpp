@@ -11,8 +11,7 @@ namespace cenote::pipeline {
 namespace {
 
 bool findCorners(const cv::Mat& grey, const cv::Size& board, std::vector<cv::Point2f>& corners) {
-  if (!cv::findChessboardCorners(grey, board, corners,
-                                 cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
+  if (!cv::findChessboardCorners(grey, board, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) {
     return false;
   }
   cv::cornerSubPix(grey, corners, cv::Size(11, 11), cv::Size(-1, -1),

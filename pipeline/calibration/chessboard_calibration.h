@@ -25,7 +25,7 @@ struct ChessboardSpec {
 
 struct ChessboardCalibration {
   StereoCalibration calibration;
-  double rms_px = 0.0;                // stereo reprojection error over every corner of every pair used
+  double rms_px = 0.0;  // stereo reprojection error over every corner of every pair used
   int pairs_used = 0;
   std::vector<std::string> rejected;  // "<left file>: board not found in the right image", ...
   StereoGeometry rectified;           // focal length and baseline after rectification

@@ -18,10 +18,10 @@ Rectifier::Rectifier(const StereoCalibration& c) : size_(c.image_size) {
   cv::stereoRectify(cv::Mat(c.left.K), cv::Mat(c.left.distortion, true), cv::Mat(c.right.K),
                     cv::Mat(c.right.distortion, true), size_, cv::Mat(c.R), cv::Mat(c.T), R1, R2, P1, P2, Q,
                     cv::CALIB_ZERO_DISPARITY, 0.0, size_);
-  cv::initUndistortRectifyMap(cv::Mat(c.left.K), cv::Mat(c.left.distortion, true), R1, P1, size_, CV_16SC2,
-                              map_left_x_, map_left_y_);
-  cv::initUndistortRectifyMap(cv::Mat(c.right.K), cv::Mat(c.right.distortion, true), R2, P2, size_, CV_16SC2,
-                              map_right_x_, map_right_y_);
+  cv::initUndistortRectifyMap(cv::Mat(c.left.K), cv::Mat(c.left.distortion, true), R1, P1, size_, CV_16SC2, map_left_x_,
+                              map_left_y_);
+  cv::initUndistortRectifyMap(cv::Mat(c.right.K), cv::Mat(c.right.distortion, true), R2, P2, size_, CV_16SC2, map_right_x_,
+                              map_right_y_);
   R_rect_left_ = cv::Matx33d(R1);
   geometry_.fx = P1.at<double>(0, 0);
   geometry_.fy = P1.at<double>(1, 1);
@@ -41,8 +41,8 @@ RectifiedPair Rectifier::rectify(const StereoFrame& frame) const {
     if (image->empty()) throw Error(std::string("rectifier: ") + which + " image is empty");
     if (image->size() != size_) {
       throw Error(std::string("rectifier: ") + which + " image is " + std::to_string(image->cols) + "x" +
-                  std::to_string(image->rows) + " but the calibration is for " + std::to_string(size_.width) +
-                  "x" + std::to_string(size_.height));
+                  std::to_string(image->rows) + " but the calibration is for " + std::to_string(size_.width) + "x" +
+                  std::to_string(size_.height));
     }
   }
   RectifiedPair pair;

@@ -17,8 +17,8 @@ void requireFile(const std::string& path) {
   if (!std::filesystem::exists(path)) throw NotFoundError("calibration file not found: " + path);
 }
 
-cv::Mat readMatrix(const cv::FileStorage& fs, const std::string& path,
-                   std::initializer_list<const char*> names, int rows, int cols, bool required) {
+cv::Mat readMatrix(const cv::FileStorage& fs, const std::string& path, std::initializer_list<const char*> names, int rows,
+                   int cols, bool required) {
   for (const char* name : names) {
     cv::FileNode node = fs[name];
     if (node.empty()) continue;
@@ -42,8 +42,7 @@ std::vector<double> toVector(const cv::Mat& m) {
   return v;
 }
 
-StereoGeometry geometryFromProjections(const cv::Matx34d& P_left, const cv::Matx34d& P_right,
-                                       const cv::Size& size) {
+StereoGeometry geometryFromProjections(const cv::Matx34d& P_left, const cv::Matx34d& P_right, const cv::Size& size) {
   StereoGeometry g;
   g.fx = P_left(0, 0);
   g.fy = P_left(1, 1);
@@ -218,8 +217,8 @@ StereoCalibration readEurocSensorPair(const std::string& left_path, const std::s
   return c;
 }
 
-StereoCalibration readKittiCalibration(const std::string& path, const cv::Size& image_size,
-                                       const std::string& left, const std::string& right) {
+StereoCalibration readKittiCalibration(const std::string& path, const cv::Size& image_size, const std::string& left,
+                                       const std::string& right) {
   requireFile(path);
   std::ifstream in(path);
   std::string line;
@@ -300,13 +299,13 @@ StereoCalibration readCalibrationFile(const std::string& path, cv::Size image_si
       }
       const fs::path right = dir.parent_path() / "cam1" / fs::path(path).filename();
       if (!fs::exists(right)) {
-        throw Error(path + ": the right camera's " + right.string() + " is missing (an EuRoC / Kalibr sensor.yaml "
-                           "describes one camera)");
+        throw Error(path + ": the right camera's " + right.string() +
+                    " is missing (an EuRoC / Kalibr sensor.yaml "
+                    "describes one camera)");
       }
       return readEurocSensorPair(path, right.string());
     }
-    case CalibrationFileKind::kOpenCv:
-      break;
+    case CalibrationFileKind::kOpenCv: break;
   }
   try {
     return readStereoCalibration(path);

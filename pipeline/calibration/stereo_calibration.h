@@ -45,8 +45,7 @@ void writeStereoCalibration(const std::string& path, const StereoCalibration& ca
 // EuRoC / Kalibr-style `sensor.yaml` of each camera: intrinsics [fu, fv, cu, cv],
 // distortion_coefficients (radial-tangential), resolution [w, h], T_BS (camera to body).
 // @throws cenote::Error.
-StereoCalibration readEurocSensorPair(const std::string& left_sensor_yaml,
-                                      const std::string& right_sensor_yaml);
+StereoCalibration readEurocSensorPair(const std::string& left_sensor_yaml, const std::string& right_sensor_yaml);
 
 // Camera-to-body transform (T_BS) of one EuRoC sensor.yaml. @throws cenote::Error.
 cv::Matx44d readEurocBodyFromSensor(const std::string& sensor_yaml);
@@ -66,7 +65,7 @@ StereoCalibration readCalibrationFile(const std::string& path, cv::Size image_si
 
 // KITTI `calib.txt` (rectified): rows "P0: 12 numbers" ...; `left`/`right` name the rows
 // ("P0"/"P1" grey, "P2"/"P3" colour). @throws cenote::Error.
-StereoCalibration readKittiCalibration(const std::string& path, const cv::Size& image_size,
-                                       const std::string& left = "P0", const std::string& right = "P1");
+StereoCalibration readKittiCalibration(const std::string& path, const cv::Size& image_size, const std::string& left = "P0",
+                                       const std::string& right = "P1");
 
 }  // namespace cenote::pipeline

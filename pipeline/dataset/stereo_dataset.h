@@ -22,7 +22,7 @@ namespace cenote::pipeline {
 struct TrajectorySource {
   std::string path;
   io::TrajectoryFormat format = io::TrajectoryFormat::kTum;
-  std::string kitti_times;  // KITTI only
+  std::string kitti_times;      // KITTI only
   bool describes_body = false;  // true: poses of the body (IMU); false: of the left camera
   // true: the format does not say which frame its poses describe (TUM; KITTI poses outside a KITTI
   // sequence), so describes_body is the format's habit (the camera), not a fact of the file.

@@ -7,14 +7,10 @@ namespace cenote::pipeline {
 
 const char* toString(Admission admission) {
   switch (admission) {
-    case Admission::kAdmitted:
-      return "admitted";
-    case Admission::kOutOfOrder:
-      return "out of time order";
-    case Admission::kNoPose:
-      return "no pose";
-    case Admission::kNotKeyframe:
-      return "not a keyframe";
+    case Admission::kAdmitted: return "admitted";
+    case Admission::kOutOfOrder: return "out of time order";
+    case Admission::kNoPose: return "no pose";
+    case Admission::kNotKeyframe: return "not a keyframe";
   }
   return "?";
 }

@@ -13,7 +13,7 @@ namespace cenote::pipeline {
 // Pinhole model of the rectified left camera and the stereo baseline.
 struct StereoGeometry {
   double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;  // pixels
-  double baseline_m = 0.0;                          // distance between the optical centres
+  double baseline_m = 0.0;                        // distance between the optical centres
   cv::Size image_size;
 
   Eigen::Matrix3d K() const {

@@ -95,7 +95,7 @@ void renderView(const DepthFrame& source, const Projector& P, const FusionLimits
       const int32_t i = index[x] < 0 ? sentinel : index[x];
       const float z_old = z_buffer[i];
       const uint32_t take = 0u - static_cast<uint32_t>(depth[x] < z_old);  // all ones when nearer
-      z_buffer[i] = std::min(z_old, depth[x]);                            // an equal depth keeps the first
+      z_buffer[i] = std::min(z_old, depth[x]);                             // an equal depth keeps the first
       c_buffer[i] = std::bit_cast<float>((std::bit_cast<uint32_t>(conf[x]) & take) |
                                          (std::bit_cast<uint32_t>(c_buffer[i]) & ~take));
     }
@@ -176,12 +176,12 @@ void checkFusionInput(const DepthFrame& frame, cv::Size expected_size) {
   if (frame.depth.empty()) throw Error(what + ": depth map is empty");
   if (frame.depth.type() != CV_32FC1) throw Error(what + ": depth map must be CV_32FC1 (float metres)");
   if (frame.confidence.type() != CV_32FC1 || frame.confidence.size() != frame.depth.size()) {
-    throw Error(what + ": confidence map must be CV_32FC1 of the depth map's size " +
-                std::to_string(frame.depth.cols) + "x" + std::to_string(frame.depth.rows));
+    throw Error(what + ": confidence map must be CV_32FC1 of the depth map's size " + std::to_string(frame.depth.cols) +
+                "x" + std::to_string(frame.depth.rows));
   }
   if (!frame.color.empty() && (frame.color.type() != CV_8UC3 || frame.color.size() != frame.depth.size())) {
-    throw Error(what + ": colour image must be CV_8UC3 of the depth map's size " + std::to_string(frame.depth.cols) +
-                "x" + std::to_string(frame.depth.rows));
+    throw Error(what + ": colour image must be CV_8UC3 of the depth map's size " + std::to_string(frame.depth.cols) + "x" +
+                std::to_string(frame.depth.rows));
   }
   if (!expected_size.empty() && frame.depth.size() != expected_size) {
     throw Error(what + ": depth map is " + std::to_string(frame.depth.cols) + "x" + std::to_string(frame.depth.rows) +
@@ -197,8 +197,7 @@ void fuseViews(std::span<const DepthFrame* const> views, const FusionConfig& con
   throwIfInvalid(config.validate(), "fusion");
   const int n_views = config.num_views;
   if (static_cast<int>(views.size()) != n_views) {
-    throw Error("fusion: got " + std::to_string(views.size()) + " views, fusion.num_views is " +
-                std::to_string(n_views));
+    throw Error("fusion: got " + std::to_string(views.size()) + " views, fusion.num_views is " + std::to_string(n_views));
   }
   const int r = (n_views - 1) / 2;
   const DepthFrame& ref = *views[r];
@@ -216,8 +215,8 @@ void fuseViews(std::span<const DepthFrame* const> views, const FusionConfig& con
   s.width = size.width;
   s.height = size.height;
   s.limits.max_depth_m = static_cast<float>(std::min<double>(config.max_depth_m, std::numeric_limits<float>::max()));
-  s.limits.min_confidence =
-      std::max(static_cast<float>(config.min_input_confidence), std::numeric_limits<float>::denorm_min());
+  s.limits.min_confidence = std::max(static_cast<float>(config.min_input_confidence),
+                                     std::numeric_limits<float>::denorm_min());
   s.limits.relative_eps = config.support_radius == SupportRadius::kRelative;
   s.limits.eps = static_cast<float>(config.eps);
   s.limits.min_fused_confidence = static_cast<float>(config.min_fused_confidence);

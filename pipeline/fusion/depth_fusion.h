@@ -56,8 +56,8 @@ namespace cenote::pipeline {
 // N_f stay the same (no allocation per frame after that).
 struct FusionScratch {
   struct View {
-    cv::Mat depth;       // CV_32F rendered depth in the reference view, +inf where none
-    cv::Mat confidence;  // CV_32F confidence of the rendered point where depth is finite (else stale)
+    cv::Mat depth;                   // CV_32F rendered depth in the reference view, +inf where none
+    cv::Mat confidence;              // CV_32F confidence of the rendered point where depth is finite (else stale)
     std::vector<int32_t> row_index;  // one projected source row: target pixel or -1
     std::vector<float> row_depth;    // and its depth in the reference camera
     std::vector<float> storage;      // pixels of depth and confidence, each followed by a sentinel cell

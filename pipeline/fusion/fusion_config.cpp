@@ -35,9 +35,7 @@ void FusionConfig::read(YamlSection& section) {
   section.read("max_depth_m", max_depth_m);
 }
 
-const char* toString(SupportRadius radius) {
-  return radius == SupportRadius::kRelative ? "relative" : "absolute";
-}
+const char* toString(SupportRadius radius) { return radius == SupportRadius::kRelative ? "relative" : "absolute"; }
 
 SupportRadius parseSupportRadius(const std::string& name) {
   if (name == "relative") return SupportRadius::kRelative;

@@ -23,14 +23,14 @@ namespace cenote::pipeline {
 enum class SupportRadius { kRelative, kAbsolute };
 
 struct FusionConfig {
-  int num_views = 3;              // N_f: views in the window; odd in [3, kMaxViews], the middle one is the reference
-  double eps = 0.04;              // support radius: fraction of depth (relative, in (0, 1)) or metres (absolute, > 0)
+  int num_views = 3;  // N_f: views in the window; odd in [3, kMaxViews], the middle one is the reference
+  double eps = 0.04;  // support radius: fraction of depth (relative, in (0, 1)) or metres (absolute, > 0)
   SupportRadius support_radius = SupportRadius::kRelative;
-  double min_fused_confidence = 0.5;   // C_thres: fused pixels below this are rejected; > 0
-  double min_input_confidence = 0.0;   // pre-fusion floor: input pixels below it take no part; >= 0
-  double max_depth_m = 4.0;       // input depths beyond it take no part; > 0 (+inf: none). Stereo depth
-                                  // error grows as Z^2 / (f b): with f b = 57 px m and 0.2 px of
-                                  // disparity error, 4 m is where it reaches 5 cm
+  double min_fused_confidence = 0.5;  // C_thres: fused pixels below this are rejected; > 0
+  double min_input_confidence = 0.0;  // pre-fusion floor: input pixels below it take no part; >= 0
+  double max_depth_m = 4.0;           // input depths beyond it take no part; > 0 (+inf: none). Stereo depth
+                                      // error grows as Z^2 / (f b): with f b = 57 px m and 0.2 px of
+                                      // disparity error, 4 m is where it reaches 5 cm
 
   static constexpr int kMaxViews = 15;
 

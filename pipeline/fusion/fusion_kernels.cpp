@@ -62,8 +62,8 @@ HWY_INLINE Projected project(DF df, DI di, VF z, VF r0, VF r1, VF r2, const Proj
   return {index, hz, inside};
 }
 
-void ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y,
-                    int width, int target_width, int target_height, int32_t* out_index, float* out_depth) {
+void ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y, int width,
+                    int target_width, int target_height, int32_t* out_index, float* out_depth) {
   const DF df;
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(df));
@@ -77,8 +77,8 @@ void ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float*
     const VF z = hn::LoadU(df, depth + x), c = hn::LoadU(df, conf + x);
     const MF valid = validPixels(df, z, c, limits);
     const VF z_safe = hn::IfThenElse(valid, z, hn::Set(df, 1.0f));
-    const Projected p = project(df, di, z_safe, hn::MulAdd(xs, a0, b0), hn::MulAdd(xs, a3, b1), hn::MulAdd(xs, a6, b2),
-                                P, target_width, target_height, static_cast<size_t>(target_width));
+    const Projected p = project(df, di, z_safe, hn::MulAdd(xs, a0, b0), hn::MulAdd(xs, a3, b1), hn::MulAdd(xs, a6, b2), P,
+                                target_width, target_height, static_cast<size_t>(target_width));
     const auto keep = hn::RebindMask(di, hn::And(valid, p.inside));
     hn::StoreU(hn::IfThenElse(keep, p.index, hn::Set(di, -1)), di, out_index + x);
     hn::StoreU(p.depth, df, out_depth + x);
@@ -181,10 +181,9 @@ HWY_EXPORT(ProjectRowImpl);
 HWY_EXPORT(FuseRowImpl);
 HWY_EXPORT(FusionLanesImpl);
 
-void projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y,
-                int width, int target_width, int target_height, int32_t* out_index, float* out_depth) {
-  HWY_DYNAMIC_DISPATCH(ProjectRowImpl)(P, limits, depth, conf, y, width, target_width, target_height, out_index,
-                                       out_depth);
+void projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y, int width,
+                int target_width, int target_height, int32_t* out_index, float* out_depth) {
+  HWY_DYNAMIC_DISPATCH(ProjectRowImpl)(P, limits, depth, conf, y, width, target_width, target_height, out_index, out_depth);
 }
 
 void fuseRow(const FusionRowInput& in, int y, float* out_depth, float* out_conf) {

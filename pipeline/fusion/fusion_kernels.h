@@ -35,19 +35,19 @@ struct FusionLimits {
 // Everything the per-pixel fusion needs, resolved once per call.
 struct FusionRowInput {
   int num_views = 0, ref = 0, width = 0, height = 0;
-  std::array<const float*, kMaxFusionViews> depth{}, conf{};  // original maps, row 0
+  std::array<const float*, kMaxFusionViews> depth{}, conf{};   // original maps, row 0
   std::array<size_t, kMaxFusionViews> step{};                  // their row step, in floats
   std::array<const float*, kMaxFusionViews> rendered_depth{};  // rendered maps (width-contiguous rows); ref: unused
   std::array<const float*, kMaxFusionViews> rendered_conf{};
-  std::array<Projector, kMaxFusionViews> to_view{};            // reference pixel -> view l; ref: unused
+  std::array<Projector, kMaxFusionViews> to_view{};  // reference pixel -> view l; ref: unused
   FusionLimits limits{};
 };
 
 // Projects row y of a source view into the target image: for each x, out_index[x] = target pixel
 // index (row * target_width + column) or -1 when the pixel is invalid or its point is dropped, and
 // out_depth[x] = its depth in the target camera.
-void projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y,
-                int width, int target_width, int target_height, int32_t* out_index, float* out_depth);
+void projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y, int width,
+                int target_width, int target_height, int32_t* out_index, float* out_depth);
 
 // Steps 2-4 of depth_fusion.h for row y of the reference view; width >= fusionLanes().
 void fuseRow(const FusionRowInput& in, int y, float* out_depth, float* out_conf);

@@ -25,8 +25,8 @@ struct FusedFrame {
 };
 
 struct FusionWindowTimings {
-  FusionTimings fusion;   // rendering and fusion
-  double points_ms = 0.0; // back-projection into the point batch
+  FusionTimings fusion;    // rendering and fusion
+  double points_ms = 0.0;  // back-projection into the point batch
 };
 
 class FusionWindow {
@@ -55,10 +55,10 @@ class FusionWindow {
 
  private:
   FusionConfig config_;
-  std::vector<DepthFrame> slots_;            // ring buffer of N_f frames
-  std::vector<const DepthFrame*> ordered_;   // the slots, oldest first
-  int next_ = 0;                             // slot the next frame goes to
-  int count_ = 0;                            // frames in the window
+  std::vector<DepthFrame> slots_;           // ring buffer of N_f frames
+  std::vector<const DepthFrame*> ordered_;  // the slots, oldest first
+  int next_ = 0;                            // slot the next frame goes to
+  int count_ = 0;                           // frames in the window
   FusionScratch scratch_;
   FusedFrame result_;
   FusionWindowTimings timings_;

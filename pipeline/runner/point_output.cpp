@@ -45,7 +45,8 @@ void PointOutput::append(const PointBatch& batch) {
     return;
   }
   for (size_t i = 0; i < batch.size(); ++i) {
-    voxels_.try_emplace(voxelKey(batch.points[i], voxel_m_), Voxel{batch.points[i], batch.hasColor() ? batch.colors[i] : grey});
+    voxels_.try_emplace(voxelKey(batch.points[i], voxel_m_),
+                        Voxel{batch.points[i], batch.hasColor() ? batch.colors[i] : grey});
   }
 }
 

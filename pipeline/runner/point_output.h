@@ -34,7 +34,7 @@ class PointOutput {
   std::string path_;
   double voxel_m_;
   std::unique_ptr<io::PlyWriter> writer_;  // null for PCD
-  PointBatch pcd_points_;              // PCD with voxel_m = 0: everything until close()
+  PointBatch pcd_points_;                  // PCD with voxel_m = 0: everything until close()
   std::unordered_map<uint64_t, Voxel> voxels_;
   size_t written_ = 0;
   bool closed_ = false;

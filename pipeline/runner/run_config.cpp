@@ -40,12 +40,9 @@ std::string pointsFileName(const RunConfig& config) { return "points." + config.
 
 const char* toString(PoseFrame frame) {
   switch (frame) {
-    case PoseFrame::kAuto:
-      return "auto";
-    case PoseFrame::kBody:
-      return "body";
-    case PoseFrame::kCamera:
-      return "camera";
+    case PoseFrame::kAuto: return "auto";
+    case PoseFrame::kBody: return "body";
+    case PoseFrame::kCamera: return "camera";
   }
   return "?";
 }

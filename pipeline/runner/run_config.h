@@ -21,11 +21,11 @@ namespace cenote::pipeline {
 enum class PoseFrame { kAuto, kBody, kCamera };
 
 struct RunConfig {
-  int queue_depth = 2;                  // frames waiting between two stages; >= 1
-  double pose_max_gap_s = 0.25;         // interpolate a pose only between samples at most this far
-                                        // apart (+1 us of slack); > 0. 2.5 periods of a 10 Hz stream
-                                        // (the slowest VIO / ground truth): jitter and one dropped
-                                        // sample pass, two in a row do not
+  int queue_depth = 2;           // frames waiting between two stages; >= 1
+  double pose_max_gap_s = 0.25;  // interpolate a pose only between samples at most this far
+                                 // apart (+1 us of slack); > 0. 2.5 periods of a 10 Hz stream
+                                 // (the slowest VIO / ground truth): jitter and one dropped
+                                 // sample pass, two in a row do not
   PoseFrame pose_frame = PoseFrame::kAuto;
   double keyframe_translation_m = 0.0;  // 0 and 0: every frame is processed (camera rate)
   double keyframe_rotation_deg = 0.0;   // else a frame moving less than both since the last is skipped

@@ -93,8 +93,8 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
         }
         const auto t0 = Clock::now();
         const double t = dataset.timestamp(i);
-        const FrameDecision decision =
-            admission.decide(t, [&](double t_s) { return camera_trajectory.poseAt(t_s, rc.pose_max_gap_s); });
+        const FrameDecision decision = admission.decide(
+            t, [&](double t_s) { return camera_trajectory.poseAt(t_s, rc.pose_max_gap_s); });
         if (decision.admission != Admission::kAdmitted) {
           countSkip(decision.admission, out_of_order, no_pose, not_keyframe);
           continue;
@@ -210,8 +210,9 @@ std::string RunReport::toTable() const {
   t.setf(std::ios::fixed);
   t.precision(1);
   t << "frames: " << frames_in << " in, " << frames_processed << " processed, " << frames_fused << " fused; skipped "
-    << (skipped_out_of_order > 0 ? std::to_string(skipped_out_of_order) + " out of time order, " : "") << skipped_no_pose << " without pose, " << skipped_not_keyframe << " not keyframes, " << skipped_unreadable
-    << " unreadable" << (interrupted ? " (interrupted)" : "") << "\n";
+    << (skipped_out_of_order > 0 ? std::to_string(skipped_out_of_order) + " out of time order, " : "") << skipped_no_pose
+    << " without pose, " << skipped_not_keyframe << " not keyframes, " << skipped_unreadable << " unreadable"
+    << (interrupted ? " (interrupted)" : "") << "\n";
   t << "stage           median ms    p95 ms   frames\n";
   for (const char* name : {"read_rectify", "stereo", "fusion", "output", "map"}) {
     const auto it = stages.find(name);
@@ -221,16 +222,16 @@ std::string RunReport::toTable() const {
                   it->second.frames);
     t << line;
   }
-  t << "end to end: " << fps << " fps over " << wall_s << " s, peak memory " << peak_memory_mb << " MiB, "
-    << points_written << " points\n";
+  t << "end to end: " << fps << " fps over " << wall_s << " s, peak memory " << peak_memory_mb << " MiB, " << points_written
+    << " points\n";
   return t.str();
 }
 
 CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const TrajectoryRequest& request) {
   TrajectorySource source;
   if (!request.path.empty()) {
-    const io::TrajectoryFormat format =
-        request.format.empty() ? io::detectTrajectoryFormat(request.path) : io::parseTrajectoryFormat(request.format);
+    const io::TrajectoryFormat format = request.format.empty() ? io::detectTrajectoryFormat(request.path)
+                                                               : io::parseTrajectoryFormat(request.format);
     source = dataset.trajectoryFile(request.path, format);
   } else if (const std::optional<TrajectorySource> own = dataset.defaultTrajectory()) {
     source = *own;
@@ -239,8 +240,8 @@ CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const Trajec
   }
   if (!request.times.empty()) {
     if (source.format != io::TrajectoryFormat::kKitti) {
-      throw Error("trajectory times " + request.times + ": only KITTI poses take a times file; " + source.path +
-                  " is " + io::toString(source.format) + ", which carries its own timestamps");
+      throw Error("trajectory times " + request.times + ": only KITTI poses take a times file; " + source.path + " is " +
+                  io::toString(source.format) + ", which carries its own timestamps");
     }
     source.kitti_times = request.times;
   }
@@ -261,8 +262,8 @@ CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const Trajec
     std::snprintf(offset, sizeof(offset), "%.3f m and %.1f deg", T_body_cam.translation().norm(),
                   Eigen::AngleAxisd(T_body_cam.linear()).angle() * 180.0 / M_PI);
     out.note = std::string("poses of ") + source.path + " taken as " + out.fileFrame() + " poses: a " +
-               io::toString(source.format) + " file does not say which frame it describes, and the camera sits " +
-               offset + " from the body of " + dataset.describe() + "; pass --pose-frame body if they are body (IMU) poses";
+               io::toString(source.format) + " file does not say which frame it describes, and the camera sits " + offset +
+               " from the body of " + dataset.describe() + "; pass --pose-frame body if they are body (IMU) poses";
   }
   const io::Trajectory trajectory = io::Trajectory::read(source.path, source.format, source.kitti_times);
   out.trajectory = out.file_describes_body ? trajectory.transformedBy(T_body_cam) : trajectory;
@@ -270,7 +271,7 @@ CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const Trajec
 }
 
 io::Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
-                            const std::string& trajectory_format, PoseFrame pose_frame) {
+                                const std::string& trajectory_format, PoseFrame pose_frame) {
   return loadCameraTrajectory(dataset, {trajectory_path, trajectory_format, "", pose_frame}).trajectory;
 }
 

@@ -30,9 +30,9 @@
 namespace cenote::pipeline {
 
 struct RunReport {
-  size_t frames_in = 0;          // frames in the dataset (up to run.max_frames)
-  size_t frames_processed = 0;   // frames that went through stereo
-  size_t frames_fused = 0;       // fused reference frames emitted (or raw frames without fusion)
+  size_t frames_in = 0;             // frames in the dataset (up to run.max_frames)
+  size_t frames_processed = 0;      // frames that went through stereo
+  size_t frames_fused = 0;          // fused reference frames emitted (or raw frames without fusion)
   size_t skipped_out_of_order = 0;  // timestamps not after the previous frame's (frame_admission.h)
   size_t skipped_no_pose = 0;
   size_t skipped_not_keyframe = 0;
@@ -45,8 +45,8 @@ struct RunReport {
   bool pose_frame_assumed = false;
   std::string pose_frame_hint;
   double wall_s = 0.0;
-  double fps = 0.0;              // frames processed per second of wall time
-  double peak_memory_mb = 0.0;   // resident set, high-water mark of the process
+  double fps = 0.0;                            // frames processed per second of wall time
+  double peak_memory_mb = 0.0;                 // resident set, high-water mark of the process
   std::map<std::string, StageSummary> stages;  // read_rectify, stereo, fusion, output (+ map: the sink)
 
   // JSON object with the keys above ("stages": {name: {median_ms, p95_ms, mean_ms, frames}}).
@@ -79,22 +79,22 @@ class Runner {
 
 // Which trajectory a run uses (the options of `cenote run`).
 struct TrajectoryRequest {
-  std::string path;          // empty: the dataset's own ground truth
-  std::string format;        // "tum", "euroc", "kitti"; empty: detected from the file
-  std::string times;         // times of a format without timestamps (KITTI); empty: the dataset's
-                             // own (a KITTI sequence's times.txt)
+  std::string path;    // empty: the dataset's own ground truth
+  std::string format;  // "tum", "euroc", "kitti"; empty: detected from the file
+  std::string times;   // times of a format without timestamps (KITTI); empty: the dataset's
+                       // own (a KITTI sequence's times.txt)
   PoseFrame pose_frame = PoseFrame::kAuto;
 };
 
 // The trajectory of the dataset's raw left camera, and how it was made.
 struct CameraTrajectory {
-  io::Trajectory trajectory;       // T_world_cam of the raw left camera
+  io::Trajectory trajectory;         // T_world_cam of the raw left camera
   bool file_describes_body = false;  // the file's poses were composed with T_body_cam
   // true: pose_frame was auto, the format does not say which frame its poses describe (TUM; KITTI
   // outside a KITTI sequence) and the dataset's T_body_cam is not the identity, so the choice
   // (the camera) changes the map; `note` then says so and how to choose.
   bool frame_assumed = false;
-  std::string note;                // one line for a person; empty when nothing was assumed
+  std::string note;  // one line for a person; empty when nothing was assumed
   const char* fileFrame() const { return file_describes_body ? "body" : "camera"; }
 };
 
@@ -108,7 +108,7 @@ CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const Trajec
 
 // loadCameraTrajectory(dataset, {trajectory_path, trajectory_format, "", pose_frame}).trajectory.
 io::Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,
-                            const std::string& trajectory_format, PoseFrame pose_frame);
+                                const std::string& trajectory_format, PoseFrame pose_frame);
 
 // Peak resident memory of this process in MiB (getrusage).
 double peakMemoryMb();

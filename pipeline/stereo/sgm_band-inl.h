@@ -34,8 +34,8 @@ HWY_INLINE V shiftedBand(V prev, V sentinel, int shift, const uint16_t* iota) {
   constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
   if constexpr (kLanes == 32) {
-    const __m512i index =
-        _mm512_add_epi16(_mm512_load_si512(iota), _mm512_set1_epi16(static_cast<int16_t>(shift + kOffset)));
+    const __m512i index = _mm512_add_epi16(_mm512_load_si512(iota),
+                                           _mm512_set1_epi16(static_cast<int16_t>(shift + kOffset)));
     // Lanes whose source index is outside [0, 32) (as unsigned) keep the sentinel.
     const __mmask32 inside = _mm512_cmplt_epu16_mask(index, _mm512_set1_epi16(32));
     return V{_mm512_mask_permutexvar_epi16(sentinel.raw, inside, index, prev.raw)};
@@ -113,9 +113,9 @@ HWY_INLINE void bandColumn(const SgmParams& p, const BandSadWindow<kWindow>& win
 // One row of one pass, as aggregateRowFull(), over each pixel's band. kWindow: the SAD window
 // side, 0 for census.
 template <int kWindow>
-void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y,
-                      int dx, bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored,
-                      float* disparity, float* confidence) {
+void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y, int dx,
+                      bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored, float* disparity,
+                      float* confidence) {
   const DU16 d;
   constexpr bool kCensus = kWindow == 0;
   constexpr int kN = static_cast<int>(hn::MaxLanes(DU16()));
@@ -212,18 +212,16 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     const VU16 min_vertical_v = hn::Set(d, min_vertical);
     const VU16 min_back_v = hn::Set(d, min_back), min_fwd_v = hn::Set(d, min_fwd);
     // P2 per direction: one constant unless adapted to the intensity step.
-    auto penalty = [&](uint8_t a, uint8_t b2) HWY_ATTR {
-      return adaptive ? hn::Set(d, pen.p2[std::abs(a - b2)]) : p2_constant;
-    };
+    auto penalty = [&](uint8_t a, uint8_t b2)
+                       HWY_ATTR { return adaptive ? hn::Set(d, pen.p2[std::abs(a - b2)]) : p2_constant; };
     const VU16 jump_along = hn::Add(along_min, penalty(row[x], row[x - dx]));
     const VU16 jump_vertical = hn::Add(min_vertical_v, penalty(row[x], prev_row[x]));
     const VU16 jump_back = hn::Add(min_back_v, penalty(row[x], prev_row[x - dx]));
     const VU16 jump_fwd = hn::Add(min_fwd_v, penalty(row[x], prev_row[x + dx]));
     const int slot = i % kWinnerBatch;
     band_first[slot] = start;
-    uint16_t* const sums_out = output == RowOutput::kStoreSums
-                                   ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp
-                                   : batch_sums + slot * Dp;
+    uint16_t* const sums_out = output == RowOutput::kStoreSums ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp
+                                                               : batch_sums + slot * Dp;
     const uint16_t* const sums_in = add_stored ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp : nullptr;
     // The along-row predecessor when it searched another band: one vector is shifted in
     // registers, several go through memory.
@@ -272,12 +270,12 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       }
       const VU16 l0 = step(along_same, along_neighbours, jump_along, along_min);
       const VU16 l1 = step(hn::LoadU(d, vertical_in + k),
-                           hn::Min(hn::LoadU(d, vertical_in + k - 1), hn::LoadU(d, vertical_in + k + 1)),
-                           jump_vertical, min_vertical_v);
+                           hn::Min(hn::LoadU(d, vertical_in + k - 1), hn::LoadU(d, vertical_in + k + 1)), jump_vertical,
+                           min_vertical_v);
       const VU16 l2 = step(hn::LoadU(d, back + k), hn::Min(hn::LoadU(d, back + k - 1), hn::LoadU(d, back + k + 1)),
                            jump_back, min_back_v);
-      const VU16 l3 = step(hn::LoadU(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)),
-                           jump_fwd, min_fwd_v);
+      const VU16 l3 = step(hn::LoadU(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)), jump_fwd,
+                           min_fwd_v);
       along_new[j] = l0;
       vertical_new[j] = l1;  // stored after every vector has read the old values
       hn::Store(l2, d, back_out + k);

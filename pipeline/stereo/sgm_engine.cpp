@@ -81,9 +81,8 @@ HWY_INLINE V shiftInPrevious(V prev, V cur) {
   constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
   if constexpr (kLanes == 32) {
-    alignas(64) static constexpr uint16_t kIndex[32] = {63, 0,  1,  2,  3,  4,  5,  6,  7,  8,  9,
-                                                        10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20,
-                                                        21, 22, 23, 24, 25, 26, 27, 28, 29, 30};
+    alignas(64) static constexpr uint16_t kIndex[32] = {63, 0,  1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11, 12, 13, 14,
+                                                        15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30};
     return V{_mm512_permutex2var_epi16(cur.raw, _mm512_load_si512(kIndex), prev.raw)};
   }
 #endif
@@ -107,9 +106,8 @@ HWY_INLINE V shiftInNext(V cur, V next) {
   constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
   if constexpr (kLanes == 32) {
-    alignas(64) static constexpr uint16_t kIndex[32] = {1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11,
-                                                        12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22,
-                                                        23, 24, 25, 26, 27, 28, 29, 30, 31, 32};
+    alignas(64) static constexpr uint16_t kIndex[32] = {1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11, 12, 13, 14, 15, 16,
+                                                        17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32};
     return V{_mm512_permutex2var_epi16(cur.raw, _mm512_load_si512(kIndex), next.raw)};
   }
 #endif
@@ -142,35 +140,33 @@ constexpr int kWinnerBatch = 16;
 // working set in the L2 cache.
 struct StripBuffers {
   int width = 0;
-  int lanes = 0;          // N
-  int padded = 0;         // Dp: disparities rounded up to N
-  int pixel_stride = 0;   // Dp, plus N sentinel lanes when Dp == D; band: 3 kBandDisparities
-  int lead = 0;           // sentinel lanes before pixel -1 of a path row: N; band: 2 kBandDisparities
-  bool band = false;      // coarse-to-fine band (SgmImages::band_start)
+  int lanes = 0;         // N
+  int padded = 0;        // Dp: disparities rounded up to N
+  int pixel_stride = 0;  // Dp, plus N sentinel lanes when Dp == D; band: 3 kBandDisparities
+  int lead = 0;          // sentinel lanes before pixel -1 of a path row: N; band: 2 kBandDisparities
+  bool band = false;     // coarse-to-fine band (SgmImages::band_start)
   uint16_t* path[4] = {};
-  uint16_t* path_min[4] = {};  // W + 2 each, pixel x at x + 1
-  uint16_t* along[2] = {};     // [N sentinels][Dp][N sentinels]: previous and current pixel
+  uint16_t* path_min[4] = {};      // W + 2 each, pixel x at x + 1
+  uint16_t* along[2] = {};         // [N sentinels][Dp][N sentinels]: previous and current pixel
   uint16_t* column_sum = nullptr;  // SAD: [x][Dp] sums over the window rows
   uint8_t* ring = nullptr;         // SAD: window rows of [x][Dp] absolute differences
   // Band SAD (instead of column_sum and ring): the window's right rows reversed and widened
   // ([window][reversed_length], slot by image row), see sgm_band-inl.h.
   uint16_t* band_rows = nullptr;
-  uint16_t* running = nullptr;     // SAD: Dp, running horizontal window sum
-  uint16_t* sums = nullptr;        // [kWinnerBatch][Dp]: path sums of the pixels awaiting their winner
-  uint16_t* batch_best = nullptr;  // [kWinnerBatch][N]: lane-wise minimum of each pixel's sums
-  uint16_t* batch_index = nullptr; // [kWinnerBatch][N]: and the first disparity that has it
-  uint16_t* batch_second = nullptr; // [kWinnerBatch][N]: lane-wise second smallest sum
-  uint16_t* iota = nullptr;        // Dp: 0, 1, 2, ...
-  uint16_t* right_min = nullptr;   // LR check: best sum per right pixel, stored reversed
+  uint16_t* running = nullptr;       // SAD: Dp, running horizontal window sum
+  uint16_t* sums = nullptr;          // [kWinnerBatch][Dp]: path sums of the pixels awaiting their winner
+  uint16_t* batch_best = nullptr;    // [kWinnerBatch][N]: lane-wise minimum of each pixel's sums
+  uint16_t* batch_index = nullptr;   // [kWinnerBatch][N]: and the first disparity that has it
+  uint16_t* batch_second = nullptr;  // [kWinnerBatch][N]: lane-wise second smallest sum
+  uint16_t* iota = nullptr;          // Dp: 0, 1, 2, ...
+  uint16_t* right_min = nullptr;     // LR check: best sum per right pixel, stored reversed
   uint16_t* right_arg = nullptr;
-  int16_t* winner = nullptr;       // W: integer winner per pixel of the row (-1 = invalid)
-  uint8_t* right_reversed = nullptr;     // SAD: entering right row, reversed and padded
-  uint16_t* census_reversed[2] = {};     // census: right row's low and high 16 bits, reversed
+  int16_t* winner = nullptr;          // W: integer winner per pixel of the row (-1 = invalid)
+  uint8_t* right_reversed = nullptr;  // SAD: entering right row, reversed and padded
+  uint16_t* census_reversed[2] = {};  // census: right row's low and high 16 bits, reversed
   int reversed_length = 0;
 
-  uint16_t* pathPixel(uint16_t* row, int x) const {
-    return row + lead + static_cast<std::ptrdiff_t>(x + 1) * pixel_stride;
-  }
+  uint16_t* pathPixel(uint16_t* row, int x) const { return row + lead + static_cast<std::ptrdiff_t>(x + 1) * pixel_stride; }
 };
 
 std::size_t alignUp(std::size_t n, std::size_t a) { return (n + a - 1) / a * a; }
@@ -190,12 +186,9 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   const std::size_t path_row = (W + 2) * b.pixel_stride + 2 * b.lead;
   const std::size_t along = std::max<std::size_t>(Dp + 2 * N, 5 * kBandDisparities);
   const bool band_sad = band && !p.census;
-  const std::size_t sad = p.census ? 0
-                          : band_sad ? p.window * rev
-                                     : W * Dp + (W * Dp * p.window + 1) / 2;
+  const std::size_t sad = p.census ? 0 : band_sad ? p.window * rev : W * Dp + (W * Dp * p.window + 1) / 2;
   // Every piece is rounded up to 64 elements by take(); 32 pieces at most.
-  const std::size_t total = 4 * (path_row + W + 2) + 2 * along + sad + 2 * Dp +
-                            kWinnerBatch * (Dp + 3 * N) + 2 * rev + W +
+  const std::size_t total = 4 * (path_row + W + 2) + 2 * along + sad + 2 * Dp + kWinnerBatch * (Dp + 3 * N) + 2 * rev + W +
                             (rev / 2 + 32) + 2 * rev + 32 * 64;
   if (ws.buffer_elements < total) {
     ws.buffer = hwy::AllocateAligned<uint16_t>(total);
@@ -303,10 +296,10 @@ struct CostSource {
 // Column c of the entering row: where its differences come from and go to (resolved once per
 // column, outside the loop over disparity vectors).
 struct EnteringColumn {
-  uint8_t left = 0;                 // left image value at c
-  const uint8_t* right = nullptr;   // reversed right row at c
-  uint8_t* slot = nullptr;          // ring slot of the entering row, at c
-  uint16_t* sum = nullptr;          // column sums, at c
+  uint8_t left = 0;                // left image value at c
+  const uint8_t* right = nullptr;  // reversed right row at c
+  uint8_t* slot = nullptr;         // ring slot of the entering row, at c
+  uint16_t* sum = nullptr;         // column sums, at c
 };
 
 EnteringColumn enteringColumn(const SgmParams& p, const StripBuffers& b, const CostSource& src, int c) {
@@ -477,9 +470,8 @@ HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uin
   // minimum and first index (branch-free; searching the vectors for the winner mispredicts).
   const uint16_t c1 = minLane(d, best);
   // With one vector (a band, or a short range) lane i holds disparity i: the first lane with c1.
-  const int winner =
-      Dp <= N ? static_cast<int>(hn::FindKnownFirstTrue(d, hn::Eq(best, hn::Set(d, c1))))
-              : minLane(d, hn::IfThenElse(hn::Eq(best, hn::Set(d, c1)), best_index, hn::Set(d, kNoCost)));
+  const int winner = Dp <= N ? static_cast<int>(hn::FindKnownFirstTrue(d, hn::Eq(best, hn::Set(d, c1))))
+                             : minLane(d, hn::IfThenElse(hn::Eq(best, hn::Set(d, c1)), best_index, hn::Set(d, kNoCost)));
   // Second minimum: outside winner-1..winner+1 (neighbours of the winner are the same match
   // seen at a sub-pixel offset), or anywhere but the winner. A lane holds disparities N apart,
   // so the excluded span takes at most one disparity from it: if that is the lane's first
@@ -500,8 +492,8 @@ HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uin
 
 // Disparity, sub-pixel offset and PKRN of batch slots [0, count): pixel j of the batch is image
 // column xs[j]. Writes the outputs and the integer winner per column (-1 where invalid).
-void finishWinners(const SgmParams& p, const WinnerBatch& in, int count, const int* xs, float* disparity,
-                   float* confidence, int16_t* winners) {
+void finishWinners(const SgmParams& p, const WinnerBatch& in, int count, const int* xs, float* disparity, float* confidence,
+                   int16_t* winners) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
   const int L = static_cast<int>(hn::Lanes(df));
@@ -524,10 +516,9 @@ void finishWinners(const SgmParams& p, const WinnerBatch& in, int count, const i
     const auto kept = hn::And(hn::RebindMask(df, hn::Gt(winner, hn::Set(di, -1))), hn::Not(hn::MaskFromVec(rejected)));
     // Parabola through (winner - 1, below), (winner, c1), (winner + 1, above).
     const auto denominator = hn::Sub(hn::Add(below, above), hn::Add(c1, c1));
-    const auto offset = hn::IfThenElse(hn::RebindMask(df, hn::Gt(denominator, hn::Zero(di))),
-                                       hn::Div(hn::ConvertTo(df, hn::Sub(below, above)),
-                                               hn::Mul(two, hn::ConvertTo(df, denominator))),
-                                       zero);
+    const auto offset = hn::IfThenElse(
+        hn::RebindMask(df, hn::Gt(denominator, hn::Zero(di))),
+        hn::Div(hn::ConvertTo(df, hn::Sub(below, above)), hn::Mul(two, hn::ConvertTo(df, denominator))), zero);
     const auto value = hn::Add(hn::ConvertTo(df, hn::Add(winner, hn::Set(di, p.min_disparity))), offset);
     hn::Store(hn::IfThenElse(kept, value, hn::Set(df, std::numeric_limits<float>::infinity())), df, out_disparity + j0);
     hn::Store(hn::IfThenElse(kept, pkrn, zero), df, out_confidence + j0);
@@ -608,8 +599,8 @@ enum class RowOutput { kNone, kStoreSums, kWinner };
 // After pixel x: the minima of its three stored paths (vertical, forward and backward diagonal),
 // which the next row's pixels read for their P2 term, into rows b.path_min[0], [2] and [3]
 // (passed as pointers: the band kernel keeps them in locals, see aggregateRowBand).
-HWY_INLINE void storePathMinima(uint16_t* min_vertical, uint16_t* min_fwd, uint16_t* min_back, int x,
-                                VU16 mins_vertical, VU16 mins_fwd, VU16 mins_back) {
+HWY_INLINE void storePathMinima(uint16_t* min_vertical, uint16_t* min_fwd, uint16_t* min_back, int x, VU16 mins_vertical,
+                                VU16 mins_fwd, VU16 mins_back) {
   const DU16 d;
   min_vertical[x + 1] = minLane(d, mins_vertical);
   min_fwd[x + 1] = minLane(d, mins_fwd);
@@ -635,9 +626,9 @@ enum class PixelKind { kGeneral, kSadInterior, kCensusInterior };
 // 2 from (x - dx, y - dx), 3 from (x + dx, y - dx); rows 0..2 of b.path hold directions 1..3
 // (row 3: direction 2's new costs).
 // `stored_sums`: first-pass sums to add (8-path second pass) or to write (8-path first pass).
-void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y,
-                      int dx, bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored,
-                      float* disparity, float* confidence) {
+void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y, int dx,
+                      bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored, float* disparity,
+                      float* confidence) {
   const DU16 d;
   const int N = b.lanes, Dp = b.padded, W = p.width, D = p.num_disparities, r = p.window / 2;
   const VU16 p1 = hn::Set(d, static_cast<uint16_t>(p.p1));
@@ -660,10 +651,11 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     // SAD window columns: the one entering ahead of x and the one leaving behind it.
     const int ahead = x + dx * r;
     const bool update_ahead = src.update_columns && i > 0 && ahead >= 0 && ahead < W;
-    const uint16_t* add_column =
-        p.census ? nullptr : b.column_sum + static_cast<std::ptrdiff_t>(clampColumn(ahead, W)) * Dp;
-    const uint16_t* leave_column =
-        p.census ? nullptr : b.column_sum + static_cast<std::ptrdiff_t>(clampColumn(x - dx * (r + 1), W)) * Dp;
+    const uint16_t* add_column = p.census ? nullptr
+                                          : b.column_sum + static_cast<std::ptrdiff_t>(clampColumn(ahead, W)) * Dp;
+    const uint16_t* leave_column = p.census
+                                       ? nullptr
+                                       : b.column_sum + static_cast<std::ptrdiff_t>(clampColumn(x - dx * (r + 1), W)) * Dp;
     const bool left_border = x - p.min_disparity < D;
     const bool no_match = x < p.min_disparity;
     const VU16 max_valid_k = hn::Set(d, static_cast<uint16_t>(no_match ? 0 : x - p.min_disparity));
@@ -686,15 +678,12 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     const VU16 min_along_v = along_min, min_vertical_v = hn::Set(d, min_vertical);
     const VU16 min_back_v = hn::Set(d, min_back), min_fwd_v = hn::Set(d, min_fwd);
     const VU16 jump_along = hn::Add(along_min, hn::Set(d, pen.p2[std::abs(row[x] - row[x - dx])]));
-    const VU16 jump_vertical =
-        hn::Set(d, static_cast<uint16_t>(min_vertical + pen.p2[std::abs(row[x] - prev_row[x])]));
-    const VU16 jump_back =
-        hn::Set(d, static_cast<uint16_t>(min_back + pen.p2[std::abs(row[x] - prev_row[x - dx])]));
+    const VU16 jump_vertical = hn::Set(d, static_cast<uint16_t>(min_vertical + pen.p2[std::abs(row[x] - prev_row[x])]));
+    const VU16 jump_back = hn::Set(d, static_cast<uint16_t>(min_back + pen.p2[std::abs(row[x] - prev_row[x - dx])]));
     const VU16 jump_fwd = hn::Set(d, static_cast<uint16_t>(min_fwd + pen.p2[std::abs(row[x] - prev_row[x + dx])]));
     const int slot = i % kWinnerBatch;
-    uint16_t* const sums_out = output == RowOutput::kStoreSums
-                                   ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp
-                                   : b.sums + slot * Dp;
+    uint16_t* const sums_out = output == RowOutput::kStoreSums ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp
+                                                               : b.sums + slot * Dp;
     const uint16_t* const sums_in = add_stored ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp : nullptr;
     const uint16_t* const iota = b.iota;
     uint16_t* const running_sum = b.running;
@@ -744,8 +733,7 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         cost = hn::IfThenElse(beyond, worst_cost, cost);
       }
       // L = C + min(L(d), min(L(d-1), L(d+1)) + P1, min_k L + P2) - min_k L.
-      auto step = [&](VU16 same, VU16 neighbours, VU16 jump,
-                      VU16 min_prev) HWY_ATTR __attribute__((always_inline)) {
+      auto step = [&](VU16 same, VU16 neighbours, VU16 jump, VU16 min_prev) HWY_ATTR __attribute__((always_inline)) {
         const VU16 path = hn::Add(cost, hn::Sub(hn::Min(hn::Min(same, hn::Add(neighbours, p1)), jump), min_prev));
         if constexpr (decltype(is_last)::value) return hn::IfThenElse(last_mask, path, sentinel_v);
         return path;
@@ -759,8 +747,8 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
                            min_vertical_v);
       const VU16 l2 = step(hn::Load(d, back + k), hn::Min(hn::LoadU(d, back + k - 1), hn::LoadU(d, back + k + 1)),
                            jump_back, min_back_v);
-      const VU16 l3 = step(hn::Load(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)),
-                           jump_fwd, min_fwd_v);
+      const VU16 l3 = step(hn::Load(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)), jump_fwd,
+                           min_fwd_v);
       hn::Store(l0, d, along_out + k);
       // Direction 1 overwrites the pixel it reads: vector k's neighbour loads still need vector
       // k - 1's old last lane, so each vector is stored one step late.
@@ -811,8 +799,8 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
 // Coarse-to-fine band search: aggregateRowBand().
 #include "pipeline/stereo/sgm_band-inl.h"
 
-void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int row_end, int overlap,
-                    SgmWorkspace& ws, const SgmOutput& out) {
+void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int row_end, int overlap, SgmWorkspace& ws,
+                    const SgmOutput& out) {
   const bool band = im.band_start != nullptr;
   StripBuffers b = carveBuffers(p, ws, band);
   const PenaltyTable pen = makePenaltyTable(p);
@@ -870,8 +858,8 @@ void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int 
   }
 }
 
-void CensusTransformImpl(const uint8_t* image, std::ptrdiff_t stride, int width, int row_begin,
-                         int row_end, int window, uint32_t* out, std::ptrdiff_t out_stride) {
+void CensusTransformImpl(const uint8_t* image, std::ptrdiff_t stride, int width, int row_begin, int row_end, int window,
+                         uint32_t* out, std::ptrdiff_t out_stride) {
   const hn::ScalableTag<uint32_t> d32;
   const hn::Rebind<uint8_t, decltype(d32)> d8;
   const int N = static_cast<int>(hn::Lanes(d32));
@@ -919,15 +907,14 @@ HWY_EXPORT(MatchStripImpl);
 HWY_EXPORT(CensusTransformImpl);
 HWY_EXPORT(VectorLanesImpl);
 
-void matchStrip(const SgmParams& params, const SgmImages& images, int row_begin, int row_end,
-                int overlap, SgmWorkspace& workspace, const SgmOutput& output) {
+void matchStrip(const SgmParams& params, const SgmImages& images, int row_begin, int row_end, int overlap,
+                SgmWorkspace& workspace, const SgmOutput& output) {
   HWY_DYNAMIC_DISPATCH(MatchStripImpl)(params, images, row_begin, row_end, overlap, workspace, output);
 }
 
-void censusTransform(const uint8_t* image, std::ptrdiff_t image_stride, int width, int row_begin,
-                     int row_end, int window, uint32_t* out, std::ptrdiff_t out_stride) {
-  HWY_DYNAMIC_DISPATCH(CensusTransformImpl)(image, image_stride, width, row_begin, row_end, window,
-                                            out, out_stride);
+void censusTransform(const uint8_t* image, std::ptrdiff_t image_stride, int width, int row_begin, int row_end, int window,
+                     uint32_t* out, std::ptrdiff_t out_stride) {
+  HWY_DYNAMIC_DISPATCH(CensusTransformImpl)(image, image_stride, width, row_begin, row_end, window, out, out_stride);
 }
 
 int sgmVectorLanes() { return HWY_DYNAMIC_DISPATCH(VectorLanesImpl)(); }

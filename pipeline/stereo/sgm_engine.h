@@ -29,7 +29,7 @@ struct SgmParams {
   int height = 0;
   int num_disparities = 0;  // D, a multiple of 16
   int min_disparity = 0;
-  bool census = false;      // false: SAD over window x window
+  bool census = false;  // false: SAD over window x window
   int window = 3;
   int sad_shift = 0;
   int max_cost = 0;
@@ -53,7 +53,7 @@ struct SgmImages {
   const uint8_t* guide = nullptr;  // grey left image: intensity steps adapt P2
   const uint8_t* left = nullptr;   // what SAD compares (grey or prefiltered)
   const uint8_t* right = nullptr;
-  std::ptrdiff_t image_stride = 0;   // bytes per row of guide/left/right
+  std::ptrdiff_t image_stride = 0;  // bytes per row of guide/left/right
   const uint32_t* census_left = nullptr;
   const uint32_t* census_right = nullptr;
   std::ptrdiff_t census_stride = 0;  // elements per row
@@ -79,14 +79,14 @@ struct SgmWorkspace {
 
 // Matches rows [row_begin, row_end) of the output, starting `overlap` rows earlier (and, with 8
 // paths, ending `overlap` rows later) so that the vertical paths are warmed up at the strip border.
-void matchStrip(const SgmParams& params, const SgmImages& images, int row_begin, int row_end,
-                int overlap, SgmWorkspace& workspace, const SgmOutput& output);
+void matchStrip(const SgmParams& params, const SgmImages& images, int row_begin, int row_end, int overlap,
+                SgmWorkspace& workspace, const SgmOutput& output);
 
 // Census transform of one image (bordered as in SgmImages): bit set where neighbour < centre,
 // over a window x window neighbourhood without the centre (window 3 or 5).
 // Rows [row_begin, row_end) only, so that callers can split the image between threads.
-void censusTransform(const uint8_t* image, std::ptrdiff_t image_stride, int width, int row_begin,
-                     int row_end, int window, uint32_t* out, std::ptrdiff_t out_stride);
+void censusTransform(const uint8_t* image, std::ptrdiff_t image_stride, int width, int row_begin, int row_end, int window,
+                     uint32_t* out, std::ptrdiff_t out_stride);
 
 // Number of uint16 lanes of the dispatched instruction set (the disparity padding unit).
 int sgmVectorLanes();

@@ -32,34 +32,34 @@ inline constexpr int kBandDisparities = 32;
 
 struct StereoConfig {
   MatchingCost cost = MatchingCost::kSad;
-  int num_disparities = 112;   // search range size; a multiple of 16 in [16, 512]
-  int min_disparity_px = 0;    // first disparity searched; >= 0
-  int window_px = 3;           // SAD: odd side in [1, 9]; census: 3 or 5
+  int num_disparities = 112;                 // search range size; a multiple of 16 in [16, 512]
+  int min_disparity_px = 0;                  // first disparity searched; >= 0
+  int window_px = 3;                         // SAD: odd side in [1, 9]; census: 3 or 5
   Prefilter prefilter = Prefilter::kSobelX;  // SAD only
-  int prefilter_cap = 63;      // derivative clipped to +-cap grey levels, in [1, 127]; 63 keeps the
-                               // sub-pixel error of a slanted plane at 0.13 px (31: 0.15)
-  int num_paths = 4;           // SGM: 4 = one top-down pass (rSGM), 8 = two passes
-  SearchMode search = SearchMode::kBand;  // band around a coarse match (about 1.7x faster), or full
-  int coarse_scale = 4;        // kBand: the coarse match runs on the pair shrunk by 2 or 4 (2x2 or
-                               // 4x4 means); 4 costs a sixteenth of the full size instead of a
-                               // quarter, for nearly the same accuracy (middlebury_test.cpp)
-  int p1 = -1;                 // penalty for a disparity step of 1; -1 = default of the cost
-  int p2 = -1;                 // penalty for larger steps; -1 = default of the cost
-  bool adaptive_p2 = false;    // P2 / (1 + |I(p) - I(p-r)| / p2_gradient_scale), never below P1 + 1
-  double p2_gradient_scale = 8.0;  // grey levels; only with adaptive_p2
-  bool subpixel = true;        // parabola through the aggregated costs at d-1, d, d+1
-  bool pkrn_exclude_neighbours = true;  // second minimum taken outside d*-1..d*+1 (see stereo_matcher.h)
-  double min_confidence = 0.0; // PKRN below this marks the pixel invalid; PKRN >= 1, so 0 keeps all
-  bool lr_check = true;        // left-right consistency check on integer disparities (mapping wants
-                               // few, right points; config/default.yaml documents every default)
-  bool invalidate_truncated = true;   // mark invalid the left columns x < min_d + D - 1, whose
-                               // search range is cut by the image border: their true match may lie
-                               // outside the right image (OpenCV's behaviour; for mapping)
-  int lr_max_diff_px = 1;      // allowed |d_left - d_right| with lr_check
-  int num_strips = 2;          // fixed horizontal strips matched independently (threads share them);
-                               // fixed so that the result does not depend on the thread count
-  int strip_overlap_px = 24;   // rows matched above (and below, 8 paths) a strip before its own rows,
-                               // so that vertical paths arrive warmed up at the strip border
+  int prefilter_cap = 63;                    // derivative clipped to +-cap grey levels, in [1, 127]; 63 keeps the
+                                             // sub-pixel error of a slanted plane at 0.13 px (31: 0.15)
+  int num_paths = 4;                         // SGM: 4 = one top-down pass (rSGM), 8 = two passes
+  SearchMode search = SearchMode::kBand;     // band around a coarse match (about 1.7x faster), or full
+  int coarse_scale = 4;                      // kBand: the coarse match runs on the pair shrunk by 2 or 4 (2x2 or
+                                             // 4x4 means); 4 costs a sixteenth of the full size instead of a
+                                             // quarter, for nearly the same accuracy (middlebury_test.cpp)
+  int p1 = -1;                               // penalty for a disparity step of 1; -1 = default of the cost
+  int p2 = -1;                               // penalty for larger steps; -1 = default of the cost
+  bool adaptive_p2 = false;                  // P2 / (1 + |I(p) - I(p-r)| / p2_gradient_scale), never below P1 + 1
+  double p2_gradient_scale = 8.0;            // grey levels; only with adaptive_p2
+  bool subpixel = true;                      // parabola through the aggregated costs at d-1, d, d+1
+  bool pkrn_exclude_neighbours = true;       // second minimum taken outside d*-1..d*+1 (see stereo_matcher.h)
+  double min_confidence = 0.0;               // PKRN below this marks the pixel invalid; PKRN >= 1, so 0 keeps all
+  bool lr_check = true;                      // left-right consistency check on integer disparities (mapping wants
+                                             // few, right points; config/default.yaml documents every default)
+  bool invalidate_truncated = true;          // mark invalid the left columns x < min_d + D - 1, whose
+                                             // search range is cut by the image border: their true match may lie
+                                             // outside the right image (OpenCV's behaviour; for mapping)
+  int lr_max_diff_px = 1;                    // allowed |d_left - d_right| with lr_check
+  int num_strips = 2;                        // fixed horizontal strips matched independently (threads share them);
+                                             // fixed so that the result does not depend on the thread count
+  int strip_overlap_px = 24;                 // rows matched above (and below, 8 paths) a strip before its own rows,
+                                             // so that vertical paths arrive warmed up at the strip border
 
   // Penalties with the per-cost defaults resolved.
   int effectiveP1() const;

@@ -19,8 +19,7 @@ namespace {
 cv::Mat toGrey(const cv::Mat& image, const char* which) {
   if (image.empty()) throw Error(std::string("stereo: ") + which + " image is empty");
   if (image.depth() != CV_8U) {
-    throw Error(std::string("stereo: ") + which + " image must be 8-bit, got depth " +
-                std::to_string(image.depth()));
+    throw Error(std::string("stereo: ") + which + " image must be 8-bit, got depth " + std::to_string(image.depth()));
   }
   if (image.channels() == 1) return image;
   cv::Mat grey;
@@ -46,7 +45,7 @@ struct MatchLevel {
   cv::Mat guide_bordered;                        // grey left image, for the adaptive P2
   cv::Mat left_bordered, right_bordered;         // what the cost compares
   cv::Mat census_left, census_right;
-  detail::SgmImages images;                      // views of the above
+  detail::SgmImages images;  // views of the above
 };
 
 // Coarse to fine, per strip: the strip's own coarse match (so that a strip never waits for
@@ -58,7 +57,7 @@ struct StripBands {
 
 struct StereoMatcher::Impl {
   MatchLevel full;
-  MatchLevel coarse;     // coarse to fine only: the pair shrunk by coarse_scale
+  MatchLevel coarse;  // coarse to fine only: the pair shrunk by coarse_scale
   cv::Mat coarse_left, coarse_right;
   std::vector<StripBands> bands;  // one per strip
   DisparityMap result;            // the last frame's result, shared with the caller
@@ -242,10 +241,10 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
   if (p.census) census_levels.push_back(&impl.full);
   if (p.census && band) census_levels.push_back(&impl.coarse);
 
-  // One parallel region per frame (each region hands work to the other thread, which spins
-  // between regions): the two images prepared side by side, the census descriptors, then the
-  // strips. Strips are equal in work (stripBoundaries) but threads may not be equally free
-  // (dynamic schedule), and a strip never waits for another.
+    // One parallel region per frame (each region hands work to the other thread, which spins
+    // between regions): the two images prepared side by side, the census descriptors, then the
+    // strips. Strips are equal in work (stripBoundaries) but threads may not be equally free
+    // (dynamic schedule), and a strip never waits for another.
 #pragma omp parallel
   {
 #pragma omp for schedule(static)

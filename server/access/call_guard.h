@@ -65,7 +65,8 @@ class CallGuard {
     const auto start = std::chrono::steady_clock::now();
     grpc::Status status = auth_.check(*context);
     if (status.ok() && context->deadline() < std::chrono::system_clock::now()) {
-      status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, std::string(method) + ": deadline passed before the call ran");
+      status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
+                            std::string(method) + ": deadline passed before the call ran");
     }
     if (status.ok()) {
       try {

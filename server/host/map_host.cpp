@@ -119,8 +119,7 @@ bool MapHost::waitForDerived(std::chrono::system_clock::time_point deadline) con
 }
 
 bool MapHost::followingQueries(Clock::time_point now) const {
-  return last_derived_query_ &&
-         now - *last_derived_query_ <= std::chrono::duration<double>(options_.derived_follow_s);
+  return last_derived_query_ && now - *last_derived_query_ <= std::chrono::duration<double>(options_.derived_follow_s);
 }
 
 void MapHost::derivedLoop() {

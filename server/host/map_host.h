@@ -80,11 +80,11 @@ class MapHost {
   const MapHostOptions options_;
   mutable std::mutex derived_mutex_;
   mutable std::condition_variable derived_cv_;
-  mapping::MapDelta pending_;        // changes not yet in the derived structures
-  uint64_t published_changes_ = 0;   // changes made
-  uint64_t derived_changes_ = 0;     // changes the derived structures include
-  uint64_t derived_updates_ = 0;     // rounds of derived updates
-  uint64_t idle_changes_ = 0;        // published_changes_ at the derived thread's last untimed wait
+  mapping::MapDelta pending_;       // changes not yet in the derived structures
+  uint64_t published_changes_ = 0;  // changes made
+  uint64_t derived_changes_ = 0;    // changes the derived structures include
+  uint64_t derived_updates_ = 0;    // rounds of derived updates
+  uint64_t idle_changes_ = 0;       // published_changes_ at the derived thread's last untimed wait
   uint64_t batches_ = 0;
   using Clock = std::chrono::steady_clock;
   bool followingQueries(Clock::time_point now) const;

@@ -67,8 +67,9 @@ fs::path Snapshotter::write(const std::string& relative_path, v1::SnapshotFormat
   const fs::path relative(relative_path);
   if (relative_path.empty()) throw invalidArgument("path: empty; give a file name such as map.vdb");
   if (relative.is_absolute()) {
-    throw StatusError(grpc::StatusCode::PERMISSION_DENIED,
-                      "path " + relative_path + " is absolute; snapshots are written under the server's snapshot directory");
+    throw StatusError(
+        grpc::StatusCode::PERMISSION_DENIED,
+        "path " + relative_path + " is absolute; snapshots are written under the server's snapshot directory");
   }
   for (const fs::path& part : relative) {
     if (part == "..") {
@@ -121,7 +122,8 @@ std::optional<double> Snapshotter::lastSnapshotAge() const {
 }
 
 void Snapshotter::periodicLoop() {
-  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(period_s_));
+  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(period_s_));
   std::unique_lock<std::mutex> lock(state_mutex_);
   while (!wake_.wait_for(lock, period, [&] { return stop_; })) {
     lock.unlock();

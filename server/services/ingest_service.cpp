@@ -82,8 +82,8 @@ class FrameStream {
     try {
       const double previous_t_s = admission_.lastTimestamp();
       poses_.noteFrameTime(wire.timestamp_s());
-      const pipeline::FrameDecision decision =
-          admission_.decide(wire.timestamp_s(), [&](double t_s) { return poseOf(wire, t_s); });
+      const pipeline::FrameDecision decision = admission_.decide(wire.timestamp_s(),
+                                                                 [&](double t_s) { return poseOf(wire, t_s); });
       switch (decision.admission) {
         case pipeline::Admission::kOutOfOrder:
           throw invalidArgument("timestamp_s = " + std::to_string(wire.timestamp_s()) +
@@ -97,8 +97,7 @@ class FrameStream {
         case pipeline::Admission::kNotKeyframe:
           skip(ack, v1::FRAME_OUTCOME_SKIPPED_NOT_KEYFRAME, "moved less than the keyframe thresholds");
           return true;
-        case pipeline::Admission::kAdmitted:
-          break;
+        case pipeline::Admission::kAdmitted: break;
       }
       const auto t0 = Clock::now();
       const pipeline::StereoFrame raw = decodeStereoFrame(wire, settings_.server.limits.max_image_pixels);

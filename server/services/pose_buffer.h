@@ -24,9 +24,9 @@
 namespace cenote::server {
 
 struct PoseBufferLimits {
-  double history_s = 60.0;   // server.pose_history_s
-  size_t max_poses = 100000; // server.limits.max_poses
-  double max_jump_s = 60.0;  // server.pose_max_jump_s
+  double history_s = 60.0;    // server.pose_history_s
+  size_t max_poses = 100000;  // server.limits.max_poses
+  double max_jump_s = 60.0;   // server.pose_max_jump_s
 };
 
 class PoseBuffer {

@@ -29,9 +29,9 @@ void QueryService::checkBoxVolume(const mapping::Aabb& box, const std::string& w
   double voxels = 1.0;
   for (int a = 0; a < 3; ++a) voxels *= std::floor((box.max_m[a] - box.min_m[a]) / s) + 1.0;
   if (voxels > static_cast<double>(limits_.max_box_voxels)) {
-    throw resourceExhausted(what + ": about " + std::to_string(static_cast<int64_t>(voxels)) +
-                            " voxels, more than the limit server.limits.max_box_voxels = " +
-                            std::to_string(limits_.max_box_voxels));
+    throw resourceExhausted(
+        what + ": about " + std::to_string(static_cast<int64_t>(voxels)) +
+        " voxels, more than the limit server.limits.max_box_voxels = " + std::to_string(limits_.max_box_voxels));
   }
 }
 
@@ -58,8 +58,7 @@ grpc::Status QueryService::GetVoxels(grpc::ServerContext* context, const v1::Vox
   });
 }
 
-grpc::Status QueryService::GetBoxes(grpc::ServerContext* context, const v1::BoxesRequest* request,
-                                    v1::BoxesReply* reply) {
+grpc::Status QueryService::GetBoxes(grpc::ServerContext* context, const v1::BoxesRequest* request, v1::BoxesReply* reply) {
   return guard_.run(context, "Query/GetBoxes", [&] {
     checkCount(request->boxes_size(), "boxes", limits_.max_batch, "server.limits.max_batch");
     std::vector<mapping::Aabb> boxes;

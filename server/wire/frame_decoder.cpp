@@ -17,8 +17,9 @@ cv::Mat decodeRaw(const v1::RawImage& raw, const std::string& what, int64_t max_
     default: throw invalidArgument(what + ": raw image encoding is unspecified (MONO8, BGR8 or RGB8)");
   }
   const int64_t pixels = int64_t{raw.width()} * raw.height();
-  if (pixels == 0) throw invalidArgument(what + ": raw image is empty (" + std::to_string(raw.width()) + "x" +
-                                         std::to_string(raw.height()) + ")");
+  if (pixels == 0)
+    throw invalidArgument(what + ": raw image is empty (" + std::to_string(raw.width()) + "x" +
+                          std::to_string(raw.height()) + ")");
   if (pixels > max_pixels) {
     throw resourceExhausted(what + ": " + std::to_string(pixels) +
                             " pixels, more than the limit server.limits.max_image_pixels = " + std::to_string(max_pixels));
@@ -51,8 +52,8 @@ cv::Mat decodeImage(const v1::Image& image, const std::string& what, int64_t max
   }
   if (decoded.depth() != CV_8U) throw invalidArgument(what + ": image is not 8-bit");
   if (int64_t{decoded.cols} * decoded.rows > max_pixels) {
-    throw resourceExhausted(what + ": more pixels than the limit server.limits.max_image_pixels = " +
-                            std::to_string(max_pixels));
+    throw resourceExhausted(what +
+                            ": more pixels than the limit server.limits.max_image_pixels = " + std::to_string(max_pixels));
   }
   return decoded;
 }

@@ -41,8 +41,8 @@ int main(int argc, char** argv) {
     io::writeImage((out / "color" / (std::string(stamp) + ".png")).string(), frame.color);
     const Eigen::Quaterniond q(poses[i].linear());
     const Eigen::Vector3d t = poses[i].translation();
-    traj << stamp << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " " << q.y() << " " << q.z()
-         << " " << q.w() << "\n";
+    traj << stamp << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " " << q.y() << " " << q.z() << " "
+         << q.w() << "\n";
   }
   const Eigen::Matrix3d K = camera.K();
   std::printf("%g,%g,%g,%g\n", K(0, 0), K(1, 1), K(0, 2), K(1, 2));

@@ -79,7 +79,7 @@ TEST(DefaultYaml, EveryKeyOfEverySectionEqualsTheCodeDefault) {
       continue;
     }
     EXPECT_TRUE(entry.equals(*value)) << key << ": config/default.yaml says " << YAML::Dump(*value)
-                                     << ", the code's default is " << entry.shown;
+                                      << ", the code's default is " << entry.shown;
   }
 }
 

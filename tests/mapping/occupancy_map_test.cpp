@@ -39,7 +39,7 @@ TEST(MapDelta, MergeKeepsBlocksSortedAndUniqueAndAddsCounts) {
   b.voxels_updated = 7;
   a.merge(b);
   const std::vector<BlockIndex> expected = {BlockIndex(-2, 5, 5), BlockIndex(-1, 0, 0), BlockIndex(0, 0, 0),
-                                            BlockIndex(0, 2, 0), BlockIndex(0, 2, 1), BlockIndex(3, 0, 0)};
+                                            BlockIndex(0, 2, 0),  BlockIndex(0, 2, 1),  BlockIndex(3, 0, 0)};
   EXPECT_EQ(a.changed_blocks, expected);
   EXPECT_EQ(a.voxels_updated, 12u);
   a.merge(MapDelta{});
@@ -94,15 +94,16 @@ TEST(OccupancyMap, EachVoxelUpdatedOncePerBatchAndOccupiedWins) {
               Eigen::Vector3f(1.09f, 0.09f, 0.01f), Eigen::Vector3f(0.55f, 0.05f, 0.05f)};
   map.integrate(b);
   auto acc = map.constAccessor();
-  EXPECT_NEAR(acc.probability(VoxelIndex(10, 0, 0)), 0.7, 1e-6);  // one hit, not three
-  EXPECT_NEAR(acc.probability(VoxelIndex(2, 0, 0)), 0.4, 1e-6);   // one miss, not two
+  EXPECT_NEAR(acc.probability(VoxelIndex(10, 0, 0)), 0.7, 1e-6);     // one hit, not three
+  EXPECT_NEAR(acc.probability(VoxelIndex(2, 0, 0)), 0.4, 1e-6);      // one miss, not two
   EXPECT_EQ(acc.state(VoxelIndex(5, 0, 0)), VoxelState::kOccupied);  // crossed by ray 1, hit by ray 4
   EXPECT_NEAR(acc.probability(VoxelIndex(5, 0, 0)), 0.7, 1e-6);
 }
 
 TEST(OccupancyMap, RepeatedHitsClampAtMaximum) {
   OccupancyMap map(smallConfig(0.1));
-  for (int i = 0; i < 20; ++i) map.integrate(oneRay(Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3f(0.55f, 0.05f, 0.05f)));
+  for (int i = 0; i < 20; ++i)
+    map.integrate(oneRay(Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3f(0.55f, 0.05f, 0.05f)));
   auto acc = map.constAccessor();
   EXPECT_NEAR(acc.probability(VoxelIndex(5, 0, 0)), 0.97, 1e-6);
   EXPECT_NEAR(acc.probability(VoxelIndex(2, 0, 0)), 0.12, 1e-6);
@@ -158,7 +159,7 @@ TEST(OccupancyMap, BadBatchesAreRejectedAndLeaveMapUnchanged) {
 // At the edge of the map's range (voxel_types.h, kMaxVoxelIndex) every endpoint keeps its own voxel
 // (packed keys there once merged whole rows of them), and a point one voxel beyond is refused.
 TEST(OccupancyMap, EndpointsAtTheRangeLimitStayDistinct) {
-  OccupancyMap map(smallConfig(1.0));  // 1 m voxels: float coordinates hold whole voxels there
+  OccupancyMap map(smallConfig(1.0));                              // 1 m voxels: float coordinates hold whole voxels there
   const double edge = -static_cast<double>(kMaxVoxelIndex) + 0.5;  // centre of the last voxel
   PointBatch batch;
   batch.origin = Eigen::Vector3d(0.5, edge + 3.0, edge + 3.0);
@@ -386,7 +387,8 @@ TEST(OccupancyMap, SameMapForAnyThreadCount) {
   Scene scene;
   scene.spheres.push_back({Eigen::Vector3d(2.5, 0.1, -0.2), 1.0});
   scene.planes.push_back({Eigen::Vector3d(0, 0, -1.0), Eigen::Vector3d(0, 0, 1)});
-  const PointBatch batch = renderBatch(scene, PinholeCamera{}, lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(2.5, 0.1, -0.2)), 8.0);
+  const PointBatch batch = renderBatch(scene, PinholeCamera{},
+                                       lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(2.5, 0.1, -0.2)), 8.0);
   MapConfig one = smallConfig();
   one.num_threads = 1;
   MapConfig three = smallConfig();

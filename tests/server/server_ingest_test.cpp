@@ -24,9 +24,7 @@ namespace fs = std::filesystem;
 using client::test::ServerProcess;
 using client::test::ServerProcessOptions;
 
-void run(const std::string& command) {
-  ASSERT_EQ(std::system(command.c_str()), 0) << command;
-}
+void run(const std::string& command) { ASSERT_EQ(std::system(command.c_str()), 0) << command; }
 
 void toWire(const Eigen::Isometry3d& T, v1::Pose* pose) {
   const Eigen::Quaterniond q(T.linear());
@@ -69,8 +67,8 @@ class SimulatedDive : public ::testing::Test {
     dir_ = (fs::temp_directory_path() / ("cenote-server-dive-" + std::to_string(getpid()))).string();
     fs::create_directories(dir_);
     config_ = std::string(CENOTE_SOURCE_DIR) + "/config/default.yaml";
-    run(std::string(CENOTE_BINARY) + " sim --scene cave --frames 12 --width 400 --height 300 --quiet --out " +
-        dir_ + "/dive > /dev/null");
+    run(std::string(CENOTE_BINARY) + " sim --scene cave --frames 12 --width 400 --height 300 --quiet --out " + dir_ +
+        "/dive > /dev/null");
     run(std::string(CENOTE_BINARY) + " run --dataset " + dir_ + "/dive --config " + config_ + " --out " + dir_ +
         "/run --map " + dir_ + "/run.vdb > /dev/null 2>&1");
   }
@@ -116,7 +114,8 @@ TEST_F(SimulatedDive, StreamedFramesAndPosesGiveTheSameMapAsCenoteRun) {
       // The stream's stereo, fusion and integrating threads run below the query handlers' CPU
       // priority, on every CPU (they start from a handler thread pinned to the query CPU).
       int background = 0;
-      for (int tries = 0; tries < 500 && (background = threadsAtIngestNice(server.pid())) < background_before + 3; ++tries) {
+      for (int tries = 0; tries < 500 && (background = threadsAtIngestNice(server.pid())) < background_before + 3;
+           ++tries) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
       }
       EXPECT_GE(background, background_before + 3);
@@ -286,7 +285,8 @@ TEST(ServerPointIngest, OversizedAndBrokenBatchesAreRefusedAndTheMapIsUnchanged)
   nan_point.set_xyz(7, std::nan(""));
   status = call(nan_point);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
-  EXPECT_NE(status.error_message().find("point 2 has a non-finite coordinate"), std::string::npos) << status.error_message();
+  EXPECT_NE(status.error_message().find("point 2 has a non-finite coordinate"), std::string::npos)
+      << status.error_message();
 
   v1::PointBatch ragged = wallBatch(2.0, 0.2, 0.05, 1.0);
   ragged.add_xyz(1.0);

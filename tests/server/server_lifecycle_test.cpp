@@ -106,7 +106,8 @@ TEST(ServerLifecycle, BadStartupInputIsRefusedWithAMessageNamingIt) {
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("server.listne"), std::string::npos) << text;
 
-  std::ofstream(dir / "range.yaml") << "map:\n  voxel_size_m: -1\nserver:\n  max_frame_streams: 0\n  time_slice_ms: 0.05\n  query_cpus: -1\n";
+  std::ofstream(dir / "range.yaml")
+      << "map:\n  voxel_size_m: -1\nserver:\n  max_frame_streams: 0\n  time_slice_ms: 0.05\n  query_cpus: -1\n";
   std::tie(status, text) = runToExit("--config " + (dir / "range.yaml").string());
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("map.voxel_size_m"), std::string::npos) << text;

@@ -15,8 +15,8 @@ namespace {
 
 // J_c = rho_c E_c exp(-beta_c r) + B_c (1 - exp(-beta_c r)) at pixel (x, y), straight from the
 // formulas of SceneLighting; the texture from surfaceAlbedo.
-Eigen::Array3d referenceRadiance(const Simulator& sim, const Eigen::Isometry3d& T_world_cam,
-                                 const VisibilityBuffer& vis, int x, int y) {
+Eigen::Array3d referenceRadiance(const Simulator& sim, const Eigen::Isometry3d& T_world_cam, const VisibilityBuffer& vis,
+                                 int x, int y) {
   const SimScene& scene = sim.scene();
   const SceneLighting& light = scene.lighting;
   const Eigen::Array3d beta = light.attenuation_per_m.cast<double>();
@@ -84,8 +84,7 @@ TEST_P(ImageFormation, RadianceMatchesTheModelPerPixel) {
     }
   }
   EXPECT_GT(surface, checked / 2);
-  std::printf("[ image formation ] %s: worst relative error %.2g over %d pixels\n", toString(GetParam()), worst,
-              checked);
+  std::printf("[ image formation ] %s: worst relative error %.2g over %d pixels\n", toString(GetParam()), worst, checked);
 }
 
 TEST(Exposure, RenderImageIsExposeImageOfRenderRadiance) {

@@ -51,8 +51,8 @@ TEST_F(SimDataset, SensorYamlReadsBackWithTheBaselineAndPosesChainThroughTheExtr
   EXPECT_EQ(summary.frames, 3);
   EXPECT_GT(summary.surface_points, 1000u);
 
-  const pipeline::StereoCalibration rig =
-      pipeline::readEurocSensorPair(dir_ + "/mav0/cam0/sensor.yaml", dir_ + "/mav0/cam1/sensor.yaml");
+  const pipeline::StereoCalibration rig = pipeline::readEurocSensorPair(dir_ + "/mav0/cam0/sensor.yaml",
+                                                                        dir_ + "/mav0/cam1/sensor.yaml");
   EXPECT_EQ(rig.image_size, cv::Size(160, 120));
   EXPECT_NEAR(cv::norm(rig.T), 0.15, 1e-9);
   EXPECT_NEAR(rig.T[0], -0.15, 1e-9);  // right camera on the left camera's +x

@@ -28,7 +28,8 @@ Bad2 evaluate(const Simulator& sim, const SimFrame& frame, const cv::Mat& dispar
       if (!std::isfinite(z)) continue;
       const double d = fb / z;
       if (d >= num_disparities - 1 || x - d < 0) continue;
-      const float z_right = right.depth.at<float>(y, static_cast<int>(std::lround(x - d)) < 0 ? 0 : static_cast<int>(std::lround(x - d)));
+      const float z_right = right.depth.at<float>(
+          y, static_cast<int>(std::lround(x - d)) < 0 ? 0 : static_cast<int>(std::lround(x - d)));
       if (!(std::abs(z_right - z) < 0.02 * z)) continue;  // occluded in the right image
       ++out.evaluated;
       const float est = disparity.at<float>(y, x);
@@ -58,10 +59,10 @@ TEST_P(SimStereo, DefaultSgmBad2IsUnderTenPercent) {
     const pipeline::DisparityMap result = matcher.match(frame.left, frame.right);
     const Bad2 stats = evaluate(sim, frame, result.disparity, matcher.config().num_disparities);
     EXPECT_GT(stats.evaluated, 100000) << toString(GetParam()) << " frame " << index;
-    EXPECT_LT(stats.bad2_percent, 10.0) << toString(GetParam()) << " frame " << index << ": bad-2 "
-                                        << stats.bad2_percent << " % of " << stats.evaluated << " pixels";
-    std::printf("[ sim stereo ] %s frame %d: bad-2 %.2f %% of %d pixels\n", toString(GetParam()), index,
-                stats.bad2_percent, stats.evaluated);
+    EXPECT_LT(stats.bad2_percent, 10.0) << toString(GetParam()) << " frame " << index << ": bad-2 " << stats.bad2_percent
+                                        << " % of " << stats.evaluated << " pixels";
+    std::printf("[ sim stereo ] %s frame %d: bad-2 %.2f %% of %d pixels\n", toString(GetParam()), index, stats.bad2_percent,
+                stats.evaluated);
   }
 }
 

@@ -10,7 +10,6 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 
-
 namespace cenote::sim {
 namespace {
 
@@ -44,8 +43,8 @@ TEST_P(SimulatorScene, DepthBackProjectedWithThePoseLiesOnTheMeshWithinOneMillim
         ++finite;
         const Eigen::Vector3d p = backProject(sim, frame.T_world_cam0, x, y, z);
         const double d = distanceToMesh(sim.scene().mesh, p, 0.01);
-        EXPECT_LT(d, 1e-3) << toString(GetParam()) << " frame " << index << " pixel (" << x << ", " << y
-                           << "), depth " << z << " m: " << d << " m from the mesh";
+        EXPECT_LT(d, 1e-3) << toString(GetParam()) << " frame " << index << " pixel (" << x << ", " << y << "), depth " << z
+                           << " m: " << d << " m from the mesh";
         ++checked;
       }
     }
@@ -64,8 +63,7 @@ TEST_P(SimulatorScene, TwoFramesDepthsAgreeUnderTheirRelativePose) {
     for (int x = 0; x < a.depth.cols; x += 3) {
       const float z = a.depth.at<float>(y, x);
       if (!std::isfinite(z)) continue;
-      const Eigen::Vector3d p_b =
-          T_b_a * Eigen::Vector3d((x - cam.cx) / cam.fx * z, (y - cam.cy) / cam.fy * z, z);
+      const Eigen::Vector3d p_b = T_b_a * Eigen::Vector3d((x - cam.cx) / cam.fx * z, (y - cam.cy) / cam.fy * z, z);
       if (p_b.z() <= 0.1) continue;
       const int u = static_cast<int>(std::lround(cam.fx * p_b.x() / p_b.z() + cam.cx));
       const int v = static_cast<int>(std::lround(cam.fy * p_b.y() / p_b.z() + cam.cy));
@@ -91,8 +89,7 @@ TEST_P(SimulatorScene, OutputIsBitIdenticalForOneAndTwoThreads) {
   const SimFrame two = sim.renderFrame(3);
   omp_set_num_threads(saved);
   auto same = [](const cv::Mat& p, const cv::Mat& q) {
-    return p.size() == q.size() && p.type() == q.type() &&
-           std::memcmp(p.data, q.data, p.total() * p.elemSize()) == 0;
+    return p.size() == q.size() && p.type() == q.type() && std::memcmp(p.data, q.data, p.total() * p.elemSize()) == 0;
   };
   // Premise: there is something to compare (two empty images are the same bytes too).
   ASSERT_EQ(one.left.size(), cv::Size(400, 300)) << toString(GetParam());

@@ -17,7 +17,6 @@ struct ReferenceFusionTimings {
 };
 
 pipeline::DepthFrame fuseViewsReference(const std::vector<const pipeline::DepthFrame*>& views,
-                                        const pipeline::FusionConfig& config,
-                                        ReferenceFusionTimings* timings = nullptr);
+                                        const pipeline::FusionConfig& config, ReferenceFusionTimings* timings = nullptr);
 
 }  // namespace cenote::test

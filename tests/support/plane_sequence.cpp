@@ -26,7 +26,9 @@ class PlaneTexture {
     const double u = x_m / 0.01 + 400.0, v = y_m / 0.01 + 300.0;
     const int x0 = static_cast<int>(std::floor(u)), y0 = static_cast<int>(std::floor(v));
     const double fx = u - x0, fy = v - y0;
-    auto px = [&](int x, int y) { return image_.at<float>(std::clamp(y, 0, image_.rows - 1), std::clamp(x, 0, image_.cols - 1)); };
+    auto px = [&](int x, int y) {
+      return image_.at<float>(std::clamp(y, 0, image_.rows - 1), std::clamp(x, 0, image_.cols - 1));
+    };
     return static_cast<float>((1 - fy) * ((1 - fx) * px(x0, y0) + fx * px(x0 + 1, y0)) +
                               fy * ((1 - fx) * px(x0, y0 + 1) + fx * px(x0 + 1, y0 + 1)));
   }

@@ -57,10 +57,10 @@ pipeline::DepthFrame renderScene(const Scene& scene, const TestCamera& camera, c
 
 // Stereo-like corruption of an exact depth map.
 struct StereoNoise {
-  double focal_baseline_px_m = 39.0;  // f * b: disparity = f b / Z
-  double sigma_disparity_px = 0.25;   // Gaussian disparity noise -> sigma_Z = Z^2 sigma_d / (f b)
-  double outlier_fraction = 0.07;     // gross outliers: disparity off by 3-20 px either way
-  double hole_fraction = 0.05;        // pixels lost in blobs (textureless patches)
+  double focal_baseline_px_m = 39.0;                  // f * b: disparity = f b / Z
+  double sigma_disparity_px = 0.25;                   // Gaussian disparity noise -> sigma_Z = Z^2 sigma_d / (f b)
+  double outlier_fraction = 0.07;                     // gross outliers: disparity off by 3-20 px either way
+  double hole_fraction = 0.05;                        // pixels lost in blobs (textureless patches)
   double min_confidence = 0.6, max_confidence = 1.4;  // confidence uniform in this range, unrelated to error
 };
 

@@ -29,7 +29,7 @@ std::optional<StereoPairWithTruth> loadCloth3();
 std::optional<StereoPairWithTruth> loadMotorcycle();
 
 struct BadPixelStats {
-  double bad1 = 0.0;     // % of evaluated pixels with |error| > 1 (invalid counts as bad)
+  double bad1 = 0.0;  // % of evaluated pixels with |error| > 1 (invalid counts as bad)
   double bad2 = 0.0;
   double density = 0.0;  // % of evaluated pixels with an estimate
   int evaluated = 0;

@@ -49,8 +49,8 @@ struct MapClient::Impl {
   }
 
   template <typename Stub, typename Request, typename Reply>
-  void unary(Stub& stub, grpc::Status (Stub::*method)(grpc::ClientContext*, const Request&, Reply*),
-             const Request& request, Reply& reply) const {
+  void unary(Stub& stub, grpc::Status (Stub::*method)(grpc::ClientContext*, const Request&, Reply*), const Request& request,
+             Reply& reply) const {
     grpc::ClientContext context;
     prepare(context, options.deadline_s);
     detail::throwIfFailed((stub.*method)(&context, request, &reply));

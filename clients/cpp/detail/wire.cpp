@@ -134,7 +134,8 @@ ServerStats fromWire(const v1::Stats& s) {
   out.map_memory_bytes = s.map_memory_bytes();
   out.process_memory_bytes = s.process_memory_bytes();
   out.map_version = s.map_version();
-  for (const auto& stage : s.stages()) out.stages.push_back({stage.name(), stage.median_ms(), stage.p95_ms(), stage.count()});
+  for (const auto& stage : s.stages())
+    out.stages.push_back({stage.name(), stage.median_ms(), stage.p95_ms(), stage.count()});
   for (const auto& m : s.methods()) out.methods.push_back({m.method(), m.calls(), m.errors(), m.p50_ms(), m.p99_ms()});
   out.subscribers = s.subscribers();
   out.last_snapshot_age_s = s.last_snapshot_age_s();
@@ -168,9 +169,7 @@ FrameAck fromWire(const v1::FrameAck& ack) {
   return out;
 }
 
-PoseAck fromWire(const v1::PoseAck& ack) {
-  return {ack.sequence(), ack.timestamp_s(), ack.status_code(), ack.message()};
-}
+PoseAck fromWire(const v1::PoseAck& ack) { return {ack.sequence(), ack.timestamp_s(), ack.status_code(), ack.message()}; }
 
 void fromWire(const v1::MapUpdate& update, MapUpdate& out) {
   out.sequence = update.sequence();

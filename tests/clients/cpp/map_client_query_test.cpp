@@ -92,13 +92,12 @@ mapping::Aabb toAabb(const Box& box) {
 
 TEST_F(MapClientQueryTest, VoxelStatesOfTheWallSceneAreKnownExactly) {
   MapClient map = client();
-  const std::vector<Eigen::Vector3d> points = {
-      centre(kWallX, 0, 0),           // on the wall
-      centre(kWallX, kWallMin, kWallMax),  // the wall's corner
-      centre(20, 0, 0),               // half way along the central ray
-      centre(kWallX + 1, 0, 0),       // just behind the wall
-      centre(-1, 0, 0),               // behind the camera
-      Eigen::Vector3d(50, 50, 50)};   // far away
+  const std::vector<Eigen::Vector3d> points = {centre(kWallX, 0, 0),                // on the wall
+                                               centre(kWallX, kWallMin, kWallMax),  // the wall's corner
+                                               centre(20, 0, 0),                    // half way along the central ray
+                                               centre(kWallX + 1, 0, 0),            // just behind the wall
+                                               centre(-1, 0, 0),                    // behind the camera
+                                               Eigen::Vector3d(50, 50, 50)};        // far away
   const auto results = map.voxels(points);
   ASSERT_EQ(results.size(), points.size());
   EXPECT_EQ(results[0].state, VoxelState::kOccupied);
@@ -138,7 +137,7 @@ TEST_F(MapClientQueryTest, BoxCountsAreAnalyticAndEqualTheInProcessMap) {
   MapClient map = client();
   const double s = kVoxel_m;
   const Box wall{{2.0 + 0.2 * s, -1.0, -1.0}, {2.05 - 0.2 * s, 1.0, 1.0}};  // the wall's voxel centres
-  const Box behind{{2.06, -0.24, -0.24}, {2.54, 0.24, 0.24}};                 // 10 x 10 x 10 centres
+  const Box behind{{2.06, -0.24, -0.24}, {2.54, 0.24, 0.24}};               // 10 x 10 x 10 centres
   std::vector<Box> boxes = {wall, behind};
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> corner(-0.6, 2.4), size(0.0, 0.8);
@@ -219,8 +218,8 @@ TEST_F(MapClientQueryTest, SegmentsAndCapsulesEqualTheInProcessMap) {
     const auto want = mapping::checkSegments(*reference_, queries, stop_at_unknown);
     ASSERT_EQ(got.size(), want.size());
     for (size_t i = 0; i < got.size(); ++i) {
-      expectSameCollision(got[i], want[i], "segment " + std::to_string(i) + " stop_at_unknown " +
-                                               std::to_string(stop_at_unknown));
+      expectSameCollision(got[i], want[i],
+                          "segment " + std::to_string(i) + " stop_at_unknown " + std::to_string(stop_at_unknown));
     }
   }
 }
@@ -236,8 +235,8 @@ TEST_F(MapClientQueryTest, RaycastHitsTheWallAndSeesUnknownBehindTheCamera) {
   const auto stopping = map.raycast({{kOrigin_m, Eigen::Vector3d(-1, 0, 0)}}, 5.0, true);
   EXPECT_TRUE(stopping[0].stopped_at_unknown);
   EXPECT_FALSE(stopping[0].clear);
-  const auto want = mapping::raycast(*reference_, {{kOrigin_m, Eigen::Vector3d(2, 0, 0)}, {kOrigin_m, Eigen::Vector3d(-1, 0, 0)}},
-                                     5.0, false);
+  const auto want = mapping::raycast(
+      *reference_, {{kOrigin_m, Eigen::Vector3d(2, 0, 0)}, {kOrigin_m, Eigen::Vector3d(-1, 0, 0)}}, 5.0, false);
   expectSameCollision(results[0], want[0], "ray +x");
   expectSameCollision(results[1], want[1], "ray -x");
 }
@@ -275,7 +274,8 @@ TEST_F(MapClientQueryTest, FrontiersLieOnTheEdgeOfTheObservedRegionAndEqualTheIn
   const auto got = map.frontiers({kOrigin_m, Box{}, 0});
   ASSERT_FALSE(got.empty());
   // The observed region: the pyramid from the origin to the wall.
-  const Eigen::Vector3d lo(-kVoxel_m, -1.0 - kVoxel_m, -1.0 - kVoxel_m), hi(2.05 + kVoxel_m, 1.0 + kVoxel_m, 1.0 + kVoxel_m);
+  const Eigen::Vector3d lo(-kVoxel_m, -1.0 - kVoxel_m, -1.0 - kVoxel_m),
+      hi(2.05 + kVoxel_m, 1.0 + kVoxel_m, 1.0 + kVoxel_m);
   uint64_t voxels = 0;
   for (const Frontier& f : got) {
     voxels += f.num_voxels;
@@ -433,12 +433,20 @@ TEST_F(MapClientQueryTest, NonFiniteOrNegativeInputIsInvalidArgumentAndChangesNo
   EXPECT_THROW(map.integratePoints(bad_origin), RpcError);
   for (const auto& call : std::vector<std::function<void()>>{
            [&] { map.voxels({Eigen::Vector3d(nan, 0, 0)}); },
-           [&] { map.segments({{kOrigin_m, centre(5, 0, 0), -0.1}}); },
+           [&] {
+             map.segments({{kOrigin_m, centre(5, 0, 0), -0.1}});
+           },
            [&] { map.clearSphere(kOrigin_m, -1.0); },
-           [&] { map.raycast({{kOrigin_m, Eigen::Vector3d::Zero()}}, 5.0); },
+           [&] {
+             map.raycast({{kOrigin_m, Eigen::Vector3d::Zero()}}, 5.0);
+           },
            // Far beyond the map's range (voxel indices would overflow): a clear error, no hang.
-           [&] { map.segments({{Eigen::Vector3d(-1e12, 0, 0), Eigen::Vector3d(-1e12 + 1, 0, 0), 0.1}}); },
-           [&] { map.extract({Eigen::Vector3d(1e12, 0, 0), Eigen::Vector3d(1e12 + 0.1, 0.1, 0.1)}); }}) {
+           [&] {
+             map.segments({{Eigen::Vector3d(-1e12, 0, 0), Eigen::Vector3d(-1e12 + 1, 0, 0), 0.1}});
+           },
+           [&] {
+             map.extract({Eigen::Vector3d(1e12, 0, 0), Eigen::Vector3d(1e12 + 0.1, 0.1, 0.1)});
+           }}) {
     try {
       call();
       ADD_FAILURE() << "bad input accepted";

@@ -51,8 +51,9 @@ class MapClientTlsTest : public ::testing::Test {
 };
 
 TEST_F(MapClientTlsTest, ConnectsWithTheServersRootOnly) {
-  ServerProcess server(CENOTE_SERVER_BINARY, {.token = "", .extra_args = {"--tls-cert", dir_ + "/server.pem",
-                                                                          "--tls-key", dir_ + "/server.key"}});
+  ServerProcess server(
+      CENOTE_SERVER_BINARY,
+      {.token = "", .extra_args = {"--tls-cert", dir_ + "/server.pem", "--tls-key", dir_ + "/server.key"}});
   ClientOptions tls;
   tls.use_tls = true;
   tls.tls_root_cert_pem = pem("server");
@@ -73,8 +74,9 @@ TEST_F(MapClientTlsTest, ConnectsWithTheServersRootOnly) {
 
 TEST_F(MapClientTlsTest, MutualTlsNeedsTheClientCertificate) {
   ServerProcess server(CENOTE_SERVER_BINARY,
-                       {.token = "", .extra_args = {"--tls-cert", dir_ + "/server.pem", "--tls-key", dir_ + "/server.key",
-                                                    "--tls-client-ca", dir_ + "/client.pem"}});
+                       {.token = "",
+                        .extra_args = {"--tls-cert", dir_ + "/server.pem", "--tls-key", dir_ + "/server.key",
+                                       "--tls-client-ca", dir_ + "/client.pem"}});
   ClientOptions mutual;
   mutual.use_tls = true;
   mutual.tls_root_cert_pem = pem("server");

@@ -154,8 +154,8 @@ TEST(MapClientUpdates, SlowSubscriberIsResyncedAndEndsEqualToTheMap) {
   });
   uint64_t version = 0;
   for (int i = 0; i < 200; ++i) {
-    version = map.integratePoints(wallBatch(kWallX - (i % 20), centre(i % 7, (i % 5) - 2, (i % 3) - 1), 0.01 * i))
-                  .map_version;
+    version =
+        map.integratePoints(wallBatch(kWallX - (i % 20), centre(i % 7, (i % 5) - 2, (i % 3) - 1), 0.01 * i)).map_version;
   }
   hold.unlock();
   ASSERT_TRUE(waitForVersion(mirror, version)) << "mirror at " << mirror.sequence() << ", map at " << version;
@@ -272,8 +272,9 @@ TEST(MapClientUpdates, AdminEditsAndSnapshots) {
   std::getline(std::ifstream(local_bt), first_line);
   EXPECT_EQ(first_line, "# Octomap OcTree binary file");
   EXPECT_EQ(mapping::loadMap(local_bt)->stats().occupied, reference.stats().occupied);
-  for (const auto& [path, format] : {std::pair{"refused.vdb", SnapshotFormat::kPointsPly}, std::pair{"mesh.ply", SnapshotFormat::kFromExtension},
-                                     std::pair{"scene.xyz", SnapshotFormat::kFromExtension}}) {
+  for (const auto& [path, format] :
+       {std::pair{"refused.vdb", SnapshotFormat::kPointsPly}, std::pair{"mesh.ply", SnapshotFormat::kFromExtension},
+        std::pair{"scene.xyz", SnapshotFormat::kFromExtension}}) {
     try {
       map.snapshot(path, format);
       ADD_FAILURE() << path << " was written";
@@ -294,7 +295,7 @@ TEST(MapClientUpdates, AdminEditsAndSnapshots) {
   // Clear box: every voxel of the box unknown, the rest untouched.
   const Box wall_part{{1.9, -0.3, -0.3}, {2.2, 0.3, 0.3}};
   const BoxCounts outside_before = map.boxes({{{-0.5, -1.2, -1.2}, {1.5, 1.2, 1.2}}})[0];
-  EXPECT_GT(outside_before.free, 0u);              // premise: "untouched" compares something
+  EXPECT_GT(outside_before.free, 0u);                 // premise: "untouched" compares something
   EXPECT_GT(map.boxes({wall_part})[0].occupied, 0u);  // premise: the box had something to clear
   EXPECT_GT(map.clearBox(wall_part).changed_blocks, 0u);
   const BoxCounts cleared = map.boxes({wall_part})[0];

@@ -38,8 +38,8 @@ ServerProcess::ServerProcess(const std::string& binary, const ServerProcessOptio
   dir_ = tmpl;
   std::filesystem::create_directories(snapshotDirectory());
   const std::string port_file = dir_ + "/port";
-  std::vector<std::string> args = {binary,          "--listen",       "127.0.0.1:0", "--port-file", port_file,
-                                   "--snapshot-dir", snapshotDirectory()};
+  std::vector<std::string> args = {binary,    "--listen",       "127.0.0.1:0",      "--port-file",
+                                   port_file, "--snapshot-dir", snapshotDirectory()};
   if (!options.token.empty()) {
     std::ofstream(dir_ + "/token") << options.token << "\n";
     args.push_back("--token-file");
@@ -93,8 +93,8 @@ ServerProcess::ServerProcess(const std::string& binary, const ServerProcessOptio
   const std::string tail = log();
   stop(5.0);
   std::filesystem::remove_all(dir_);
-  throw std::runtime_error("cenote-server did not write its port file within " +
-                           std::to_string(options.start_timeout_s) + " s: " + tail);
+  throw std::runtime_error("cenote-server did not write its port file within " + std::to_string(options.start_timeout_s) +
+                           " s: " + tail);
 }
 
 ServerProcess::~ServerProcess() {

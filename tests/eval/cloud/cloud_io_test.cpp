@@ -110,15 +110,18 @@ TEST(CloudIo, MalformedFilesNameTheFileAndTheProblem) {
   EXPECT_NE(errorOf(dir / "word.ply").find("'two' is not a number"), std::string::npos);
   std::ofstream(dir / "trunc.ply", std::ios::binary) << "ply\nformat binary_little_endian 1.0\nelement vertex 5\n"
                                                         "property float x\nproperty float y\nproperty float z\n"
-                                                        "end_header\n" << std::string(20, '\0');
+                                                        "end_header\n"
+                                                     << std::string(20, '\0');
   EXPECT_NE(errorOf(dir / "trunc.ply").find("trunc.ply: PLY file is truncated in element 'vertex' (1 of 5"),
-            std::string::npos) << errorOf(dir / "trunc.ply");
+            std::string::npos)
+      << errorOf(dir / "trunc.ply");
   std::ofstream(dir / "z.pcd") << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nPOINTS 1\n"
                                   "DATA binary_compressed\n";
   // PCD goes through PCL's reader (io/cloud/pcd_io.h): binary_compressed is read, a body
   // shorter than announced is refused naming the file.
-  EXPECT_EQ(errorOf(dir / "z.pcd"), "cannot read " + (dir / "z.pcd") + " as PCD: pcl::PCDReader failed (-1; its message "
-                                    "is printed above): a malformed header, a truncated body or not a PCD file");
+  EXPECT_EQ(errorOf(dir / "z.pcd"), "cannot read " + (dir / "z.pcd") +
+                                        " as PCD: pcl::PCDReader failed (-1; its message "
+                                        "is printed above): a malformed header, a truncated body or not a PCD file");
   std::ofstream(dir / "few.pcd") << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 3\nHEIGHT 1\nPOINTS 3\n"
                                     "DATA ascii\n1 2 3\n";
   EXPECT_EQ(errorOf(dir / "few.pcd").rfind("cannot read " + (dir / "few.pcd") + " as PCD: pcl::PCDReader failed", 0), 0u)

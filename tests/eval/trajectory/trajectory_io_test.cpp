@@ -36,8 +36,8 @@ TEST(TrajectoryIo, ColmapImageNameMustBeATimestamp) {
     readColmapImagesTxt(dir / "images.txt");
     FAIL() << "no error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("images.txt:1: image name 'frame_a.png' is not a timestamp"),
-              std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("images.txt:1: image name 'frame_a.png' is not a timestamp"), std::string::npos)
+        << e.what();
   }
 }
 

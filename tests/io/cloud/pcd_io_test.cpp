@@ -170,14 +170,16 @@ TEST(PcdIo, ErrorsNameTheFileAndTheProblem) {
   EXPECT_EQ(errorOf(tempPath("absent.pcd")), "cannot read " + tempPath("absent.pcd") + ": no such file");
   const std::string text = tempPath("hello.pcd");
   std::ofstream(text) << "hello\n";
-  EXPECT_EQ(errorOf(text).rfind("cannot read " + text + " as PCD: pcl::PCDReader finds no PCD header", 0), 0u) << errorOf(text);
+  EXPECT_EQ(errorOf(text).rfind("cannot read " + text + " as PCD: pcl::PCDReader finds no PCD header", 0), 0u)
+      << errorOf(text);
   const std::string noxyz = tempPath("noxyz.pcd");
   std::ofstream(noxyz) << "VERSION 0.7\nFIELDS a b c\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\nPOINTS 1\n"
                           "DATA ascii\n1 2 3\n";
   EXPECT_EQ(errorOf(noxyz), noxyz + ": PCD FIELDS has no x, y and z");
   const std::string few = tempPath("few.pcd");
   std::ofstream(few) << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 3\nHEIGHT 1\nPOINTS 3\n"
-                        "DATA binary\n" << std::string(12, '\0');
+                        "DATA binary\n"
+                     << std::string(12, '\0');
   EXPECT_NE(errorOf(few).find("cannot read " + few + " as PCD"), std::string::npos) << errorOf(few);
   try {
     writePcd(tempPath("bad.pcd"), {{0, 0, 0}, {1, 1, 1}}, {{1, 2, 3}});

@@ -99,9 +99,7 @@ TEST(PlyIo, StreamingWriterKeepsEveryPointPastItsWriteBehindWindow) {
 
 TEST(PlyIo, UnclosedWriterLeavesNoFile) {
   const std::string path = tempPath("unclosed.ply");
-  {
-    PlyWriter writer(path);
-  }
+  { PlyWriter writer(path); }
   EXPECT_FALSE(std::filesystem::exists(path));
   EXPECT_FALSE(std::filesystem::exists(temporaryPathFor(path)));
 }

@@ -173,8 +173,7 @@ TEST(PngDecoder, ReadImageGivesOpenCvsResultForFastAndFallbackFiles) {
   }
   const std::string deep_path = dir + "/deep.png";
   ASSERT_TRUE(cv::imwrite(deep_path, cv::Mat(4, 4, CV_16UC1, cv::Scalar(700))));
-  expectSamePixels(readImage(deep_path, cv::IMREAD_UNCHANGED), cv::imread(deep_path, cv::IMREAD_UNCHANGED),
-                   "16-bit");
+  expectSamePixels(readImage(deep_path, cv::IMREAD_UNCHANGED), cv::imread(deep_path, cv::IMREAD_UNCHANGED), "16-bit");
 }
 
 TEST(PngDecoder, RealPngFilesMatchOpenCv) {

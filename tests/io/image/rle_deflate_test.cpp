@@ -18,8 +18,8 @@ namespace {
 std::vector<uint8_t> inflate(const std::vector<uint8_t>& stream, std::size_t expected_size) {
   libdeflate_decompressor* d = libdeflate_alloc_decompressor();
   std::vector<uint8_t> out(expected_size);
-  const libdeflate_result result =
-      libdeflate_zlib_decompress(d, stream.data(), stream.size(), out.data(), out.size(), nullptr);
+  const libdeflate_result result = libdeflate_zlib_decompress(d, stream.data(), stream.size(), out.data(), out.size(),
+                                                              nullptr);
   libdeflate_free_decompressor(d);
   EXPECT_EQ(result, LIBDEFLATE_SUCCESS) << "stream of " << stream.size() << " bytes";
   std::vector<uint8_t> by_zlib(expected_size + 1);  // one spare byte: a longer output shows

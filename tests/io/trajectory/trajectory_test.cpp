@@ -42,10 +42,10 @@ TEST(Trajectory, NeverGuessesOutsideTheSamplesOrAcrossLongGaps) {
 }
 
 TEST(Trajectory, ReadsEurocCsvInNanosecondsWithWFirstQuaternions) {
-  const std::string path = write("gt.csv",
-                                 "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z []\n"
-                                 "1403636579758555392,4.688319,-1.786938,0.783338,0.534108,-0.153029,-0.827383,-0.082152\n"
-                                 "1403636579763555584,4.688177,-1.786770,0.787350,0.534640,-0.152990,-0.826976,-0.082863\n");
+  const std::string path = write(
+      "gt.csv", "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z []\n"
+                "1403636579758555392,4.688319,-1.786938,0.783338,0.534108,-0.153029,-0.827383,-0.082152\n"
+                "1403636579763555584,4.688177,-1.786770,0.787350,0.534640,-0.152990,-0.826976,-0.082863\n");
   const Trajectory t = Trajectory::read(path, TrajectoryFormat::kEuroc);
   ASSERT_EQ(t.size(), 2u);
   EXPECT_NEAR(t.poses()[0].t_s, 1403636579.758555392, 1e-6);
@@ -55,9 +55,8 @@ TEST(Trajectory, ReadsEurocCsvInNanosecondsWithWFirstQuaternions) {
 }
 
 TEST(Trajectory, ReadsKittiRowsWithTimesFile) {
-  const std::string poses = write("00.txt",
-                                  "1 0 0 0 0 1 0 0 0 0 1 0\n"
-                                  "1 0 0 0.1 0 1 0 -0.02 0 0 1 0.8\n");
+  const std::string poses = write("00.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n"
+                                            "1 0 0 0.1 0 1 0 -0.02 0 0 1 0.8\n");
   const std::string times = write("times.txt", "0.000000e+00\n1.036594e-01\n");
   const Trajectory t = Trajectory::read(poses, TrajectoryFormat::kKitti, times);
   ASSERT_EQ(t.size(), 2u);

@@ -49,13 +49,11 @@ TEST(TumTrajectory, LookupTakesTheNearestPoseWithinTolerance) {
 }
 
 TEST(TumTrajectory, ErrorsNameFileLineAndProblem) {
-  EXPECT_EQ(errorOf("1.0 0 0 0 0 0 0 1\n2.0 0 0\n"),
-            "traj.txt:2: expected 8 numbers 't tx ty tz qx qy qz qw', found 3");
+  EXPECT_EQ(errorOf("1.0 0 0 0 0 0 0 1\n2.0 0 0\n"), "traj.txt:2: expected 8 numbers 't tx ty tz qx qy qz qw', found 3");
   EXPECT_EQ(errorOf("1.0 0 0 0 0 0 0 1 9\n"), "traj.txt:1: expected 8 numbers 't tx ty tz qx qy qz qw', found more");
   EXPECT_EQ(errorOf("1.0 0 zero 0 0 0 0 1\n"), "traj.txt:1: 'zero' is not a number");
   EXPECT_NE(errorOf("# header\n1.0 0 nan 0 0 0 0 1\n").find("traj.txt:2: non-finite value"), std::string::npos);
-  EXPECT_NE(errorOf("1.0 0 0 0 0 0 0 0.9\n").find("traj.txt:1: quaternion (qx qy qz qw) has norm 0.9"),
-            std::string::npos);
+  EXPECT_NE(errorOf("1.0 0 0 0 0 0 0 0.9\n").find("traj.txt:1: quaternion (qx qy qz qw) has norm 0.9"), std::string::npos);
   EXPECT_NE(errorOf("2.0 0 0 0 0 0 0 1\n1.0 0 0 0 0 0 0 1\n").find("traj.txt:2: timestamp 1 is not after"),
             std::string::npos);
   EXPECT_THROW(TumTrajectory::read("/nonexistent/traj.txt"), Error);

@@ -68,10 +68,25 @@ LogOddsModel randomModel(std::mt19937_64& rng) {
 // Every value a kernel compares against or lands on, a few ulps either side, and the extremes.
 std::vector<float> edgeValues(const LogOddsModel& m) {
   const float denorm = std::numeric_limits<float>::denorm_min(), tiny = std::numeric_limits<float>::min();
-  const std::vector<float> centres = {0.0f,         -0.0f,        denorm,      -denorm,     tiny,
-                                      -tiny,        kMax,         -kMax,       kInf,        -kInf,
-                                      m.clamp_min,  m.clamp_max,  m.occupied,  m.hit,       m.miss,
-                                      -m.hit,       -m.miss,      m.clamp_max - m.hit,      m.clamp_min - m.miss};
+  const std::vector<float> centres = {0.0f,
+                                      -0.0f,
+                                      denorm,
+                                      -denorm,
+                                      tiny,
+                                      -tiny,
+                                      kMax,
+                                      -kMax,
+                                      kInf,
+                                      -kInf,
+                                      m.clamp_min,
+                                      m.clamp_max,
+                                      m.occupied,
+                                      m.hit,
+                                      m.miss,
+                                      -m.hit,
+                                      -m.miss,
+                                      m.clamp_max - m.hit,
+                                      m.clamp_min - m.miss};
   std::vector<float> values;
   for (float c : centres) {
     float up = c, down = c;
@@ -90,10 +105,8 @@ std::vector<float> edgeValues(const LogOddsModel& m) {
 float randomValue(std::mt19937_64& rng, const std::vector<float>& edges, const LogOddsModel& m) {
   switch (rng() % 4) {
     case 0:
-    case 1:
-      return edges[rng() % edges.size()];
-    case 2:
-      return std::uniform_real_distribution<float>(m.clamp_min - 1.0f, m.clamp_max + 1.0f)(rng);
+    case 1: return edges[rng() % edges.size()];
+    case 2: return std::uniform_real_distribution<float>(m.clamp_min - 1.0f, m.clamp_max + 1.0f)(rng);
     default:
       for (;;) {
         const float v = std::bit_cast<float>(static_cast<uint32_t>(rng()));
@@ -105,16 +118,11 @@ float randomValue(std::mt19937_64& rng, const std::vector<float>& edges, const L
 // Empty, full, random, sparse, dense, or whole groups of four (the vector kernels' lanes).
 uint64_t randomMask(std::mt19937_64& rng) {
   switch (rng() % 6) {
-    case 0:
-      return 0;
-    case 1:
-      return ~uint64_t{0};
-    case 2:
-      return rng();
-    case 3:
-      return rng() & rng() & rng();
-    case 4:
-      return rng() | rng() | rng();
+    case 0: return 0;
+    case 1: return ~uint64_t{0};
+    case 2: return rng();
+    case 3: return rng() & rng() & rng();
+    case 4: return rng() | rng() | rng();
     default: {
       const uint64_t groups = rng();
       uint64_t mask = 0;
@@ -161,8 +169,7 @@ struct VoxelOutcome {
   bool changed;
 };
 
-VoxelOutcome publishOne(PublishKernel kernel, const LogOddsModel& model, float value, bool known, bool update,
-                        bool hit) {
+VoxelOutcome publishOne(PublishKernel kernel, const LogOddsModel& model, float value, bool known, bool update, bool hit) {
   Word values{};
   const int i = 37;  // any lane of any group
   values[i] = value;
@@ -237,10 +244,15 @@ TEST(MapKernels, OccupiedMaskMatchesScalarBitForBit) {
 
 TEST(MapKernels, OccupiedMaskFollowsTheRule) {
   const float occupied = defaultModel().occupied;
-  const std::vector<std::pair<float, bool>> cases = {
-      {occupied, true},  {std::nextafter(occupied, -kInf), false}, {std::nextafter(occupied, kInf), true},
-      {-0.0f, true},     {0.0f, true},                              {kInf, true},
-      {-kInf, false},    {kMax, true},                              {-kMax, false}};
+  const std::vector<std::pair<float, bool>> cases = {{occupied, true},
+                                                     {std::nextafter(occupied, -kInf), false},
+                                                     {std::nextafter(occupied, kInf), true},
+                                                     {-0.0f, true},
+                                                     {0.0f, true},
+                                                     {kInf, true},
+                                                     {-kInf, false},
+                                                     {kMax, true},
+                                                     {-kMax, false}};
   ASSERT_EQ(bitsOf(occupied), bitsOf(0.0f));  // p = 0.5: the +-0 cases sit on the threshold
   for (OccupiedKernel kernel : {&detail::occupiedMask, &detail::occupiedMaskScalar}) {
     Word values{};

@@ -163,22 +163,28 @@ TEST(MapLookup, IndexAndColoursFollowTheTreeThroughClearingCroppingAndReset) {
   Aabb box;
   box.min_m = Eigen::Vector3d(2.0, -1.0, -3.0);
   box.max_m = Eigen::Vector3d(3.2, 0.7, 0.0);
-  check("clearBox", [&](const Eigen::Vector3d& c) { return box.contains(c); }, [&] { map.clearBox(box); });
+  check(
+      "clearBox", [&](const Eigen::Vector3d& c) { return box.contains(c); }, [&] { map.clearBox(box); });
   const Eigen::Vector3d centre(4.0, 1.0, -1.5);
-  check("clearSphere", [&](const Eigen::Vector3d& c) { return (c - centre).norm() <= 1.0; },
-        [&] { map.clearSphere(centre, 1.0); });
+  check(
+      "clearSphere", [&](const Eigen::Vector3d& c) { return (c - centre).norm() <= 1.0; },
+      [&] { map.clearSphere(centre, 1.0); });
   // Many small clears: blocks lose all their colours one after another (the store compacts).
   for (int k = 0; k < 12; ++k) {
     const Eigen::Vector3d at(5.0 + 0.4 * k, -1.0 + 0.2 * k, -1.6);
-    check("small sphere " + std::to_string(k), [&](const Eigen::Vector3d& c) { return (c - at).norm() <= 0.35; },
-          [&] { map.clearSphere(at, 0.35); });
+    check(
+        "small sphere " + std::to_string(k), [&](const Eigen::Vector3d& c) { return (c - at).norm() <= 0.35; },
+        [&] { map.clearSphere(at, 0.35); });
   }
-  check("crop", [&](const Eigen::Vector3d& c) { return c.norm() > 4.0; }, [&] { map.cropToRadius(Eigen::Vector3d::Zero(), 4.0); });
+  check(
+      "crop", [&](const Eigen::Vector3d& c) { return c.norm() > 4.0; },
+      [&] { map.cropToRadius(Eigen::Vector3d::Zero(), 4.0); });
   // Integrating again after clearing reuses and re-creates leaves and colour blocks.
   map.integrate(test::renderBatch(scene, test::PinholeCamera{},
                                   test::lookAt(Eigen::Vector3d(0.2, 0.1, 0.0), Eigen::Vector3d(2.0, 0.1, -1.5)), 8.0));
   expectLookupsEqualTree(map, region, "integrated again");
-  check("reset", [](const Eigen::Vector3d&) { return true; }, [&] { map.reset(); });
+  check(
+      "reset", [](const Eigen::Vector3d&) { return true; }, [&] { map.reset(); });
   // Reset leaves the store as a new one; both ways of eraseIf ran along the way.
   EXPECT_EQ(colours.numBlocks(), 0u);
   EXPECT_EQ(colours.memoryBytes(), detail::ColorStore().memoryBytes());

@@ -84,7 +84,8 @@ TEST(DistanceField, SingleObstacleDistanceAndGradient) {
   b.points = {Eigen::Vector3f(0.55f, 0.05f, 0.05f)};
   DistanceField field(map);
   field.update(map.integrate(b));
-  const auto q = field.query({Eigen::Vector3d(0.25, 0.05, 0.05), Eigen::Vector3d(0.55, 0.45, 0.05), Eigen::Vector3d(3, 3, 3)});
+  const auto q = field.query(
+      {Eigen::Vector3d(0.25, 0.05, 0.05), Eigen::Vector3d(0.55, 0.45, 0.05), Eigen::Vector3d(3, 3, 3)});
   EXPECT_NEAR(q[0].distance_m, 0.3, 1e-9);
   EXPECT_NEAR(q[0].gradient.x(), -1.0, 1e-9);
   EXPECT_NEAR(q[1].distance_m, 0.4, 1e-9);

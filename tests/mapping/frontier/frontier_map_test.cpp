@@ -142,8 +142,8 @@ TEST(FrontierMap, ClustersDoNotDependOnHowChangesWereGrouped) {
   auto key = [](const FrontierMap& f) {
     std::vector<std::tuple<double, double, double, size_t, double, double, double>> out;
     for (const FrontierCluster& c : f.clusters(Eigen::Vector3d::Zero())) {
-      out.emplace_back(c.centroid_m.x(), c.centroid_m.y(), c.centroid_m.z(), c.num_voxels, c.direction.x(),
-                       c.direction.y(), c.direction.z());
+      out.emplace_back(c.centroid_m.x(), c.centroid_m.y(), c.centroid_m.z(), c.num_voxels, c.direction.x(), c.direction.y(),
+                       c.direction.z());
     }
     std::sort(out.begin(), out.end());
     return out;
@@ -226,8 +226,8 @@ void expectSameClusters(const std::vector<FrontierCluster>& got, const std::vect
   for (size_t i = 0; i < got.size(); ++i) {
     if (!used[i] && ++unmatched <= 10) {
       ADD_FAILURE() << when << ": FrontierMap's cluster of " << got[i].num_voxels << " voxels, box ("
-                    << got[i].bounds_m.min_m.transpose() << ") - (" << got[i].bounds_m.max_m.transpose()
-                    << "), centroid (" << got[i].centroid_m.transpose() << ") is none of the reference's";
+                    << got[i].bounds_m.min_m.transpose() << ") - (" << got[i].bounds_m.max_m.transpose() << "), centroid ("
+                    << got[i].centroid_m.transpose() << ") is none of the reference's";
     }
   }
   EXPECT_EQ(unmatched, 0u) << when;

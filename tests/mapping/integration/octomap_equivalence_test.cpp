@@ -40,8 +40,8 @@ Agreement compare(const OccupancyMap& map, const octomap::OcTree& tree) {
     const double size = it.getSize();
     const int n = static_cast<int>(std::lround(size / s));
     const octomap::point3d c = it.getCoordinate();
-    const VoxelIndex first = map.toIndex(Eigen::Vector3d(c.x() - size / 2 + s / 2, c.y() - size / 2 + s / 2,
-                                                         c.z() - size / 2 + s / 2));
+    const VoxelIndex first = map.toIndex(
+        Eigen::Vector3d(c.x() - size / 2 + s / 2, c.y() - size / 2 + s / 2, c.z() - size / 2 + s / 2));
     const bool occupied = tree.isNodeOccupied(*it);
     const double p = it->getOccupancy();
     for (int i = 0; i < n; ++i) {
@@ -125,10 +125,11 @@ TEST(OctomapEquivalence, ExactRaysGiveSameStatesAsInsertPointCloudWithDiscretize
   EXPECT_GE(a.same_state / known, 0.999) << a.same_state << " of " << a.both_known;
   EXPECT_GE(a.same_probability / known, 0.99) << a.same_probability << " of " << a.both_known;
   // Known to one map only: voxels grazed by a ray in one map's rounding and not the other's.
-  EXPECT_LE(a.only_octomap + a.only_ours, 0.01 * known) << a.only_octomap << " only OctoMap, " << a.only_ours << " only ours";
+  EXPECT_LE(a.only_octomap + a.only_ours, 0.01 * known)
+      << a.only_octomap << " only OctoMap, " << a.only_ours << " only ours";
   std::cout << "discretize on: " << a.both_known << " voxels known to both, " << a.same_state << " same state, "
-            << a.same_probability << " same probability, " << a.only_octomap << " known to OctoMap only, "
-            << a.only_ours << " known to ours only\n";
+            << a.same_probability << " same probability, " << a.only_octomap << " known to OctoMap only, " << a.only_ours
+            << " known to ours only\n";
 }
 
 // Discretize off: OctoMap casts one ray per point to the point itself, we one per endpoint voxel
@@ -166,9 +167,9 @@ TEST(OctomapEquivalence, FastRaysAtLeast99PercentSameStatesAsInsertPointCloudWit
   EXPECT_GE(a.same_state / known, 0.999) << a.same_state << " of " << a.both_known;
   EXPECT_LE(a.only_octomap, 0.01 * known) << a.only_octomap << " known to OctoMap only";
   EXPECT_LE(a.only_ours, 1e-4 * known) << a.only_ours << " known to ours only";
-  std::cout << "fast rays, discretize on: " << a.both_known << " voxels known to both, " << a.same_state
-            << " same state, " << a.same_probability << " same probability, " << a.only_octomap
-            << " known to OctoMap only, " << a.only_ours << " known to ours only\n";
+  std::cout << "fast rays, discretize on: " << a.both_known << " voxels known to both, " << a.same_state << " same state, "
+            << a.same_probability << " same probability, " << a.only_octomap << " known to OctoMap only, " << a.only_ours
+            << " known to ours only\n";
 }
 
 // The free and occupied voxels of a map, each as sorted packed voxel indices.
@@ -207,8 +208,8 @@ VoxelSets voxelSets(const octomap::OcTree& tree, const OccupancyMap& map) {
     const double size = it.getSize();
     const int n = static_cast<int>(std::lround(size / s));
     const octomap::point3d c = it.getCoordinate();
-    const VoxelIndex first = map.toIndex(Eigen::Vector3d(c.x() - size / 2 + s / 2, c.y() - size / 2 + s / 2,
-                                                         c.z() - size / 2 + s / 2));
+    const VoxelIndex first = map.toIndex(
+        Eigen::Vector3d(c.x() - size / 2 + s / 2, c.y() - size / 2 + s / 2, c.z() - size / 2 + s / 2));
     std::vector<uint64_t>& out = tree.isNodeOccupied(*it) ? sets.occupied : sets.free;
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j)
@@ -250,7 +251,7 @@ PointBatch laserScan() {
     if (centre.head<2>().norm() < 4.0) continue;  // nothing on the scanner
     const double radius = r(rng);
     scene.spheres.push_back({centre + Eigen::Vector3d(0, 0, 2.0 + radius), radius});  // crown
-    scene.spheres.push_back({centre + Eigen::Vector3d(0, 0, 0.6), 0.25});              // trunk
+    scene.spheres.push_back({centre + Eigen::Vector3d(0, 0, 0.6), 0.25});             // trunk
   }
   test::LaserScanner scanner;
   scanner.rings = 32;
@@ -301,8 +302,8 @@ TEST(OctomapEquivalence, ExactRaysOnALaserScanGiveInsertPointCloudsVoxelSetsUpTo
   const size_t missing_free = countNotIn(c.octomap.free, c.ours.free);
   EXPECT_LE(extra_free, 1e-4 * c.octomap.free.size()) << "free here but not in OctoMap";
   EXPECT_LE(missing_free, 1e-4 * c.octomap.free.size()) << "free in OctoMap but not here";
-  EXPECT_EQ(c.ours.occupied, c.octomap.occupied) << c.ours.occupied.size() << " occupied here, "
-                                                 << c.octomap.occupied.size() << " in OctoMap";
+  EXPECT_EQ(c.ours.occupied, c.octomap.occupied)
+      << c.ours.occupied.size() << " occupied here, " << c.octomap.occupied.size() << " in OctoMap";
   std::cout << "laser scan, whole rays: " << c.ours.free.size() << " free (OctoMap " << c.octomap.free.size() << "), "
             << extra_free << " free only here, " << missing_free << " free only in OctoMap\n";
 }
@@ -333,15 +334,15 @@ TEST(OctomapEquivalence, DefaultRaysOnALaserScanMakeFreeOnlyVoxelsInsertPointClo
   EXPECT_EQ(countNotIn(extra, whole_extra), 0u)
       << "free here but not in OctoMap, beyond the " << whole_extra.size() << " voxels of whole rays' rounding";
   EXPECT_LE(extra.size(), 1e-4 * c.octomap.free.size());
-  EXPECT_EQ(c.ours.occupied, c.octomap.occupied) << c.ours.occupied.size() << " occupied here, "
-                                                 << c.octomap.occupied.size() << " in OctoMap";
+  EXPECT_EQ(c.ours.occupied, c.octomap.occupied)
+      << c.ours.occupied.size() << " occupied here, " << c.octomap.occupied.size() << " in OctoMap";
   // Left unknown by early stopping: 3566 voxels here (0.25 %).
   const size_t missing_free = countNotIn(c.octomap.free, c.ours.free);
   EXPECT_LE(missing_free, 0.01 * c.octomap.free.size()) << "free in OctoMap, unknown here";
-  std::cout << "laser scan, default rays: " << c.ours.free.size() << " free (OctoMap " << c.octomap.free.size()
-            << "), " << extra.size() << " free only here (whole rays: " << whole_extra.size() << "), " << missing_free
-            << " free only in OctoMap; " << c.ours.occupied.size() << " occupied (OctoMap "
-            << c.octomap.occupied.size() << ")\n";
+  std::cout << "laser scan, default rays: " << c.ours.free.size() << " free (OctoMap " << c.octomap.free.size() << "), "
+            << extra.size() << " free only here (whole rays: " << whole_extra.size() << "), " << missing_free
+            << " free only in OctoMap; " << c.ours.occupied.size() << " occupied (OctoMap " << c.octomap.occupied.size()
+            << ")\n";
 }
 
 }  // namespace

@@ -84,8 +84,8 @@ TEST(ProjectiveIntegration, PixelsWithoutDepthCarveNothing) {
   OccupancyMap map(config());
   map.integrateDepth(frame);
   const auto acc = map.constAccessor();
-  const Eigen::Vector3d centre_ray = frame.T_world_cam.linear() * Eigen::Vector3d((80 - camera.cx) / camera.fx,
-                                                                                  (60 - camera.cy) / camera.fy, 1.0);
+  const Eigen::Vector3d centre_ray = frame.T_world_cam.linear() *
+                                     Eigen::Vector3d((80 - camera.cx) / camera.fx, (60 - camera.cy) / camera.fy, 1.0);
   for (double t = 0.8; t < 3.0; t += 0.2) {
     const Eigen::Vector3d p = frame.T_world_cam.translation() + t * centre_ray.normalized();
     EXPECT_EQ(acc.state(map.toIndex(p)), VoxelState::kUnknown) << "at " << t << " m along the hole's centre ray";

@@ -74,12 +74,14 @@ TEST(MapFileFormat, RefusalsNameThePathAndBothFormats) {
   EXPECT_EQ(errorOf("mesh.ply", MapFileFormat::kUnspecified),
             "mesh.ply: a .ply file holds a mesh or points: name it .mesh.ply or .points.ply, or give the format "
             "mesh-ply or points-ply");
-  EXPECT_NE(errorOf("m.xyz", MapFileFormat::kUnspecified).find("m.xyz: the extension .xyz names no map file format (.vdb vdb"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf("m.xyz", MapFileFormat::kUnspecified).find("m.xyz: the extension .xyz names no map file format (.vdb vdb"),
+      std::string::npos);
   EXPECT_NE(errorOf("m", MapFileFormat::kBt).find("m: no extension does not match format bt, which is written as .bt"),
             std::string::npos);
-  EXPECT_NE(errorOf("m.ply", MapFileFormat::kVdb).find("m.ply: the extension .ply means format mesh-ply or points-ply, not vdb"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf("m.ply", MapFileFormat::kVdb).find("m.ply: the extension .ply means format mesh-ply or points-ply, not vdb"),
+      std::string::npos);
 }
 
 }  // namespace

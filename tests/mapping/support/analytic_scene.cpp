@@ -142,10 +142,10 @@ PointBatch renderScan(const Scene& scene, const LaserScanner& scanner, const Eig
   std::normal_distribution<double> noise(0.0, noise_m > 0.0 ? noise_m : 1.0);
   batch.points.reserve(static_cast<size_t>(scanner.rings) * scanner.columns);
   for (int r = 0; r < scanner.rings; ++r) {
-    const double elevation =
-        scanner.rings == 1 ? scanner.min_elevation_rad
-                           : scanner.min_elevation_rad + (scanner.max_elevation_rad - scanner.min_elevation_rad) * r /
-                                                             (scanner.rings - 1);
+    const double elevation = scanner.rings == 1
+                                 ? scanner.min_elevation_rad
+                                 : scanner.min_elevation_rad +
+                                       (scanner.max_elevation_rad - scanner.min_elevation_rad) * r / (scanner.rings - 1);
     for (int c = 0; c < scanner.columns; ++c) {
       const double azimuth = scanner.azimuth_offset_rad + 2.0 * M_PI * c / scanner.columns;
       const Eigen::Vector3d d_scanner(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),

@@ -150,11 +150,12 @@ TEST(CalibrationFile, OpenCvYamlIsReadAsBeforeIncludingItsRectifiedP1P2Layout) {
   const StereoCalibration c = readCalibrationFile(temp("any_rig.yaml"));
   EXPECT_EQ(c.image_size, cv::Size(640, 480));
   EXPECT_LT(cv::norm(c.T - exampleRig().T), 1e-12);
-  std::ofstream(temp("any_rect.yaml")) << "%YAML:1.0\nimage_width: 1241\nimage_height: 376\n"
-                                          "P1: !!opencv-matrix\n  rows: 3\n  cols: 4\n  dt: d\n"
-                                          "  data: [718.856, 0, 607.1928, 0, 0, 718.856, 185.2157, 0, 0, 0, 1, 0]\n"
-                                          "P2: !!opencv-matrix\n  rows: 3\n  cols: 4\n  dt: d\n"
-                                          "  data: [718.856, 0, 607.1928, -386.1448, 0, 718.856, 185.2157, 0, 0, 0, 1, 0]\n";
+  std::ofstream(temp("any_rect.yaml"))
+      << "%YAML:1.0\nimage_width: 1241\nimage_height: 376\n"
+         "P1: !!opencv-matrix\n  rows: 3\n  cols: 4\n  dt: d\n"
+         "  data: [718.856, 0, 607.1928, 0, 0, 718.856, 185.2157, 0, 0, 0, 1, 0]\n"
+         "P2: !!opencv-matrix\n  rows: 3\n  cols: 4\n  dt: d\n"
+         "  data: [718.856, 0, 607.1928, -386.1448, 0, 718.856, 185.2157, 0, 0, 0, 1, 0]\n";
   EXPECT_NEAR(readCalibrationFile(temp("any_rect.yaml")).rectified_geometry.baseline_m, 386.1448 / 718.856, 1e-12);
 }
 
@@ -172,8 +173,8 @@ TEST(CalibrationFile, EurocCam0SensorYamlIsReadWithItsCam1Sibling) {
     readCalibrationFile(cam0);
     FAIL() << "one camera's sensor.yaml was read as a stereo rig";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), cam0 + ": the right camera's " + cam1 +
-                                         " is missing (an EuRoC / Kalibr sensor.yaml describes one camera)");
+    EXPECT_EQ(std::string(e.what()),
+              cam0 + ": the right camera's " + cam1 + " is missing (an EuRoC / Kalibr sensor.yaml describes one camera)");
   }
   writeEurocSensor(cam1,
                    "0.0125552670891, -0.999755099723, 0.0182237714554, -0.0198435579556, "
@@ -260,8 +261,8 @@ TEST(Rectifier, PointsLandOnTheSameRowWithTheDisparityOfTheirDepth) {
                       cv::Mat(c.left.distortion), in_left);
     cv::Mat rvec;
     cv::Rodrigues(cv::Mat(c.R), rvec);
-    cv::projectPoints(std::vector<cv::Point3d>{p_left}, rvec, cv::Mat(c.T), cv::Mat(c.right.K),
-                      cv::Mat(c.right.distortion), in_right);
+    cv::projectPoints(std::vector<cv::Point3d>{p_left}, rvec, cv::Mat(c.T), cv::Mat(c.right.K), cv::Mat(c.right.distortion),
+                      in_right);
     StereoFrame frame;
     frame.left = cv::Mat(c.image_size, CV_8UC1, cv::Scalar(0));
     frame.right = frame.left.clone();

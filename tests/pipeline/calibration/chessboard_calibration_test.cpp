@@ -33,8 +33,8 @@ TEST(ChessboardCalibration, RealPairsGiveSubPixelErrorAndRectifiedCornersShareRo
   ChessboardSpec board;
   board.square_m = 0.025;
   const ChessboardCalibration result = calibrateFromChessboards(pairs, board);
-  std::cout << "pairs " << result.pairs_used << ", rms " << result.rms_px << " px, rectified f "
-            << result.rectified.fx << " px, baseline " << result.rectified.baseline_m << " m\n";
+  std::cout << "pairs " << result.pairs_used << ", rms " << result.rms_px << " px, rectified f " << result.rectified.fx
+            << " px, baseline " << result.rectified.baseline_m << " m\n";
   EXPECT_EQ(result.pairs_used, static_cast<int>(pairs.size()));
   EXPECT_LT(result.rms_px, 0.6);
   EXPECT_GT(result.rectified.baseline_m, 0.0);

@@ -87,7 +87,8 @@ TEST(EurocDataset, MalformedCsvAndMissingImagesAreClearErrors) {
   const std::string dir2 = freshDir("euroc_missing_image");
   test::writeEurocPlaneSequence(dir2, s);
   EurocDataset dataset(dir2);
-  fs::remove(fs::path(dir2) / "mav0" / "cam0" / "data" / (std::to_string(std::llround(dataset.timestamp(1) * 1e9)) + ".png"));
+  fs::remove(fs::path(dir2) / "mav0" / "cam0" / "data" /
+             (std::to_string(std::llround(dataset.timestamp(1) * 1e9)) + ".png"));
   EXPECT_THROW(dataset.load(1), Error);
 }
 
@@ -117,7 +118,6 @@ TEST(KittiDataset, ReadsSequenceCalibrationTimesAndGroundTruth) {
   const io::Trajectory camera = cameraTrajectory(*dataset, "", "", PoseFrame::kAuto);
   EXPECT_NEAR(camera.poseAt(dataset->timestamp(2), 0.2)->translation().x(), 0.02, 1e-6);
 }
-
 
 // A KITTI odometry sequence written by hand from the format (devkit readme): calib.txt with the
 // P0..P3 rows of sequence 00, times.txt with the real spacing (about 0.1036 s) and jitter,
@@ -244,8 +244,8 @@ TEST(CameraTrajectory, KittiPosesWithoutTimesAreAnErrorOutsideAKittiSequence) {
     loadCameraTrajectory(*dataset, {tum, "", dir + "/times.txt", PoseFrame::kAuto});
     FAIL() << "a times file was taken for TUM poses";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), "trajectory times " + dir + "/times.txt: only KITTI poses take a times file; " +
-                                         tum + " is tum, which carries its own timestamps");
+    EXPECT_EQ(std::string(e.what()), "trajectory times " + dir + "/times.txt: only KITTI poses take a times file; " + tum +
+                                         " is tum, which carries its own timestamps");
   }
 }
 
@@ -259,8 +259,10 @@ TEST(CameraTrajectory, TumPosesOnADatasetWithExtrinsicsSayWhichFrameWasAssumed) 
   const CameraTrajectory assumed = loadCameraTrajectory(*dataset, {tum, "", "", PoseFrame::kAuto});
   EXPECT_TRUE(assumed.frame_assumed);
   EXPECT_STREQ(assumed.fileFrame(), "camera");
-  EXPECT_EQ(assumed.note.rfind("poses of " + tum + " taken as camera poses: a tum file does not say which frame it "
-                               "describes, and the camera sits 0.050 m and 0.0 deg from the body of EuRoC ", 0),
+  EXPECT_EQ(assumed.note.rfind("poses of " + tum +
+                                   " taken as camera poses: a tum file does not say which frame it "
+                                   "describes, and the camera sits 0.050 m and 0.0 deg from the body of EuRoC ",
+                               0),
             0u)
       << assumed.note;
   EXPECT_NE(assumed.note.find("; pass --pose-frame body if they are body (IMU) poses"), std::string::npos);

@@ -85,13 +85,10 @@ TEST(FrameAdmission, OutOfOrderAndNonFiniteTimestampsAreRefusedAndDoNotMoveTheTi
 TEST(FrameAdmission, NonFiniteFirstTimestampIsOutOfOrder) {
   const Rectifier rectifier(tiltedRig());
   FrameAdmission admission(rectifier, RunConfig{});
-  EXPECT_EQ(admission.decide(std::numeric_limits<double>::quiet_NaN(), always(at(0.0))).admission,
-            Admission::kOutOfOrder);
-  EXPECT_EQ(admission.decide(-std::numeric_limits<double>::infinity(), always(at(0.0))).admission,
-            Admission::kOutOfOrder);
+  EXPECT_EQ(admission.decide(std::numeric_limits<double>::quiet_NaN(), always(at(0.0))).admission, Admission::kOutOfOrder);
+  EXPECT_EQ(admission.decide(-std::numeric_limits<double>::infinity(), always(at(0.0))).admission, Admission::kOutOfOrder);
   // +inf would come after anything, and then nothing could come after it.
-  EXPECT_EQ(admission.decide(std::numeric_limits<double>::infinity(), always(at(0.0))).admission,
-            Admission::kOutOfOrder);
+  EXPECT_EQ(admission.decide(std::numeric_limits<double>::infinity(), always(at(0.0))).admission, Admission::kOutOfOrder);
   EXPECT_EQ(admission.lastTimestamp(), -std::numeric_limits<double>::infinity());
   EXPECT_EQ(admission.decide(0.0, always(at(0.0))).admission, Admission::kAdmitted);
 }
@@ -109,8 +106,7 @@ TEST(FrameAdmission, PoseLookupIsNotAskedForAFrameOutOfOrder) {
   ASSERT_EQ(asked, std::vector<double>{3.0});
   EXPECT_EQ(admission.decide(3.0, counting).admission, Admission::kOutOfOrder);
   EXPECT_EQ(admission.decide(2.0, counting).admission, Admission::kOutOfOrder);
-  EXPECT_EQ(admission.decide(std::numeric_limits<double>::quiet_NaN(), counting).admission,
-            Admission::kOutOfOrder);
+  EXPECT_EQ(admission.decide(std::numeric_limits<double>::quiet_NaN(), counting).admission, Admission::kOutOfOrder);
   EXPECT_EQ(asked, std::vector<double>{3.0});
 }
 
@@ -212,8 +208,9 @@ TEST(FrameAdmission, AdmitPosesTheRectifiedCameraFromStereoRectifyR1) {
   ASSERT_EQ(d.admission, Admission::kAdmitted);
   const PosedPair posed = admission.admit(frame, d.T_world_raw);
   const Eigen::Isometry3d expected = T_world_raw * T_raw_rect;
-  EXPECT_TRUE(posed.T_world_cam.isApprox(expected, 1e-15))
-      << "got\n" << posed.T_world_cam.matrix() << "\nexpected\n" << expected.matrix();
+  EXPECT_TRUE(posed.T_world_cam.isApprox(expected, 1e-15)) << "got\n"
+                                                           << posed.T_world_cam.matrix() << "\nexpected\n"
+                                                           << expected.matrix();
   // A point on the rectified optical axis lands where R1 says in the world.
   const Eigen::Vector3d p_rect(0.0, 0.0, 2.0);
   const Eigen::Vector3d p_raw = R1_e.transpose() * p_rect;
@@ -230,13 +227,12 @@ TEST(FrameAdmission, AdmittedImagesAreTheRectifiersBitForBit) {
   EXPECT_EQ(posed.pair.t_s, 1.5);
   EXPECT_EQ(posed.pair.geometry.fx, direct.geometry.fx);
   EXPECT_EQ(posed.pair.geometry.baseline_m, direct.geometry.baseline_m);
-  for (const auto& [got, want, which] : {std::tuple{&posed.pair.left, &direct.left, "left"},
-                                         std::tuple{&posed.pair.right, &direct.right, "right"}}) {
+  for (const auto& [got, want, which] :
+       {std::tuple{&posed.pair.left, &direct.left, "left"}, std::tuple{&posed.pair.right, &direct.right, "right"}}) {
     // Premise: non-empty images, mostly valid pixels, and not the raw image passed through.
     ASSERT_EQ(want->size(), frame.left.size()) << which;
     ASSERT_GT(cv::countNonZero(*want), want->rows * want->cols / 2) << which;
-    ASSERT_GT(cv::norm(*want, which == std::string("left") ? frame.left : frame.right, cv::NORM_INF), 0.0)
-        << which;
+    ASSERT_GT(cv::norm(*want, which == std::string("left") ? frame.left : frame.right, cv::NORM_INF), 0.0) << which;
     ASSERT_EQ(got->size(), want->size()) << which;
     ASSERT_EQ(got->type(), want->type()) << which;
     EXPECT_EQ(cv::norm(*got, *want, cv::NORM_INF), 0.0) << which << " image differs from Rectifier::rectify";

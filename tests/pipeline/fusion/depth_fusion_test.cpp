@@ -230,8 +230,7 @@ TEST(FuseViews, OneAndTwoThreadsAreBitIdentical) {
     ASSERT_EQ(one.depth.size(), two.depth.size());
     const size_t bytes = one.depth.total() * sizeof(float);
     EXPECT_EQ(std::memcmp(one.depth.data, two.depth.data, bytes), 0) << "depth differs, N_f = " << n_views;
-    EXPECT_EQ(std::memcmp(one.confidence.data, two.confidence.data, bytes), 0)
-        << "confidence differs, N_f = " << n_views;
+    EXPECT_EQ(std::memcmp(one.confidence.data, two.confidence.data, bytes), 0) << "confidence differs, N_f = " << n_views;
     EXPECT_GT(cv::countNonZero(one.confidence), static_cast<int>(one.depth.total() / 2));
   }
 }
@@ -262,8 +261,7 @@ TEST(FuseViews, AgreesWithThePlainReferenceImplementation) {
     // float vs double arithmetic may flip a decision that sits exactly on a boundary.
     // (A z-buffer tie or a point on a pixel border then changes the candidates of that pixel.)
     EXPECT_LE(disagree, static_cast<int>(fast.depth.total() / 2000)) << "N_f = " << n_views << examples.str();
-    std::printf("[fusion vs plain reference] N_f = %d: %d of %zu pixels differ\n", n_views, disagree,
-                fast.depth.total());
+    std::printf("[fusion vs plain reference] N_f = %d: %d of %zu pixels differ\n", n_views, disagree, fast.depth.total());
   }
 }
 

@@ -30,8 +30,8 @@ TEST(FusionConfig, RejectsEvenOrTooFewOrTooManyViews) {
   for (int n : {1, 2, 4, 17}) {
     FusionConfig c;
     c.num_views = n;
-    EXPECT_EQ(onlyError(c), "fusion.num_views = " + std::to_string(n) +
-                                ": must be odd in [3, 15] (the middle view is the reference)");
+    EXPECT_EQ(onlyError(c),
+              "fusion.num_views = " + std::to_string(n) + ": must be odd in [3, 15] (the middle view is the reference)");
   }
   FusionConfig c;
   c.num_views = 15;

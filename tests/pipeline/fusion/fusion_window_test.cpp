@@ -40,11 +40,11 @@ Sequence makeSequence(const test::Scene& scene, int frames, uint32_t seed,
 }
 
 struct Score {
-  double raw_error = 0.0, fused_error = 0.0;          // summed |error| on pixels both keep
+  double raw_error = 0.0, fused_error = 0.0;                // summed |error| on pixels both keep
   double raw_inlier_error = 0.0, fused_inlier_error = 0.0;  // same, where the raw pixel is not an outlier
   long both = 0, both_inlier = 0;
-  long outliers = 0, outliers_removed = 0;             // injected in the reference; removed or corrected
-  long correct = 0, correct_kept = 0;                  // raw valid and not an outlier; fused valid
+  long outliers = 0, outliers_removed = 0;  // injected in the reference; removed or corrected
+  long correct = 0, correct_kept = 0;       // raw valid and not an outlier; fused valid
 
   double rawMae() const { return raw_error / std::max(1L, both); }
   double fusedMae() const { return fused_error / std::max(1L, both); }
@@ -93,8 +93,8 @@ Score runWindow(const Sequence& seq, const FusionConfig& config) {
     if (!fused) continue;
     const size_t ref = i - half;
     EXPECT_EQ(fused->frame.t_s, seq.noisy[ref].t_s);
-    accumulate(fused->frame, seq.noisy[ref], seq.truth[ref], seq.outliers[ref],
-               test::StereoNoise{}.focal_baseline_px_m, score);
+    accumulate(fused->frame, seq.noisy[ref], seq.truth[ref], seq.outliers[ref], test::StereoNoise{}.focal_baseline_px_m,
+               score);
   }
   return score;
 }
@@ -106,19 +106,17 @@ void expectIssueTargets(const char* scene_name, const test::Scene& scene, int nu
   config.max_depth_m = std::numeric_limits<double>::infinity();  // the rules over every depth of the
                                                                  // scene, not the 4 m mapping default
   const Score s = runWindow(seq, config);
-  std::printf(
-      "[fusion accuracy] %-6s N_f=%d  MAE raw %.4f m fused %.4f m (ratio %.2f) | inliers only: raw %.4f fused %.4f "
-      "(ratio %.2f) | outliers removed %.1f %% | correct kept %.1f %%\n",
-      scene_name, num_views, s.rawMae(), s.fusedMae(), s.fusedMae() / s.rawMae(), s.rawInlierMae(),
-      s.fusedInlierMae(), s.fusedInlierMae() / s.rawInlierMae(), s.removedPct(), s.keptPct());
+  std::printf("[fusion accuracy] %-6s N_f=%d  MAE raw %.4f m fused %.4f m (ratio %.2f) | inliers only: raw %.4f fused %.4f "
+              "(ratio %.2f) | outliers removed %.1f %% | correct kept %.1f %%\n",
+              scene_name, num_views, s.rawMae(), s.fusedMae(), s.fusedMae() / s.rawMae(), s.rawInlierMae(),
+              s.fusedInlierMae(), s.fusedInlierMae() / s.rawInlierMae(), s.removedPct(), s.keptPct());
   EXPECT_GT(s.both, 100000) << scene_name;
   EXPECT_LE(s.fusedMae(), 0.5 * s.rawMae()) << scene_name << " N_f = " << num_views;
   EXPECT_GE(s.removedPct(), 90.0) << scene_name << " N_f = " << num_views;
   EXPECT_GE(s.keptPct(), 80.0) << scene_name << " N_f = " << num_views;
   // Beyond the issue: the noise of inliers goes down too, not only the outliers (less with 3
   // views, where a third of the pixels has fewer than 3 candidates: holes, outliers, splat gaps).
-  EXPECT_LE(s.fusedInlierMae(), (num_views == 3 ? 0.92 : 0.75) * s.rawInlierMae())
-      << scene_name << " N_f = " << num_views;
+  EXPECT_LE(s.fusedInlierMae(), (num_views == 3 ? 0.92 : 0.75) * s.rawInlierMae()) << scene_name << " N_f = " << num_views;
 }
 
 TEST(FusionAccuracy, PlaneMeetsTheTargets) { expectIssueTargets("plane", test::planeScene(), 3); }
@@ -160,8 +158,7 @@ TEST(FusionWindow, RejectsAFrameOfAnotherSizeAndStaysUsable) {
     window.push(other);
     FAIL() << "expected an error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("is 160x120 but the other views are 320x240"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("is 160x120 but the other views are 320x240"), std::string::npos) << e.what();
   }
   EXPECT_EQ(window.size(), 1);
   EXPECT_EQ(window.push(seq.noisy[1]), nullptr);

@@ -50,7 +50,8 @@ PointBatch noisyPlaneWithOutliers(unsigned seed) {
   b.origin = Eigen::Vector3d(0.1, 0.2, 0.3);
   for (int i = 0; i < 600; ++i) b.points.emplace_back(u(rng), u(rng), 2.0f + noise(rng));
   for (int i = 0; i < 12; ++i) b.points.emplace_back(u(rng), u(rng), 2.3f + 0.5f * u(rng));  // floating specks
-  for (size_t i = 0; i < b.points.size(); ++i) b.colors.push_back({static_cast<uint8_t>(i), static_cast<uint8_t>(i >> 8), 7});
+  for (size_t i = 0; i < b.points.size(); ++i)
+    b.colors.push_back({static_cast<uint8_t>(i), static_cast<uint8_t>(i >> 8), 7});
   return b;
 }
 

@@ -92,7 +92,8 @@ TEST(Runner, KeyframeThresholdsSkipFramesThatBarelyMoved) {
 
 TEST(Runner, UnreadableImageSkipsOneFrameAndTheRestGoesOn) {
   Fixture f = makeFixture("runner_corrupt");
-  const std::string victim = f.dataset_dir + "/mav0/cam1/data/" + std::to_string(std::llround(f.dataset->timestamp(3) * 1e9)) + ".png";
+  const std::string victim = f.dataset_dir + "/mav0/cam1/data/" +
+                             std::to_string(std::llround(f.dataset->timestamp(3) * 1e9)) + ".png";
   std::ofstream(victim, std::ios::trunc) << "not a png";
   const std::atomic<bool> stop{false};
   const RunReport r = Runner(smallConfig()).run(*f.dataset, f.trajectory, f.out_dir, stop);
@@ -170,7 +171,8 @@ TEST(Runner, OutlierRemovalFiltersEachFusedFrameBeforeTheFileAndTheMap) {
   c.run.outlier_neighbours = 8;
   c.run.outlier_stddev_mul = 1.0;
   size_t sunk = 0;
-  const RunReport r = Runner(c).run(*f.dataset, f.trajectory, f.out_dir, stop, [&](const PointBatch& b) { sunk += b.size(); });
+  const RunReport r = Runner(c).run(*f.dataset, f.trajectory, f.out_dir, stop,
+                                    [&](const PointBatch& b) { sunk += b.size(); });
   std::vector<Eigen::Vector3f> expected;
   for (const PointBatch& b : fused) {
     const PointBatch kept = removeStatisticalOutliers(b, 8, 1.0);

@@ -67,10 +67,10 @@ TEST(SimulatedCave, FusedPointsMatchTheSeenSurfaceWithin5cm) {
   options.threshold_m = 0.05;
   const eval::CloudEvaluation e = eval::evaluateDistances(eval::nearestDistances(source, target_beyond),
                                                           eval::nearestDistances(target, source), options);
-  std::cout << "simulated cave, 30 frames, surface within " << max_depth << " m: " << source.size()
-            << " fused points vs " << target.size() << " surface points at 1 cm: precision " << 100 * e.precision
-            << " %, recall " << 100 * e.recall << " % at 5 cm; accuracy " << e.accuracy_m << " m, completeness "
-            << e.completeness_m << " m\n";
+  std::cout << "simulated cave, 30 frames, surface within " << max_depth << " m: " << source.size() << " fused points vs "
+            << target.size() << " surface points at 1 cm: precision " << 100 * e.precision << " %, recall "
+            << 100 * e.recall << " % at 5 cm; accuracy " << e.accuracy_m << " m, completeness " << e.completeness_m
+            << " m\n";
   EXPECT_GE(e.precision, 0.90);
   EXPECT_GE(e.recall, 0.90);
 }

@@ -36,12 +36,10 @@ BadPixelStats evaluate(const StereoPairWithTruth& pair, const StereoConfig& conf
   StereoMatcher matcher(config);
   DisparityMap map = matcher.match(pair.left, pair.right);
   const BadPixelStats s = test::badPixels(map.disparity, pair);
-  std::cout << pair.name << " " << toString(config.cost) << " " << config.window_px << "x" << config.window_px
-            << " " << config.num_paths << " paths, search " << toString(config.search)
-            << (config.usesBand() ? " coarse_scale " + std::to_string(config.coarse_scale) : std::string())
-            << ": bad-1 " << s.bad1
-            << " %, bad-2 " << s.bad2 << " %, density "
-            << s.density << " %\n";
+  std::cout << pair.name << " " << toString(config.cost) << " " << config.window_px << "x" << config.window_px << " "
+            << config.num_paths << " paths, search " << toString(config.search)
+            << (config.usesBand() ? " coarse_scale " + std::to_string(config.coarse_scale) : std::string()) << ": bad-1 "
+            << s.bad1 << " %, bad-2 " << s.bad2 << " %, density " << s.density << " %\n";
   if (out) *out = std::move(map);
   return s;
 }
@@ -68,8 +66,8 @@ BadPixelStats evaluateOpenCv(const StereoPairWithTruth& pair, const StereoConfig
   return s;
 }
 
-#define REQUIRE_PAIR(var, loader)                                           \
-  auto var = loader();                                                      \
+#define REQUIRE_PAIR(var, loader) \
+  auto var = loader();            \
   if (!var) GTEST_SKIP() << "test data absent (" #loader ")";
 
 TEST(MiddleburyCones, SadThreeByThreeFourPathsBad1AtMostTenPercent) {
@@ -165,8 +163,8 @@ TEST(MiddleburyCones, PkrnExcludingNeighboursRanksBetterThanNaiveSecondMinimum) 
   config.pkrn_exclude_neighbours = false;
   evaluate(*pair, config, &naive);
   const double e = sparsificationArea(*pair, excluded), n = sparsificationArea(*pair, naive);
-  std::cout << "PKRN sparsification area (mean bad-1 over 5..100 % most confident): " << e
-            << " % excluding neighbours vs " << n << " % naive\n";
+  std::cout << "PKRN sparsification area (mean bad-1 over 5..100 % most confident): " << e << " % excluding neighbours vs "
+            << n << " % naive\n";
   EXPECT_LT(e, n);
 }
 

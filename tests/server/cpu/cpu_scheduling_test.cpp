@@ -29,11 +29,12 @@ std::optional<long> sliceNs(pid_t tid) {
 // A thread that runs until told to stop, at nice `nice`.
 class Sleeper {
  public:
-  explicit Sleeper(int nice) : thread_([this, nice] {
-    setThreadNice(nice);
-    tid_ = gettid();
-    while (!stop_) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }) {
+  explicit Sleeper(int nice)
+      : thread_([this, nice] {
+          setThreadNice(nice);
+          tid_ = gettid();
+          while (!stop_) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        }) {
     while (tid_ == 0) std::this_thread::yield();
   }
   ~Sleeper() {

@@ -28,8 +28,8 @@ PointBatch wallBatch(double y_offset_m) {
   PointBatch batch;
   batch.origin = Eigen::Vector3d::Zero();
   for (int i = 0; i <= 20; ++i)
-    for (int j = 0; j <= 20; ++j) batch.points.emplace_back(1.0f, static_cast<float>(y_offset_m - 0.5 + 0.05 * i),
-                                                           static_cast<float>(-0.5 + 0.05 * j));
+    for (int j = 0; j <= 20; ++j)
+      batch.points.emplace_back(1.0f, static_cast<float>(y_offset_m - 0.5 + 0.05 * i), static_cast<float>(-0.5 + 0.05 * j));
   return batch;
 }
 
