@@ -51,7 +51,7 @@ if [ -x "$server" ] && [ -x "$cli" ]; then
   "$cli" --server "$address" segment 0,0,0 3,0,0 --radius 0.2 || true
   echo "-- the three nearest frontiers:"
   "$cli" --server "$address" frontiers --max 3
-  "$cli" --server "$address" snapshot map_mesh.ply > /dev/null
+  "$cli" --server "$address" snapshot map.mesh.ply > /dev/null
   kill -TERM "$server_pid" && wait "$server_pid"
 else
   echo "(cenote-server or cenote-cli not built)"
@@ -66,4 +66,4 @@ echo "  run/depth/                  fused depth and confidence maps (PFM)"
 echo "  run/report.json             frames, per-stage ms (median, p95), fps, peak memory"
 echo "  report.html                 one-page report with metrics and plots"
 echo "  motorcycle.preview.png      colour-mapped disparity of a real pair"
-echo "  snapshots/                  written by cenote-server: map_mesh.ply (asked for), map.vdb (on shutdown)"
+echo "  snapshots/                  written by cenote-server: map.mesh.ply (asked for), map.vdb (on shutdown)"
