@@ -49,6 +49,7 @@
 #include "mapping/occupancy_map.h"
 #include "mapping/query/map_query.h"
 #include "tests/mapping/support/analytic_scene.h"
+#include "tests/mapping/support/voxel_sets.h"
 
 using namespace cenote;
 using namespace cenote::mapping;
@@ -329,49 +330,14 @@ struct VoxelSetDiff {
   size_t occupied_differ = 0;                             // occupied in one map only
 };
 
-uint64_t packVoxel(const VoxelIndex& ijk) {
-  constexpr int64_t kBias = int64_t{1} << 20;
-  return static_cast<uint64_t>(ijk.x() + kBias) << 42 | static_cast<uint64_t>(ijk.y() + kBias) << 21 |
-         static_cast<uint64_t>(ijk.z() + kBias);
-}
-
 VoxelSetDiff compareVoxelSets(const OccupancyMap& map, const octomap::OcTree& tree) {
-  std::vector<uint64_t> free, occupied, octo_free, octo_occupied;
-  {
-    const auto acc = map.constAccessor();
-    for (const BlockIndex& block : acc.knownBlocks()) {
-      std::array<uint64_t, 8> known, occ;
-      acc.readBlockMasks(block, known, occ);
-      for (int o = 0; o < kBlockVoxels; ++o) {
-        if (!((known[o >> 6] >> (o & 63)) & 1)) continue;
-        (((occ[o >> 6] >> (o & 63)) & 1) ? occupied : free).push_back(packVoxel(voxelOfOffset(block, o)));
-      }
-    }
-  }
-  const double s = map.voxelSize();
-  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
-    const double size = it.getSize();
-    const int n = static_cast<int>(std::lround(size / s));
-    const octomap::point3d c = it.getCoordinate();
-    const VoxelIndex first = map.toIndex(
-        Eigen::Vector3d(c.x() - size / 2 + s / 2, c.y() - size / 2 + s / 2, c.z() - size / 2 + s / 2));
-    std::vector<uint64_t>& out = tree.isNodeOccupied(*it) ? octo_occupied : octo_free;
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j)
-        for (int k = 0; k < n; ++k) out.push_back(packVoxel(first + VoxelIndex(i, j, k)));
-  }
-  for (auto* v : {&free, &occupied, &octo_free, &octo_occupied}) std::sort(v->begin(), v->end());
-  auto countNotIn = [](const std::vector<uint64_t>& a, const std::vector<uint64_t>& b) {
-    size_t count = 0;
-    for (uint64_t key : a) count += !std::binary_search(b.begin(), b.end(), key);
-    return count;
-  };
+  const test::VoxelSets ours = test::voxelSets(map), octo = test::voxelSets(tree, map);
   VoxelSetDiff d;
-  d.octo_free = octo_free.size();
-  d.octo_occupied = octo_occupied.size();
-  d.free_not_octo_free = countNotIn(free, octo_free);
-  d.octo_free_not_free = countNotIn(octo_free, free);
-  d.occupied_differ = countNotIn(occupied, octo_occupied) + countNotIn(octo_occupied, occupied);
+  d.octo_free = octo.free.size();
+  d.octo_occupied = octo.occupied.size();
+  d.free_not_octo_free = test::countNotIn(ours.free, octo.free);
+  d.octo_free_not_free = test::countNotIn(octo.free, ours.free);
+  d.occupied_differ = test::countNotIn(ours.occupied, octo.occupied) + test::countNotIn(octo.occupied, ours.occupied);
   return d;
 }
 
