@@ -2,6 +2,7 @@
 
 #include <sys/resource.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -47,14 +48,6 @@ class FrameNames {
   std::map<double, std::string> names_;
 };
 
-// Counts a frame that frame admission did not let through.
-void countSkip(Admission admission, std::atomic<size_t>& out_of_order, std::atomic<size_t>& no_pose,
-               std::atomic<size_t>& not_keyframe) {
-  if (admission == Admission::kOutOfOrder) ++out_of_order;
-  if (admission == Admission::kNoPose) ++no_pose;
-  if (admission == Admission::kNotKeyframe) ++not_keyframe;
-}
-
 }  // namespace
 
 Runner::Runner(PipelineConfig config) : config_(std::move(config)) {
@@ -75,7 +68,11 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   const size_t total = rc.max_frames > 0 ? std::min<size_t>(dataset.size(), rc.max_frames) : dataset.size();
   RunReport report;
   report.frames_in = total;
-  std::atomic<size_t> out_of_order{0}, no_pose{0}, not_keyframe{0}, unreadable{0}, read_done{0};
+  // Frames frame admission refused, by Admission; and unreadable ones. Written by the reader only,
+  // read after it is joined. read_done is also read by the progress callback meanwhile.
+  std::array<size_t, 4> refused{};
+  size_t unreadable = 0;
+  std::atomic<size_t> read_done{0};
   std::atomic<bool> interrupted{false};
   StageTimer read_timer, output_timer, sink_timer;
   FramePipeline stages(config_, rc.write_depth);
@@ -96,7 +93,7 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
         const FrameDecision decision = admission.decide(
             t, [&](double t_s) { return camera_trajectory.poseAt(t_s, rc.pose_max_gap_s); });
         if (decision.admission != Admission::kAdmitted) {
-          countSkip(decision.admission, out_of_order, no_pose, not_keyframe);
+          ++refused[static_cast<size_t>(decision.admission)];
           continue;
         }
         PosedPair item;
@@ -162,9 +159,9 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   report.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   report.frames_processed = stages.framesProcessed();
   report.frames_fused = stages.framesFused();
-  report.skipped_out_of_order = out_of_order;
-  report.skipped_no_pose = no_pose;
-  report.skipped_not_keyframe = not_keyframe;
+  report.skipped_out_of_order = refused[static_cast<size_t>(Admission::kOutOfOrder)];
+  report.skipped_no_pose = refused[static_cast<size_t>(Admission::kNoPose)];
+  report.skipped_not_keyframe = refused[static_cast<size_t>(Admission::kNotKeyframe)];
   report.skipped_unreadable = unreadable;
   report.points_written = points.pointsWritten();
   report.interrupted = interrupted;

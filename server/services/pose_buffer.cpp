@@ -15,7 +15,7 @@ void PoseBuffer::add(const io::StampedPose& pose) {
       throw invalidArgument("pose at t = " + std::to_string(pose.t_s) + " s is not after the previous pose (t = " +
                             std::to_string(poses_.back().t_s) + " s): timestamps must increase");
     }
-    const double clock_s = std::max(poses_.empty() ? newest_frame_t_s_ : poses_.back().t_s, newest_frame_t_s_);
+    const double clock_s = poses_.empty() ? newest_frame_t_s_ : std::max(poses_.back().t_s, newest_frame_t_s_);
     if (std::isfinite(clock_s) && pose.t_s - clock_s > limits_.max_jump_s) {
       throw invalidArgument("pose at t = " + std::to_string(pose.t_s) + " s is " + std::to_string(pose.t_s - clock_s) +
                             " s after the stream's clock (t = " + std::to_string(clock_s) +
