@@ -4,10 +4,9 @@ BUILD_TYPE ?= Release
 JOBS ?= 2
 DEMO_DIR ?= out/demo
 
-CMAKE_FLAGS := -DCMAKE_BUILD_TYPE=$(BUILD_TYPE)
-ifneq ($(shell command -v ccache 2>/dev/null),)
-CMAKE_FLAGS += -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache
-endif
+# Recursive (=) so that the ccache check runs when configure does, after `deps` may have installed it.
+CCACHE = $(shell command -v ccache 2>/dev/null)
+CMAKE_FLAGS = -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(if $(CCACHE),-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
 
 .PHONY: all deps configure build test demo bench test-data asan-test format format-check clean
 
