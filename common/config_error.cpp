@@ -4,6 +4,12 @@
 
 namespace cenote {
 
+std::vector<ConfigError> concatConfigErrors(std::initializer_list<std::vector<ConfigError>> lists) {
+  std::vector<ConfigError> all;
+  for (const std::vector<ConfigError>& list : lists) all.insert(all.end(), list.begin(), list.end());
+  return all;
+}
+
 std::string formatConfigErrors(const std::vector<ConfigError>& errors) {
   std::string text;
   for (const ConfigError& error : errors) {

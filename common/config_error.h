@@ -2,6 +2,7 @@
 // A rule prints as  "stereo.max_disparity_px = 300: must be a multiple of 16 in [16, 256]".
 #pragma once
 
+#include <initializer_list>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -35,6 +36,9 @@ class ConfigErrors {
   std::string prefix_;
   std::vector<ConfigError> errors_;
 };
+
+// The errors of each list, in order: a config made of components validates as the sum of theirs.
+std::vector<ConfigError> concatConfigErrors(std::initializer_list<std::vector<ConfigError>> lists);
 
 // Joins errors one per line; empty string when there are none.
 std::string formatConfigErrors(const std::vector<ConfigError>& errors);

@@ -3,17 +3,17 @@
 #include <cerrno>
 #include <filesystem>
 
+#include "common/enum_names.h"
+
 namespace cenote {
 
 const char* toString(ErrorKind kind) {
-  switch (kind) {
-    case ErrorKind::kInvalidArgument: return "invalid argument";
-    case ErrorKind::kNotFound: return "not found";
-    case ErrorKind::kResourceExhausted: return "resource exhausted";
-    case ErrorKind::kIoFailure: return "I/O failure";
-    case ErrorKind::kFailedPrecondition: return "failed precondition";
-  }
-  return "unknown";
+  constexpr EnumName<ErrorKind> kNames[] = {{ErrorKind::kInvalidArgument, "invalid argument"},
+                                            {ErrorKind::kNotFound, "not found"},
+                                            {ErrorKind::kResourceExhausted, "resource exhausted"},
+                                            {ErrorKind::kIoFailure, "I/O failure"},
+                                            {ErrorKind::kFailedPrecondition, "failed precondition"}};
+  return enumName(kNames, kind, "unknown");
 }
 
 ErrorKind ioErrorKind(int errno_value, bool missing_is_not_found) {

@@ -36,25 +36,19 @@ class Error : public std::runtime_error {
   ErrorKind kind_;
 };
 
-class NotFoundError : public Error {
+// An Error of one fixed kind. The typed names below are this template, one instance per kind: each is
+// its own type to catch (`catch (const IoError&)`), and each sets its kind (`IoError::kKind`).
+template <ErrorKind Kind>
+class KindedError : public Error {
  public:
-  explicit NotFoundError(const std::string& message) : Error(message, ErrorKind::kNotFound) {}
+  static constexpr ErrorKind kKind = Kind;
+  explicit KindedError(const std::string& message) : Error(message, Kind) {}
 };
 
-class ResourceExhaustedError : public Error {
- public:
-  explicit ResourceExhaustedError(const std::string& message) : Error(message, ErrorKind::kResourceExhausted) {}
-};
-
-class IoError : public Error {
- public:
-  explicit IoError(const std::string& message) : Error(message, ErrorKind::kIoFailure) {}
-};
-
-class FailedPreconditionError : public Error {
- public:
-  explicit FailedPreconditionError(const std::string& message) : Error(message, ErrorKind::kFailedPrecondition) {}
-};
+using NotFoundError = KindedError<ErrorKind::kNotFound>;
+using ResourceExhaustedError = KindedError<ErrorKind::kResourceExhausted>;
+using IoError = KindedError<ErrorKind::kIoFailure>;
+using FailedPreconditionError = KindedError<ErrorKind::kFailedPrecondition>;
 
 // The kind of a failed read or write from its errno: ENOSPC and EDQUOT (disk or quota full) are
 // kResourceExhausted, ENOENT kNotFound when `missing_is_not_found` (reads; a write into a missing

@@ -50,8 +50,27 @@ class YamlSection {
     }
   }
 
+  // Reads `key` as a name into the enum `value`: the name is read as a string (absent: toString(value),
+  // found by argument-dependent lookup) and `value = parse(name)`.
+  // @throws what `parse` throws for a name it does not know.
+  template <typename Enum, typename Parse>
+  void readName(const std::string& key, Enum& value, Parse parse) {
+    std::string name = toString(value);
+    read(key, name);
+    value = parse(name);
+  }
+
   // The sub-mapping `key` as a section of its own (which the caller must finish()).
   YamlSection section(const std::string& key);
+
+  // Reads the sub-mapping `key` into `config` with its `read(YamlSection&)`, then finishes it.
+  // @throws Error as read() does, and for a key of the sub-mapping that config.read() does not read.
+  template <typename Config>
+  void readSection(const std::string& key, Config& config) {
+    YamlSection sub = section(key);
+    config.read(sub);
+    sub.finish();
+  }
 
   // @throws Error naming every key of the mapping that was never read.
   void finish() const;
@@ -91,5 +110,13 @@ class YamlSection {
 
 // Loads a YAML file. @throws Error when missing or unparsable (with the line of the error).
 YAML::Node loadYamlFile(const std::string& path);
+
+// Reads the section `key` of the YAML file at `path` into `config` (YamlSection::readSection); other
+// top-level keys of the file are left to their own readers.
+// @throws Error when the file is missing or unparsable, or the section is wrong.
+template <typename Config>
+void readConfigFile(const std::string& path, const std::string& key, Config& config) {
+  YamlSection(loadYamlFile(path), "", path).readSection(key, config);
+}
 
 }  // namespace cenote

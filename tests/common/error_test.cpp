@@ -30,6 +30,27 @@ TEST(Error, DerivedTypesCarryTheirKindAndAreCaughtAsError) {
   EXPECT_EQ(kindOf(FailedPreconditionError("m")), ErrorKind::kFailedPrecondition);
 }
 
+TEST(Error, EachTypedErrorIsItsOwnTypeToCatch) {
+  const auto caughtAsIoError = [](auto thrown) {
+    try {
+      throw thrown;
+    } catch (const IoError& e) {
+      EXPECT_EQ(e.kind(), IoError::kKind);
+      return true;
+    } catch (const Error&) {
+      return false;
+    }
+  };
+  EXPECT_TRUE(caughtAsIoError(IoError("m")));
+  EXPECT_FALSE(caughtAsIoError(NotFoundError("m")));
+  EXPECT_FALSE(caughtAsIoError(ResourceExhaustedError("m")));
+  EXPECT_FALSE(caughtAsIoError(FailedPreconditionError("m")));
+  EXPECT_FALSE(caughtAsIoError(Error("m", ErrorKind::kIoFailure)));
+  EXPECT_EQ(NotFoundError::kKind, ErrorKind::kNotFound);
+  EXPECT_EQ(ResourceExhaustedError::kKind, ErrorKind::kResourceExhausted);
+  EXPECT_EQ(FailedPreconditionError::kKind, ErrorKind::kFailedPrecondition);
+}
+
 TEST(Error, KindsHaveNames) {
   EXPECT_STREQ(toString(ErrorKind::kInvalidArgument), "invalid argument");
   EXPECT_STREQ(toString(ErrorKind::kNotFound), "not found");
