@@ -1,11 +1,15 @@
 // query_service.h: Query (proto/cenote/v1/query.proto): voxel states, boxes, segments and capsules,
 // raycasts, distances, frontiers, voxel extracts and the map's metadata, all batched, served
-// concurrently with ingest (each call reads the map under its shared lock; see
-// mapping/occupancy_map.h).
+// concurrently with ingest. Work is bounded per request: boxes, segments, rays and extracts count
+// the voxels they may visit before visiting any (server.limits.max_query_voxels), and run in slices
+// (mapping/query/map_query.h) that each hold the map's shared lock, so integration and other
+// readers get in between; between two slices the call's deadline (DEADLINE_EXCEEDED) and
+// cancellation (CANCELLED) are checked.
 // Threads: any number of calls at once.
 #pragma once
 
 #include "cenote/v1/query.grpc.pb.h"
+#include "mapping/query/map_query.h"
 #include "server/access/call_guard.h"
 #include "server/host/map_host.h"
 #include "server/server_config.h"
@@ -35,6 +39,9 @@ class QueryService final : public v1::Query::Service {
   // Voxels whose centre lies in `box`: RESOURCE_EXHAUSTED beyond limits.max_box_voxels.
   void checkBoxVolume(const mapping::Aabb& box, const std::string& what) const;
   void waitForDerived(grpc::ServerContext* context) const;
+  // The budget and slices of one batch; between slices, the deadline and cancellation of `context`
+  // (the error names `method` and how many of `items` were answered).
+  mapping::BatchControl batchControl(grpc::ServerContext* context, const char* method, size_t items) const;
 
   MapHost& host_;
   CallGuard& guard_;
