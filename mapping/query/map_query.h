@@ -27,8 +27,8 @@ double mapRange_m(const OccupancyMap& map);                       // mapRange_m(
 bool withinMapRange(const Aabb& box_m, const OccupancyMap& map);  // voxelsOfBox(...).within_range
 std::string mapRangeText(const OccupancyMap& map);                // mapRangeText(map.voxelSize())
 
-// Voxels of one slice: about 0.5 ms of segment walking on the bench machine (30-40 ns a voxel with
-// its lookup), so a writer waits at most about that long for a batch reader.
+// Voxels of work in one slice: a writer waits for at most one slice of a batch reader (or one item,
+// when a single item is larger).
 inline constexpr uint64_t kSliceVoxels = 1 << 14;
 
 // How a batch of boxes, segments or rays runs.
