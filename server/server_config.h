@@ -21,27 +21,16 @@ namespace cenote::server {
 
 // What one request may ask for. Beyond a limit: RESOURCE_EXHAUSTED naming it.
 struct RequestLimits {
-  int64_t max_message_bytes = 64 << 20;    // of any request or reply (gRPC's receive limit)
-  int64_t max_batch = 100000;              // points / boxes / segments / rays in one query
-  int64_t max_points_per_batch = 1000000;  // points in one ingested point batch
-  int64_t max_box_voxels = 10000000;       // voxels in one box query or extract
-  int64_t max_query_voxels = 100000000;    // voxels one query request may visit (all its items)
-  int64_t max_image_pixels = 4096 * 4096;  // of one stereo image
-  int64_t max_poses = 100000;              // streamed poses kept (200 Hz for over 8 minutes)
-
-  // Voxels an ExtractVoxels box may hold: max_box_voxels, and fewer when its reply at the worst
-  // (kExtractBytesPerVoxel a voxel, kExtractReplyBytes besides) would exceed max_message_bytes.
-  int64_t maxExtractVoxels() const;
+  int64_t max_message_bytes = 64 << 20;           // of any request or reply (gRPC's receive limit)
+  int64_t max_batch = 100000;                     // points / boxes / segments / rays in one query
+  int64_t max_points_per_batch = 1000000;         // points in one ingested point batch
+  int64_t max_box_voxels = 10000000;              // voxels in one box query or extract
+  int64_t max_query_voxels = 100000000;           // voxels one query request may visit (all its items)
+  int64_t max_snapshots = 10;                     // rotated snapshots kept (host/snapshotter.h)
+  int64_t max_snapshot_bytes = int64_t{8} << 30;  // of map.vdb and the rotated ones; 0: no limit
+  int64_t max_image_pixels = 4096 * 4096;         // of one stereo image
+  int64_t max_poses = 100000;                     // streamed poses kept (200 Hz for over 8 minutes)
 };
-
-// Worst-case size of an ExtractReply (proto/cenote/v1/query.proto) per listed voxel: ijk, three
-// packed sint32 varints of at most 3 bytes each (zigzag of |i| <= kMaxVoxelIndex + 1 < 2^20 fits in
-// 21 bits); its state, a 1-byte packed enum; its probability, a 4-byte packed float; its colour,
-// 3 bytes of rgb.
-inline constexpr int64_t kExtractBytesPerVoxel = 3 * 3 + 1 + 4 + 3;
-// And once per reply: voxel_size_m (tag + 8), map_version (tag + at most 10), the tags and length
-// varints (at most 1 + 5 each) of the four per-voxel fields: 44 bytes, rounded up.
-inline constexpr int64_t kExtractReplyBytes = 64;
 
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  // loopback unless asked otherwise

@@ -196,7 +196,7 @@ grpc::Status QueryService::ExtractVoxels(grpc::ServerContext* context, const v1:
     const mapping::BoxVoxels voxels = mapping::voxelsOfBox(finiteBox(request->box(), "box"), map.voxelSize(), "box");
     if (!voxels.within_range) throw invalidArgument("box reaches beyond " + mapping::mapRangeText(map));
     // One item: its reply must fit one message at the worst (every voxel listed).
-    const int64_t limit = limits_.maxExtractVoxels();
+    const int64_t limit = maxExtractVoxels(limits_);
     if (voxels.count() > static_cast<uint64_t>(limit)) {
       throw resourceExhausted("box: " + std::to_string(voxels.count()) +
                               " voxels, more than an extract may hold: " + std::to_string(limit) +

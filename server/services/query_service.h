@@ -8,6 +8,8 @@
 // Threads: any number of calls at once.
 #pragma once
 
+#include <algorithm>
+
 #include "cenote/v1/query.grpc.pb.h"
 #include "mapping/query/map_query.h"
 #include "server/access/call_guard.h"
@@ -15,6 +17,20 @@
 #include "server/server_config.h"
 
 namespace cenote::server {
+
+// Worst-case size of an ExtractReply (proto/cenote/v1/query.proto) per listed voxel: ijk, three
+// packed sint32 varints of at most 3 bytes each (zigzag of |i| <= kMaxVoxelIndex + 1 < 2^20 fits in
+// 21 bits); its state, a 1-byte packed enum; its probability, a 4-byte packed float; its colour,
+// 3 bytes of rgb.
+inline constexpr int64_t kExtractBytesPerVoxel = 3 * 3 + 1 + 4 + 3;
+// And once per reply: voxel_size_m (tag + 8), map_version (tag + at most 10), the tags and length
+// varints (at most 1 + 5 each) of the four per-voxel fields: 44 bytes, rounded up.
+inline constexpr int64_t kExtractReplyBytes = 64;
+// Voxels an ExtractVoxels box may hold: max_box_voxels, and fewer when its reply at the worst
+// would exceed max_message_bytes.
+inline int64_t maxExtractVoxels(const RequestLimits& limits) {
+  return std::min(limits.max_box_voxels, (limits.max_message_bytes - kExtractReplyBytes) / kExtractBytesPerVoxel);
+}
 
 class QueryService final : public v1::Query::Service {
  public:
