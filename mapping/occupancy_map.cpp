@@ -14,6 +14,7 @@
 #include "mapping/detail/publish_word.h"
 #include "mapping/integration/depth_frame.h"
 #include "mapping/integration/voxel_ray.h"
+#include "mapping/map_range.h"
 
 namespace cenote::mapping {
 
@@ -398,9 +399,8 @@ MapDelta OccupancyMap::clearBox(const Aabb& box_m) {
     throw Error("map: clear box " + formatPoint(box_m.min_m) + " - " + formatPoint(box_m.max_m) +
                 " must be finite with min <= max");
   }
-  VoxelBox candidates;
-  candidates.extend(toIndex(box_m.min_m));
-  candidates.extend(toIndex(box_m.max_m));
+  // Clipped to the map's range (map_range.h): a box reaching beyond it clears what lies within.
+  const VoxelBox candidates = voxelsOfBox(box_m, voxelSize(), "map: clear box").voxels;
   return removeVoxels(candidates, false, [&](const Eigen::Vector3d& c) { return box_m.contains(c); });
 }
 
@@ -409,9 +409,8 @@ MapDelta OccupancyMap::clearSphere(const Eigen::Vector3d& centre_m, double radiu
     throw Error("map: clear sphere at " + formatPoint(centre_m) + " radius " + std::to_string(radius_m) +
                 " m: centre must be finite and radius finite and >= 0");
   }
-  VoxelBox candidates;
-  candidates.extend(toIndex(centre_m - Eigen::Vector3d::Constant(radius_m)));
-  candidates.extend(toIndex(centre_m + Eigen::Vector3d::Constant(radius_m)));
+  const Aabb bounds{(centre_m.array() - radius_m).matrix(), (centre_m.array() + radius_m).matrix()};
+  const VoxelBox candidates = voxelsOfBox(bounds, voxelSize(), "map: clear sphere").voxels;
   const double r2 = radius_m * radius_m;
   return removeVoxels(candidates, false, [&](const Eigen::Vector3d& c) { return (c - centre_m).squaredNorm() <= r2; });
 }

@@ -92,6 +92,7 @@ class OccupancyMap {
   MapDelta integrateDepth(const DepthFrame& frame);
 
   // Forget (make unknown) the voxels whose centre lies in the box / sphere, or outside the sphere.
+  // A box or sphere reaching beyond the map's range (map_range.h) clears the part within it.
   // Blocks left without a known voxel are freed; cropToRadius and reset also free the integration
   // scratch (the next integrate allocates it again).
   // @throws Error for a non-finite or negative size. @return what changed.

@@ -108,7 +108,8 @@ int serve(const Options& o) {
   }
   const CpuPlacement cpus(settings.server.query_cpus);  // before any thread is pinned
   MapHost host(initialMap(o, settings), settings.server.host);
-  Snapshotter snapshots(host, settings.server.snapshot_dir, settings.server.frame_id, settings.server.snapshot_period_s);
+  Snapshotter snapshots(host, settings.server.snapshot_dir, settings.server.frame_id, settings.server.snapshot_period_s,
+                        {o.load, settings.server.limits.max_snapshots, settings.server.limits.max_snapshot_bytes});
   IngestService ingest(host, guard, settings, rectifierFrom(settings.server.calibration), cpus);
   QueryService query(host, guard, settings.server, settings.server.frame_id);
   UpdatesService updates(host, guard);

@@ -38,6 +38,11 @@ std::vector<ConfigError> ServerConfig::validate() const {
   errors.check(limits.max_points_per_batch >= 1, "limits.max_points_per_batch", limits.max_points_per_batch,
                "must be >= 1");
   errors.check(limits.max_box_voxels >= 1, "limits.max_box_voxels", limits.max_box_voxels, "must be >= 1");
+  errors.check(limits.max_query_voxels >= 1, "limits.max_query_voxels", limits.max_query_voxels, "must be >= 1");
+  errors.check(limits.max_snapshots >= 1, "limits.max_snapshots", limits.max_snapshots,
+               "must be >= 1 (the previous session's map is always kept)");
+  errors.check(limits.max_snapshot_bytes >= 0, "limits.max_snapshot_bytes", limits.max_snapshot_bytes,
+               "must be >= 0 (0: no limit)");
   errors.check(limits.max_image_pixels >= 1, "limits.max_image_pixels", limits.max_image_pixels, "must be >= 1");
   errors.check(limits.max_poses >= 2, "limits.max_poses", limits.max_poses, "must be >= 2 (two poses bracket a frame)");
   return errors.take();
@@ -70,6 +75,9 @@ void ServerConfig::read(YamlSection& section) {
   l.read("max_batch", limits.max_batch);
   l.read("max_points_per_batch", limits.max_points_per_batch);
   l.read("max_box_voxels", limits.max_box_voxels);
+  l.read("max_query_voxels", limits.max_query_voxels);
+  l.read("max_snapshots", limits.max_snapshots);
+  l.read("max_snapshot_bytes", limits.max_snapshot_bytes);
   l.read("max_image_pixels", limits.max_image_pixels);
   l.read("max_poses", limits.max_poses);
   l.finish();

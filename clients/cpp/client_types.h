@@ -250,7 +250,7 @@ struct MapUpdate {
 };
 
 struct SubscribeOptions {
-  Box region;  // only blocks touching it; empty: everywhere
+  Box region;  // only blocks holding a voxel whose centre lies in it; empty: everywhere
   bool include_probabilities = false;
 };
 

@@ -11,6 +11,7 @@ namespace cenote::mapping {
 namespace {
 
 constexpr double kMaxBoxVoxels = 2147483648.0;
+constexpr uint64_t kMaxBoxVoxelCount = uint64_t{1} << 31;
 
 // Voxels of a box counted along each axis, as a double (no overflow).
 double boxVoxels(const Aabb& box_m, double voxel_size_m) {
@@ -134,17 +135,61 @@ CollisionResult sweepCapsule(const OccupancyMap::ConstAccessor& acc, const Segme
   return result;
 }
 
-}  // namespace
-
-double mapRange_m(const OccupancyMap& map) { return kMaxVoxelIndex * map.voxelSize(); }
-
-bool withinMapRange(const Aabb& box_m, const OccupancyMap& map) {
-  const double range = mapRange_m(map);
-  return box_m.isEmpty() || ((box_m.min_m.array() >= -range).all() && (box_m.max_m.array() <= range).all());
+// The budget: the sum of the items' costs, before any is visited.
+void checkBudget(const std::vector<uint64_t>& cost, const char* items, const BatchControl& control) {
+  uint64_t total = 0;
+  for (const uint64_t c : cost) total = c > std::numeric_limits<uint64_t>::max() - total ? UINT64_MAX : total + c;
+  if (total > control.max_voxels) {
+    throw ResourceExhaustedError("map query: " + std::to_string(cost.size()) + " " + items + " may visit up to " +
+                                 std::to_string(total) + " voxels, more than the budget " + control.budget_name + " = " +
+                                 std::to_string(control.max_voxels));
+  }
 }
 
-std::string mapRangeText(const OccupancyMap& map) {
-  return "the map's range, +-" + std::to_string(static_cast<int64_t>(mapRange_m(map))) + " m on each axis";
+// Calls answer(accessor, i) for every item, one accessor (one shared lock) per slice of items whose
+// costs reach control.slice_voxels; control.between_slices runs between two slices, unlocked.
+template <typename Answer>
+void runInSlices(const OccupancyMap& map, const std::vector<uint64_t>& cost, const BatchControl& control, Answer&& answer) {
+  size_t i = 0;
+  while (i < cost.size()) {
+    if (i > 0 && control.between_slices) control.between_slices(i);
+    const OccupancyMap::ConstAccessor acc = map.constAccessor();
+    uint64_t spent = 0;
+    do {
+      answer(acc, i);
+      spent += cost[i];
+      ++i;
+    } while (i < cost.size() && spent < control.slice_voxels);
+  }
+}
+
+}  // namespace
+
+double mapRange_m(const OccupancyMap& map) { return mapRange_m(map.voxelSize()); }
+
+bool withinMapRange(const Aabb& box_m, const OccupancyMap& map) {
+  return voxelsOfBox(box_m, map.voxelSize(), "map query: box").within_range;
+}
+
+std::string mapRangeText(const OccupancyMap& map) { return mapRangeText(map.voxelSize()); }
+
+uint64_t visitBound(const SegmentQuery& q, double s) {
+  const VoxelIndex a = toVoxel(q.start_m.cwiseMin(q.end_m).array() - q.radius_m, s);
+  const VoxelIndex b = toVoxel(q.start_m.cwiseMax(q.end_m).array() + q.radius_m, s);
+  const Eigen::Array3d extent = (b - a).cast<double>().array() + 1.0;
+  if (q.radius_m == 0.0) return static_cast<uint64_t>(extent.sum() - 2.0);  // |di| + |dj| + |dk| + 1
+  // sweepCapsule: per slab of the dominant axis, the voxels of a rectangle spanning the segment's
+  // points within r of the slab's centre plane (a parameter range of 2 r / |d_axis|), grown by r.
+  const double box = extent.prod();
+  const Eigen::Vector3d d = (q.end_m - q.start_m).cwiseAbs();
+  int axis;
+  const double da = d.maxCoeff(&axis);
+  if (da <= 1e-12) return static_cast<uint64_t>(box);
+  double slabs = extent[axis];
+  for (const int u : {(axis + 1) % 3, (axis + 2) % 3}) {
+    slabs *= std::min(extent[u], std::floor(2.0 * q.radius_m * (1.0 + d[u] / da) / s) + 2.0);
+  }
+  return static_cast<uint64_t>(std::min(box, slabs));
 }
 
 Aabb boundsOf(const SegmentQuery& segment) {
@@ -176,33 +221,25 @@ std::vector<VoxelQuery> queryVoxels(const OccupancyMap& map, const std::vector<E
   return out;
 }
 
-std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aabb>& boxes_m) {
+std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aabb>& boxes_m, const BatchControl& control) {
   const double s = map.voxelSize();
+  std::vector<VoxelBox> voxels(boxes_m.size());
+  std::vector<uint64_t> cost(boxes_m.size());
   for (size_t i = 0; i < boxes_m.size(); ++i) {
-    const Aabb& box = boxes_m[i];
-    if (!box.min_m.allFinite() || !box.max_m.allFinite()) {
-      throw Error("map query: box " + std::to_string(i) + " must be finite");
-    }
-    if (box.isEmpty()) continue;
-    if (!withinMapRange(box, map)) {
-      throw Error("map query: box " + std::to_string(i) + " reaches beyond " + mapRangeText(map));
-    }
-    if (boxVoxels(box, s) > kMaxBoxVoxels) {
-      throw Error("map query: box " + std::to_string(i) + " holds more than 2^31 voxels");
-    }
+    const std::string what = "map query: box " + std::to_string(i);
+    const BoxVoxels v = voxelsOfBox(boxes_m[i], s, what);
+    if (!v.within_range) throw Error(what + " reaches beyond " + mapRangeText(map));
+    if (v.count() > kMaxBoxVoxelCount) throw Error(what + " holds more than 2^31 voxels");
+    voxels[i] = v.voxels;
+    cost[i] = v.count();
   }
+  checkBudget(cost, "boxes", control);
   std::vector<BoxCounts> out(boxes_m.size());
-  const auto acc = map.constAccessor();
-  BlockView view;
-  for (size_t i = 0; i < boxes_m.size(); ++i) {
-    const Aabb& box = boxes_m[i];
-    if (box.isEmpty()) continue;
-    // Voxels whose centre is inside: ceil(min / s - 0.5) .. floor(max / s - 0.5).
-    const VoxelIndex lo = (box.min_m / s).array().unaryExpr([](double x) { return std::ceil(x - 0.5); }).cast<int>();
-    const VoxelIndex hi = (box.max_m / s).array().unaryExpr([](double x) { return std::floor(x - 0.5); }).cast<int>();
-    if ((lo.array() > hi.array()).any()) continue;
-    const uint64_t total = static_cast<uint64_t>(hi.x() - lo.x() + 1) * (hi.y() - lo.y() + 1) * (hi.z() - lo.z() + 1);
+  runInSlices(map, cost, control, [&](const OccupancyMap::ConstAccessor& acc, size_t i) {
+    if (voxels[i].isEmpty()) return;
+    const VoxelIndex lo = voxels[i].min, hi = voxels[i].max;
     BoxCounts& c = out[i];
+    BlockView view;
     const BlockIndex blo = blockOf(lo), bhi = blockOf(hi);
     for (int bx = blo.x(); bx <= bhi.x(); ++bx) {
       for (int by = blo.y(); by <= bhi.y(); ++by) {
@@ -226,25 +263,38 @@ std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aab
         }
       }
     }
-    c.unknown = total - c.free - c.occupied;
-  }
+    c.unknown = cost[i] - c.free - c.occupied;
+  });
   return out;
 }
 
-std::vector<CollisionResult> checkSegments(const OccupancyMap& map, const std::vector<SegmentQuery>& segments,
-                                           bool stop_at_unknown) {
-  for (size_t i = 0; i < segments.size(); ++i) checkSegment(segments[i], i, map);
-  std::vector<CollisionResult> out(segments.size());
-  const auto acc = map.constAccessor();
+namespace {
+
+std::vector<CollisionResult> runSegments(const OccupancyMap& map, const std::vector<SegmentQuery>& segments,
+                                         bool stop_at_unknown, const BatchControl& control, const char* items) {
+  std::vector<uint64_t> cost(segments.size());
   for (size_t i = 0; i < segments.size(); ++i) {
+    checkSegment(segments[i], i, map);
+    cost[i] = visitBound(segments[i], map.voxelSize());
+  }
+  checkBudget(cost, items, control);
+  std::vector<CollisionResult> out(segments.size());
+  runInSlices(map, cost, control, [&](const OccupancyMap::ConstAccessor& acc, size_t i) {
     out[i] = segments[i].radius_m > 0.0 ? sweepCapsule(acc, segments[i], stop_at_unknown)
                                         : walkSegment(acc, segments[i], stop_at_unknown);
-  }
+  });
   return out;
+}
+
+}  // namespace
+
+std::vector<CollisionResult> checkSegments(const OccupancyMap& map, const std::vector<SegmentQuery>& segments,
+                                           bool stop_at_unknown, const BatchControl& control) {
+  return runSegments(map, segments, stop_at_unknown, control, "segments");
 }
 
 std::vector<CollisionResult> raycast(const OccupancyMap& map, const std::vector<Ray>& rays, double max_range_m,
-                                     bool stop_at_unknown) {
+                                     bool stop_at_unknown, const BatchControl& control) {
   if (!(max_range_m > 0.0) || !std::isfinite(max_range_m)) {
     throw Error("map raycast: max_range_m = " + std::to_string(max_range_m) + ": must be finite and > 0");
   }
@@ -263,7 +313,7 @@ std::vector<CollisionResult> raycast(const OccupancyMap& map, const std::vector<
                         0.5 * map.voxelSize();
     segments[i].end_m = rays[i].origin_m + rays[i].direction * (std::clamp(edge, 0.0, max_range_m) / n);
   }
-  return checkSegments(map, segments, stop_at_unknown);
+  return runSegments(map, segments, stop_at_unknown, control, "rays");
 }
 
 }  // namespace cenote::mapping

@@ -1,27 +1,50 @@
 // map_query.h: what planners ask of the occupancy map: voxel states and probabilities at points,
-// box counts, segment and capsule collision (with stop-at-unknown), raycasts. All batched: each
-// call takes one ConstAccessor (one shared lock) for the whole batch.
+// box counts, segment and capsule collision (with stop-at-unknown), raycasts. All batched.
+// Work: box, segment and ray batches have a budget of voxels, counted before any is visited, and
+// run in slices: the map's shared lock (one ConstAccessor) is held for one slice of items at a
+// time, so integration and other readers get in between two slices, and a caller's check (deadline,
+// cancellation) runs there. Each item is answered from one consistent state of the map; the items
+// of one batch may see different states when the map changes meanwhile.
 // Units: metres, world frame. A voxel belongs to a box / capsule when its centre does.
-// Range: boxes, segments and capsules must lie within the map's range, +-mapRange_m(map) on each
-// axis (voxel_types.h: beyond it no voxel is ever known, and voxel indices would overflow).
-// Threads: free functions; call them from any number of threads while the map integrates (each
-// call holds the map's shared lock for its duration; see occupancy_map.h).
+// Range: boxes, segments and capsules must lie within the map's range, +-mapRange_m on each axis
+// (map_range.h: beyond it no voxel is ever known, and voxel indices would overflow).
+// Threads: free functions; call them from any number of threads while the map integrates.
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
+#include "mapping/map_range.h"
 #include "mapping/occupancy_map.h"
 
 namespace cenote::mapping {
 
-// Half the side of the cube, centred on the origin, that holds every voxel the map can know.
-double mapRange_m(const OccupancyMap& map);
-// Whether `box_m` lies within that cube (an empty box does).
-bool withinMapRange(const Aabb& box_m, const OccupancyMap& map);
-// "the map's range, +-N m on each axis", for error messages.
-std::string mapRangeText(const OccupancyMap& map);
+double mapRange_m(const OccupancyMap& map);                       // mapRange_m(map.voxelSize())
+bool withinMapRange(const Aabb& box_m, const OccupancyMap& map);  // voxelsOfBox(...).within_range
+std::string mapRangeText(const OccupancyMap& map);                // mapRangeText(map.voxelSize())
+
+// Voxels of work in one slice: a writer waits for at most one slice of a batch reader (or one item,
+// when a single item is larger).
+inline constexpr uint64_t kSliceVoxels = 1 << 14;
+
+// How a batch of boxes, segments or rays runs.
+struct BatchControl {
+  // Voxels the batch may visit at most, counted before any is: a segment the voxels its walk can
+  // pass (|di| + |dj| + |dk| + 1 between its end voxels), a capsule those of its slabs'
+  // cross-sections (at most its bounding box's), a box its voxels. Beyond: ResourceExhaustedError
+  // naming `budget_name` (e.g. "server.limits.max_query_voxels"), before the map is read.
+  uint64_t max_voxels = std::numeric_limits<uint64_t>::max();
+  std::string budget_name = "the query budget";
+  // A slice: items until their voxels reach this many (at least one item).
+  uint64_t slice_voxels = kSliceVoxels;
+  // Called before every slice but the first, without the lock, with the number of items answered
+  // so far; it may throw to end the batch (the exception leaves the call). Empty: never called.
+  std::function<void(size_t items_done)> between_slices;
+};
 
 struct VoxelQuery {
   VoxelState state = VoxelState::kUnknown;
@@ -41,8 +64,9 @@ struct BoxCounts {
 
 // Counts of the voxels whose centre lies in each box. An empty box counts nothing.
 // @throws Error for a non-finite box, one reaching beyond the map's range or holding more than
-// 2^31 voxels.
-std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aabb>& boxes_m);
+// 2^31 voxels; ResourceExhaustedError beyond control.max_voxels; whatever between_slices throws.
+std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aabb>& boxes_m,
+                                  const BatchControl& control = {});
 
 struct SegmentQuery {
   Eigen::Vector3d start_m = Eigen::Vector3d::Zero();
@@ -67,9 +91,10 @@ struct CollisionResult {
 // First occupied voxel along each segment or capsule, in order of distance from its start.
 // stop_at_unknown: the walk ends at the first unknown voxel (stopped_at_unknown), since unknown is
 // never free. @throws Error for a non-finite segment, a negative radius, a segment or capsule
-// reaching beyond the map's range, or a capsule whose bounding box holds more than 2^31 voxels.
+// reaching beyond the map's range, or a capsule whose bounding box holds more than 2^31 voxels;
+// ResourceExhaustedError beyond control.max_voxels; whatever control.between_slices throws.
 std::vector<CollisionResult> checkSegments(const OccupancyMap& map, const std::vector<SegmentQuery>& segments,
-                                           bool stop_at_unknown);
+                                           bool stop_at_unknown, const BatchControl& control = {});
 
 struct Ray {
   Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
@@ -79,8 +104,12 @@ struct Ray {
 // First occupied voxel along each ray within max_range_m (a segment check of that length, ending
 // where the ray leaves the map's range if sooner).
 // @throws Error for a zero or non-finite direction, an origin beyond the map's range, or
-// max_range_m <= 0.
+// max_range_m <= 0; as checkSegments for the budget and slices (each ray's segment counts).
 std::vector<CollisionResult> raycast(const OccupancyMap& map, const std::vector<Ray>& rays, double max_range_m,
-                                     bool stop_at_unknown);
+                                     bool stop_at_unknown, const BatchControl& control = {});
+
+// Voxels a segment or capsule can visit (BatchControl::max_voxels). The segment must be finite and
+// within the map's range.
+uint64_t visitBound(const SegmentQuery& segment, double voxel_size_m);
 
 }  // namespace cenote::mapping

@@ -1,6 +1,11 @@
 #include "server/host/snapshotter.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <ctime>
+#include <regex>
+#include <tuple>
 
 #include "common/atomic_file.h"
 #include "common/error.h"
@@ -33,12 +38,19 @@ v1::SnapshotFormat resolveSnapshotFormat(const std::string& path, v1::SnapshotFo
   }
 }
 
-Snapshotter::Snapshotter(const MapHost& host, std::string directory, std::string frame_id, double period_s)
-    : host_(host), directory_(fs::absolute(directory)), frame_id_(std::move(frame_id)), period_s_(period_s) {
+Snapshotter::Snapshotter(const MapHost& host, std::string directory, std::string frame_id, double period_s,
+                         SnapshotRetention retention)
+    : host_(host),
+      directory_(fs::absolute(directory)),
+      frame_id_(std::move(frame_id)),
+      period_s_(period_s),
+      retention_(std::move(retention)) {
   std::error_code ec;
   fs::create_directories(directory_, ec);
   if (ec) throw Error("snapshot directory " + directory_.string() + " cannot be created: " + ec.message());
   removeStaleTemporaries();
+  rotateUnloaded();
+  applyQuotas();
   if (period_s_ > 0.0) thread_ = std::thread([this] { periodicLoop(); });
 }
 
@@ -51,6 +63,68 @@ void Snapshotter::removeStaleTemporaries() {
     std::fprintf(stderr, "cenote-server: removing %s, left by a snapshot that did not finish\n", it->path().c_str());
     std::error_code remove_ec;
     fs::remove(it->path(), remove_ec);
+  }
+}
+
+void Snapshotter::rotateUnloaded() {
+  const fs::path latest = directory_ / "map.vdb";
+  std::error_code ec;
+  if (!fs::exists(latest, ec)) return;
+  if (!retention_.loaded.empty() && fs::equivalent(retention_.loaded, latest, ec)) return;
+  // Named after the time it was written: the end of the session it holds.
+  const auto written = std::chrono::file_clock::to_sys(fs::last_write_time(latest));
+  const std::time_t t = std::chrono::system_clock::to_time_t(
+      std::chrono::time_point_cast<std::chrono::system_clock::duration>(written));
+  std::tm utc{};
+  gmtime_r(&t, &utc);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &utc);
+  fs::path rotated = directory_ / ("map." + std::string(stamp) + ".vdb");
+  for (int n = 2; fs::exists(rotated, ec); ++n)
+    rotated = directory_ / ("map." + std::string(stamp) + "-" + std::to_string(n) + ".vdb");
+  fs::rename(latest, rotated, ec);
+  if (ec) throw IoError("cannot keep " + latest.string() + " as " + rotated.string() + ": " + ec.message());
+  std::fprintf(stderr, "cenote-server: %s was not loaded (%s): kept as %s; this server writes a new map.vdb\n",
+               latest.c_str(), retention_.loaded.empty() ? "no --load" : ("--load " + retention_.loaded).c_str(),
+               rotated.filename().c_str());
+}
+
+std::vector<fs::path> Snapshotter::rotatedSnapshots() const {
+  static const std::regex kRotated(R"(map\.(\d{8}T\d{6}Z)(-(\d+))?\.vdb)");
+  // By the time written, then the time in the name, then the number after it (none: 1).
+  std::vector<std::tuple<fs::file_time_type, std::string, int, fs::path>> found;
+  std::error_code ec;
+  for (fs::directory_iterator it(directory_, ec), end; !ec && it != end; it.increment(ec)) {
+    std::smatch m;
+    const std::string name = it->path().filename().string();
+    if (!it->is_regular_file(ec) || !std::regex_match(name, m, kRotated)) continue;
+    found.emplace_back(fs::last_write_time(it->path(), ec), m[1].str(), m[3].matched ? std::stoi(m[3].str()) : 1,
+                       it->path());
+  }
+  std::sort(found.begin(), found.end());
+  std::vector<fs::path> out;
+  for (auto& f : found) out.push_back(std::move(std::get<3>(f)));
+  return out;
+}
+
+void Snapshotter::applyQuotas() {
+  std::vector<fs::path> rotated = rotatedSnapshots();
+  std::error_code ec;
+  uint64_t bytes = fs::exists(directory_ / "map.vdb", ec) ? fs::file_size(directory_ / "map.vdb", ec) : 0;
+  for (const fs::path& p : rotated) bytes += fs::file_size(p, ec);
+  const uint64_t max_bytes = static_cast<uint64_t>(retention_.max_snapshot_bytes);
+  size_t oldest = 0;
+  while (rotated.size() - oldest > 1 && (static_cast<int64_t>(rotated.size() - oldest) > retention_.max_snapshots ||
+                                         (max_bytes > 0 && bytes > max_bytes))) {
+    const fs::path& p = rotated[oldest++];
+    const uint64_t size = fs::file_size(p, ec);
+    if (!fs::remove(p, ec)) continue;
+    bytes -= size;
+    std::fprintf(stderr,
+                 "cenote-server: removed %s, the oldest snapshot beyond server.limits.max_snapshots = %lld / "
+                 "max_snapshot_bytes = %lld\n",
+                 p.c_str(), static_cast<long long>(retention_.max_snapshots),
+                 static_cast<long long>(retention_.max_snapshot_bytes));
   }
 }
 
@@ -110,9 +184,13 @@ void Snapshotter::writeLatest() {
     if (saved_version_ && *saved_version_ == version) return;
   }
   writeTo(directory_ / "map.vdb", v1::SNAPSHOT_FORMAT_VDB);
-  std::lock_guard<std::mutex> lock(state_mutex_);
-  saved_version_ = version;
-  saved_at_ = std::chrono::steady_clock::now();
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    saved_version_ = version;
+    saved_at_ = std::chrono::steady_clock::now();
+  }
+  std::lock_guard<std::mutex> lock(write_mutex_);
+  applyQuotas();
 }
 
 std::optional<double> Snapshotter::lastSnapshotAge() const {

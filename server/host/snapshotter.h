@@ -3,6 +3,12 @@
 // (kill -9) the last complete snapshot is there to `--load`.
 // Paths asked for over the wire are relative to the snapshot directory; absolute paths and ".."
 // are refused (PERMISSION_DENIED): a client never writes elsewhere on the vehicle.
+// A server never overwrites a map it did not load: a <directory>/map.vdb there at start-up that is
+// not the file the map was loaded from (`--load`) is renamed to map.<UTC time it was written>.vdb
+// (map.20261202T011500Z.vdb, "-2" etc. appended when taken), and the server says so on stderr.
+// Quotas: at most max_snapshots such rotated snapshots are kept, and map.vdb with them holds at
+// most max_snapshot_bytes; beyond either, the oldest rotated ones are removed first, never map.vdb
+// nor the newest rotated one (at start-up, before map.vdb is written anew, the previous session's).
 // Threads: any; writes serialise on one mutex (readers of the map are not blocked, see map_io.h).
 #pragma once
 
@@ -13,17 +19,27 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "cenote/v1/admin.pb.h"
 #include "server/host/map_host.h"
 
 namespace cenote::server {
 
+// What becomes of the snapshots already in the directory.
+struct SnapshotRetention {
+  std::string loaded;              // the file the map was loaded from (--load); empty: none
+  int64_t max_snapshots = 10;      // rotated snapshots kept (server.limits.max_snapshots), >= 1
+  int64_t max_snapshot_bytes = 0;  // of map.vdb and the rotated ones (server.limits.max_snapshot_bytes); 0: no limit
+};
+
 class Snapshotter {
  public:
-  // Removes stale temporary files left by a crashed process (removeStaleTemporaries).
-  // @throws cenote::Error when the directory cannot be created.
-  Snapshotter(const MapHost& host, std::string directory, std::string frame_id, double period_s);
+  // Removes stale temporary files left by a crashed process (removeStaleTemporaries), rotates a
+  // map.vdb that was not loaded and applies the quotas.
+  // @throws cenote::Error when the directory cannot be created or map.vdb cannot be renamed.
+  Snapshotter(const MapHost& host, std::string directory, std::string frame_id, double period_s,
+              SnapshotRetention retention = {});
   ~Snapshotter();
 
   // Writes `relative_path` under the snapshot directory, in the format its extension names
@@ -34,8 +50,11 @@ class Snapshotter {
   // Writes to an absolute path chosen by the server (downloads, the periodic snapshot); its
   // extension must name `format` as for write().
   void writeTo(const std::filesystem::path& path, v1::SnapshotFormat format);
-  // The periodic / shutdown snapshot: <directory>/map.vdb, when the map changed since the last one.
+  // The periodic / shutdown snapshot: <directory>/map.vdb, when the map changed since the last one;
+  // then the byte quota.
   void writeLatest();
+  // The rotated snapshots (map.<time>.vdb) in the directory, oldest first (by the time written).
+  std::vector<std::filesystem::path> rotatedSnapshots() const;
   // Stops the periodic thread.
   void stop();
   // Seconds since the last snapshot; nullopt when none has been written.
@@ -47,11 +66,16 @@ class Snapshotter {
 
  private:
   void periodicLoop();
+  // A map.vdb not loaded: renamed to map.<time>.vdb.
+  void rotateUnloaded();
+  // Removes the oldest rotated snapshots beyond the quotas (never the newest one, never map.vdb).
+  void applyQuotas();
 
   const MapHost& host_;
   const std::filesystem::path directory_;
   const std::string frame_id_;
   const double period_s_;
+  const SnapshotRetention retention_;
   std::mutex write_mutex_;
   mutable std::mutex state_mutex_;
   std::condition_variable wake_;

@@ -1,8 +1,8 @@
 #include "server/services/query_service.h"
 
+#include <chrono>
 #include <cmath>
 
-#include "mapping/query/map_query.h"
 #include "server/wire/wire.h"
 
 namespace cenote::server {
@@ -21,6 +21,19 @@ void toWire(const mapping::CollisionResult& r, const mapping::OccupancyMap& map,
   out->set_clear(r.isClear());
 }
 
+// Between two slices of a batch: DEADLINE_EXCEEDED once the call's deadline passed, CANCELLED once
+// the client cancelled (or went away).
+void checkInterrupted(grpc::ServerContext* context, const char* method, size_t done, size_t items,
+                      const char* unit = "items") {
+  const std::string progress = " after " + std::to_string(done) + " of " + std::to_string(items) + " " + unit;
+  if (std::chrono::system_clock::now() > context->deadline()) {
+    throw StatusError(grpc::StatusCode::DEADLINE_EXCEEDED, std::string(method) + ": the deadline passed" + progress);
+  }
+  if (context->IsCancelled()) {
+    throw StatusError(grpc::StatusCode::CANCELLED, std::string(method) + ": cancelled by the client" + progress);
+  }
+}
+
 }  // namespace
 
 void QueryService::checkBoxVolume(const mapping::Aabb& box, const std::string& what) const {
@@ -33,6 +46,14 @@ void QueryService::checkBoxVolume(const mapping::Aabb& box, const std::string& w
         what + ": about " + std::to_string(static_cast<int64_t>(voxels)) +
         " voxels, more than the limit server.limits.max_box_voxels = " + std::to_string(limits_.max_box_voxels));
   }
+}
+
+mapping::BatchControl QueryService::batchControl(grpc::ServerContext* context, const char* method, size_t items) const {
+  mapping::BatchControl control;
+  control.max_voxels = static_cast<uint64_t>(limits_.max_query_voxels);
+  control.budget_name = "server.limits.max_query_voxels";
+  control.between_slices = [context, method, items](size_t done) { checkInterrupted(context, method, done, items); };
+  return control;
 }
 
 void QueryService::waitForDerived(grpc::ServerContext* context) const {
@@ -68,7 +89,8 @@ grpc::Status QueryService::GetBoxes(grpc::ServerContext* context, const v1::Boxe
       checkBoxVolume(boxes.back(), what);
     }
     reply->set_map_version(host_.map().version());
-    for (const mapping::BoxCounts& c : mapping::queryBoxes(host_.map(), boxes)) {
+    const auto control = batchControl(context, "Query/GetBoxes", boxes.size());
+    for (const mapping::BoxCounts& c : mapping::queryBoxes(host_.map(), boxes, control)) {
       v1::BoxCounts* out = reply->add_counts();
       out->set_unknown(c.unknown);
       out->set_free(c.free);
@@ -97,7 +119,8 @@ grpc::Status QueryService::CheckSegments(grpc::ServerContext* context, const v1:
       if (s.radius_m() > 0.0) checkBoxVolume(mapping::boundsOf(segments[i]), what);
     }
     reply->set_map_version(host_.map().version());
-    for (const auto& r : mapping::checkSegments(host_.map(), segments, request->stop_at_unknown())) {
+    const auto control = batchControl(context, "Query/CheckSegments", segments.size());
+    for (const auto& r : mapping::checkSegments(host_.map(), segments, request->stop_at_unknown(), control)) {
       toWire(r, host_.map(), reply->add_results());
     }
     return grpc::Status::OK;
@@ -119,7 +142,8 @@ grpc::Status QueryService::Raycast(grpc::ServerContext* context, const v1::Rayca
       if (rays[i].direction.norm() == 0.0) throw invalidArgument(what + ".direction is zero");
     }
     reply->set_map_version(host_.map().version());
-    for (const auto& r : mapping::raycast(host_.map(), rays, request->max_range_m(), request->stop_at_unknown())) {
+    const auto control = batchControl(context, "Query/Raycast", rays.size());
+    for (const auto& r : mapping::raycast(host_.map(), rays, request->max_range_m(), request->stop_at_unknown(), control)) {
       toWire(r, host_.map(), reply->add_results());
     }
     return grpc::Status::OK;
@@ -168,24 +192,29 @@ grpc::Status QueryService::GetFrontiers(grpc::ServerContext* context, const v1::
 grpc::Status QueryService::ExtractVoxels(grpc::ServerContext* context, const v1::ExtractRequest* request,
                                          v1::ExtractReply* reply) {
   return guard_.run(context, "Query/ExtractVoxels", [&] {
-    const mapping::Aabb box = finiteBox(request->box(), "box");
-    checkBoxVolume(box, "box");
     const mapping::OccupancyMap& map = host_.map();
-    if (!mapping::withinMapRange(box, map)) throw invalidArgument("box reaches beyond " + mapping::mapRangeText(map));
-    reply->set_voxel_size_m(map.voxelSize());
-    if (box.isEmpty()) return grpc::Status::OK;
-    // Voxels whose centre lies in the box: i with (i + 0.5) s in [min, max].
-    const double s = map.voxelSize();
-    mapping::VoxelIndex lo, hi;
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = static_cast<int>(std::ceil(box.min_m[a] / s - 0.5));
-      hi[a] = static_cast<int>(std::floor(box.max_m[a] / s - 0.5));
+    const mapping::BoxVoxels voxels = mapping::voxelsOfBox(finiteBox(request->box(), "box"), map.voxelSize(), "box");
+    if (!voxels.within_range) throw invalidArgument("box reaches beyond " + mapping::mapRangeText(map));
+    // One item: its reply must fit one message at the worst (every voxel listed).
+    const int64_t limit = maxExtractVoxels(limits_);
+    if (voxels.count() > static_cast<uint64_t>(limit)) {
+      throw resourceExhausted("box: " + std::to_string(voxels.count()) +
+                              " voxels, more than an extract may hold: " + std::to_string(limit) +
+                              " (server.limits.max_box_voxels = " + std::to_string(limits_.max_box_voxels) +
+                              ", and (server.limits.max_message_bytes = " + std::to_string(limits_.max_message_bytes) +
+                              " - " + std::to_string(kExtractReplyBytes) + ") / " + std::to_string(kExtractBytesPerVoxel) +
+                              " bytes per voxel at the worst)");
     }
+    checkCount(static_cast<int64_t>(voxels.count()), "box voxels", limits_.max_query_voxels,
+               "server.limits.max_query_voxels");
+    reply->set_voxel_size_m(map.voxelSize());
+    if (voxels.voxels.isEmpty()) return grpc::Status::OK;
+    const mapping::VoxelIndex lo = voxels.voxels.min, hi = voxels.voxels.max;
     const mapping::OccupancyMap::ConstAccessor access = map.constAccessor();
     reply->set_map_version(map.version());
     std::string rgb;
     for (int x = lo.x(); x <= hi.x(); ++x) {
-      if (context->IsCancelled()) throw StatusError(grpc::StatusCode::CANCELLED, "extract cancelled");
+      checkInterrupted(context, "Query/ExtractVoxels", x - lo.x(), hi.x() - lo.x() + 1, "x planes");
       for (int y = lo.y(); y <= hi.y(); ++y) {
         for (int z = lo.z(); z <= hi.z(); ++z) {
           const mapping::VoxelIndex ijk(x, y, z);

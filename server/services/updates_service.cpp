@@ -2,6 +2,7 @@
 
 #include <optional>
 
+#include "mapping/map_range.h"
 #include "server/wire/wire.h"
 
 namespace cenote::server {
@@ -11,11 +12,15 @@ constexpr size_t kBlocksPerMessage = 256;  // about 130 KiB of states per messag
 
 // What one subscriber asked for.
 struct BlockFilter {
-  std::optional<mapping::VoxelBox> region;  // blocks touching it; all when absent
+  // Blocks holding a voxel of it: those whose centre lies in the requested box, clipped to the map's
+  // range (mapping/map_range.h). All when absent (no box, or an empty one); none when the box holds
+  // no voxel centre.
+  std::optional<mapping::VoxelBox> region;
   bool probabilities = false;
 
   bool accepts(const mapping::BlockIndex& b) const {
     if (!region) return true;
+    if (region->isEmpty()) return false;
     const mapping::VoxelIndex lo = b * mapping::kBlockSide, hi = lo.array() + (mapping::kBlockSide - 1);
     return (hi.array() >= region->min.array()).all() && (lo.array() <= region->max.array()).all();
   }
@@ -90,7 +95,7 @@ grpc::Status UpdatesService::Subscribe(grpc::ServerContext* context, const v1::S
     filter.probabilities = request->include_probabilities();
     if (request->has_region()) {
       const mapping::Aabb box = finiteBox(request->region(), "region");
-      if (!box.isEmpty()) filter.region = mapping::VoxelBox{map.toIndex(box.min_m), map.toIndex(box.max_m)};
+      if (!box.isEmpty()) filter.region = mapping::voxelsOfBox(box, map.voxelSize(), "region").voxels;
     }
     // Subscribe before reading the snapshot: a change made meanwhile is sent twice, never missed.
     const std::shared_ptr<Subscription> subscription = host_.feed().subscribe();

@@ -389,7 +389,7 @@ class MapClient:
     # -- updates ----------------------------------------------------------------------------------
     def subscribe(self, region=None, include_probabilities=False, timeout_s=None):
         """Generator of MapUpdate: first the whole map (snapshot updates, the last with
-        snapshot_complete), then every change. region: only blocks touching the box (min, max).
+        snapshot_complete), then every change. region: only blocks holding a voxel whose centre lies in the box (min, max).
         Runs until closed (close() the generator or leave its loop), timeout_s, or the server ends."""
         req = self.pb.updates.SubscribeRequest(include_probabilities=bool(include_probabilities))
         if region is not None:
