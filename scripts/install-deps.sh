@@ -32,6 +32,10 @@ PACKAGES=(
   # test data scripts
   python3 python3-numpy
 )
+# `make fuzz` (install-deps.sh --fuzz): clang and its libFuzzer runtime; CI's `make test` needs neither.
+if [ "${1:-}" = "--fuzz" ]; then
+  PACKAGES+=(clang libclang-rt-14-dev)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
