@@ -162,6 +162,9 @@ cv::Mat decodeImageStrict(const uint8_t* data, std::size_t size, const std::stri
   if (!image.empty()) return image;
   // Kinds the fast decoder leaves to OpenCV (16-bit, palette, interlaced); libpng checks the zlib
   // stream and the amount of image data.
+  if (size > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    throw ResourceExhaustedError(what + ": PNG of " + std::to_string(size) + " bytes, more than OpenCV takes (2^31 - 1)");
+  }
   try {
     image = cv::imdecode(cv::Mat(1, static_cast<int>(size), CV_8U, const_cast<uint8_t*>(data)), cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {
