@@ -8,7 +8,7 @@ DEMO_DIR ?= out/demo
 CCACHE = $(shell command -v ccache 2>/dev/null)
 CMAKE_FLAGS = -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(if $(CCACHE),-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
 
-.PHONY: all deps configure build test demo bench test-data asan-test format format-check clean
+.PHONY: all deps configure build test demo bench test-data asan-test fuzz format format-check clean
 
 all: build
 
@@ -38,6 +38,24 @@ asan-test: deps test-data
 	cmake --preset asan
 	cmake --build --preset asan -j$(JOBS)
 	ctest --preset asan -j$(JOBS)
+
+# libFuzzer on every harness of tests/fuzz/ (a clang build of its own in build-fuzz): FUZZ_RUNS inputs
+# each from the committed seed corpus; new inputs go to build-fuzz/corpus/, crashes to
+# build-fuzz/crashes/ (copy one into tests/fuzz/corpus/<harness>/ and ctest replays it from then on).
+FUZZ_DIR ?= build-fuzz
+FUZZ_RUNS ?= 200000
+FUZZ_HARNESSES = image_decode ply_reader map_file frame_decoder config_yaml
+fuzz:
+	bash scripts/install-deps.sh --fuzz
+	cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+	  -DCENOTE_FUZZ=ON -DCENOTE_BUILD_BENCH=OFF $(if $(CCACHE),-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+	cmake --build $(FUZZ_DIR) -j$(JOBS) --target fuzzers
+	mkdir -p $(FUZZ_DIR)/crashes
+	set -e; for h in $(FUZZ_HARNESSES); do \
+	  mkdir -p $(FUZZ_DIR)/corpus/$$h; \
+	  TEST_TMPDIR=$(FUZZ_DIR) $(FUZZ_DIR)/tests/fuzz/$${h}_fuzzer -runs=$(FUZZ_RUNS) -seed=1 -max_len=65536 -timeout=20 \
+	    -rss_limit_mb=2048 -artifact_prefix=$(FUZZ_DIR)/crashes/$$h- $(FUZZ_DIR)/corpus/$$h tests/fuzz/corpus/$$h; \
+	done
 
 # Layout of every tracked C++ file by .clang-format (clang-format 14): format in place, or only name the files that differ.
 format:

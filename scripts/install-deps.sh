@@ -8,7 +8,7 @@ PACKAGES=(
   # toolchain
   build-essential cmake ninja-build ccache pkg-config git
   # pipeline: images, calibration, SIMD, threads
-  libopencv-dev libeigen3-dev libhwy-dev libdeflate-dev zlib1g-dev
+  libopencv-dev libeigen3-dev libhwy-dev libdeflate-dev zlib1g-dev libjpeg-dev
   # command line, config, logs
   libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   # mapping: volumetric map (OpenVDB, TBB), OctoMap as peer, reference and file format
@@ -32,6 +32,10 @@ PACKAGES=(
   # test data scripts
   python3 python3-numpy
 )
+# `make fuzz` (install-deps.sh --fuzz): clang and its libFuzzer runtime; CI's `make test` needs neither.
+if [ "${1:-}" = "--fuzz" ]; then
+  PACKAGES+=(clang libclang-rt-14-dev)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

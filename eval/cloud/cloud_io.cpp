@@ -241,7 +241,8 @@ Cloud readPlyCloud(const std::string& path) {
   if (ix < 0 || iy < 0 || iz < 0) throw Error(path + ": PLY vertex element has no x, y and z properties");
 
   Cloud cloud;
-  cloud.points.reserve(static_cast<size_t>(vertex->count));
+  // Every vertex takes at least a byte of the file: a header's count is never trusted beyond that.
+  cloud.points.reserve(std::min(static_cast<size_t>(vertex->count), data.size() - std::min(pos, data.size())));
   std::vector<double> values;
   if (format == "ascii") {
     TokenReader tokens(data, pos);
@@ -288,9 +289,9 @@ Cloud readPlyCloud(const std::string& path) {
                    std::to_string(e->count) + " read)");
     };
     if (fixed) {
-      const size_t bytes = record * static_cast<size_t>(e->count);
-      if (data.size() - std::min(pos, data.size()) < bytes) {
-        throw truncated(static_cast<long>((data.size() - std::min(pos, data.size())) / std::max<size_t>(record, 1)));
+      const size_t left = data.size() - std::min(pos, data.size());
+      if (record > 0 && static_cast<size_t>(e->count) > left / record) {
+        throw truncated(static_cast<long>(left / record));
       }
       if (is_vertex) {
         const char* base = data.data() + pos;
@@ -302,7 +303,7 @@ Cloud readPlyCloud(const std::string& path) {
         }
         break;
       }
-      pos += bytes;
+      pos += record * static_cast<size_t>(e->count);
       continue;
     }
     for (long i = 0; i < e->count; ++i) {
@@ -314,8 +315,8 @@ Cloud readPlyCloud(const std::string& path) {
           const auto n = static_cast<long>(decode(data.data() + pos, p.count_type, swap));
           pos += sizeOf(p.count_type);
           if (n < 0) throw Error(path + ": PLY list of negative length in element '" + e->name + "'");
+          if (static_cast<size_t>(n) > (data.size() - pos) / sizeOf(p.type)) throw truncated(i);
           pos += static_cast<size_t>(n) * sizeOf(p.type);
-          if (pos > data.size()) throw truncated(i);
         } else {
           if (pos + sizeOf(p.type) > data.size()) throw truncated(i);
           values[k] = decode(data.data() + pos, p.type, swap);

@@ -203,6 +203,19 @@ PlyPoints readPly(const std::string& path) {
   if (!binary_le || count < 0 || properties != expected) {
     throw Error(path + ": PLY layout is not 'float x y z, uchar red green blue' binary little-endian vertices");
   }
+  // The count is checked against the bytes the file holds before anything is allocated.
+  const auto header_end = static_cast<uint64_t>(in.tellg());
+  std::error_code size_error;
+  const uint64_t file_bytes = std::filesystem::file_size(path, size_error);
+  if (size_error) throw IoError("cannot read " + path + ": " + size_error.message());
+  const uint64_t data_bytes = file_bytes - header_end;
+  if (static_cast<uint64_t>(count) > data_bytes / kBytesPerPoint) {
+    throw IoError(path + ": PLY header's element vertex count " + std::to_string(count) + " needs " +
+                  (static_cast<uint64_t>(count) > UINT64_MAX / kBytesPerPoint
+                       ? std::string("more bytes than there are")
+                       : std::to_string(static_cast<uint64_t>(count) * kBytesPerPoint) + " bytes") +
+                  " but the file holds " + std::to_string(data_bytes) + " after its header (truncated?)");
+  }
   PlyPoints result;
   result.points.resize(count);
   result.colors.resize(count);

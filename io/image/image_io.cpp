@@ -13,6 +13,8 @@
 
 #include "common/atomic_file.h"
 #include "common/error.h"
+#include "io/image/image_header.h"
+#include "io/image/jpeg_decoder.h"
 #include "io/image/png_decoder.h"
 #include "io/image/png_encoder.h"
 
@@ -109,6 +111,27 @@ cv::Mat readImage(const std::string& path, int flags) {
   if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()))) {
     throw IoError("cannot read image " + path + ": read failed");
   }
+  // The size a PNG or JPEG claims, checked against what its data can hold before decoding.
+  const std::string format = describeFormat(bytes.data(), bytes.size());
+  if (format == "PNG") {
+    try {
+      checkPngStructure(bytes.data(), bytes.size(), path);
+    } catch (const Error& e) {
+      throw IoError(std::string("cannot read image ") + e.what());
+    }
+  } else if (format == "JPEG") {
+    ImageHeader header;
+    try {
+      header = readImageHeader(bytes.data(), bytes.size(), path);
+    } catch (const Error& e) {
+      throw IoError(std::string("cannot read image ") + e.what());
+    }
+    if (!header.dataCanHold()) {
+      throw IoError("cannot read image " + path + ": JPEG claims " + std::to_string(header.width) + "x" +
+                    std::to_string(header.height) + " pixels, more than its " + std::to_string(header.data_bytes) +
+                    " bytes of data can hold");
+    }
+  }
   // 8-bit PNGs (what stereo sequences are made of) through libdeflate; everything else, and any
   // PNG it does not handle, through OpenCV. Both give the same pixels.
   if (flags == cv::IMREAD_UNCHANGED || flags == cv::IMREAD_COLOR) {
@@ -117,6 +140,37 @@ cv::Mat readImage(const std::string& path, int flags) {
   }
   cv::Mat image = bytes.empty() ? cv::Mat() : cv::imdecode(bytes, flags);
   if (image.empty()) throw Error("cannot read image " + path + ": not a readable image file");
+  return image;
+}
+
+cv::Mat decodeImageStrict(const uint8_t* data, std::size_t size, const std::string& what, uint64_t max_pixels) {
+  const ImageHeader header = readImageHeader(data, size, what);
+  if (header.pixels() > max_pixels) {
+    throw ResourceExhaustedError(what + ": " + toString(header.format) + " of " + std::to_string(header.width) + "x" +
+                                 std::to_string(header.height) + " = " + std::to_string(header.pixels()) +
+                                 " pixels, more than the limit of " + std::to_string(max_pixels));
+  }
+  if (header.format == EncodedFormat::kJpeg) {
+    if (!header.dataCanHold()) {
+      throw Error(what + ": JPEG claims " + std::to_string(header.width) + "x" + std::to_string(header.height) +
+                  " pixels, more than its " + std::to_string(header.data_bytes) + " bytes of data can hold");
+    }
+    return decodeJpegStrict(data, size, what, max_pixels);
+  }
+  checkPngStructure(data, size, what);
+  cv::Mat image = decodePngFast(data, size);
+  if (!image.empty()) return image;
+  // Kinds the fast decoder leaves to OpenCV (16-bit, palette, interlaced); libpng checks the zlib
+  // stream and the amount of image data.
+  if (size > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    throw ResourceExhaustedError(what + ": PNG of " + std::to_string(size) + " bytes, more than OpenCV takes (2^31 - 1)");
+  }
+  try {
+    image = cv::imdecode(cv::Mat(1, static_cast<int>(size), CV_8U, const_cast<uint8_t*>(data)), cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    throw Error(what + ": PNG cannot be decoded: " + e.what());
+  }
+  if (image.empty()) throw Error(what + ": PNG cannot be decoded: its compressed image data is damaged");
   return image;
 }
 

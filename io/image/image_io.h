@@ -29,8 +29,19 @@ int writeDepthPng16(const std::string& path, const cv::Mat& depth);
 // @throws cenote::Error when missing or not a 16-bit single-channel PNG.
 cv::Mat readDepthPng16(const std::string& path);
 
-// @param flags cv::IMREAD_* flags. @throws cenote::Error when missing or not a readable image.
+// @param flags cv::IMREAD_* flags. A PNG or JPEG's header is read first (image_header.h): a size
+// its compressed data cannot hold is refused before any pixel is allocated.
+// @throws cenote::Error when missing or not a readable image (IoError "<path>: PNG claims ...").
 cv::Mat readImage(const std::string& path, int flags);
+
+// Decodes a PNG or JPEG held in memory, as cv::imdecode(IMREAD_UNCHANGED) would (8-bit grey, BGR
+// or BGRA; 16-bit PNGs as 16-bit), but strictly: before any pixel is allocated it refuses another
+// format (naming it), more than max_pixels, and a size the data cannot hold (image_header.h);
+// then a truncated or corrupt file (PNG: a bad CRC, no IEND, a damaged zlib stream; JPEG: any
+// libjpeg warning, jpeg_decoder.h).
+// @param what names the image in errors ("left image", a path).
+// @throws cenote::Error "<what>: ..." (ResourceExhaustedError beyond max_pixels).
+cv::Mat decodeImageStrict(const uint8_t* data, std::size_t size, const std::string& what, uint64_t max_pixels);
 
 // @throws cenote::Error when the image cannot be encoded or written.
 void writeImage(const std::string& path, const cv::Mat& image);

@@ -127,6 +127,9 @@ cv::Mat decodePngFast(const uint8_t* data, std::size_t size) {
 
   const std::size_t row_bytes = static_cast<std::size_t>(width) * channels;
   const std::size_t stride = row_bytes + 1;  // each row starts with its filter byte
+  // Deflate inflates at most 1032:1 (image_header.h): a larger claim is a damaged file, refused
+  // before the buffer for it is allocated.
+  if (stride * height > 1032 * (compressed.size() + 1)) return {};
   // Reused per thread: a fresh buffer of this size would be page-faulted in for every frame.
   thread_local std::vector<uint8_t> raw;
   raw.resize(stride * height);

@@ -16,6 +16,7 @@
 #include "common/error.h"
 #include "io/cloud/ply_io.h"
 #include "mapping/detail/map_impl.h"
+#include "mapping/io/octree_file_scan.h"
 
 namespace cenote::mapping {
 namespace {
@@ -168,14 +169,34 @@ double metaDouble(const openvdb::MetaMap& meta, const std::string& key, const st
   return value->value();
 }
 
-std::unique_ptr<OccupancyMap> loadVdb(const std::string& path, const MapConfig& defaults) {
+std::unique_ptr<OccupancyMap> loadVdb(const std::string& path, const MapConfig& defaults, uint64_t max_voxels) {
   openvdb::io::File file(path);
   try {
     file.open();
   } catch (const openvdb::Exception& e) {
     throw Error("cannot read " + path + ": " + e.what());
   }
-  const openvdb::MetaMap::Ptr meta = file.getMetadata();
+  openvdb::MetaMap::Ptr meta;
+  openvdb::FloatGrid::Ptr log_odds;
+  openvdb::Int32Grid::Ptr color;
+  try {
+    meta = file.getMetadata();
+    log_odds = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("log_odds"));
+    color = openvdb::gridPtrCast<openvdb::Int32Grid>(file.readGrid("color"));
+    file.close();
+  } catch (const openvdb::Exception& e) {
+    throw IoError("cannot read " + path + ": " + e.what());
+  }
+  if (!log_odds || !color) throw Error(path + ": grids log_odds (float) and color (int32) expected");
+  // Counted with tiles as they are, before any is expanded: one active tile of a small file can
+  // stand for 2^36 voxels.
+  for (const auto& [name, voxels] : {std::pair<const char*, uint64_t>{"log_odds", log_odds->activeVoxelCount()},
+                                     std::pair<const char*, uint64_t>{"color", color->activeVoxelCount()}}) {
+    if (voxels > max_voxels) {
+      throw IoError(path + ": grid " + name + " has " + std::to_string(voxels) + " active voxels, more than the " +
+                    std::to_string(max_voxels) + " a map may load");
+    }
+  }
   MapConfig c = defaults;
   c.voxel_size_m = metaDouble(*meta, "cenote:voxel_size_m", path);
   c.prob_hit = metaDouble(*meta, "cenote:prob_hit", path);
@@ -184,10 +205,6 @@ std::unique_ptr<OccupancyMap> loadVdb(const std::string& path, const MapConfig& 
   c.clamp_max = metaDouble(*meta, "cenote:clamp_max", path);
   c.occupied_threshold = metaDouble(*meta, "cenote:occupied_threshold", path);
   c.max_range_m = metaDouble(*meta, "cenote:max_range_m", path);
-  auto log_odds = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("log_odds"));
-  auto color = openvdb::gridPtrCast<openvdb::Int32Grid>(file.readGrid("color"));
-  file.close();
-  if (!log_odds || !color) throw Error(path + ": grids log_odds (float) and color (int32) expected");
   auto map = std::make_unique<OccupancyMap>(c);
   detail::MapImpl& impl = detail::MapAccess::of(*map);
   std::unique_lock<detail::FairSharedMutex> lock(impl.grid_mutex);
@@ -230,8 +247,15 @@ std::unique_ptr<OccupancyMap> fromOctree(const Tree& tree, const MapConfig& defa
   return map;
 }
 
-std::unique_ptr<OccupancyMap> loadOctomap(const std::string& path, const MapConfig& defaults, bool binary) {
-  if (!std::filesystem::exists(path)) throw NotFoundError("cannot read " + path + ": no such file");
+std::unique_ptr<OccupancyMap> loadOctomap(const std::string& path, const MapConfig& defaults, bool binary,
+                                          uint64_t max_voxels) {
+  // OctoMap's readers trust the file (octree_file_scan.h): its structure is checked first.
+  const OctreeFileSummary summary = scanOctreeFile(path, binary);
+  if (summary.leaf_voxels > max_voxels) {
+    throw IoError(path + ": the tree's " + std::to_string(summary.nodes) + " nodes have leaves covering " +
+                  std::to_string(summary.leaf_voxels) + " voxels, more than the " + std::to_string(max_voxels) +
+                  " a map may load");
+  }
   if (binary) {
     octomap::OcTree tree(0.1);
     if (!tree.readBinary(path)) throw Error("cannot read " + path + ": not an OctoMap binary tree (.bt)");
@@ -280,14 +304,14 @@ void saveMap(const OccupancyMap& map, const std::string& path, const std::string
   }
 }
 
-std::unique_ptr<OccupancyMap> loadMap(const std::string& path, const MapConfig& defaults) {
+std::unique_ptr<OccupancyMap> loadMap(const std::string& path, const MapConfig& defaults, uint64_t max_voxels) {
   const MapFormat format = mapFormatOf(path);
   if (!std::filesystem::exists(path)) throw NotFoundError("cannot read " + path + ": no such file");
   openvdb::initialize();
   switch (format) {
-    case MapFormat::kVdb: return loadVdb(path, defaults);
-    case MapFormat::kBt: return loadOctomap(path, defaults, true);
-    case MapFormat::kOt: return loadOctomap(path, defaults, false);
+    case MapFormat::kVdb: return loadVdb(path, defaults, max_voxels);
+    case MapFormat::kBt: return loadOctomap(path, defaults, true, max_voxels);
+    case MapFormat::kOt: return loadOctomap(path, defaults, false, max_voxels);
   }
   return nullptr;
 }

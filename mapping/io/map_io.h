@@ -33,9 +33,18 @@ MapFormat mapFormatOf(const std::string& path);
 // @throws Error when the file cannot be written (the message names the path and the reason).
 void saveMap(const OccupancyMap& map, const std::string& path, const std::string& frame_id = "world");
 
+// The most voxels loadMap() expands a file to (about 1.2 GB of grid): a pruned OctoMap leaf or an
+// OpenVDB tile stands for many voxels, so a file of 100 bytes can claim 10^14 of them.
+inline constexpr uint64_t kMaxLoadVoxels = uint64_t{1} << 28;
+
 // Loads .vdb, .bt or .ot. The sensor model comes from the file (.vdb) or from `defaults` (OctoMap
-// files keep only the resolution). @throws Error for a missing, unreadable or foreign file.
-std::unique_ptr<OccupancyMap> loadMap(const std::string& path, const MapConfig& defaults = MapConfig{});
+// files keep only the resolution). OctoMap files are checked node by node before OctoMap reads
+// them (octree_file_scan.h).
+// @throws Error for a missing (NotFoundError), unreadable or foreign file; IoError naming the file
+//   and the field for a file cut short, a damaged tree, or more than max_voxels voxels.
+// @param max_voxels the most voxels the file may expand to (tests and fuzzing pass less).
+std::unique_ptr<OccupancyMap> loadMap(const std::string& path, const MapConfig& defaults = MapConfig{},
+                                      uint64_t max_voxels = kMaxLoadVoxels);
 
 struct MeshStats {
   size_t vertices = 0;

@@ -58,6 +58,7 @@ class FrameStream {
       : host_(host),
         settings_(settings),
         admission_(rectifier, settings.pipeline.run),
+        limits_{settings.server.limits.max_image_pixels, rectifier.geometry().image_size},
         poses_(poses),
         counters_(counters),
         timings_(timings),
@@ -75,7 +76,9 @@ class FrameStream {
   }
 
   // Runs one frame up to the pipeline's input (pipeline/frame/frame_admission.h decides, as it
-  // does for `cenote run`). Fills the ack; false when the pipeline has failed.
+  // does for `cenote run`). Fills the ack; false when the pipeline has failed. Whatever fails
+  // inside one frame (its decoding, rectification, an exception of OpenCV's) rejects that frame
+  // alone: the stream and the frames already in the pipeline go on.
   bool handle(const v1::StereoFrame& wire, v1::FrameAck& ack) {
     ack.set_timestamp_s(wire.timestamp_s());
     ++counters_.frames_received;
@@ -100,21 +103,18 @@ class FrameStream {
         case pipeline::Admission::kAdmitted: break;
       }
       const auto t0 = Clock::now();
-      const pipeline::StereoFrame raw = decodeStereoFrame(wire, settings_.server.limits.max_image_pixels);
-      pipeline::PosedPair item;
-      try {
-        item = admission_.admit(raw, decision.T_world_raw);
-      } catch (const Error& e) {
-        throw toStatusError(e);
-      }
+      const pipeline::StereoFrame raw = decodeStereoFrame(wire, limits_);
+      pipeline::PosedPair item = admission_.admit(raw, decision.T_world_raw);
       timings_.add("decode_rectify", msSince(t0));
       if (!stages_.push(std::move(item))) return false;
       ack.set_outcome(v1::FRAME_OUTCOME_PROCESSED);
       ++counters_.frames_processed;
     } catch (const StatusError& e) {
-      ack.set_outcome(v1::FRAME_OUTCOME_REJECTED);
-      reject(ack, e);
-      ++counters_.frames_rejected;
+      rejectFrame(ack, e);
+    } catch (const Error& e) {
+      rejectFrame(ack, toStatusError(e));
+    } catch (const std::exception& e) {
+      rejectFrame(ack, StatusError(grpc::StatusCode::INTERNAL, std::string("frame failed: ") + e.what()));
     }
     return true;
   }
@@ -146,6 +146,12 @@ class FrameStream {
     return poses_.poseAt(t_s, settings_.pipeline.run.pose_max_gap_s, deadline);
   }
 
+  void rejectFrame(v1::FrameAck& ack, const StatusError& e) {
+    ack.set_outcome(v1::FRAME_OUTCOME_REJECTED);
+    reject(ack, e);
+    ++counters_.frames_rejected;
+  }
+
   void skip(v1::FrameAck& ack, v1::FrameOutcome outcome, const std::string& why) {
     ack.set_outcome(outcome);
     ack.set_message(why);
@@ -169,6 +175,7 @@ class FrameStream {
   MapHost& host_;
   const ServerSettings& settings_;
   pipeline::FrameAdmission admission_;
+  const FrameLimits limits_;
   PoseBuffer& poses_;
   IngestCounters& counters_;
   IngestTimings& timings_;

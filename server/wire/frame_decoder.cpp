@@ -1,14 +1,32 @@
 #include "server/wire/frame_decoder.h"
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "io/image/image_header.h"
+#include "io/image/image_io.h"
 #include "server/wire/status_error.h"
 
 namespace cenote::server {
 namespace {
 
-cv::Mat decodeRaw(const v1::RawImage& raw, const std::string& what, int64_t max_pixels) {
+std::string sizeText(uint64_t width, uint64_t height) { return std::to_string(width) + "x" + std::to_string(height); }
+
+void checkPixels(uint64_t width, uint64_t height, const std::string& what, const FrameLimits& limits) {
+  const uint64_t pixels = width * height;  // both below 2^32: no overflow
+  if (pixels == 0) throw invalidArgument(what + ": image is empty (" + sizeText(width, height) + ")");
+  if (pixels > static_cast<uint64_t>(limits.max_pixels)) {
+    throw resourceExhausted(
+        what + ": " + sizeText(width, height) + " = " + std::to_string(pixels) +
+        " pixels, more than the limit server.limits.max_image_pixels = " + std::to_string(limits.max_pixels));
+  }
+  if (!limits.image_size.empty() && (width != static_cast<uint64_t>(limits.image_size.width) ||
+                                     height != static_cast<uint64_t>(limits.image_size.height))) {
+    throw invalidArgument(what + " image is " + sizeText(width, height) + " but the calibration is for " +
+                          sizeText(limits.image_size.width, limits.image_size.height));
+  }
+}
+
+cv::Mat decodeRaw(const v1::RawImage& raw, const std::string& what, const FrameLimits& limits) {
   int channels = 0;
   switch (raw.encoding()) {
     case v1::IMAGE_ENCODING_MONO8: channels = 1; break;
@@ -16,19 +34,12 @@ cv::Mat decodeRaw(const v1::RawImage& raw, const std::string& what, int64_t max_
     case v1::IMAGE_ENCODING_RGB8: channels = 3; break;
     default: throw invalidArgument(what + ": raw image encoding is unspecified (MONO8, BGR8 or RGB8)");
   }
-  const int64_t pixels = int64_t{raw.width()} * raw.height();
-  if (pixels == 0)
-    throw invalidArgument(what + ": raw image is empty (" + std::to_string(raw.width()) + "x" +
-                          std::to_string(raw.height()) + ")");
-  if (pixels > max_pixels) {
-    throw resourceExhausted(what + ": " + std::to_string(pixels) +
-                            " pixels, more than the limit server.limits.max_image_pixels = " + std::to_string(max_pixels));
-  }
-  const int64_t expected = pixels * channels;
-  if (static_cast<int64_t>(raw.data().size()) != expected) {
+  checkPixels(raw.width(), raw.height(), what, limits);
+  const uint64_t expected = uint64_t{raw.width()} * raw.height() * channels;
+  if (raw.data().size() != expected) {
     throw invalidArgument(what + ": raw image has " + std::to_string(raw.data().size()) + " bytes, expected " +
-                          std::to_string(expected) + " for " + std::to_string(raw.width()) + "x" +
-                          std::to_string(raw.height()) + "x" + std::to_string(channels));
+                          std::to_string(expected) + " for " + sizeText(raw.width(), raw.height()) + "x" +
+                          std::to_string(channels));
   }
   const cv::Mat view(static_cast<int>(raw.height()), static_cast<int>(raw.width()), CV_8UC(channels),
                      const_cast<char*>(raw.data().data()));
@@ -41,33 +52,47 @@ cv::Mat decodeRaw(const v1::RawImage& raw, const std::string& what, int64_t max_
   return image;
 }
 
-cv::Mat decodeImage(const v1::Image& image, const std::string& what, int64_t max_pixels) {
-  if (image.has_raw()) return decodeRaw(image.raw(), what, max_pixels);
+cv::Mat decodeEncoded(const std::string& encoded, const std::string& what, const FrameLimits& limits) {
+  const auto* data = reinterpret_cast<const uint8_t*>(encoded.data());
+  try {
+    // The header alone first: size, depth and channels are refused before any pixel is decoded.
+    const io::ImageHeader header = io::readImageHeader(data, encoded.size(), what);
+    checkPixels(header.width, header.height, what, limits);
+    if (header.bit_depth != 8) {
+      throw invalidArgument(what + ": " + io::toString(header.format) + " has " + std::to_string(header.bit_depth) +
+                            "-bit samples; frames must be 8-bit");
+    }
+    if (header.format == io::EncodedFormat::kPng && header.channels == 2) {
+      throw invalidArgument(what + ": PNG is grey with alpha (2 channels); frames are grey, BGR or BGRA");
+    }
+    cv::Mat image = io::decodeImageStrict(data, encoded.size(), what, static_cast<uint64_t>(limits.max_pixels));
+    // What the decoder gives must be what the pipeline takes (8-bit, 1, 3 or 4 channels).
+    if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3 && image.channels() != 4)) {
+      throw invalidArgument(what + ": decoded to " + std::to_string(image.channels()) + " channels of depth " +
+                            std::to_string(image.depth()) + "; frames are 8-bit grey, BGR or BGRA");
+    }
+    return image;
+  } catch (const Error& e) {
+    throw toStatusError(e);
+  }
+}
+
+cv::Mat decodeImage(const v1::Image& image, const std::string& what, const FrameLimits& limits) {
+  if (image.has_raw()) return decodeRaw(image.raw(), what, limits);
   if (image.encoded().empty()) throw invalidArgument(what + ": no image data");
-  const cv::Mat bytes(1, static_cast<int>(image.encoded().size()), CV_8U, const_cast<char*>(image.encoded().data()));
-  cv::Mat decoded = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-  if (decoded.empty()) {
-    throw invalidArgument(what + ": " + std::to_string(image.encoded().size()) +
-                          " bytes that OpenCV cannot decode as an image (corrupt, or not PNG / JPEG)");
-  }
-  if (decoded.depth() != CV_8U) throw invalidArgument(what + ": image is not 8-bit");
-  if (int64_t{decoded.cols} * decoded.rows > max_pixels) {
-    throw resourceExhausted(what +
-                            ": more pixels than the limit server.limits.max_image_pixels = " + std::to_string(max_pixels));
-  }
-  return decoded;
+  return decodeEncoded(image.encoded(), what, limits);
 }
 
 }  // namespace
 
-pipeline::StereoFrame decodeStereoFrame(const v1::StereoFrame& frame, int64_t max_pixels) {
+pipeline::StereoFrame decodeStereoFrame(const v1::StereoFrame& frame, const FrameLimits& limits) {
   pipeline::StereoFrame out;
   out.t_s = frame.timestamp_s();
-  out.left = decodeImage(frame.left(), "left", max_pixels);
-  out.right = decodeImage(frame.right(), "right", max_pixels);
+  out.left = decodeImage(frame.left(), "left", limits);
+  out.right = decodeImage(frame.right(), "right", limits);
   if (out.left.size() != out.right.size()) {
-    throw invalidArgument("left image is " + std::to_string(out.left.cols) + "x" + std::to_string(out.left.rows) +
-                          " but right is " + std::to_string(out.right.cols) + "x" + std::to_string(out.right.rows));
+    throw invalidArgument("left image is " + sizeText(out.left.cols, out.left.rows) + " but right is " +
+                          sizeText(out.right.cols, out.right.rows));
   }
   return out;
 }

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <opencv2/imgcodecs.hpp>
 #include <thread>
 
 #include "common/text_file.h"
@@ -164,7 +165,7 @@ TEST_F(SimulatedDive, BadFramesAreRejectedWithTheirStatusAndTheMapIsUnchanged) {
   small.mutable_right()->mutable_raw()->set_height(10);
   small.mutable_right()->mutable_raw()->set_encoding(v1::IMAGE_ENCODING_MONO8);
   small.mutable_right()->mutable_raw()->set_data(std::string(200, '\0'));
-  cases.push_back({"but right is 20x10", small});
+  cases.push_back({"right image is 20x10 but the calibration is for 400x300", small});
   v1::StereoFrame no_image = good;
   no_image.clear_right();
   cases.push_back({"right: no image data", no_image});
@@ -217,6 +218,66 @@ TEST_F(SimulatedDive, BadFramesAreRejectedWithTheirStatusAndTheMapIsUnchanged) {
   EXPECT_EQ(ack.outcome(), v1::FRAME_OUTCOME_PROCESSED) << ack.message();
   good_frames->WritesDone();
   EXPECT_TRUE(good_frames->Finish().ok());
+}
+
+// Frames streamed in one call, each with the outcome its ack must have; the map they give.
+std::unique_ptr<mapping::OccupancyMap> streamAndDownload(Stubs& stubs, const std::string& dir,
+                                                         const std::vector<v1::StereoFrame>& frames,
+                                                         const std::vector<v1::FrameOutcome>& outcomes,
+                                                         std::vector<std::string>* messages) {
+  auto reset_context = contextWithDeadline();
+  v1::ChangeReply reset;
+  EXPECT_TRUE(stubs.admin->Reset(reset_context.get(), v1::ResetRequest(), &reset).ok());
+  auto context = contextWithDeadline();
+  auto stream = stubs.ingest->StreamFrames(context.get());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_TRUE(stream->Write(frames[i]));
+    v1::FrameAck ack;
+    EXPECT_TRUE(stream->Read(&ack));
+    EXPECT_EQ(ack.outcome(), outcomes[i]) << "frame " << i << ": " << ack.message();
+    if (messages) messages->push_back(ack.message());
+  }
+  stream->WritesDone();
+  const grpc::Status status = stream->Finish();
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  return downloadMap(*stubs.admin, dir);
+}
+
+TEST_F(SimulatedDive, BadFrameBetweenGoodOnesIsRejectedAloneAndTheGoodOnesAreMapped) {
+  // Stereo points of each frame straight into the map (no fusion window), so that two frames map.
+  std::string yaml = readFileBytes(config_, "config");
+  const size_t fuse = yaml.find("  fuse: true");
+  ASSERT_NE(fuse, std::string::npos);
+  yaml.replace(fuse, 12, "  fuse: false");
+  const std::string config = dir_ + "/no_fusion.yaml";
+  std::ofstream(config) << yaml;
+  ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", config, "--calibration", dir_ + "/dive"}});
+  Stubs stubs(server.target());
+  const auto dataset = pipeline::openDataset(dir_ + "/dive");
+  const v1::StereoFrame first = diveFrame(dir_, *dataset, 0, true), third = diveFrame(dir_, *dataset, 2, true);
+  // The second frame's left image as a JPEG cut halfway: OpenCV would decode it padded with grey.
+  v1::StereoFrame second = diveFrame(dir_, *dataset, 1, true);
+  const std::string& png = second.left().encoded();
+  std::vector<uint8_t> jpg;
+  ASSERT_TRUE(cv::imencode(".jpg", cv::imdecode(std::vector<uint8_t>(png.begin(), png.end()), cv::IMREAD_UNCHANGED), jpg));
+  second.mutable_left()->set_encoded(std::string(jpg.begin(), jpg.begin() + static_cast<long>(jpg.size() / 2)));
+
+  using O = v1::FrameOutcome;
+  std::vector<std::string> messages;
+  const auto mixed = streamAndDownload(stubs, dir_, {first, second, third},
+                                       {O::FRAME_OUTCOME_PROCESSED, O::FRAME_OUTCOME_REJECTED, O::FRAME_OUTCOME_PROCESSED},
+                                       &messages);
+  ASSERT_EQ(messages.size(), 3u);
+  EXPECT_EQ(messages[1], "left: JPEG cannot be decoded: Premature end of JPEG file");
+  const auto good = streamAndDownload(stubs, dir_, {first, third}, {O::FRAME_OUTCOME_PROCESSED, O::FRAME_OUTCOME_PROCESSED},
+                                      nullptr);
+  const auto alone = streamAndDownload(stubs, dir_, {first}, {O::FRAME_OUTCOME_PROCESSED}, nullptr);
+  const MapDifference diff = compareMaps(*mixed, *good);
+  EXPECT_GT(diff.known, 1000u);
+  EXPECT_EQ(diff.different_state, 0u);
+  EXPECT_EQ(diff.different_log_odds, 0u);
+  // Both good frames are in it: the third adds voxels to the first's.
+  EXPECT_GT(diff.known, compareMaps(*alone, *alone).known);
 }
 
 TEST(ServerWithoutCalibration, StreamFramesFailsWithFailedPrecondition) {

@@ -130,5 +130,28 @@ TEST(CloudIo, MalformedFilesNameTheFileAndTheProblem) {
   EXPECT_NE(errorOf(dir / "x.txt").find("neither a PLY nor a PCD"), std::string::npos);
 }
 
+TEST(CloudIo, PlyCountsBeyondTheFileAreRefusedBeforeAllocating) {
+  test::TempDir dir;
+  // 10^14 vertices announced, 2 held: refused, not reserved (2.4 PB).
+  std::ofstream(dir / "claims.ply", std::ios::binary) << "ply\nformat binary_little_endian 1.0\n"
+                                                         "element vertex 100000000000000\nproperty float x\n"
+                                                         "property float y\nproperty float z\nend_header\n"
+                                                      << std::string(24, '\0');
+  EXPECT_EQ(errorOf(dir / "claims.ply"),
+            dir / "claims.ply" + ": PLY file is truncated in element 'vertex' (2 of 100000000000000 read)");
+  std::ofstream(dir / "claims_ascii.ply") << "ply\nformat ascii 1.0\nelement vertex 100000000000000\n"
+                                             "property float x\nproperty float y\nproperty float z\nend_header\n"
+                                             "1 2 3\n";
+  EXPECT_EQ(errorOf(dir / "claims_ascii.ply"),
+            dir / "claims_ascii.ply" + ": PLY vertex 1 of 100000000000000: file ends early (truncated)");
+  // A list whose length overflows size_t when multiplied by its item size.
+  std::ofstream(dir / "list.ply", std::ios::binary) << "ply\nformat binary_little_endian 1.0\nelement face 1\n"
+                                                       "property list uint int vertex_indices\nelement vertex 1\n"
+                                                       "property float x\nproperty float y\nproperty float z\n"
+                                                       "end_header\n\xff\xff\xff\xff"
+                                                    << std::string(12, '\0');
+  EXPECT_EQ(errorOf(dir / "list.ply"), dir / "list.ply" + ": PLY file is truncated in element 'face' (0 of 1 read)");
+}
+
 }  // namespace
 }  // namespace cenote::eval

@@ -127,5 +127,27 @@ TEST(PlyIo, ReadRejectsOtherFilesWithAClearMessage) {
   std::filesystem::remove(path);
 }
 
+TEST(PlyIo, ReadRefusesAVertexCountTheFileCannotHoldBeforeAllocating) {
+  const std::string path = tempPath("claims.ply");
+  const auto header = [](const std::string& count) {
+    return "ply\nformat binary_little_endian 1.0\nelement vertex " + count +
+           "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
+           "property uchar blue\nend_header\n";
+  };
+  std::ofstream(path, std::ios::binary) << header("100000000000000") << std::string(30, '\0');  // two points' worth
+  try {
+    readPly(path);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kIoFailure);
+    EXPECT_EQ(std::string(e.what()), path + ": PLY header's element vertex count 100000000000000 needs 1500000000000000 "
+                                            "bytes but the file holds 30 after its header (truncated?)");
+  }
+  // The same file with the count it holds reads.
+  std::ofstream(path, std::ios::binary) << header("2") << std::string(30, '\0');
+  EXPECT_EQ(readPly(path).points.size(), 2u);
+  std::filesystem::remove(path);
+}
+
 }  // namespace
 }  // namespace cenote::io
