@@ -191,7 +191,7 @@ IngestService::IngestService(MapHost& host, CallGuard& guard, const ServerSettin
 
 grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
                                          grpc::ServerReaderWriter<v1::FrameAck, v1::StereoFrame>* stream) {
-  return guard_.run(context, "Ingest/StreamFrames", [&] {
+  return guard_.runStream(context, "Ingest/StreamFrames", [&] {
     if (!rectifier_) {
       throw StatusError(grpc::StatusCode::FAILED_PRECONDITION,
                         "the server has no stereo calibration: start cenote-server with --calibration");
@@ -211,7 +211,7 @@ grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
 
 grpc::Status IngestService::StreamPoses(grpc::ServerContext* context,
                                         grpc::ServerReaderWriter<v1::PoseAck, v1::PoseStamped>* stream) {
-  return guard_.run(context, "Ingest/StreamPoses", [&] {
+  return guard_.runStream(context, "Ingest/StreamPoses", [&] {
     acknowledgeEach(stream, [&](const v1::PoseStamped& wire, v1::PoseAck& ack) {
       ack.set_timestamp_s(wire.timestamp_s());
       try {
@@ -256,7 +256,7 @@ void IngestService::integrateBatch(const v1::PointBatch& wire, v1::BatchAck& ack
 
 grpc::Status IngestService::StreamPoints(grpc::ServerContext* context,
                                          grpc::ServerReaderWriter<v1::BatchAck, v1::PointBatch>* stream) {
-  return guard_.run(context, "Ingest/StreamPoints", [&] {
+  return guard_.runStream(context, "Ingest/StreamPoints", [&] {
     acknowledgeEach(stream, [&](const v1::PointBatch& wire, v1::BatchAck& ack) {
       try {
         integrateBatch(wire, ack);

@@ -6,7 +6,10 @@
 - server reflection lists cenote's services (what grpcurl uses);
 - TLS: a client trusting the server's CA gets in, a plain-text client does not; with a client CA
   (mutual TLS) a client without a certificate is refused, one with a signed certificate gets in;
-  the bearer token is still checked over TLS.
+  the bearer token is still checked over TLS;
+- the token is checked before the request is parsed: a body that is not a protobuf message, or one
+  of 60 MiB, gets UNAUTHENTICATED without a token (a parsed one would be INTERNAL), and the
+  read-only token gets PERMISSION_DENIED for Admin.Reset, also unparsed.
 Calls are made with raw bytes (grpcio's generic calls), so no generated stubs are needed.
 Usage: server_protocols_test.py <cenote-server binary>
 """
@@ -26,6 +29,9 @@ SERVER = sys.argv.pop(1) if len(sys.argv) > 1 else os.environ.get("CENOTE_SERVER
 HEALTH_CHECK = "/grpc.health.v1.Health/Check"
 REFLECTION = "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo"
 MAP_INFO = "/cenote.v1.Query/GetMapInfo"
+INTEGRATE = "/cenote.v1.Ingest/IntegratePoints"
+RESET = "/cenote.v1.Admin/Reset"
+NOT_PROTOBUF = b"\xff\xff\xff\xff"  # field 0 with a truncated varint: no message parses from it
 SERVING = b"\x08\x01"  # HealthCheckResponse{status: SERVING}
 LIST_SERVICES = b"\x3a\x01*"  # ServerReflectionRequest{list_services: "*"}
 
@@ -145,6 +151,39 @@ class Tls(unittest.TestCase):
                                               certificate_chain=read(f"{self.dir}/client.pem"))
         with grpc.secure_channel(server.target, signed) as channel:
             unary(channel, MAP_INFO)
+        self.assertEqual(server.stop(), 0)
+
+
+class TokenBeforeParsing(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="cenote-token-")
+        for name, token in (("operator", "op-secret"), ("planner", "planner-secret")):
+            with open(f"{self.dir}/{name}", "w") as f:
+                f.write(token + "\n")
+
+    def tearDown(self):
+        shutil.rmtree(self.dir)
+
+    def code(self, channel, method, body, token=None):
+        metadata = [("authorization", f"Bearer {token}")] if token else None
+        with self.assertRaises(grpc.RpcError) as refused:
+            unary(channel, method, body, metadata=metadata)
+        return refused.exception.code(), refused.exception.details()
+
+    def test_a_call_without_the_token_is_refused_before_its_message_is_parsed(self):
+        server = Server(self.dir, "--token-file", f"{self.dir}/operator", "--read-token-file", f"{self.dir}/planner")
+        with grpc.insecure_channel(server.target) as channel:
+            missing = (grpc.StatusCode.UNAUTHENTICATED, "missing token: send metadata 'authorization: Bearer <token>'")
+            self.assertEqual(self.code(channel, INTEGRATE, NOT_PROTOBUF), missing)
+            self.assertEqual(self.code(channel, INTEGRATE, NOT_PROTOBUF, token="guess"),
+                             (grpc.StatusCode.UNAUTHENTICATED, "wrong token"))
+            self.assertEqual(self.code(channel, RESET, NOT_PROTOBUF, token="planner-secret")[0],
+                             grpc.StatusCode.PERMISSION_DENIED)
+            # 60 MiB that claim to be one huge field: never read into a message.
+            self.assertEqual(self.code(channel, INTEGRATE, b"\x0a\x80\x80\x80\x1e" + bytes(60 << 20)), missing)
+            # With the operator's token the same bytes reach the parser, which refuses them.
+            self.assertEqual(self.code(channel, INTEGRATE, NOT_PROTOBUF, token="op-secret")[0],
+                             grpc.StatusCode.INTERNAL)
         self.assertEqual(server.stop(), 0)
 
 
