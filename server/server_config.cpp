@@ -46,10 +46,17 @@ std::vector<ConfigError> ServerConfig::validate() const {
   errors.check(limits.max_subscribers >= 1, "limits.max_subscribers", limits.max_subscribers, "must be >= 1");
   errors.check(limits.max_snapshot_downloads >= 1, "limits.max_snapshot_downloads", limits.max_snapshot_downloads,
                "must be >= 1");
+  errors.check(limits.max_ingest_streams >= 1, "limits.max_ingest_streams", limits.max_ingest_streams, "must be >= 1");
   const TransportConfig& t = transport;
+  // Each stream holds a thread of the sync server: together they must leave the pollers and one
+  // more for the planners' calls.
+  const int stream_threads = max_frame_streams + limits.max_ingest_streams + limits.max_snapshot_downloads;
+  errors.check(stream_threads + max_pollers < t.max_threads, "transport.max_threads", t.max_threads,
+               "must exceed max_frame_streams + limits.max_ingest_streams + limits.max_snapshot_downloads + "
+               "max_pollers (" +
+                   std::to_string(stream_threads + max_pollers) + ")");
   errors.check(t.max_threads >= 8 && t.max_threads <= 65536, "transport.max_threads", t.max_threads,
                "must be in [8, 65536]");
-  errors.check(max_pollers < t.max_threads, "max_pollers", max_pollers, "must be below server.transport.max_threads");
   errors.check(t.keepalive_time_s >= 1.0, "transport.keepalive_time_s", t.keepalive_time_s, "must be >= 1");
   errors.check(t.keepalive_timeout_s >= 0.1, "transport.keepalive_timeout_s", t.keepalive_timeout_s, "must be >= 0.1");
   errors.check(t.min_client_ping_interval_s >= 0.0, "transport.min_client_ping_interval_s", t.min_client_ping_interval_s,
@@ -98,6 +105,7 @@ void ServerConfig::read(YamlSection& section) {
   l.read("max_poses", limits.max_poses);
   l.read("max_subscribers", limits.max_subscribers);
   l.read("max_snapshot_downloads", limits.max_snapshot_downloads);
+  l.read("max_ingest_streams", limits.max_ingest_streams);
   l.finish();
   YamlSection t = section.section("transport");
   t.read("max_threads", transport.max_threads);

@@ -29,6 +29,7 @@ struct RequestLimits {
   int64_t max_poses = 100000;              // streamed poses kept (200 Hz for over 8 minutes)
   int max_subscribers = 1024;              // concurrent Updates.Subscribe calls
   int max_snapshot_downloads = 2;          // concurrent Admin.DownloadSnapshot calls
+  int max_ingest_streams = 8;              // concurrent StreamPoses + StreamPoints calls
 };
 
 // gRPC's transport: threads, keepalive, connection lifetime, shutdown (server/main.cpp).

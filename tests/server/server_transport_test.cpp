@@ -211,6 +211,37 @@ TEST(ServerSubscribers, AChangeBeyondTheByteBudgetIsSentAsAResync) {
   fs::remove_all(dir.parent_path());
 }
 
+TEST(ServerStreams, BeyondTheLimitAPoseStreamIsRefusedAndPlannersKeepTheirThreads) {
+  const fs::path dir = scratch("ingest-streams");
+  std::ofstream(dir / "config.yaml") << "server:\n  limits:\n    max_ingest_streams: 3\n";
+  ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", (dir / "config.yaml").string()}});
+  Stubs stubs(server.target());
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::vector<std::unique_ptr<grpc::ClientReaderWriter<v1::PoseStamped, v1::PoseAck>>> streams;
+  v1::PoseStamped pose;
+  pose.mutable_pose()->mutable_orientation()->set_w(1.0);
+  v1::PoseAck ack;
+  for (int i = 0; i < 4; ++i) {
+    contexts.push_back(contextWithDeadline());
+    streams.push_back(stubs.ingest->StreamPoses(contexts.back().get()));
+    pose.set_timestamp_s(i);
+    streams.back()->Write(pose);
+    EXPECT_EQ(streams.back()->Read(&ack), i < 3) << "stream " << i;
+  }
+  const grpc::Status refused = streams.back()->Finish();
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(refused.error_message(),
+            "already 3 pose and point streams running: the limit server.limits.max_ingest_streams");
+  auto context = contextWithDeadline();
+  v1::MapInfo info;
+  EXPECT_TRUE(stubs.query->GetMapInfo(context.get(), v1::MapInfoRequest(), &info).ok());
+  for (size_t i = 0; i + 1 < streams.size(); ++i) {
+    streams[i]->WritesDone();
+    EXPECT_TRUE(streams[i]->Finish().ok()) << "stream " << i;
+  }
+  fs::remove_all(dir.parent_path());
+}
+
 TEST(ServerSnapshots, ADownloadBeyondTheLimitIsRefusedNamingIt) {
   const fs::path dir = scratch("downloads");
   std::ofstream(dir / "config.yaml") << "server:\n  limits:\n    max_snapshot_downloads: 1\n";
