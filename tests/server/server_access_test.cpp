@@ -120,7 +120,8 @@ TEST(ServerAccess, ListeningBeyondLoopbackWithoutTokenOrTlsIsRefusedAtStartUp) {
   EXPECT_NE(text.find("server.read_token_file"), std::string::npos) << text;
 
   // Said explicitly, it runs, and says what it risks.
-  ServerProcess server(CENOTE_SERVER_BINARY, {.token = "", .listen = "0.0.0.0:0", .extra_args = {"--allow-insecure-remote"}});
+  ServerProcess server(CENOTE_SERVER_BINARY,
+                       {.token = "", .listen = "0.0.0.0:0", .extra_args = {"--allow-insecure-remote"}});
   EXPECT_NE(server.log().find("cenote-server: WARNING: listening on 0.0.0.0:0 (beyond loopback) without a token"),
             std::string::npos)
       << server.log();
