@@ -8,7 +8,7 @@ DEMO_DIR ?= out/demo
 CCACHE = $(shell command -v ccache 2>/dev/null)
 CMAKE_FLAGS = -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(if $(CCACHE),-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
 
-.PHONY: all deps configure build test demo bench test-data asan-test fuzz format format-check clean
+.PHONY: all deps configure build test demo bench soak test-data asan-test fuzz format format-check clean
 
 all: build
 
@@ -32,6 +32,14 @@ demo: build test-data
 
 bench: build test-data
 	bash scripts/bench.sh $(BUILD_DIR)
+
+# A simulated dive against a real server for SOAK_MINUTES (20): camera-rate frames, a planner's
+# queries, subscribers that come and go, bad frames; prints RSS and query latency (bench/soak.py).
+# Outside CI.
+SOAK_MINUTES ?= 20
+soak: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target cenote cenote-server cenote_python_stubs
+	/usr/bin/python3 bench/soak.py $(BUILD_DIR) --minutes $(SOAK_MINUTES)
 
 # AddressSanitizer + UndefinedBehaviorSanitizer build of the whole suite.
 asan-test: deps test-data

@@ -3,14 +3,15 @@
 // server/server_config.h for the settings.
 //
 //   cenote-server --config config/default.yaml [--listen 127.0.0.1:50051] [--load map.vdb|map.bt]
-//                 [--token-file F] [--calibration calib.yaml|DATASET] [--snapshot-dir DIR]
+//                 [--token-file F [--read-token-file F]] [--calibration calib.yaml|DATASET]
+//                 [--snapshot-dir DIR] [--allow-insecure-remote]
 //
-// SIGTERM or Ctrl-C: stops taking calls, lets the calls in flight finish (up to a grace period),
-// writes the shutdown snapshot and exits 0.
+// SIGTERM or Ctrl-C: stops taking calls, cancels the open streams, lets the other calls in flight
+// finish (server.transport.shutdown_grace_s), writes the shutdown snapshot and exits 0.
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
-#include <grpcpp/security/server_credentials.h>
+#include <grpcpp/resource_quota.h>
 
 #include <CLI/CLI.hpp>
 #include <csignal>
@@ -27,6 +28,7 @@
 #include "pipeline/calibration/stereo_calibration.h"
 #include "pipeline/dataset/stereo_dataset.h"
 #include "proto/grpc_runtime.h"
+#include "server/access/access_policy.h"
 #include "server/services/admin_service.h"
 #include "server/cpu/cpu_placement.h"
 #include "server/cpu/cpu_scheduling.h"
@@ -40,15 +42,17 @@ namespace {
 namespace fs = std::filesystem;
 
 struct Options {
-  std::string config, listen, load, token_file, calibration, snapshot_dir, port_file;
-  std::string tls_cert, tls_key, tls_client_ca;
+  std::string config, listen, load, token_file, read_token_file, calibration, snapshot_dir, port_file;
+  TlsFiles tls;
   double snapshot_period_s = -1.0;
+  bool allow_insecure_remote = false;
 };
 
 ServerSettings settingsFrom(const Options& o) {
   ServerSettings s = ServerSettings::load(o.config);
   if (!o.listen.empty()) s.server.listen = o.listen;
   if (!o.token_file.empty()) s.server.token_file = o.token_file;
+  if (!o.read_token_file.empty()) s.server.read_token_file = o.read_token_file;
   if (!o.calibration.empty()) s.server.calibration = o.calibration;
   if (!o.snapshot_dir.empty()) s.server.snapshot_dir = o.snapshot_dir;
   if (o.snapshot_period_s >= 0.0) s.server.snapshot_period_s = o.snapshot_period_s;
@@ -62,21 +66,6 @@ std::shared_ptr<const pipeline::Rectifier> rectifierFrom(const std::string& cali
     return std::make_shared<const pipeline::Rectifier>(pipeline::openDataset(calibration)->calibration());
   }
   return std::make_shared<const pipeline::Rectifier>(pipeline::readCalibrationFile(calibration));
-}
-
-std::shared_ptr<grpc::ServerCredentials> credentialsFrom(const Options& o) {
-  if (o.tls_cert.empty() && o.tls_key.empty()) {
-    if (!o.tls_client_ca.empty()) throw Error("--tls-client-ca needs --tls-cert and --tls-key");
-    return grpc::InsecureServerCredentials();
-  }
-  if (o.tls_cert.empty() || o.tls_key.empty()) throw Error("TLS needs both --tls-cert and --tls-key");
-  grpc::SslServerCredentialsOptions tls;
-  tls.pem_key_cert_pairs.push_back({readFileBytes(o.tls_key, "TLS key"), readFileBytes(o.tls_cert, "TLS certificate")});
-  if (!o.tls_client_ca.empty()) {
-    tls.pem_root_certs = readFileBytes(o.tls_client_ca, "TLS client CA");
-    tls.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
-  }
-  return grpc::SslServerCredentials(tls);
 }
 
 std::unique_ptr<mapping::OccupancyMap> initialMap(const Options& o, const ServerSettings& s) {
@@ -96,12 +85,44 @@ sigset_t blockShutdownSignals() {
   return set;
 }
 
+std::string tokenFrom(const std::string& file) { return file.empty() ? "" : readTokenFile(file, "token file"); }
+
+// Refuses to expose the map beyond loopback without a token, or a token without TLS, unless the
+// operator said so (--allow-insecure-remote); then says it loudly.
+void checkExposure(const Options& o, const ServerSettings& s, const AccessPolicy& access) {
+  const std::string problem = exposureProblem(s.server.listen, access.enabled(), !o.tls.cert.empty());
+  if (problem.empty()) return;
+  if (!o.allow_insecure_remote) throw Error("refusing to start: " + problem);
+  std::cerr << "cenote-server: WARNING: " << problem << "\ncenote-server: WARNING: running so because of "
+            << "--allow-insecure-remote" << std::endl;
+}
+
+// gRPC's resources: a thread quota, keepalive, connection lifetime (server.transport).
+void configureTransport(grpc::ServerBuilder& builder, const TransportConfig& t) {
+  grpc::ResourceQuota quota("cenote-server");
+  quota.SetMaxThreads(t.max_threads);
+  builder.SetResourceQuota(quota);
+  const auto ms = [](double s) { return static_cast<int>(std::min(s * 1000.0, 2147483647.0)); };
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, ms(t.keepalive_time_s));
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, ms(t.keepalive_timeout_s));
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, t.keepalive_without_calls ? 1 : 0);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA, 0);  // keep pinging an idle link
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, ms(t.min_client_ping_interval_s));
+  if (t.max_connection_idle_s > 0.0)
+    builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_IDLE_MS, ms(t.max_connection_idle_s));
+  if (t.max_connection_age_s > 0.0) builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_AGE_MS, ms(t.max_connection_age_s));
+  if (t.max_connection_age_grace_s > 0.0) {
+    builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_AGE_GRACE_MS, ms(t.max_connection_age_grace_s));
+  }
+}
+
 int serve(const Options& o) {
   const sigset_t signals = blockShutdownSignals();
   const ServerSettings settings = settingsFrom(o);
-  const std::string token = settings.server.token_file.empty() ? ""
-                                                               : readTokenFile(settings.server.token_file, "token file");
-  CallGuard guard{Authenticator(token)};
+  const auto access = std::make_shared<const AccessPolicy>(tokenFrom(settings.server.token_file),
+                                                           tokenFrom(settings.server.read_token_file));
+  checkExposure(o, settings, *access);
+  CallGuard guard;
   if (!setProcessTimeSlice(settings.server.time_slice_ms)) {
     std::fprintf(stderr, "cenote-server: the kernel refused server.time_slice_ms %g; running with its default\n",
                  settings.server.time_slice_ms);
@@ -112,14 +133,16 @@ int serve(const Options& o) {
                         {o.load, settings.server.limits.max_snapshots, settings.server.limits.max_snapshot_bytes});
   IngestService ingest(host, guard, settings, rectifierFrom(settings.server.calibration), cpus);
   QueryService query(host, guard, settings.server, settings.server.frame_id);
-  UpdatesService updates(host, guard);
-  AdminService admin(host, guard, snapshots, ingest);
+  UpdatesService updates(host, guard, settings.server.limits.max_subscribers);
+  AdminService admin(host, guard, snapshots, ingest, settings.server.limits.max_snapshot_downloads);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(settings.server.listen, credentialsFrom(o), &port);
+  // The token and role are checked as a call's headers arrive, before its message is parsed.
+  builder.AddListeningPort(settings.server.listen, serverCredentials(o.tls, access), &port);
+  configureTransport(builder, settings.server.transport);
   builder.SetMaxReceiveMessageSize(static_cast<int>(settings.server.limits.max_message_bytes));
   builder.SetMaxSendMessageSize(static_cast<int>(settings.server.limits.max_message_bytes));
   // One completion queue: measured with bench/server_bench on 2 cores, about 30 us of server CPU
@@ -143,7 +166,7 @@ int serve(const Options& o) {
   if (!server || port == 0) throw Error("cannot listen on " + settings.server.listen + " (address in use or invalid?)");
 
   const std::string host_part = settings.server.listen.substr(0, settings.server.listen.rfind(':'));
-  std::cout << "cenote-server listening on " << host_part << ":" << port << (token.empty() ? "" : " (token required)")
+  std::cout << "cenote-server listening on " << host_part << ":" << port << (access->enabled() ? " (token required)" : "")
             << "; " << cpus.describe() << std::endl;
   if (!o.port_file.empty()) {
     // Appears whole: a test polling for it never reads half.
@@ -153,10 +176,14 @@ int serve(const Options& o) {
   int signal = 0;
   sigwait(&signals, &signal);
   std::cerr << "cenote-server: " << (signal == SIGTERM ? "SIGTERM" : "SIGINT")
-            << ": draining calls, then writing the snapshot" << std::endl;
+            << ": cancelling streams, draining calls, then writing the snapshot" << std::endl;
   if (grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService()) health->Shutdown();  // NOT_SERVING
+  // Streams never end by themselves: a frame or pose stream is cancelled (its frames already
+  // taken still reach the map), a subscription ends with UNAVAILABLE. Unary calls get the grace.
+  guard.cancelStreams();
   updates.shutdown();
-  server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  server->Shutdown(std::chrono::system_clock::now() +
+                   std::chrono::microseconds(static_cast<int64_t>(settings.server.transport.shutdown_grace_s * 1e6)));
   server->Wait();
   snapshots.stop();
   if (settings.server.snapshot_on_shutdown) {
@@ -177,14 +204,18 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--listen", o.listen, "HOST:PORT to listen on (default 127.0.0.1:50051; port 0 picks a free one)");
   app.add_option("--load", o.load, "start from this map (.vdb, .bt or .ot)");
-  app.add_option("--token-file", o.token_file, "bearer token clients must send (first line of the file)");
+  app.add_option("--token-file", o.token_file, "operator's bearer token clients must send (first line of the file)");
+  app.add_option("--read-token-file", o.read_token_file,
+                 "read-only bearer token: Query, Updates and Admin.GetStats (needs --token-file)");
+  app.add_flag("--allow-insecure-remote", o.allow_insecure_remote,
+               "listen beyond loopback without a token, or with one but without TLS (logged as a warning)");
   app.add_option("--calibration", o.calibration, "stereo calibration YAML or dataset folder, for Ingest.StreamFrames");
   app.add_option("--snapshot-dir", o.snapshot_dir, "where snapshots are written (default ./snapshots)");
   app.add_option("--snapshot-period", o.snapshot_period_s, "seconds between periodic snapshots (0: none)");
   app.add_option("--port-file", o.port_file, "write the bound port here once serving");
-  app.add_option("--tls-cert", o.tls_cert, "PEM server certificate (enables TLS)");
-  app.add_option("--tls-key", o.tls_key, "PEM server private key");
-  app.add_option("--tls-client-ca", o.tls_client_ca, "PEM CA that client certificates must chain to (mutual TLS)");
+  app.add_option("--tls-cert", o.tls.cert, "PEM server certificate (enables TLS)");
+  app.add_option("--tls-key", o.tls.key, "PEM server private key");
+  app.add_option("--tls-client-ca", o.tls.client_ca, "PEM CA that client certificates must chain to (mutual TLS)");
   CLI11_PARSE(app, argc, argv);
   try {
     return cenote::server::serve(o);

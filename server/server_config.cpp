@@ -19,6 +19,9 @@ std::vector<ConfigError> ServerConfig::validate() const {
   errors.check(max_frame_streams >= 1 && max_frame_streams <= 64, "max_frame_streams", max_frame_streams,
                "must be in [1, 64]");
   errors.check(host.max_subscriber_lag >= 1, "max_subscriber_lag", host.max_subscriber_lag, "must be >= 1");
+  errors.check(host.max_subscriber_bytes >= 4096, "max_subscriber_bytes", host.max_subscriber_bytes, "must be >= 4096");
+  errors.check(read_token_file.empty() || !token_file.empty(), "read_token_file", read_token_file,
+               "needs server.token_file (the operator's token) as well");
   errors.check(completion_queues >= 1 && completion_queues <= 64, "completion_queues", completion_queues,
                "must be in [1, 64]");
   errors.check(min_pollers >= 1 && min_pollers <= max_pollers, "min_pollers", min_pollers, "must be in [1, max_pollers]");
@@ -45,12 +48,39 @@ std::vector<ConfigError> ServerConfig::validate() const {
                "must be >= 0 (0: no limit)");
   errors.check(limits.max_image_pixels >= 1, "limits.max_image_pixels", limits.max_image_pixels, "must be >= 1");
   errors.check(limits.max_poses >= 2, "limits.max_poses", limits.max_poses, "must be >= 2 (two poses bracket a frame)");
+  errors.check(limits.max_subscribers >= 1, "limits.max_subscribers", limits.max_subscribers, "must be >= 1");
+  errors.check(limits.max_snapshot_downloads >= 1, "limits.max_snapshot_downloads", limits.max_snapshot_downloads,
+               "must be >= 1");
+  errors.check(limits.max_ingest_streams >= 1, "limits.max_ingest_streams", limits.max_ingest_streams, "must be >= 1");
+  const TransportConfig& t = transport;
+  // Each stream holds a thread of the sync server: together they must leave the pollers and one
+  // more for the planners' calls.
+  const int stream_threads = max_frame_streams + limits.max_ingest_streams + limits.max_snapshot_downloads;
+  errors.check(stream_threads + max_pollers < t.max_threads, "transport.max_threads", t.max_threads,
+               "must exceed max_frame_streams + limits.max_ingest_streams + limits.max_snapshot_downloads + "
+               "max_pollers (" +
+                   std::to_string(stream_threads + max_pollers) + ")");
+  errors.check(t.max_threads >= 8 && t.max_threads <= 65536, "transport.max_threads", t.max_threads,
+               "must be in [8, 65536]");
+  errors.check(t.keepalive_time_s >= 1.0, "transport.keepalive_time_s", t.keepalive_time_s, "must be >= 1");
+  errors.check(t.keepalive_timeout_s >= 0.1, "transport.keepalive_timeout_s", t.keepalive_timeout_s, "must be >= 0.1");
+  errors.check(t.min_client_ping_interval_s >= 0.0, "transport.min_client_ping_interval_s", t.min_client_ping_interval_s,
+               "must be >= 0");
+  errors.check(t.max_connection_idle_s == 0.0 || t.max_connection_idle_s >= 1.0, "transport.max_connection_idle_s",
+               t.max_connection_idle_s, "must be 0 (never) or >= 1");
+  errors.check(t.max_connection_age_s == 0.0 || t.max_connection_age_s >= 1.0, "transport.max_connection_age_s",
+               t.max_connection_age_s, "must be 0 (never) or >= 1");
+  errors.check(t.max_connection_age_grace_s >= 0.0, "transport.max_connection_age_grace_s", t.max_connection_age_grace_s,
+               "must be >= 0 (0: unbounded)");
+  errors.check(t.shutdown_grace_s >= 0.0 && t.shutdown_grace_s <= 60.0, "transport.shutdown_grace_s", t.shutdown_grace_s,
+               "must be in [0, 60]");
   return errors.take();
 }
 
 void ServerConfig::read(YamlSection& section) {
   section.read("listen", listen);
   section.read("token_file", token_file);
+  section.read("read_token_file", read_token_file);
   section.read("snapshot_dir", snapshot_dir);
   section.read("snapshot_period_s", snapshot_period_s);
   section.read("snapshot_on_shutdown", snapshot_on_shutdown);
@@ -61,6 +91,7 @@ void ServerConfig::read(YamlSection& section) {
   section.read("pose_max_jump_s", pose_max_jump_s);
   section.read("max_frame_streams", max_frame_streams);
   section.read("max_subscriber_lag", host.max_subscriber_lag);
+  section.read("max_subscriber_bytes", host.max_subscriber_bytes);
   section.read("completion_queues", completion_queues);
   section.read("min_pollers", min_pollers);
   section.read("max_pollers", max_pollers);
@@ -80,7 +111,21 @@ void ServerConfig::read(YamlSection& section) {
   l.read("max_snapshot_bytes", limits.max_snapshot_bytes);
   l.read("max_image_pixels", limits.max_image_pixels);
   l.read("max_poses", limits.max_poses);
+  l.read("max_subscribers", limits.max_subscribers);
+  l.read("max_snapshot_downloads", limits.max_snapshot_downloads);
+  l.read("max_ingest_streams", limits.max_ingest_streams);
   l.finish();
+  YamlSection t = section.section("transport");
+  t.read("max_threads", transport.max_threads);
+  t.read("keepalive_time_s", transport.keepalive_time_s);
+  t.read("keepalive_timeout_s", transport.keepalive_timeout_s);
+  t.read("keepalive_without_calls", transport.keepalive_without_calls);
+  t.read("min_client_ping_interval_s", transport.min_client_ping_interval_s);
+  t.read("max_connection_idle_s", transport.max_connection_idle_s);
+  t.read("max_connection_age_s", transport.max_connection_age_s);
+  t.read("max_connection_age_grace_s", transport.max_connection_age_grace_s);
+  t.read("shutdown_grace_s", transport.shutdown_grace_s);
+  t.finish();
 }
 
 ServerSettings ServerSettings::load(const std::string& path) {

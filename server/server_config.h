@@ -30,11 +30,30 @@ struct RequestLimits {
   int64_t max_snapshot_bytes = int64_t{8} << 30;  // of map.vdb and the rotated ones; 0: no limit
   int64_t max_image_pixels = 4096 * 4096;         // of one stereo image
   int64_t max_poses = 100000;                     // streamed poses kept (200 Hz for over 8 minutes)
+  int max_subscribers = 1024;                     // concurrent Updates.Subscribe calls
+  int max_snapshot_downloads = 2;                 // concurrent Admin.DownloadSnapshot calls
+  int max_ingest_streams = 8;                     // concurrent StreamPoses + StreamPoints calls
+};
+
+// gRPC's transport: threads, keepalive, connection lifetime, shutdown (server/main.cpp).
+struct TransportConfig {
+  int max_threads = 128;                    // gRPC's resource quota: threads of the sync server
+                                            // (handlers and pollers); beyond, calls get RESOURCE_EXHAUSTED
+  double keepalive_time_s = 10.0;           // ping a connection after this long without data
+  double keepalive_timeout_s = 5.0;         // ... and close it when the ping is not answered in this
+  bool keepalive_without_calls = true;      // ping connections with no call open too
+  double min_client_ping_interval_s = 5.0;  // clients may ping this often (more: GOAWAY)
+  double max_connection_idle_s = 600.0;     // close a connection without calls after this; 0: never
+  double max_connection_age_s = 0.0;        // ask clients to reconnect after this; 0: never
+  double max_connection_age_grace_s = 0.0;  // ... calls still open then get this long; 0: unbounded
+  double shutdown_grace_s = 0.5;            // SIGTERM: streams are cancelled at once, other calls
+                                            // in flight get this long to finish
 };
 
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  // loopback unless asked otherwise
-  std::string token_file;                  // bearer token (first line); empty: no authentication
+  std::string token_file;                  // operator's bearer token (first line); empty: no authentication
+  std::string read_token_file;             // read-only token: Query, Updates, Admin.GetStats; needs token_file
   std::string snapshot_dir = "snapshots";  // Admin.Snapshot writes under it; the periodic and
                                            // shutdown snapshot is <snapshot_dir>/map.vdb
   double snapshot_period_s = 60.0;         // 0: only on shutdown and on request
@@ -52,9 +71,10 @@ struct ServerConfig {
                                    // 0: the kernel's default
   int query_cpus = 1;              // CPUs of gRPC's threads, the last ones (cpu_placement.h);
                                    // 0: not pinned
-  MapHostOptions host;             // keys max_subscriber_lag, ingest_nice, derived_nice,
-                                   // derived_period_s, derived_follow_s
+  MapHostOptions host;             // keys max_subscriber_lag, max_subscriber_bytes, ingest_nice,
+                                   // derived_nice, derived_period_s, derived_follow_s
   RequestLimits limits;
+  TransportConfig transport;
 
   std::vector<ConfigError> validate() const;
   // Reads keys of a `server:` section; unknown keys are errors.

@@ -1,33 +1,6 @@
 #include "server/access/call_guard.h"
 
 namespace cenote::server {
-namespace {
-
-// Compares in a time that does not depend on where the strings first differ (the token's length
-// is not the secret).
-bool equalConstantTime(const std::string& given, const std::string& token) {
-  if (given.size() != token.size()) return false;
-  unsigned char diff = 0;
-  for (size_t i = 0; i < given.size(); ++i) diff |= static_cast<unsigned char>(given[i] ^ token[i]);
-  return diff == 0;
-}
-
-}  // namespace
-
-grpc::Status Authenticator::check(const grpc::ServerContext& context) const {
-  if (token_.empty()) return grpc::Status::OK;
-  const auto& metadata = context.client_metadata();
-  const auto it = metadata.find("authorization");
-  if (it == metadata.end()) {
-    return grpc::Status(grpc::StatusCode::UNAUTHENTICATED, "missing token: send metadata 'authorization: Bearer <token>'");
-  }
-  const std::string value(it->second.data(), it->second.size());
-  static const std::string kPrefix = "Bearer ";
-  if (value.rfind(kPrefix, 0) != 0 || !equalConstantTime(value.substr(kPrefix.size()), token_)) {
-    return grpc::Status(grpc::StatusCode::UNAUTHENTICATED, "wrong token");
-  }
-  return grpc::Status::OK;
-}
 
 void MethodStats::record(double ms, bool ok) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -58,6 +31,23 @@ std::vector<MethodSummary> CallGuard::summaries() const {
   std::lock_guard<std::mutex> lock(mutex_);
   for (const auto& [name, stats] : stats_) out.push_back(stats->summary(name));
   return out;
+}
+
+void CallGuard::addStream(grpc::ServerContext* context) {
+  std::lock_guard<std::mutex> lock(streams_mutex_);
+  streams_.insert(context);
+  if (streams_cancelled_) context->TryCancel();
+}
+
+void CallGuard::removeStream(grpc::ServerContext* context) {
+  std::lock_guard<std::mutex> lock(streams_mutex_);
+  streams_.erase(context);
+}
+
+void CallGuard::cancelStreams() {
+  std::lock_guard<std::mutex> lock(streams_mutex_);
+  streams_cancelled_ = true;
+  for (grpc::ServerContext* context : streams_) context->TryCancel();
 }
 
 }  // namespace cenote::server

@@ -1,12 +1,13 @@
-// call_guard.h: what every call of every cenote service goes through before and after its handler:
-//  - the bearer token (metadata `authorization: Bearer <token>`), checked first: a missing or wrong
-//    token gets UNAUTHENTICATED and the handler never runs, so nothing is touched;
+// call_guard.h: what every call of every cenote service goes through before and after its handler
+// (the token and role were checked earlier, as the call's headers arrived: access_policy.h):
 //  - the deadline: a call whose deadline has already passed gets DEADLINE_EXCEEDED unrun;
 //  - errors: a StatusError keeps its code, a cenote::Error gets the code of its kind
 //    (statusCodeOf in server/wire/status_error.h: bad input INVALID_ARGUMENT, a failed write
 //    INTERNAL, a full disk RESOURCE_EXHAUSTED, ...), anything else INTERNAL; the message always says what;
-//  - statistics: calls, errors and latency percentiles per method (Admin.GetStats).
-// Threads: run() from any number of handler threads at once.
+//  - statistics: calls, errors and latency percentiles per method (Admin.GetStats);
+//  - shutdown: streams run with runStream() are cancelled by cancelStreams() (the client sees
+//    CANCELLED), so that an open stream never holds up a restart.
+// Threads: run(), runStream() and cancelStreams() from any number of threads at once.
 #pragma once
 
 #include <grpcpp/server_context.h>
@@ -15,6 +16,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -23,17 +25,6 @@
 #include "server/wire/status_error.h"
 
 namespace cenote::server {
-
-class Authenticator {
- public:
-  // Empty token: every call is let in.
-  explicit Authenticator(std::string token) : token_(std::move(token)) {}
-  grpc::Status check(const grpc::ServerContext& context) const;
-  bool enabled() const { return !token_.empty(); }
-
- private:
-  std::string token_;
-};
 
 struct MethodSummary {
   std::string method;
@@ -57,14 +48,14 @@ class MethodStats {
 
 class CallGuard {
  public:
-  explicit CallGuard(Authenticator auth) : auth_(std::move(auth)) {}
-
   // Runs `handler` (returning grpc::Status) for the call named `method` ("Query/GetVoxels").
-  template <typename Handler>
-  grpc::Status run(grpc::ServerContext* context, const char* method, Handler&& handler) {
+  // Context: grpc::ServerContext, or grpc::CallbackServerContext (the handler then only sets the
+  // call up: Updates.Subscribe).
+  template <typename Context, typename Handler>
+  grpc::Status run(Context* context, const char* method, Handler&& handler) {
     const auto start = std::chrono::steady_clock::now();
-    grpc::Status status = auth_.check(*context);
-    if (status.ok() && context->deadline() < std::chrono::system_clock::now()) {
+    grpc::Status status;
+    if (context->deadline() < std::chrono::system_clock::now()) {
       status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
                             std::string(method) + ": deadline passed before the call ran");
     }
@@ -84,15 +75,34 @@ class CallGuard {
     return status;
   }
 
+  // run() for a long-lived stream (StreamFrames, StreamPoses, StreamPoints): cancelStreams()
+  // cancels it, and its handler then sees the stream end (Read() false) and returns.
+  template <typename Handler>
+  grpc::Status runStream(grpc::ServerContext* context, const char* method, Handler&& handler) {
+    struct Registered {
+      CallGuard& guard;
+      grpc::ServerContext* context;
+      ~Registered() { guard.removeStream(context); }
+    } registered{*this, context};
+    addStream(context);
+    return run(context, method, std::forward<Handler>(handler));
+  }
+
+  // Cancels every stream running now and every one that starts later (server shutdown).
+  void cancelStreams();
+
   std::vector<MethodSummary> summaries() const;
-  const Authenticator& auth() const { return auth_; }
 
  private:
   MethodStats& stats(const char* method);
+  void addStream(grpc::ServerContext* context);
+  void removeStream(grpc::ServerContext* context);
 
-  Authenticator auth_;
   mutable std::mutex mutex_;
   std::map<std::string, std::unique_ptr<MethodStats>> stats_;
+  std::mutex streams_mutex_;
+  std::set<grpc::ServerContext*> streams_;
+  bool streams_cancelled_ = false;
 };
 
 }  // namespace cenote::server

@@ -4,6 +4,10 @@
 
 namespace cenote::server {
 
+size_t bytesOf(const MapChange& change) {
+  return sizeof(MapChange) + change.delta.changed_blocks.size() * sizeof(mapping::BlockIndex);
+}
+
 Subscription::Next Subscription::next(MapChange& change, std::chrono::milliseconds timeout) {
   std::unique_lock<std::mutex> lock(mutex_);
   ready_.wait_for(lock, timeout, [&] { return closed_ || resync_ || !queue_.empty(); });
@@ -13,9 +17,25 @@ Subscription::Next Subscription::next(MapChange& change, std::chrono::millisecon
     return Next::kResync;
   }
   if (queue_.empty()) return Next::kTimeout;
-  change = std::move(queue_.front());
+  change = *queue_.front();
+  queued_bytes_ -= bytesOf(change);
   queue_.pop_front();
   return Next::kChange;
+}
+
+void Subscription::setNotify(std::function<void()> notify) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  notify_ = std::move(notify);
+}
+
+bool Subscription::closed() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return closed_;
+}
+
+size_t Subscription::queuedBytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return queued_bytes_;
 }
 
 std::shared_ptr<Subscription> ChangeFeed::subscribe() {
@@ -32,17 +52,27 @@ void ChangeFeed::unsubscribe(const std::shared_ptr<Subscription>& subscription) 
 }
 
 void ChangeFeed::publish(const MapChange& change) {
+  const size_t bytes = bytesOf(change);
+  std::shared_ptr<const MapChange> shared;
   std::lock_guard<std::mutex> lock(mutex_);
   for (const auto& s : subscriptions_) {
-    std::lock_guard<std::mutex> sub_lock(s->mutex_);
-    if (s->resync_) continue;  // it will read the whole map anyway
-    if (s->queue_.size() >= max_lag_) {
-      s->queue_.clear();
-      s->resync_ = true;
-    } else {
-      s->queue_.push_back(change);
+    std::function<void()> notify;
+    {
+      std::lock_guard<std::mutex> sub_lock(s->mutex_);
+      if (s->resync_) continue;  // it will read the whole map anyway
+      if (s->queue_.size() >= max_lag_ || s->queued_bytes_ + bytes > max_bytes_) {
+        s->queue_.clear();
+        s->queued_bytes_ = 0;
+        s->resync_ = true;
+      } else {
+        if (!shared) shared = std::make_shared<const MapChange>(change);
+        s->queue_.push_back(shared);
+        s->queued_bytes_ += bytes;
+      }
+      s->ready_.notify_one();
+      notify = s->notify_;
     }
-    s->ready_.notify_one();
+    if (notify) notify();
   }
 }
 
@@ -50,9 +80,14 @@ void ChangeFeed::close() {
   std::lock_guard<std::mutex> lock(mutex_);
   closed_ = true;
   for (const auto& s : subscriptions_) {
-    std::lock_guard<std::mutex> sub_lock(s->mutex_);
-    s->closed_ = true;
-    s->ready_.notify_all();
+    std::function<void()> notify;
+    {
+      std::lock_guard<std::mutex> sub_lock(s->mutex_);
+      s->closed_ = true;
+      s->ready_.notify_all();
+      notify = s->notify_;
+    }
+    if (notify) notify();
   }
 }
 

@@ -26,7 +26,7 @@ MapHost::MapHost(std::unique_ptr<mapping::OccupancyMap> map, const MapHostOption
     : map_(std::move(map)),
       distance_(std::make_unique<mapping::DistanceField>(*map_)),
       frontiers_(std::make_unique<mapping::FrontierMap>(*map_)),
-      feed_(options.max_subscriber_lag),
+      feed_(options.max_subscriber_lag, options.max_subscriber_bytes),
       options_(options),
       writer_(options.ingest_nice) {
   // A loaded map: derive everything once before serving (stats() walks the grid: ask once).

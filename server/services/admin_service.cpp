@@ -51,7 +51,17 @@ grpc::Status AdminService::Snapshot(grpc::ServerContext* context, const v1::Snap
 
 grpc::Status AdminService::DownloadSnapshot(grpc::ServerContext* context, const v1::SnapshotRequest* request,
                                             grpc::ServerWriter<v1::FileChunk>* writer) {
-  return guard_.run(context, "Admin/DownloadSnapshot", [&] {
+  return guard_.runStream(context, "Admin/DownloadSnapshot", [&] {
+    // Each download writes the whole map to a file first: a few at a time.
+    if (++downloads_ > max_downloads_) {
+      --downloads_;
+      throw resourceExhausted("already " + std::to_string(max_downloads_) +
+                              " snapshot downloads running: the limit server.limits.max_snapshot_downloads");
+    }
+    struct Release {
+      std::atomic<int>& n;
+      ~Release() { --n; }
+    } release{downloads_};
     // Older clients send no file name: the format asked for, VDB when none.
     v1::SnapshotFormat format = request->format();
     if (!request->path().empty()) {

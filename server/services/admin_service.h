@@ -1,8 +1,10 @@
 // admin_service.h: Admin (proto/cenote/v1/admin.proto): snapshots written on the server or streamed
 // to the client, clearing, cropping, reset, and statistics of the running server.
-// Threads: any number of calls at once; snapshot writes serialise (snapshotter.h).
+// Threads: any number of calls at once; snapshot writes serialise (snapshotter.h); at most
+// max_downloads DownloadSnapshot calls at once (more: RESOURCE_EXHAUSTED).
 #pragma once
 
+#include <atomic>
 #include <chrono>
 
 #include "cenote/v1/admin.grpc.pb.h"
@@ -15,8 +17,14 @@ namespace cenote::server {
 
 class AdminService final : public v1::Admin::Service {
  public:
-  AdminService(MapHost& host, CallGuard& guard, Snapshotter& snapshots, const IngestService& ingest)
-      : host_(host), guard_(guard), snapshots_(snapshots), ingest_(ingest), started_(std::chrono::steady_clock::now()) {}
+  // max_downloads: concurrent DownloadSnapshot calls (server.limits.max_snapshot_downloads).
+  AdminService(MapHost& host, CallGuard& guard, Snapshotter& snapshots, const IngestService& ingest, int max_downloads)
+      : host_(host),
+        guard_(guard),
+        snapshots_(snapshots),
+        ingest_(ingest),
+        max_downloads_(max_downloads),
+        started_(std::chrono::steady_clock::now()) {}
 
   grpc::Status Snapshot(grpc::ServerContext* context, const v1::SnapshotRequest* request,
                         v1::SnapshotReply* reply) override;
@@ -36,6 +44,8 @@ class AdminService final : public v1::Admin::Service {
   CallGuard& guard_;
   Snapshotter& snapshots_;
   const IngestService& ingest_;
+  const int max_downloads_;
+  std::atomic<int> downloads_{0};
   const std::chrono::steady_clock::time_point started_;
 };
 

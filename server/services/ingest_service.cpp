@@ -14,14 +14,15 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Holds one of the server's frame-stream slots for the life of a call.
+// Holds one of the server's stream slots of a kind for the life of a call: each such stream holds
+// a thread of gRPC's sync server, and the rest must stay for the planners' queries.
 class StreamSlot {
  public:
-  StreamSlot(std::atomic<int>& active, int max) : active_(active) {
+  // what: "frame streams"; limit: the key, "server.max_frame_streams".
+  StreamSlot(std::atomic<int>& active, int max, const char* what, const char* limit) : active_(active) {
     if (++active_ > max) {
       --active_;
-      throw resourceExhausted("already " + std::to_string(max) +
-                              " frame streams running: the limit server.max_frame_streams");
+      throw resourceExhausted("already " + std::to_string(max) + " " + what + " running: the limit " + limit);
     }
   }
   ~StreamSlot() { --active_; }
@@ -198,12 +199,12 @@ IngestService::IngestService(MapHost& host, CallGuard& guard, const ServerSettin
 
 grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
                                          grpc::ServerReaderWriter<v1::FrameAck, v1::StereoFrame>* stream) {
-  return guard_.run(context, "Ingest/StreamFrames", [&] {
+  return guard_.runStream(context, "Ingest/StreamFrames", [&] {
     if (!rectifier_) {
       throw StatusError(grpc::StatusCode::FAILED_PRECONDITION,
                         "the server has no stereo calibration: start cenote-server with --calibration");
     }
-    StreamSlot slot(frame_streams_, settings_.server.max_frame_streams);
+    StreamSlot slot(frame_streams_, settings_.server.max_frame_streams, "frame streams", "server.max_frame_streams");
     // Decoding, rectification and the pipeline's threads (started by FrameStream) are bulk work.
     CpuScope bulk(cpus_, CpuScope::Side::kBulk);
     FrameStream frames(host_, settings_, *rectifier_, poses_, counters_, timings_);
@@ -218,7 +219,9 @@ grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
 
 grpc::Status IngestService::StreamPoses(grpc::ServerContext* context,
                                         grpc::ServerReaderWriter<v1::PoseAck, v1::PoseStamped>* stream) {
-  return guard_.run(context, "Ingest/StreamPoses", [&] {
+  return guard_.runStream(context, "Ingest/StreamPoses", [&] {
+    StreamSlot slot(ingest_streams_, settings_.server.limits.max_ingest_streams, "pose and point streams",
+                    "server.limits.max_ingest_streams");
     acknowledgeEach(stream, [&](const v1::PoseStamped& wire, v1::PoseAck& ack) {
       ack.set_timestamp_s(wire.timestamp_s());
       try {
@@ -263,7 +266,9 @@ void IngestService::integrateBatch(const v1::PointBatch& wire, v1::BatchAck& ack
 
 grpc::Status IngestService::StreamPoints(grpc::ServerContext* context,
                                          grpc::ServerReaderWriter<v1::BatchAck, v1::PointBatch>* stream) {
-  return guard_.run(context, "Ingest/StreamPoints", [&] {
+  return guard_.runStream(context, "Ingest/StreamPoints", [&] {
+    StreamSlot slot(ingest_streams_, settings_.server.limits.max_ingest_streams, "pose and point streams",
+                    "server.limits.max_ingest_streams");
     acknowledgeEach(stream, [&](const v1::PointBatch& wire, v1::BatchAck& ack) {
       try {
         integrateBatch(wire, ack);

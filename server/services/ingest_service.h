@@ -6,7 +6,8 @@
 // Back-pressure: a frame stream's pipeline has bounded queues; while it is full the handler stops
 // reading, and gRPC's flow control slows the sender.
 // Threads: any number of calls at once; each frame stream runs a pipeline (stereo and fusion
-// threads) plus one thread integrating its points; at most server.max_frame_streams at a time.
+// threads) plus one thread integrating its points; at most server.max_frame_streams at a time,
+// and at most server.limits.max_ingest_streams pose and point streams (each holds a gRPC thread).
 #pragma once
 
 #include <atomic>
@@ -94,6 +95,7 @@ class IngestService final : public v1::Ingest::Service {
   IngestCounters counters_;
   IngestTimings timings_;
   std::atomic<int> frame_streams_{0};
+  std::atomic<int> ingest_streams_{0};  // StreamPoses and StreamPoints
 };
 
 }  // namespace cenote::server

@@ -6,7 +6,12 @@
 - server reflection lists cenote's services (what grpcurl uses);
 - TLS: a client trusting the server's CA gets in, a plain-text client does not; with a client CA
   (mutual TLS) a client without a certificate is refused, one with a signed certificate gets in;
-  the bearer token is still checked over TLS.
+  the bearer token is still checked over TLS;
+- keepalive: a subscriber whose process stops answering (SIGSTOP: its TCP connection stays open, a
+  half-open tether link) is dropped by the server's keepalive pings, and its subscription ends;
+- the token is checked before the request is parsed: a body that is not a protobuf message, or one
+  of 60 MiB, gets UNAUTHENTICATED without a token (a parsed one would be INTERNAL), and the
+  read-only token gets PERMISSION_DENIED for Admin.Reset, also unparsed.
 Calls are made with raw bytes (grpcio's generic calls), so no generated stubs are needed.
 Usage: server_protocols_test.py <cenote-server binary>
 """
@@ -26,6 +31,9 @@ SERVER = sys.argv.pop(1) if len(sys.argv) > 1 else os.environ.get("CENOTE_SERVER
 HEALTH_CHECK = "/grpc.health.v1.Health/Check"
 REFLECTION = "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo"
 MAP_INFO = "/cenote.v1.Query/GetMapInfo"
+INTEGRATE = "/cenote.v1.Ingest/IntegratePoints"
+RESET = "/cenote.v1.Admin/Reset"
+NOT_PROTOBUF = b"\xff\xff\xff\xff"  # field 0 with a truncated varint: no message parses from it
 SERVING = b"\x08\x01"  # HealthCheckResponse{status: SERVING}
 LIST_SERVICES = b"\x3a\x01*"  # ServerReflectionRequest{list_services: "*"}
 
@@ -145,6 +153,112 @@ class Tls(unittest.TestCase):
                                               certificate_chain=read(f"{self.dir}/client.pem"))
         with grpc.secure_channel(server.target, signed) as channel:
             unary(channel, MAP_INFO)
+        self.assertEqual(server.stop(), 0)
+
+
+STATS = "/cenote.v1.Admin/GetStats"
+SUBSCRIBER = '''
+import sys, grpc
+channel = grpc.insecure_channel(sys.argv[1])
+call = channel.unary_stream("/cenote.v1.Updates/Subscribe", request_serializer=lambda x: x,
+                            response_deserializer=lambda x: x)(b"", timeout=600)
+next(call)
+print("subscribed", flush=True)
+for _ in call:
+    pass
+'''
+
+
+def varint_field(message, number):
+    """The value of varint field `number` in a serialised protobuf message (0 when absent)."""
+    def varint(i):
+        value, shift = 0, 0
+        while True:
+            b = message[i]
+            value |= (b & 0x7F) << shift
+            i, shift = i + 1, shift + 7
+            if b < 0x80:
+                return value, i
+    i, found = 0, 0
+    while i < len(message):
+        key, i = varint(i)
+        wire = key & 7
+        if wire == 0:
+            value, i = varint(i)
+            if key >> 3 == number:
+                found = value
+        elif wire == 1:
+            i += 8
+        elif wire == 2:
+            length, i = varint(i)
+            i += length
+        elif wire == 5:
+            i += 4
+        else:
+            raise ValueError(f"wire type {wire}")
+    return found
+
+
+class Keepalive(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="cenote-keepalive-")
+
+    def tearDown(self):
+        shutil.rmtree(self.dir)
+
+    def test_a_subscriber_that_stops_answering_is_dropped(self):
+        with open(f"{self.dir}/config.yaml", "w") as f:
+            f.write("server:\n  transport:\n    keepalive_time_s: 1\n    keepalive_timeout_s: 1\n")
+        server = Server(self.dir, "--config", f"{self.dir}/config.yaml")
+        subscriber = subprocess.Popen([sys.executable, "-c", SUBSCRIBER, server.target], stdout=subprocess.PIPE)
+        try:
+            self.assertEqual(subscriber.stdout.readline().strip(), b"subscribed")
+            with grpc.insecure_channel(server.target) as channel:
+                self.assertEqual(varint_field(unary(channel, STATS), 15), 1)  # Stats.subscribers
+                os.kill(subscriber.pid, signal.SIGSTOP)  # its kernel keeps the connection; gRPC answers nothing
+                subscribers = 1
+                for _ in range(300):  # 30 s at most; keepalive needs about 2
+                    subscribers = varint_field(unary(channel, STATS), 15)
+                    if subscribers == 0:
+                        break
+                    time.sleep(0.1)
+                self.assertEqual(subscribers, 0)
+        finally:
+            subscriber.kill()
+            subscriber.wait()
+        self.assertEqual(server.stop(), 0)
+
+
+class TokenBeforeParsing(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="cenote-token-")
+        for name, token in (("operator", "op-secret"), ("planner", "planner-secret")):
+            with open(f"{self.dir}/{name}", "w") as f:
+                f.write(token + "\n")
+
+    def tearDown(self):
+        shutil.rmtree(self.dir)
+
+    def code(self, channel, method, body, token=None):
+        metadata = [("authorization", f"Bearer {token}")] if token else None
+        with self.assertRaises(grpc.RpcError) as refused:
+            unary(channel, method, body, metadata=metadata)
+        return refused.exception.code(), refused.exception.details()
+
+    def test_a_call_without_the_token_is_refused_before_its_message_is_parsed(self):
+        server = Server(self.dir, "--token-file", f"{self.dir}/operator", "--read-token-file", f"{self.dir}/planner")
+        with grpc.insecure_channel(server.target) as channel:
+            missing = (grpc.StatusCode.UNAUTHENTICATED, "missing token: send metadata 'authorization: Bearer <token>'")
+            self.assertEqual(self.code(channel, INTEGRATE, NOT_PROTOBUF), missing)
+            self.assertEqual(self.code(channel, INTEGRATE, NOT_PROTOBUF, token="guess"),
+                             (grpc.StatusCode.UNAUTHENTICATED, "wrong token"))
+            self.assertEqual(self.code(channel, RESET, NOT_PROTOBUF, token="planner-secret")[0],
+                             grpc.StatusCode.PERMISSION_DENIED)
+            # 60 MiB that claim to be one huge field: never read into a message.
+            self.assertEqual(self.code(channel, INTEGRATE, b"\x0a\x80\x80\x80\x1e" + bytes(60 << 20)), missing)
+            # With the operator's token the same bytes reach the parser, which refuses them.
+            self.assertEqual(self.code(channel, INTEGRATE, NOT_PROTOBUF, token="op-secret")[0],
+                             grpc.StatusCode.INTERNAL)
         self.assertEqual(server.stop(), 0)
 
 

@@ -38,7 +38,7 @@ ServerProcess::ServerProcess(const std::string& binary, const ServerProcessOptio
   dir_ = tmpl;
   std::filesystem::create_directories(snapshotDirectory());
   const std::string port_file = dir_ + "/port";
-  std::vector<std::string> args = {binary,    "--listen",       "127.0.0.1:0",      "--port-file",
+  std::vector<std::string> args = {binary,    "--listen",       options.listen,     "--port-file",
                                    port_file, "--snapshot-dir", snapshotDirectory()};
   if (!options.token.empty()) {
     std::ofstream(dir_ + "/token") << options.token << "\n";

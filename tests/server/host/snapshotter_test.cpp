@@ -35,7 +35,7 @@ TEST(Snapshotter, WriteWhereTheDiskRefusesIsAnInternalErrorNotAnInvalidArgument)
   // whose directory was replaced, the write cannot happen (the tests run as root, so permission
   // bits alone would not stop it).
   std::ofstream(dir / "blocked") << "not a directory";
-  CallGuard guard(Authenticator(""));
+  CallGuard guard;
   grpc::ServerContext context;
   const grpc::Status status = guard.run(&context, "Admin/Snapshot", [&] {
     snapshots.write("blocked/map.vdb", v1::SNAPSHOT_FORMAT_UNSPECIFIED);

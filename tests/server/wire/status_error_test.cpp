@@ -29,7 +29,7 @@ grpc::Status runThrowing(CallGuard& guard, const Error& error) {
 }
 
 TEST(CallGuard, LibraryErrorsGetTheCodeOfTheirKindAndTheirMessage) {
-  CallGuard guard(Authenticator(""));
+  CallGuard guard;
   const grpc::Status bad = runThrowing(guard, Error("stereo: window_px = 4: must be odd"));
   EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_EQ(bad.error_message(), "stereo: window_px = 4: must be odd");
