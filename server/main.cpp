@@ -33,6 +33,7 @@
 #include "server/services/ingest_service.h"
 #include "server/services/query_service.h"
 #include "server/services/updates_service.h"
+#include "server/viewer/host_viewer.h"
 
 namespace cenote::server {
 namespace {
@@ -41,13 +42,14 @@ namespace fs = std::filesystem;
 
 struct Options {
   std::string config, listen, load, token_file, calibration, snapshot_dir, port_file;
-  std::string tls_cert, tls_key, tls_client_ca;
+  std::string tls_cert, tls_key, tls_client_ca, viewer_listen;
   double snapshot_period_s = -1.0;
 };
 
 ServerSettings settingsFrom(const Options& o) {
   ServerSettings s = ServerSettings::load(o.config);
   if (!o.listen.empty()) s.server.listen = o.listen;
+  if (!o.viewer_listen.empty()) s.server.viewer.listen = o.viewer_listen;
   if (!o.token_file.empty()) s.server.token_file = o.token_file;
   if (!o.calibration.empty()) s.server.calibration = o.calibration;
   if (!o.snapshot_dir.empty()) s.server.snapshot_dir = o.snapshot_dir;
@@ -113,6 +115,8 @@ int serve(const Options& o) {
   QueryService query(host, guard, settings.server, settings.server.frame_id);
   UpdatesService updates(host, guard);
   AdminService admin(host, guard, snapshots, ingest);
+  viewer::LiveFeed live(settings.server.viewer.max_cloud_points, settings.server.viewer.max_trajectory_poses);
+  const std::unique_ptr<viewer::ViewerServer> viewer = startViewer(settings, host, ingest, live, token);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -148,6 +152,11 @@ int serve(const Options& o) {
     // Appears whole: a test polling for it never reads half.
     writeFileAtomically(o.port_file, std::to_string(port) + "\n", Durability::kFast);
   }
+  if (viewer) {
+    const std::string viewer_host = settings.server.viewer.listen.substr(0, settings.server.viewer.listen.rfind(':'));
+    std::cout << "cenote-server viewer on http://" << viewer_host << ":" << viewer->port() << "/ (Foxglove: ws://"
+              << viewer_host << ":" << viewer->port() << ")" << std::endl;
+  }
 
   int signal = 0;
   sigwait(&signals, &signal);
@@ -155,6 +164,7 @@ int serve(const Options& o) {
             << ": draining calls, then writing the snapshot" << std::endl;
   if (grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService()) health->Shutdown();  // NOT_SERVING
   updates.shutdown();
+  if (viewer) viewer->stop();
   server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(10));
   server->Wait();
   snapshots.stop();
@@ -181,6 +191,8 @@ int main(int argc, char** argv) {
   app.add_option("--snapshot-dir", o.snapshot_dir, "where snapshots are written (default ./snapshots)");
   app.add_option("--snapshot-period", o.snapshot_period_s, "seconds between periodic snapshots (0: none)");
   app.add_option("--port-file", o.port_file, "write the bound port here once serving");
+  app.add_option("--viewer-listen", o.viewer_listen,
+                 "HOST:PORT of the live viewer (Foxglove WebSocket and browser page; server.viewer.listen)");
   app.add_option("--tls-cert", o.tls_cert, "PEM server certificate (enables TLS)");
   app.add_option("--tls-key", o.tls_key, "PEM server private key");
   app.add_option("--tls-client-ca", o.tls_client_ca, "PEM CA that client certificates must chain to (mutual TLS)");

@@ -40,7 +40,9 @@ std::vector<ConfigError> ServerConfig::validate() const {
   errors.check(limits.max_box_voxels >= 1, "limits.max_box_voxels", limits.max_box_voxels, "must be >= 1");
   errors.check(limits.max_image_pixels >= 1, "limits.max_image_pixels", limits.max_image_pixels, "must be >= 1");
   errors.check(limits.max_poses >= 2, "limits.max_poses", limits.max_poses, "must be >= 2 (two poses bracket a frame)");
-  return errors.take();
+  std::vector<ConfigError> all = errors.take();
+  for (auto& e : viewer.validate()) all.push_back(std::move(e));
+  return all;
 }
 
 void ServerConfig::read(YamlSection& section) {
@@ -73,6 +75,9 @@ void ServerConfig::read(YamlSection& section) {
   l.read("max_image_pixels", limits.max_image_pixels);
   l.read("max_poses", limits.max_poses);
   l.finish();
+  YamlSection v = section.section("viewer");
+  viewer.read(v);
+  v.finish();
 }
 
 ServerSettings ServerSettings::load(const std::string& path) {
