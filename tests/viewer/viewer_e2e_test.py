@@ -17,6 +17,7 @@ usage: viewer_e2e_test.py CENOTE CENOTE_SERVER WEB_SOURCE_DIR WEB_DIST_DIR ARTIF
 import json
 import os
 import re
+import signal
 import subprocess
 import sys
 import tempfile
@@ -158,6 +159,26 @@ class ViewerEndToEnd(unittest.TestCase):
         self.assertRegex(page["picked"], r"occupied, p = (0\.(5[1-9]|[6-9]\d)|1\.00)")
         self.assertTrue(os.path.getsize(screenshot) > 1000)
         print(f"browser: {page['voxels']} voxels, {page['framesReceived']} frames; screenshot {screenshot}")
+
+    def test_cenote_view_serves_a_saved_map_the_same_way(self):
+        saved = self.client.download_snapshot(os.path.join(self.tmp.name, "saved.vdb"))
+        view = subprocess.Popen([CENOTE, "view", saved, "--listen", "127.0.0.1:0", "--web-dir", DIST],
+                                stdout=subprocess.PIPE, text=True)
+        try:
+            line = view.stdout.readline()
+            match = re.search(r"\((\d+) occupied voxels\) on http://127\.0\.0\.1:(\d+)/", line)
+            self.assertIsNotNone(match, line)
+            self.assertEqual(int(match.group(1)), self.occupied)
+            watcher = subprocess.run(["node", os.path.join(WEB, "test", "protocol_client.mjs"),
+                                      f"ws://127.0.0.1:{match.group(2)}/"], cwd=WEB, input=f"occupied {self.occupied}\n",
+                                     capture_output=True, text=True, timeout=180)
+            report = json.loads(watcher.stdout.strip().splitlines()[-1])
+            self.assertEqual(watcher.returncode, 0, report)
+            self.assertEqual(report["fullVoxels"], self.occupied)
+            self.assertGreater(report["messages"]["/frontiers"], 0)
+        finally:
+            view.send_signal(signal.SIGTERM)
+            self.assertEqual(view.wait(timeout=30), 0)
 
 
 if __name__ == "__main__":
