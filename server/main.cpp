@@ -148,14 +148,14 @@ int serve(const Options& o) {
   const std::string host_part = settings.server.listen.substr(0, settings.server.listen.rfind(':'));
   std::cout << "cenote-server listening on " << host_part << ":" << port << (token.empty() ? "" : " (token required)")
             << "; " << cpus.describe() << std::endl;
-  if (!o.port_file.empty()) {
-    // Appears whole: a test polling for it never reads half.
-    writeFileAtomically(o.port_file, std::to_string(port) + "\n", Durability::kFast);
-  }
   if (viewer) {
     const std::string viewer_host = settings.server.viewer.listen.substr(0, settings.server.viewer.listen.rfind(':'));
     std::cout << "cenote-server viewer on http://" << viewer_host << ":" << viewer->port() << "/ (Foxglove: ws://"
               << viewer_host << ":" << viewer->port() << ")" << std::endl;
+  }
+  if (!o.port_file.empty()) {
+    // Appears whole: a test polling for it never reads half.
+    writeFileAtomically(o.port_file, std::to_string(port) + "\n", Durability::kFast);
   }
 
   int signal = 0;

@@ -34,11 +34,10 @@ std::unique_ptr<viewer::ViewerServer> startViewer(const ServerSettings& settings
   sources.map = &host.map();
   sources.subscribe = [&host] { return std::make_unique<FeedSource>(host.feed()); };
   sources.live = &live;
-  sources.frontiers = [&host](const Eigen::Vector3d& from_m) {
-    // Brings the frontiers up to date first (at most a second's wait), as a frontier query does.
-    host.waitForDerived(std::chrono::system_clock::now() + std::chrono::seconds(1));
-    return host.frontiers().clusters(from_m);
-  };
+  // The frontiers as the host last derived them: a viewer never makes it derive (that keeps the
+  // distance field current too, a third of the server's CPU while ingesting); they follow the map
+  // while planners ask for frontiers or distances (map_host.h).
+  sources.frontiers = [&host](const Eigen::Vector3d& from_m) { return host.frontiers().clusters(from_m); };
   sources.stages = [&ingest] {
     std::vector<viewer::StageRate> rates;
     for (const StageSummaryNamed& s : ingest.stageTimings())
