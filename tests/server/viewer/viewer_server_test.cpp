@@ -9,8 +9,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "common/error.h"
 
@@ -106,6 +108,56 @@ TEST_F(ViewerServerHttp, ServesThePageAndRefusesOtherPaths) {
   const std::string post = exchange(server_->port(),
                                     "POST / HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\nConnection: close\r\n\r\n");
   EXPECT_EQ(post.rfind("HTTP/1.1 405", 0), 0u) << post;
+}
+
+// A masked client text frame (RFC 6455 5.3), as a browser sends one.
+std::string clientTextFrame(const std::string& text) {
+  std::string frame = "\x81";
+  frame += static_cast<char>(0x80 | text.size());  // under 126 bytes
+  const char mask[4] = {0x12, 0x34, 0x56, 0x78};
+  frame.append(mask, 4);
+  for (size_t i = 0; i < text.size(); ++i) frame += static_cast<char>(text[i] ^ mask[i % 4]);
+  return frame;
+}
+
+TEST(ViewerServer, AClientThatStopsReadingIsNotQueuedWithoutBound) {
+  mapping::OccupancyMap map{mapping::MapConfig{}};
+  PointBatch wall;  // 90000 occupied voxels: about 16 MB of cubes
+  for (int j = -150; j < 150; ++j)
+    for (int k = -150; k < 150; ++k) wall.points.emplace_back(3.0f, 0.05f * j + 0.025f, 0.05f * k + 0.025f);
+  map.integrate(wall);
+  ViewerConfig config;
+  config.listen = "127.0.0.1:0";
+  config.budget_bytes_per_s = 2.0e6;
+  ViewerSources sources;
+  sources.map = &map;
+  ViewerServer server(config, sources);
+
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  const int small = 4096;  // a slow link: the server's writes block soon
+  setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof(small));
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<uint16_t>(server.port()));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)), 0);
+  const std::string request = upgrade("/", "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n");
+  send(fd, request.data(), request.size(), 0);
+  char head[512];  // the 101 response (and maybe serverInfo): as a client, wait for it, then subscribe
+  ASSERT_GT(recv(fd, head, sizeof(head), 0), 12);
+  ASSERT_EQ(std::string(head, 12), "HTTP/1.1 101");
+  const std::string subscribe = clientTextFrame(R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":1}]})");
+  send(fd, subscribe.data(), subscribe.size(), 0);
+  // Never read. At 2 MB/s the whole map would be made within 8 s; instead the server makes what the
+  // sockets take plus a second's worth, then nothing more.
+  std::this_thread::sleep_for(std::chrono::seconds(4));
+  const uint64_t after_4s = server.bytesSent();
+  std::this_thread::sleep_for(std::chrono::seconds(4));
+  const uint64_t after_8s = server.bytesSent();
+  close(fd);
+  EXPECT_GT(after_4s, 100000u);
+  EXPECT_LT(after_8s, 9000000u) << "bytes made for a client that reads nothing";
+  EXPECT_LT(after_8s - after_4s, 500000u) << "the server went on making bytes for a client that reads nothing";
 }
 
 TEST(ViewerServer, AnAddressInUseIsAnErrorNamingTheKey) {
