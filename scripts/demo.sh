@@ -39,11 +39,12 @@ echo "== 5. serve the map over gRPC and ask it what a planner asks (cenote-serve
 if [ -x "$server" ] && [ -x "$cli" ]; then
   rm -f "$out/server.port"
   "$server" --config "$here/config/default.yaml" --load "$out/run/map.vdb" --listen 127.0.0.1:0 \
-    --port-file "$out/server.port" --snapshot-dir "$out/snapshots" > "$out/server.log" 2>&1 &
+    --viewer-listen 127.0.0.1:0 --port-file "$out/server.port" --snapshot-dir "$out/snapshots" > "$out/server.log" 2>&1 &
   server_pid=$!
   for _ in $(seq 1 600); do [ -f "$out/server.port" ] && break; sleep 0.1; done
   address="127.0.0.1:$(cat "$out/server.port")"
   echo "server on $address"
+  grep -o "viewer on http://[^ ]*" "$out/server.log" | sed 's/^/live /' || true
   "$cli" --server "$address" info
   echo "-- voxel states 1 m and 2 m ahead of the start, and 0.5 m to the side (x y z state probability):"
   "$cli" --server "$address" state 1,0,0 2,0,0 0,0.5,0 0,2,0
@@ -67,3 +68,6 @@ echo "  run/report.json             frames, per-stage ms (median, p95), fps, pea
 echo "  report.html                 one-page report with metrics and plots"
 echo "  motorcycle.preview.png      colour-mapped disparity of a real pair"
 echo "  snapshots/                  written by cenote-server: map.mesh.ply (asked for), map.vdb (on shutdown)"
+echo
+echo "live view of the dive's map (browser, or Foxglove / Lichtblick at ws://127.0.0.1:8765; docs/VIEWER.md):"
+echo "  $cenote view $out/run/map.vdb   then open http://127.0.0.1:8765/"

@@ -31,6 +31,8 @@ PACKAGES=(
   clang-format
   # test data scripts
   python3 python3-numpy
+  # the live viewer's browser test: headless Chromium (driven by npm playwright-core, web/)
+  chromium
 )
 # `make fuzz` (install-deps.sh --fuzz): clang and its libFuzzer runtime; CI's `make test` needs neither.
 if [ "${1:-}" = "--fuzz" ]; then
@@ -58,6 +60,15 @@ else
   $SUDO apt-get update -qq
   updated=1
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# The browser viewer (web/) is bundled by npm packages: node and npm, from Debian unless some other
+# node (with its own npm) is installed already.
+if ! command -v node > /dev/null || ! command -v npm > /dev/null; then
+  echo "install-deps: installing nodejs npm"
+  [ "$updated" -eq 1 ] || $SUDO apt-get update -qq
+  updated=1
+  $SUDO apt-get install -y -qq --no-install-recommends nodejs npm
 fi
 
 # PCL's headers without libpcl-dev's dependencies: the package unpacked (not installed) under

@@ -35,6 +35,7 @@
 #include "server/services/ingest_service.h"
 #include "server/services/query_service.h"
 #include "server/services/updates_service.h"
+#include "server/viewer/host_viewer.h"
 
 namespace cenote::server {
 namespace {
@@ -42,7 +43,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct Options {
-  std::string config, listen, load, token_file, read_token_file, calibration, snapshot_dir, port_file;
+  std::string config, listen, load, token_file, read_token_file, calibration, snapshot_dir, port_file, viewer_listen;
   TlsFiles tls;
   double snapshot_period_s = -1.0;
   bool allow_insecure_remote = false;
@@ -51,6 +52,7 @@ struct Options {
 ServerSettings settingsFrom(const Options& o) {
   ServerSettings s = ServerSettings::load(o.config);
   if (!o.listen.empty()) s.server.listen = o.listen;
+  if (!o.viewer_listen.empty()) s.server.viewer.listen = o.viewer_listen;
   if (!o.token_file.empty()) s.server.token_file = o.token_file;
   if (!o.read_token_file.empty()) s.server.read_token_file = o.read_token_file;
   if (!o.calibration.empty()) s.server.calibration = o.calibration;
@@ -135,6 +137,9 @@ int serve(const Options& o) {
   QueryService query(host, guard, settings.server, settings.server.frame_id);
   UpdatesService updates(host, guard, settings.server.limits.max_subscribers);
   AdminService admin(host, guard, snapshots, ingest, settings.server.limits.max_snapshot_downloads);
+  viewer::LiveFeed live(settings.server.viewer.max_cloud_points, settings.server.viewer.max_trajectory_poses);
+  const std::unique_ptr<viewer::ViewerServer> viewer = startViewer(settings, host, ingest, live,
+                                                                   tokenFrom(settings.server.token_file));
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -168,6 +173,11 @@ int serve(const Options& o) {
   const std::string host_part = settings.server.listen.substr(0, settings.server.listen.rfind(':'));
   std::cout << "cenote-server listening on " << host_part << ":" << port << (access->enabled() ? " (token required)" : "")
             << "; " << cpus.describe() << std::endl;
+  if (viewer) {
+    const std::string viewer_host = settings.server.viewer.listen.substr(0, settings.server.viewer.listen.rfind(':'));
+    std::cout << "cenote-server viewer on http://" << viewer_host << ":" << viewer->port() << "/ (Foxglove: ws://"
+              << viewer_host << ":" << viewer->port() << ")" << std::endl;
+  }
   if (!o.port_file.empty()) {
     // Appears whole: a test polling for it never reads half.
     writeFileAtomically(o.port_file, std::to_string(port) + "\n", Durability::kFast);
@@ -182,6 +192,7 @@ int serve(const Options& o) {
   // taken still reach the map), a subscription ends with UNAVAILABLE. Unary calls get the grace.
   guard.cancelStreams();
   updates.shutdown();
+  if (viewer) viewer->stop();
   server->Shutdown(std::chrono::system_clock::now() +
                    std::chrono::microseconds(static_cast<int64_t>(settings.server.transport.shutdown_grace_s * 1e6)));
   server->Wait();
@@ -213,6 +224,8 @@ int main(int argc, char** argv) {
   app.add_option("--snapshot-dir", o.snapshot_dir, "where snapshots are written (default ./snapshots)");
   app.add_option("--snapshot-period", o.snapshot_period_s, "seconds between periodic snapshots (0: none)");
   app.add_option("--port-file", o.port_file, "write the bound port here once serving");
+  app.add_option("--viewer-listen", o.viewer_listen,
+                 "HOST:PORT of the live viewer (Foxglove WebSocket and browser page; server.viewer.listen)");
   app.add_option("--tls-cert", o.tls.cert, "PEM server certificate (enables TLS)");
   app.add_option("--tls-key", o.tls.key, "PEM server private key");
   app.add_option("--tls-client-ca", o.tls.client_ca, "PEM CA that client certificates must chain to (mutual TLS)");

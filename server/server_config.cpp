@@ -74,7 +74,9 @@ std::vector<ConfigError> ServerConfig::validate() const {
                "must be >= 0 (0: unbounded)");
   errors.check(t.shutdown_grace_s >= 0.0 && t.shutdown_grace_s <= 60.0, "transport.shutdown_grace_s", t.shutdown_grace_s,
                "must be in [0, 60]");
-  return errors.take();
+  std::vector<ConfigError> all = errors.take();
+  for (auto& e : viewer.validate()) all.push_back(std::move(e));
+  return all;
 }
 
 void ServerConfig::read(YamlSection& section) {
@@ -126,6 +128,9 @@ void ServerConfig::read(YamlSection& section) {
   t.read("max_connection_age_grace_s", transport.max_connection_age_grace_s);
   t.read("shutdown_grace_s", transport.shutdown_grace_s);
   t.finish();
+  YamlSection v = section.section("viewer");
+  viewer.read(v);
+  v.finish();
 }
 
 ServerSettings ServerSettings::load(const std::string& path) {

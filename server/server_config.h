@@ -11,6 +11,7 @@
 #include "common/config_error.h"
 #include "mapping/map_config.h"
 #include "server/host/map_host_options.h"
+#include "server/viewer/viewer_config.h"
 #include "pipeline/runner/run_config.h"
 
 namespace cenote {
@@ -75,6 +76,7 @@ struct ServerConfig {
                                    // derived_nice, derived_period_s, derived_follow_s
   RequestLimits limits;
   TransportConfig transport;
+  viewer::ViewerConfig viewer;  // the live viewer (section viewer:); off unless viewer.listen is set
 
   std::vector<ConfigError> validate() const;
   // Reads keys of a `server:` section; unknown keys are errors.

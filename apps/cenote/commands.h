@@ -16,5 +16,7 @@ void registerEvalMapCommand(CLI::App& eval_cmd);
 void registerSimCommand(CLI::App& app);
 // `cenote map`: integrate, info, export, query (mapping/).
 void registerMapCommand(CLI::App& app);
+// `cenote view`: a saved map in the live viewer (server/viewer/).
+void registerViewCommand(CLI::App& app);
 
 }  // namespace cenote::apps

@@ -68,8 +68,9 @@ mapping::MapDelta MapHost::change(Change&& apply, bool forgets) {
   });
 }
 
-mapping::MapDelta MapHost::integrate(const PointBatch& batch) {
+mapping::MapDelta MapHost::integrate(const PointBatch& batch, const std::optional<Eigen::Isometry3d>& T_world_cam) {
   mapping::MapDelta delta = change([&] { return map_->integrate(batch); }, false);
+  if (live_) live_->post(batch, T_world_cam);
   std::lock_guard<std::mutex> lock(derived_mutex_);
   ++batches_;
   return delta;

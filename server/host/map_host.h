@@ -31,6 +31,7 @@
 #include "server/host/change_feed.h"
 #include "server/host/map_host_options.h"
 #include "server/host/serial_worker.h"
+#include "server/viewer/live_feed.h"
 
 namespace cenote::server {
 
@@ -45,7 +46,11 @@ class MapHost {
   ChangeFeed& feed() { return feed_; }
 
   // @throws cenote::Error for a bad batch (the map is then unchanged).
-  mapping::MapDelta integrate(const PointBatch& batch);
+  // T_world_cam: the camera's pose when known (frames), for the live viewer (setLiveFeed).
+  mapping::MapDelta integrate(const PointBatch& batch, const std::optional<Eigen::Isometry3d>& T_world_cam = {});
+  // Integrated batches are handed on to `live` (the viewer's camera and cloud); null: none. Call
+  // before serving.
+  void setLiveFeed(viewer::LiveFeed* live) { live_ = live; }
   mapping::MapDelta clearBox(const mapping::Aabb& box_m);
   mapping::MapDelta clearSphere(const Eigen::Vector3d& centre_m, double radius_m);
   mapping::MapDelta cropToRadius(const Eigen::Vector3d& centre_m, double radius_m);
@@ -86,6 +91,7 @@ class MapHost {
   uint64_t derived_updates_ = 0;    // rounds of derived updates
   uint64_t idle_changes_ = 0;       // published_changes_ at the derived thread's last untimed wait
   uint64_t batches_ = 0;
+  viewer::LiveFeed* live_ = nullptr;
   using Clock = std::chrono::steady_clock;
   bool followingQueries(Clock::time_point now) const;
 

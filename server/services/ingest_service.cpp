@@ -164,7 +164,7 @@ class FrameStream {
       if (out->points.empty()) continue;
       try {
         const auto t0 = Clock::now();
-        host_.integrate(out->points);
+        host_.integrate(out->points, out->frame.T_world_cam);
         timings_.add("integrate", msSince(t0));
       } catch (const std::exception& e) {
         integrate_error_ = std::string("integration failed: ") + e.what();

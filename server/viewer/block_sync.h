@@ -1,0 +1,66 @@
+// block_sync.h: what one viewer client has of the map, and the next SceneUpdate to bring it closer
+// within a byte budget, with level of detail.
+// The client has each block at a level: none, coarse (the block as one cube) or full (a cube per
+// occupied voxel). Blocks the map changed are dirty. next() sends the dirty blocks nearest the
+// camera first: when the budget does not cover them all at full detail, every dirty block it
+// reaches is first given a coarse cube, then the nearest are upgraded to full while the budget
+// lasts; blocks the budget does not reach stay dirty. With budget to spare, coarse blocks are
+// refined, nearest first. So a slow link gets the whole map's shape first and detail later, and
+// what waits is a set of blocks, never a queue of messages: a block changed ten times is sent once,
+// as it is then.
+// Blocks are read from the map when sent (ConstAccessor), so the client converges to the map.
+// Units: metres, world frame. Threads: one thread per BlockSync.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "mapping/occupancy_map.h"
+#include "server/viewer/scene_messages.h"
+
+namespace cenote::server::viewer {
+
+struct SyncStep {
+  std::string message;  // a SceneUpdate; empty when there was nothing to send
+  size_t full_blocks = 0, coarse_blocks = 0, deleted_blocks = 0;
+  uint64_t full_voxels = 0;
+};
+
+class BlockSync {
+ public:
+  BlockSync(std::string frame_id, ColorBy color_by) : frame_id_(std::move(frame_id)), color_by_(color_by) {}
+
+  // Every block the client has and every block given (the map's known blocks) become dirty: the
+  // whole map is sent again (a new client, or a change feed that dropped changes).
+  void markAll(const std::vector<mapping::BlockIndex>& known_blocks);
+  void markChanged(const std::vector<mapping::BlockIndex>& blocks);
+
+  // The next update, at most about budget_bytes long (a single block bigger than that is sent
+  // coarse, which always fits once: the budget's floor is one coarse block).
+  SyncStep next(const mapping::OccupancyMap::ConstAccessor& access, const Eigen::Vector3d& camera_m, double budget_bytes,
+                uint64_t time_ns);
+
+  // Nothing dirty and nothing coarse: the client has the map as it is.
+  bool settled() const { return dirty_.empty() && coarse_ == 0; }
+  size_t dirtyBlocks() const { return dirty_.size(); }
+  size_t coarseBlocks() const { return coarse_; }
+
+ private:
+  enum class Lod : uint8_t { kCoarse = 1, kFull = 2 };
+  static uint64_t key(const mapping::BlockIndex& b);
+  static mapping::BlockIndex unkey(uint64_t k);
+  void setLevel(uint64_t k, Lod lod);
+  void forget(uint64_t k);
+
+  std::string frame_id_;
+  ColorBy color_by_;
+  std::unordered_map<uint64_t, Lod> sent_;  // blocks the client has, and at which level
+  std::unordered_set<uint64_t> dirty_;
+  size_t coarse_ = 0;  // blocks of sent_ at kCoarse
+};
+
+}  // namespace cenote::server::viewer

@@ -1,0 +1,35 @@
+#include "server/viewer/viewer_config.h"
+
+#include "common/yaml_section.h"
+
+namespace cenote::server::viewer {
+
+std::vector<ConfigError> ViewerConfig::validate() const {
+  ConfigErrors errors("server.viewer");
+  errors.check(listen.empty() || listen.rfind(':') != std::string::npos, "listen", listen,
+               "must be HOST:PORT (port 0 picks a free one), or empty for no viewer");
+  errors.check(budget_bytes_per_s >= 1.0e4 && budget_bytes_per_s <= 1.0e10, "budget_bytes_per_s", budget_bytes_per_s,
+               "must be in [1e4, 1e10]");
+  errors.check(tick_s >= 0.005 && tick_s <= 10.0, "tick_s", tick_s, "must be in [0.005, 10]");
+  errors.check(stats_period_s >= 0.05 && stats_period_s <= 3600.0, "stats_period_s", stats_period_s,
+               "must be in [0.05, 3600]");
+  errors.check(max_cloud_points >= 0 && max_cloud_points <= 1000000, "max_cloud_points", max_cloud_points,
+               "must be in [0, 1000000] (0: no point cloud channel data)");
+  errors.check(max_trajectory_poses >= 1 && max_trajectory_poses <= 1000000, "max_trajectory_poses", max_trajectory_poses,
+               "must be in [1, 1000000]");
+  errors.check(color_by == "image" || color_by == "height", "color_by", color_by, "must be image or height");
+  return errors.take();
+}
+
+void ViewerConfig::read(YamlSection& section) {
+  section.read("listen", listen);
+  section.read("budget_bytes_per_s", budget_bytes_per_s);
+  section.read("tick_s", tick_s);
+  section.read("stats_period_s", stats_period_s);
+  section.read("max_cloud_points", max_cloud_points);
+  section.read("max_trajectory_poses", max_trajectory_poses);
+  section.read("color_by", color_by);
+  section.read("web_dir", web_dir);
+}
+
+}  // namespace cenote::server::viewer

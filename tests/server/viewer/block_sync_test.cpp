@@ -1,0 +1,172 @@
+#include "server/viewer/block_sync.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <nlohmann/json.hpp>
+
+namespace cenote::server::viewer {
+namespace {
+
+// A wall of points at x = 2 m, |y|, |z| <= half_m, seen from the origin.
+PointBatch wall(double half_m, double spacing_m) {
+  PointBatch batch;
+  for (double y = -half_m; y <= half_m; y += spacing_m) {
+    for (double z = -half_m; z <= half_m; z += spacing_m) {
+      batch.points.emplace_back(2.0f, static_cast<float>(y), static_cast<float>(z));
+      batch.colors.push_back({200, 100, 50});
+    }
+  }
+  return batch;
+}
+
+// What a client holds after applying SceneUpdates: entity id -> (lod, cubes, voxels).
+struct Mirror {
+  struct Entity {
+    std::string lod;
+    size_t cubes = 0;
+    uint64_t voxels = 0;
+  };
+  std::map<std::string, Entity> entities;
+  size_t deletions = 0;
+
+  void apply(const std::string& message) {
+    const auto update = nlohmann::json::parse(message);
+    for (const auto& d : update["deletions"]) {
+      deletions += entities.erase(d["id"].get<std::string>());
+    }
+    for (const auto& e : update["entities"]) {
+      Entity entity;
+      for (const auto& kv : e["metadata"]) {
+        if (kv["key"] == "lod") entity.lod = kv["value"];
+        if (kv["key"] == "voxels") entity.voxels = std::stoull(kv["value"].get<std::string>());
+      }
+      entity.cubes = e["cubes"].size();
+      entities[e["id"]] = entity;
+    }
+  }
+  uint64_t fullVoxels() const {
+    uint64_t n = 0;
+    for (const auto& [id, e] : entities)
+      if (e.lod == "full") n += e.cubes;
+    return n;
+  }
+  size_t coarse() const {
+    size_t n = 0;
+    for (const auto& [id, e] : entities) n += e.lod == "coarse";
+    return n;
+  }
+};
+
+// Runs steps until settled; @return the number of steps.
+int settle(BlockSync& sync, const mapping::OccupancyMap& map, Mirror& mirror, double budget_bytes) {
+  int steps = 0;
+  while (!sync.settled() && steps < 10000) {
+    const auto access = map.constAccessor();
+    const SyncStep step = sync.next(access, Eigen::Vector3d::Zero(), budget_bytes, 1);
+    if (!step.message.empty()) mirror.apply(step.message);
+    ++steps;
+  }
+  return steps;
+}
+
+TEST(BlockSync, EmptyMapSendsNothingAndIsSettled) {
+  mapping::OccupancyMap map{mapping::MapConfig{}};
+  BlockSync sync("world", ColorBy::kImage);
+  const auto access = map.constAccessor();
+  sync.markAll(access.knownBlocks());
+  EXPECT_TRUE(sync.settled());
+  EXPECT_TRUE(sync.next(access, Eigen::Vector3d::Zero(), 1e6, 1).message.empty());
+}
+
+TEST(BlockSync, AmpleBudgetSendsEveryOccupiedVoxelAtFullDetailInOneStep) {
+  mapping::OccupancyMap map{mapping::MapConfig{}};
+  map.integrate(wall(1.0, 0.04));
+  BlockSync sync("world", ColorBy::kImage);
+  Mirror mirror;
+  {
+    const auto access = map.constAccessor();
+    sync.markAll(access.knownBlocks());
+  }
+  EXPECT_EQ(settle(sync, map, mirror, 1e9), 1);
+  EXPECT_EQ(mirror.coarse(), 0u);
+  EXPECT_GT(map.stats().occupied, 1000u);
+  EXPECT_EQ(mirror.fullVoxels(), map.stats().occupied);
+}
+
+TEST(BlockSync, ShortBudgetSendsCoarseBlocksFirstThenRefinesThemWithinTheBudget) {
+  mapping::OccupancyMap map{mapping::MapConfig{}};
+  map.integrate(wall(1.0, 0.04));
+  BlockSync sync("world", ColorBy::kHeight);
+  Mirror mirror;
+  {
+    const auto access = map.constAccessor();
+    sync.markAll(access.knownBlocks());
+  }
+  const double budget = 20000.0;
+  size_t largest = 0;
+  bool saw_coarse = false;
+  int steps = 0;
+  while (!sync.settled() && steps < 10000) {
+    const auto access = map.constAccessor();
+    const SyncStep step = sync.next(access, Eigen::Vector3d::Zero(), budget, 1);
+    largest = std::max(largest, step.message.size());
+    saw_coarse = saw_coarse || step.coarse_blocks > 0;
+    mirror.apply(step.message);
+    ++steps;
+  }
+  EXPECT_TRUE(saw_coarse);
+  EXPECT_GT(steps, 5);
+  // Every message within the budget, but for one block bigger than it (sent alone).
+  EXPECT_LE(largest, static_cast<size_t>(budget) + SceneUpdateWriter::entityBytes(mapping::kBlockVoxels));
+  EXPECT_EQ(mirror.coarse(), 0u);
+  EXPECT_EQ(mirror.fullVoxels(), map.stats().occupied);
+}
+
+TEST(BlockSync, ClearedBlocksAreDeletedAndTheMirrorFollowsTheMap) {
+  mapping::OccupancyMap map{mapping::MapConfig{}};
+  map.integrate(wall(1.0, 0.04));
+  BlockSync sync("world", ColorBy::kImage);
+  Mirror mirror;
+  {
+    const auto access = map.constAccessor();
+    sync.markAll(access.knownBlocks());
+  }
+  settle(sync, map, mirror, 1e9);
+  const size_t before = mirror.entities.size();
+  mapping::Aabb box;
+  box.min_m = Eigen::Vector3d(1.5, -2.0, 0.0);
+  box.max_m = Eigen::Vector3d(2.5, 2.0, 2.0);
+  const mapping::MapDelta delta = map.clearBox(box);
+  sync.markChanged(delta.changed_blocks);
+  settle(sync, map, mirror, 1e9);
+  EXPECT_GT(mirror.deletions, 0u);
+  EXPECT_LT(mirror.entities.size(), before);
+  EXPECT_EQ(mirror.fullVoxels(), map.stats().occupied);
+}
+
+TEST(BlockSync, AResyncAfterChangesConvergesToTheMapAsItIsNow) {
+  mapping::OccupancyMap map{mapping::MapConfig{}};
+  map.integrate(wall(0.5, 0.04));
+  BlockSync sync("world", ColorBy::kImage);
+  Mirror mirror;
+  {
+    const auto access = map.constAccessor();
+    sync.markAll(access.knownBlocks());
+  }
+  settle(sync, map, mirror, 1e9);
+  map.reset();
+  PointBatch moved = wall(0.5, 0.04);
+  for (auto& p : moved.points) p.y() += 3.0f;
+  map.integrate(moved);
+  {
+    const auto access = map.constAccessor();
+    sync.markAll(access.knownBlocks());  // as after a dropped change feed
+  }
+  settle(sync, map, mirror, 1e9);
+  EXPECT_EQ(mirror.fullVoxels(), map.stats().occupied);
+  for (const auto& [id, e] : mirror.entities) EXPECT_EQ(e.cubes, e.voxels) << id;
+}
+
+}  // namespace
+}  // namespace cenote::server::viewer
