@@ -34,8 +34,8 @@ std::vector<ConfigError> SimConfig::validate() const {
                drift_yaw_deg_per_sqrt_s, "must be in [0, 10]");
   errors.check(loop_closure_period_s > 0.0 && std::isfinite(loop_closure_period_s), "loop_closure_period_s",
                loop_closure_period_s, "must be finite and > 0");
-  errors.check(loop_closure_residual >= 0.0 && loop_closure_residual <= 1.0, "loop_closure_residual",
-               loop_closure_residual, "must be in [0, 1]");
+  errors.check(loop_closure_residual >= 0.0 && loop_closure_residual <= 1.0, "loop_closure_residual", loop_closure_residual,
+               "must be in [0, 1]");
   return errors.take();
 }
 
