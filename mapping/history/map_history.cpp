@@ -132,6 +132,7 @@ MapDelta MapHistory::integrateStored(const PointBatch& batch, const FrameMeta& g
 
 void MapHistory::index(uint32_t seq, const std::vector<uint64_t>& keys) {
   for (uint64_t key : keys) {
+    if (sealed_.count(key) != 0) continue;  // never replayed
     std::vector<uint32_t>& frames = frames_of_block_[key];
     frames.insert(std::upper_bound(frames.begin(), frames.end(), seq), seq);
   }
@@ -151,22 +152,30 @@ void MapHistory::unindex(uint32_t seq, const std::vector<uint64_t>& keys) {
 void MapHistory::enforceBudget() {
   for (uint32_t seq : store_.overBudget()) {
     const FrameUpdates updates = history::decodeUpdates(store_.readUpdates(seq), "frame " + std::to_string(seq));
-    unindex(seq, updates.keys);
-    sealed_.insert(updates.keys.begin(), updates.keys.end());
+    for (uint64_t key : updates.keys) {
+      sealed_.insert(key);
+      frames_of_block_.erase(key);  // never replayed now
+    }
     store_.erase(seq);
   }
 }
 
 void MapHistory::seal(std::span<const BlockIndex> blocks) {
   for (const BlockIndex& block : blocks) {
-    if (detail::inPackRange(block)) sealed_.insert(detail::packIndex(block));
+    if (!detail::inPackRange(block)) continue;
+    const uint64_t key = detail::packIndex(block);
+    sealed_.insert(key);
+    frames_of_block_.erase(key);  // never replayed now
   }
 }
 
+void MapHistory::releaseScratch() { rays_ = RayBatch(); }
+
 void MapHistory::clear() {
   store_.clear();
-  frames_of_block_.clear();
-  sealed_.clear();
+  frames_of_block_ = {};
+  sealed_ = {};
+  releaseScratch();
 }
 
 CorrectionSummary MapHistory::correct(std::span<const CorrectedPose> poses) {

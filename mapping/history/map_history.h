@@ -88,6 +88,9 @@ class MapHistory {
   // Marks blocks whose state came from elsewhere than the stored frames (a loaded map, a clear or
   // crop): corrections keep them as they are (counted in blocks_kept).
   void seal(std::span<const BlockIndex> blocks);
+  // Frees the ray-marching scratch, whose capacity the largest frame so far set (after a crop,
+  // as OccupancyMap frees its own); the next frame allocates it again.
+  void releaseScratch();
 
   size_t numFrames() const { return store_.numFrames(); }
   uint64_t storeBytes() const { return store_.bytes(); }
