@@ -178,16 +178,12 @@ void MapHistory::clear() {
   releaseScratch();
 }
 
-CorrectionSummary MapHistory::correct(std::span<const CorrectedPose> poses) {
+CorrectionPlan MapHistory::planCorrection(std::span<const CorrectedPose> poses) {
   checkPoses(poses);
-  CorrectionSummary summary;
-  if (poses.empty()) return summary;
+  CorrectionPlan plan;
+  if (poses.empty()) return plan;
   const MapConfig& config = map_.config();
-  const double quantum = config.history_quantum_m;
   const double min_turn_rad = config.correction_min_turn_deg * M_PI / 180.0;
-
-  // 1. The frames that moved, with their new camera poses.
-  std::vector<std::pair<uint32_t, Eigen::Isometry3d>> moved;
   store_.forEach([&](uint32_t seq, const FrameMeta& meta) {
     if (!meta.correctable || meta.t_s < poses.front().t_s - kSameTime_s || meta.t_s > poses.back().t_s + kSameTime_s) {
       return;
@@ -197,36 +193,50 @@ CorrectionSummary MapHistory::correct(std::span<const CorrectedPose> poses) {
     const Eigen::Isometry3d T_world_cam = T_world_pose * meta.T_pose_cam;
     const double shift = (T_world_cam.translation() - meta.T_world_cam.translation()).norm();
     const double turn = Eigen::AngleAxisd(meta.T_world_cam.linear().transpose() * T_world_cam.linear()).angle();
-    if (shift > config.correction_min_shift_m || turn > min_turn_rad) moved.emplace_back(seq, T_world_cam);
+    if (shift > config.correction_min_shift_m || turn > min_turn_rad) plan.moved.emplace_back(seq, T_world_cam);
   });
-  summary.frames_moved = moved.size();
-  if (moved.empty()) return summary;
+  return plan;
+}
 
-  // 2. March each moved frame at its new pose; the blocks it touched before and now are affected.
-  std::unordered_set<uint64_t> affected;
-  for (const auto& [seq, T_world_cam] : moved) {
-    const std::string where = "frame " + std::to_string(seq);
-    const FrameUpdates old_updates = history::decodeUpdates(store_.readUpdates(seq), where);
-    const std::string points_bytes = store_.readPoints(seq);
-    const FramePoints points = history::decodePoints(points_bytes, where);
-    FrameMeta meta = store_.meta(seq);
-    PointBatch batch;
-    batch.t_s = meta.t_s;
-    batch.origin = T_world_cam * meta.origin_cam;
-    batch.points.resize(points.quantised.size());
-    for (size_t i = 0; i < points.quantised.size(); ++i)
-      batch.points[i] = toWorld(T_world_cam, points.quantised[i], quantum);
-    batch.colors = points.colors;
-    map_.checkBatch(batch);
-    rays_.build(batch, config.voxel_size_m, config.max_range_m, config.num_threads, config.ray_stop_run);
-    const FrameUpdates new_updates = FrameUpdates::of(rays_.updates());
-    meta.T_world_cam = T_world_cam;
-    store_.put(seq, meta, points_bytes, history::encodeUpdates(new_updates, kDeflateLevel));
-    unindex(seq, old_updates.keys);
-    index(seq, new_updates.keys);
-    affected.insert(old_updates.keys.begin(), old_updates.keys.end());
-    affected.insert(new_updates.keys.begin(), new_updates.keys.end());
+void MapHistory::moveFrame(CorrectionPlan& plan, size_t i) {
+  const auto& [seq, T_world_cam] = plan.moved.at(i);
+  if (!store_.contains(seq)) return;  // dropped (budget) or cleared since the plan: its blocks are sealed
+  const MapConfig& config = map_.config();
+  const std::string where = "frame " + std::to_string(seq);
+  const FrameUpdates old_updates = history::decodeUpdates(store_.readUpdates(seq), where);
+  const std::string points_bytes = store_.readPoints(seq);
+  const FramePoints points = history::decodePoints(points_bytes, where);
+  FrameMeta meta = store_.meta(seq);
+  PointBatch batch;
+  batch.t_s = meta.t_s;
+  batch.origin = T_world_cam * meta.origin_cam;
+  batch.points.resize(points.quantised.size());
+  for (size_t k = 0; k < points.quantised.size(); ++k) {
+    batch.points[k] = toWorld(T_world_cam, points.quantised[k], config.history_quantum_m);
   }
+  batch.colors = points.colors;
+  map_.checkBatch(batch);
+  rays_.build(batch, config.voxel_size_m, config.max_range_m, config.num_threads, config.ray_stop_run);
+  const FrameUpdates new_updates = FrameUpdates::of(rays_.updates());
+  meta.T_world_cam = T_world_cam;
+  store_.put(seq, meta, points_bytes, history::encodeUpdates(new_updates, kDeflateLevel));
+  unindex(seq, old_updates.keys);
+  index(seq, new_updates.keys);
+  plan.affected.insert(old_updates.keys.begin(), old_updates.keys.end());
+  plan.affected.insert(new_updates.keys.begin(), new_updates.keys.end());
+}
+
+CorrectionSummary MapHistory::correct(std::span<const CorrectedPose> poses) {
+  CorrectionPlan plan = planCorrection(poses);
+  for (size_t i = 0; i < plan.moved.size(); ++i) moveFrame(plan, i);
+  return finishCorrection(plan);
+}
+
+CorrectionSummary MapHistory::finishCorrection(CorrectionPlan& plan) {
+  CorrectionSummary summary;
+  summary.frames_moved = plan.moved.size();
+  if (plan.affected.empty()) return summary;
+  const std::unordered_set<uint64_t>& affected = plan.affected;
 
   // 3. Rebuild the affected blocks no dropped frame touched, from unknown, by replaying in order
   // every frame that touches them.

@@ -59,6 +59,13 @@ struct CorrectionSummary {
   MapDelta delta;          // blocks that changed
 };
 
+// A correction in steps (MapHistory::planCorrection): the frames that move, with their new camera
+// poses, and the blocks the frames moved so far touched.
+struct CorrectionPlan {
+  std::vector<std::pair<uint32_t, Eigen::Isometry3d>> moved;
+  std::unordered_set<uint64_t> affected;  // detail::packIndex of the blocks
+};
+
 class MapHistory {
  public:
   // The store follows map.config(): history_max_mb, history_dir, history_quantum_m.
@@ -82,6 +89,15 @@ class MapHistory {
   // interpolated) takes T_world_pose * T_pose_cam as its new camera pose; see 1.-3. above.
   // @throws Error, changing nothing, for poses not ascending or not finite rigid transforms.
   CorrectionSummary correct(std::span<const CorrectedPose> poses);
+
+  // correct() in steps, so that a writer can integrate new frames between them (MapHost does):
+  // the plan (which frames move; @throws as correct()), one ray march per moved frame, then the
+  // replay and swap. Frames integrated between the steps are replayed too where they touch the
+  // affected blocks, so the result is the same as correct() after them. Steps of one plan run in
+  // order on the writer, and no other correction starts before its finishCorrection().
+  CorrectionPlan planCorrection(std::span<const CorrectedPose> poses);
+  void moveFrame(CorrectionPlan& plan, size_t i);
+  CorrectionSummary finishCorrection(CorrectionPlan& plan);
 
   // Forgets every stored frame (after OccupancyMap::reset()).
   void clear();

@@ -94,10 +94,15 @@ mapping::CorrectionSummary MapHost::correctPoses(const std::vector<mapping::Corr
   if (!history_) {
     throw FailedPreconditionError("correct poses: the server keeps no frame history (server.frame_history is false)");
   }
+  // In steps on the writer thread, one ray march each: frames that arrive meanwhile are integrated
+  // between them, and the final replay includes them where they touch the affected blocks.
+  std::lock_guard<std::mutex> one_at_a_time(correction_mutex_);
+  mapping::CorrectionPlan plan = writer_.run([&] { return history_->planCorrection(poses); });
+  for (size_t i = 0; i < plan.moved.size(); ++i) writer_.run([&] { history_->moveFrame(plan, i); });
   mapping::CorrectionSummary summary;
   change(
       [&] {
-        summary = history_->correct(poses);
+        summary = history_->finishCorrection(plan);
         return summary.delta;
       },
       false);

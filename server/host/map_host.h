@@ -52,8 +52,10 @@ class MapHost {
   // With options.frame_history it is kept for corrections; otherwise integrate(batch).
   mapping::MapDelta integrateFrame(const PointBatch& batch, const Eigen::Isometry3d& T_world_cam,
                                    const Eigen::Isometry3d& T_pose_cam);
-  // Applies corrected poses of past frames (mapping/history/map_history.h) on the writer thread:
-  // the rebuilt blocks go to the feed and the derived structures like any change.
+  // Applies corrected poses of past frames (mapping/history/map_history.h) on the writer thread, in
+  // steps of one moved frame's ray march each, between which other changes (ingest) run; then the
+  // blocks are rebuilt and swapped in one change, which goes to the feed and the derived
+  // structures like any other. One correction at a time (a second waits).
   // @throws FailedPreconditionError without a frame history; Error for bad poses (nothing changes).
   mapping::CorrectionSummary correctPoses(const std::vector<mapping::CorrectedPose>& poses);
   mapping::MapDelta clearBox(const mapping::Aabb& box_m);
@@ -86,6 +88,7 @@ class MapHost {
 
   std::unique_ptr<mapping::OccupancyMap> map_;
   std::unique_ptr<mapping::MapHistory> history_;  // with options.frame_history; used on the writer thread
+  std::mutex correction_mutex_;                   // one correction's steps at a time
   std::unique_ptr<mapping::DistanceField> distance_;
   std::unique_ptr<mapping::FrontierMap> frontiers_;
   ChangeFeed feed_;

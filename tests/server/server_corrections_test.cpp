@@ -10,6 +10,8 @@
 namespace cenote::server::test {
 namespace {
 
+using client::test::ServerProcess;
+
 v1::PoseStamped poseAt(double t_s, double x_m) {
   v1::PoseStamped p;
   p.set_timestamp_s(t_s);

@@ -155,6 +155,38 @@ TEST(MapHistory, CorrectedMapEqualsTheMapBuiltFromScratchWithTheCorrectedPoses) 
   EXPECT_TRUE(again.delta.isEmpty());
 }
 
+TEST(MapHistory, FramesIntegratedBetweenTheStepsOfACorrectionAreReplayedToo) {
+  const MapConfig config = historyConfig();
+  const auto frames = test::driftedRoomSweep(24, smallCamera(), 0.25, 3.0, config.history_quantum_m);
+  OccupancyMap map(config);
+  MapHistory history(map);
+  MapConfig reference_config = config;
+  reference_config.history_dir += "-reference";
+  OccupancyMap reference(reference_config);
+  MapHistory reference_history(reference);
+  std::vector<CorrectedPose> poses;
+  for (size_t i = 0; i < 18; ++i) {
+    history.integrate(frames[i].batchAt(frames[i].T_drifted), frames[i].T_drifted);
+    poses.push_back({frames[i].t_s, frames[i].T_true});
+  }
+  for (const auto& f : frames) reference_history.integrate(f.batchAt(f.T_true), f.T_true);
+  // The last 6 frames arrive (with their true poses) while the correction of the first 18 runs.
+  CorrectionPlan plan = history.planCorrection(poses);
+  ASSERT_EQ(plan.moved.size(), 17u);
+  size_t next = 0;
+  for (size_t i = 0; i < plan.moved.size(); ++i) {
+    history.moveFrame(plan, i);
+    if (i % 3 == 0 && next < 6) {
+      const auto& f = frames[18 + next++];
+      history.integrate(f.batchAt(f.T_true), f.T_true);
+    }
+  }
+  ASSERT_EQ(next, 6u);
+  const CorrectionSummary summary = history.finishCorrection(plan);
+  EXPECT_EQ(summary.frames_moved, 17u);
+  EXPECT_EQ(compare(map, reference).blocks, 0u);
+}
+
 TEST(MapHistory, PartialCorrectionMovesOnlyTheFramesItCoversAndFramesWithoutPoseStay) {
   const MapConfig config = historyConfig();
   const auto frames = test::driftedRoomSweep(16, smallCamera(), 0.2, 2.0, config.history_quantum_m);
