@@ -33,6 +33,13 @@ std::vector<ConfigError> MapConfig::validate() const {
   errors.check(max_distance_m > 0.0 && max_distance_m <= 100.0, "max_distance_m", max_distance_m, "must be in (0, 100]");
   errors.check(frontier_min_voxels >= 1, "frontier_min_voxels", frontier_min_voxels, "must be >= 1");
   errors.check(frontier_max_extent_m > 0.0, "frontier_max_extent_m", frontier_max_extent_m, "must be > 0");
+  errors.check(history_max_mb >= 1 && history_max_mb <= 1 << 20, "history_max_mb", history_max_mb,
+               "must be in [1, 1048576]");
+  errors.check(history_quantum_m > 0.0 && history_quantum_m <= voxel_size_m / 4, "history_quantum_m", history_quantum_m,
+               "must be in (0, voxel_size_m / 4]");
+  errors.check(correction_min_shift_m >= 0.0, "correction_min_shift_m", correction_min_shift_m, "must be >= 0");
+  errors.check(correction_min_turn_deg >= 0.0, "correction_min_turn_deg", correction_min_turn_deg, "must be >= 0");
+  errors.check(correction_max_gap_s > 0.0, "correction_max_gap_s", correction_max_gap_s, "must be > 0");
   return errors.take();
 }
 
@@ -50,6 +57,12 @@ void MapConfig::read(YamlSection& section) {
   section.read("max_distance_m", max_distance_m);
   section.read("frontier_min_voxels", frontier_min_voxels);
   section.read("frontier_max_extent_m", frontier_max_extent_m);
+  section.read("history_max_mb", history_max_mb);
+  section.read("history_dir", history_dir);
+  section.read("history_quantum_m", history_quantum_m);
+  section.read("correction_min_shift_m", correction_min_shift_m);
+  section.read("correction_min_turn_deg", correction_min_turn_deg);
+  section.read("correction_max_gap_s", correction_max_gap_s);
 }
 
 }  // namespace cenote::mapping

@@ -4,6 +4,7 @@
 // Threads: a plain value.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "common/config_error.h"
@@ -34,6 +35,16 @@ struct MapConfig {
   double max_distance_m = 2.0;         // distance field: beyond this, distance() reports this, in (0, 100]
   int frontier_min_voxels = 10;        // frontier clusters with fewer voxels are dropped; >= 1
   double frontier_max_extent_m = 2.0;  // larger clusters are split along their main axis (PCA); > 0
+  // The frame store behind pose corrections (history/map_history.h), where one is kept (the server;
+  // `cenote run --corrections`).
+  int history_max_mb = 1024;              // disk budget; the oldest frames leave beyond it; [1, 1048576]
+  std::string history_dir;                // its folder; "" = a new one in the system's temp folder
+  double history_quantum_m = 0.001;       // stored points are rounded to this, relative to the camera
+                                          // (and integrated rounded); in (0, voxel_size_m / 4]
+  double correction_min_shift_m = 0.001;  // a corrected frame moves when its camera moves more than
+  double correction_min_turn_deg = 0.01;  //   this or turns more than this; >= 0 each
+  double correction_max_gap_s = 0.5;      // a frame's corrected pose is interpolated between two
+                                          // corrected poses at most this far apart; > 0
 
   LogOddsModel logOddsModel() const;
   // Every failed rule, empty when valid.

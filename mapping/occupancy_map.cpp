@@ -10,6 +10,7 @@
 
 #include "common/error.h"
 #include "mapping/detail/map_impl.h"
+#include "mapping/detail/block_bits.h"
 #include "mapping/detail/occupied_mask.h"
 #include "mapping/detail/publish_word.h"
 #include "mapping/integration/depth_frame.h"
@@ -61,6 +62,9 @@ openvdb::math::Transform::Ptr makeTransform(double voxel_size_m) {
 
 namespace {
 
+using detail::blockOfFloatTreeOrderKey;
+using detail::boxOfBits;
+using detail::floatTreeOrderKey;
 using detail::LeafIndex;
 using detail::LeafRef;
 using openvdb::Coord;
@@ -84,60 +88,6 @@ void noteChanged(MapDelta& delta, const BlockIndex& block, const VoxelBox& voxel
   delta.changed_voxels.extend(voxels);
 }
 
-// Bounding box of the set bits of a block's 512-bit mask (word w holds x = w; bit y * 8 + z).
-VoxelBox boxOfBits(const BlockIndex& block, const std::array<uint64_t, 8>& bits) {
-  VoxelBox box;
-  uint64_t any = 0;
-  int x_min = 8, x_max = -1;
-  for (int w = 0; w < 8; ++w) {
-    if (bits[w] == 0) continue;
-    any |= bits[w];
-    x_min = std::min(x_min, w);
-    x_max = w;
-  }
-  if (any == 0) return box;
-  uint8_t z_bits = 0;
-  int y_min = 8, y_max = -1;
-  for (int y = 0; y < 8; ++y) {
-    const uint8_t row = static_cast<uint8_t>(any >> (8 * y));
-    if (row == 0) continue;
-    z_bits |= row;
-    y_min = std::min(y_min, y);
-    y_max = y;
-  }
-  const VoxelIndex base = block * kBlockSide;
-  box.min = base + VoxelIndex(x_min, y_min, __builtin_ctz(z_bits));
-  box.max = base + VoxelIndex(x_max, y_max, 31 - __builtin_clz(z_bits));
-  return box;
-}
-
-// The order in which a standard FloatTree (internal nodes of 32^3 and 16^3 children: 4096^3 and
-// 128^3 voxels) visits its leaves, which knownBlocks() kept before the map's tree got smaller
-// internal nodes: node origins lexicographically, then children x-major inside each node. Keeps
-// every consumer's block order (and so its results, e.g. frontier cluster numbering) unchanged.
-// As one integer per block, sorted once (a block lies within +-2^20 on each axis, so x >> 9 within
-// +-2^11): the top-level node's x, y, z (12 bits each, biased), then the 16^3 node's child index
-// (5 bits per axis), then the leaf's (4 bits per axis); 63 bits.
-uint64_t floatTreeOrderKey(const BlockIndex& b) {
-  constexpr int64_t kBias = 1 << 11;
-  uint64_t key = 0;
-  for (int k = 0; k < 3; ++k) key = (key << 12) | static_cast<uint64_t>((b[k] >> 9) + kBias);
-  for (int k = 0; k < 3; ++k) key = (key << 5) | static_cast<uint64_t>((b[k] >> 4) & 31);
-  for (int k = 0; k < 3; ++k) key = (key << 4) | static_cast<uint64_t>(b[k] & 15);
-  return key;
-}
-BlockIndex blockOfFloatTreeOrderKey(uint64_t key) {
-  constexpr int64_t kBias = 1 << 11;
-  BlockIndex b;
-  for (int k = 0; k < 3; ++k) {
-    const int64_t top = static_cast<int64_t>((key >> (51 - 12 * k)) & 4095) - kBias;
-    const int64_t node = static_cast<int64_t>((key >> (22 - 5 * k)) & 31);
-    const int64_t leaf = static_cast<int64_t>((key >> (8 - 4 * k)) & 15);
-    b[k] = static_cast<int>(top * 512 + node * 16 + leaf);
-  }
-  return b;
-}
-
 void finishDelta(MapDelta& delta, double s) {
   auto less = [](const BlockIndex& a, const BlockIndex& b) {
     return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
@@ -152,31 +102,6 @@ void finishDelta(MapDelta& delta, double s) {
 }
 
 }  // namespace
-
-const char* toString(VoxelState state) {
-  switch (state) {
-    case VoxelState::kUnknown: return "unknown";
-    case VoxelState::kFree: return "free";
-    case VoxelState::kOccupied: return "occupied";
-  }
-  return "?";
-}
-
-void MapDelta::merge(const MapDelta& other) {
-  // Both lists are sorted and unique: a linear merge (the server merges every frame's delta into
-  // the pending one, which can hold the whole map's blocks while nobody asks for distances).
-  const auto middle = static_cast<std::ptrdiff_t>(changed_blocks.size());
-  changed_blocks.insert(changed_blocks.end(), other.changed_blocks.begin(), other.changed_blocks.end());
-  changed_voxels.extend(other.changed_voxels);
-  changed_m.extend(other.changed_m);
-  voxels_updated += other.voxels_updated;
-  points_used += other.points_used;
-  auto less = [](const BlockIndex& a, const BlockIndex& b) {
-    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-  };
-  std::inplace_merge(changed_blocks.begin(), changed_blocks.begin() + middle, changed_blocks.end(), less);
-  changed_blocks.erase(std::unique(changed_blocks.begin(), changed_blocks.end()), changed_blocks.end());
-}
 
 OccupancyMap::OccupancyMap(const MapConfig& config) : config_(config) {
   throwIfInvalid(config.validate(), "map configuration");
@@ -232,6 +157,81 @@ MapDelta OccupancyMap::integrate(const PointBatch& batch) {
   RayBatch& rays = impl_->scratch;
   rays.build(batch, voxelSize(), config_.max_range_m, config_.num_threads, config_.ray_stop_run);
   return publish(rays.updates(), rays.numRays());
+}
+
+MapDelta OccupancyMap::integrate(const PointBatch& batch, RayBatch& rays) {
+  checkBatch(batch);
+  std::lock_guard<std::mutex> writer(impl_->writer_mutex);
+  rays.build(batch, voxelSize(), config_.max_range_m, config_.num_threads, config_.ray_stop_run);
+  return publish(rays.updates(), rays.numRays());
+}
+
+MapDelta OccupancyMap::replaceBlocks(std::span<const BlockState> blocks) {
+  std::vector<uint64_t> keys;
+  keys.reserve(blocks.size());
+  for (const BlockState& state : blocks) {
+    const VoxelIndex base = state.block * kBlockSide;
+    if (!inMapRange(base) || !inMapRange(base + VoxelIndex::Constant(kBlockSide - 1))) {
+      throw Error("map: replaced block (" + std::to_string(state.block.x()) + ", " + std::to_string(state.block.y()) +
+                  ", " + std::to_string(state.block.z()) + ") lies outside the map's range");
+    }
+    keys.push_back(detail::packIndex(state.block));
+  }
+  std::sort(keys.begin(), keys.end());
+  if (std::adjacent_find(keys.begin(), keys.end()) != keys.end()) throw Error("map: a block is replaced twice");
+  std::lock_guard<std::mutex> writer(impl_->writer_mutex);
+  MapDelta delta;
+  const double s = voxelSize();
+  auto& tree = impl_->log_odds->tree();
+  openvdb::tree::ValueAccessor<detail::LogOddsTree, false> acc(tree);
+  const size_t group = static_cast<size_t>(config_.publish_blocks);
+  std::vector<std::pair<int, int32_t>> packed;
+  for (size_t begin = 0; begin < blocks.size(); begin += group) {
+    const size_t end = std::min(blocks.size(), begin + group);
+    std::unique_lock<detail::FairSharedMutex> lock(impl_->grid_mutex);
+    for (size_t b = begin; b < end; ++b) {
+      const BlockState& state = blocks[b];
+      const Coord origin = coordOf(state.block * kBlockSide);
+      auto* leaf = acc.probeLeaf(origin);
+      uint64_t any_new = 0;
+      for (uint64_t word : state.view.known) any_new |= word;
+      std::array<uint64_t, 8> changed{};
+      if (leaf != nullptr || any_new != 0) {
+        if (leaf == nullptr) {
+          leaf = acc.touchLeaf(origin);
+          impl_->indexLeaf(*leaf);
+        }
+        float* values = leaf->buffer().data();
+        auto& known_mask = leaf->getValueMask();
+        for (int w = 0; w < 8; ++w) {
+          uint64_t& known = known_mask.template getWord<uint64_t>(w);
+          const uint64_t next = state.view.known[w];
+          uint64_t differs = known ^ next;
+          for (uint64_t rest = next; rest != 0; rest &= rest - 1) {
+            const int i = w * 64 + __builtin_ctzll(rest);
+            if (values[i] != state.view.log_odds[i]) differs |= 1ull << (i & 63);
+            values[i] = state.view.log_odds[i];
+          }
+          for (uint64_t rest = known & ~next; rest != 0; rest &= rest - 1) values[w * 64 + __builtin_ctzll(rest)] = 0.0f;
+          known = next;
+          changed[w] = differs;
+        }
+      }
+      packed.clear();
+      for (const VoxelColor& c : state.colors) packed.emplace_back(c.offset, detail::packColor(c.rgb, c.count));
+      const auto old_colors = impl_->color.blockColors(state.block);
+      if (old_colors != packed) {
+        impl_->color.replaceBlock(state.block, packed);
+        for (const auto& [offset, value] : old_colors) changed[offset >> 6] |= 1ull << (offset & 63);
+        for (const auto& [offset, value] : packed) changed[offset >> 6] |= 1ull << (offset & 63);
+      }
+      const VoxelBox box = boxOfBits(state.block, changed);
+      if (!box.isEmpty()) noteChanged(delta, state.block, box, s);
+    }
+  }
+  finishDelta(delta, s);
+  impl_->version.fetch_add(1);
+  return delta;
 }
 
 void OccupancyMap::checkDepthFrame(const DepthFrame& f) const {
@@ -551,6 +551,15 @@ bool OccupancyMap::ConstAccessor::readBlock(const BlockIndex& block, BlockView& 
   }
   std::copy(leaf->values, leaf->values + kBlockVoxels, view.log_odds.begin());
   return any != 0;
+}
+
+std::vector<VoxelColor> OccupancyMap::ConstAccessor::blockColors(const BlockIndex& block) const {
+  std::vector<VoxelColor> out;
+  for (const auto& [offset, packed] : impl_->color->blockColors(block)) {
+    out.push_back(VoxelColor{static_cast<uint16_t>(offset), detail::unpackColor(packed),
+                             static_cast<uint8_t>(detail::colorCount(packed))});
+  }
+  return out;
 }
 
 bool OccupancyMap::ConstAccessor::readBlockMasks(const BlockIndex& block, std::array<uint64_t, 8>& known,

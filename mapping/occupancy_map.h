@@ -36,6 +36,7 @@ namespace cenote::mapping {
 
 struct DepthFrame;   // integration/depth_frame.h
 class BatchUpdates;  // integration/batch_updates.h
+class RayBatch;      // integration/ray_batch.h
 
 namespace detail {
 struct MapImpl;
@@ -47,6 +48,21 @@ class MapAccess;
 struct BlockView {
   std::array<uint64_t, 8> known{};             // bit offsetInBlock(ijk): observed
   std::array<float, kBlockVoxels> log_odds{};  // meaningful where known
+};
+
+// The colour of one voxel of a block: its offsetInBlock, mean RGB and the number of batches averaged
+// (saturating at 127, as the map keeps it).
+struct VoxelColor {
+  uint16_t offset = 0;
+  std::array<uint8_t, 3> rgb{};
+  uint8_t count = 0;
+};
+
+// A block's whole state, as replaceBlocks() writes it (history/map_history.h re-builds blocks).
+struct BlockState {
+  BlockIndex block = BlockIndex::Zero();
+  BlockView view;                  // known bits and log-odds (values where unknown are ignored)
+  std::vector<VoxelColor> colors;  // ascending offset, on known voxels only
 };
 
 struct MapStats {
@@ -80,6 +96,17 @@ class OccupancyMap {
   //   colours given for some points only, a point or origin farther than kMaxVoxelIndex voxels
   //   from 0 on an axis (voxel_types.h).
   MapDelta integrate(const PointBatch& batch);
+  // The checks integrate() makes of a batch. @throws Error as integrate() does.
+  void checkBatch(const PointBatch& batch) const;
+  // The same as integrate(batch), computing the updates in the caller's `rays`, which holds them afterwards (the frame
+  // store records them: history/map_history.h).
+  MapDelta integrate(const PointBatch& batch, RayBatch& rays);
+
+  // Replaces whole blocks by the given states (a block with no known voxel becomes unknown), in
+  // groups of publish_blocks per exclusive lock: a reader sees each block either as it was or as
+  // given, never a mix. @return the blocks whose voxels or colours changed. Blocks must be unique
+  // and within the map's range (voxel_types.h); @throws Error otherwise, leaving the map unchanged.
+  MapDelta replaceBlocks(std::span<const BlockState> blocks);
 
   // Projective integration of a depth image with intrinsics and pose (integration/
   // projective_batch.h): every voxel of the frustum's blocks is projected into the image once; free
@@ -133,6 +160,8 @@ class OccupancyMap {
     // Known and occupied bits of one block (bit offsetInBlock(ijk)), without copying its values;
     // false (both all zero) when the block holds no known voxel.
     bool readBlockMasks(const BlockIndex& block, std::array<uint64_t, 8>& known, std::array<uint64_t, 8>& occupied) const;
+    // The colours of one block's voxels, ascending offset (empty when none).
+    std::vector<VoxelColor> blockColors(const BlockIndex& block) const;
     const OccupancyMap& map() const { return *map_; }
 
    private:
@@ -146,7 +175,6 @@ class OccupancyMap {
 
  private:
   friend class detail::MapAccess;
-  void checkBatch(const PointBatch& batch) const;
   void checkDepthFrame(const DepthFrame& frame) const;
   // Writes the updates of a computed batch (RayBatch or ProjectiveBatch, from points_used points)
   // into the grids, publish_blocks blocks per exclusive lock. Called with the writer mutex held.

@@ -103,6 +103,7 @@ void ServerConfig::read(YamlSection& section) {
   section.read("derived_nice", host.derived_nice);
   section.read("derived_period_s", host.derived_period_s);
   section.read("derived_follow_s", host.derived_follow_s);
+  section.read("frame_history", host.frame_history);
   YamlSection l = section.section("limits");
   l.read("max_message_bytes", limits.max_message_bytes);
   l.read("max_batch", limits.max_batch);

@@ -73,7 +73,7 @@ struct ServerConfig {
   int query_cpus = 1;              // CPUs of gRPC's threads, the last ones (cpu_placement.h);
                                    // 0: not pinned
   MapHostOptions host;             // keys max_subscriber_lag, max_subscriber_bytes, ingest_nice,
-                                   // derived_nice, derived_period_s, derived_follow_s
+                                   // derived_nice, derived_period_s, derived_follow_s, frame_history
   RequestLimits limits;
   TransportConfig transport;
   viewer::ViewerConfig viewer;  // the live viewer (section viewer:); off unless viewer.listen is set

@@ -28,6 +28,14 @@ std::vector<ConfigError> SimConfig::validate() const {
                "must be in [0.005, 0.5]");
   errors.check(surface_spacing_m >= 0.002 && surface_spacing_m <= 0.2, "surface_spacing_m", surface_spacing_m,
                "must be in [0.002, 0.2]");
+  errors.check(drift_position_m_per_sqrt_s >= 0.0 && drift_position_m_per_sqrt_s <= 1.0, "drift_position_m_per_sqrt_s",
+               drift_position_m_per_sqrt_s, "must be in [0, 1]");
+  errors.check(drift_yaw_deg_per_sqrt_s >= 0.0 && drift_yaw_deg_per_sqrt_s <= 10.0, "drift_yaw_deg_per_sqrt_s",
+               drift_yaw_deg_per_sqrt_s, "must be in [0, 10]");
+  errors.check(loop_closure_period_s > 0.0 && std::isfinite(loop_closure_period_s), "loop_closure_period_s",
+               loop_closure_period_s, "must be finite and > 0");
+  errors.check(loop_closure_residual >= 0.0 && loop_closure_residual <= 1.0, "loop_closure_residual", loop_closure_residual,
+               "must be in [0, 1]");
   return errors.take();
 }
 
@@ -51,6 +59,11 @@ void SimConfig::read(YamlSection& section) {
   section.read("k2", k2);
   section.read("mesh_spacing_m", mesh_spacing_m);
   section.read("surface_spacing_m", surface_spacing_m);
+  section.read("drift", drift);
+  section.read("drift_position_m_per_sqrt_s", drift_position_m_per_sqrt_s);
+  section.read("drift_yaw_deg_per_sqrt_s", drift_yaw_deg_per_sqrt_s);
+  section.read("loop_closure_period_s", loop_closure_period_s);
+  section.read("loop_closure_residual", loop_closure_residual);
 }
 
 const char* toString(SimSceneKind scene) {

@@ -36,6 +36,12 @@ struct SimConfig {
   double k1 = 0.0, k2 = 0.0;           // radial distortion of both cameras (rendered through it); |k| <= 1
   double mesh_spacing_m = 0.04;        // tessellation of curved surfaces; [0.005, 0.5]
   double surface_spacing_m = 0.015;    // point spacing of groundtruth/surface.ply; [0.002, 0.2]
+  // A drifting VIO and its loop closures (vio_drift.h): vio_trajectory.tum and loop_closures/.
+  bool drift = false;                         // write them (`cenote sim --drift`)
+  double drift_position_m_per_sqrt_s = 0.02;  // random walk of the position bias, per axis; [0, 1]
+  double drift_yaw_deg_per_sqrt_s = 0.2;      // random walk of the yaw bias; [0, 10]
+  double loop_closure_period_s = 10.0;        // a correction event every this many seconds; > 0
+  double loop_closure_residual = 0.05;        // fraction of the drift a correction leaves; [0, 1]
 
   // Every failed rule, empty when valid.
   std::vector<ConfigError> validate() const;

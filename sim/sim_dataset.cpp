@@ -14,6 +14,7 @@
 #include "common/error.h"
 #include "io/image/image_io.h"
 #include "io/cloud/ply_io.h"
+#include "sim/vio_drift.h"
 
 namespace cenote::sim {
 namespace {
@@ -139,6 +140,37 @@ void sampleTriangle(const Simulator& sim, size_t t, double spacing_m, std::vecto
   }
 }
 
+// The event's name: its time in seconds of the dataset's clock, 6 decimals ("1700000010.000000").
+std::string eventName(int64_t t_ns) {
+  char text[40];
+  std::snprintf(text, sizeof(text), "%lld.%06lld", static_cast<long long>(t_ns / 1000000000),
+                static_cast<long long>(t_ns % 1000000000 / 1000));
+  return text;
+}
+
+void writeVioDrift(const Simulator& sim, const fs::path& dir) {
+  const VioDrift drift = simulateVioDrift(sim);
+  std::ostringstream live;
+  live << "# cenote sim --drift: left camera (cam0) pose a drifting VIO reported live, T_world_cam0\n"
+          "# t tx ty tz qx qy qz qw\n";
+  for (int i = 0; i < sim.numFrames(); ++i) appendTum(live, sim.frameTimeNs(i), drift.live[i]);
+  writeText(dir / "vio_trajectory.tum", live.str());
+  const fs::path events = dir / "loop_closures";
+  makeDirectory(events);
+  // A dataset written again with other settings keeps no stale events.
+  for (const auto& entry : fs::directory_iterator(events)) {
+    if (entry.path().extension() == ".tum") fs::remove(entry.path());
+  }
+  for (const LoopClosureEvent& event : drift.events) {
+    const int64_t t_ns = sim.frameTimeNs(event.frame);
+    std::ostringstream tum;
+    tum << "# cenote sim --drift: loop closure known at " << seconds(t_ns)
+        << " s: corrected T_world_cam0 of every frame up to then\n# t tx ty tz qx qy qz qw\n";
+    for (int j = 0; j <= event.frame; ++j) appendTum(tum, sim.frameTimeNs(j), event.corrected[j]);
+    writeText(events / (eventName(t_ns) + ".tum"), tum.str());
+  }
+}
+
 }  // namespace
 
 void sampleSurface(const Simulator& sim, const std::vector<uint8_t>& seen, double spacing_m,
@@ -234,6 +266,7 @@ SimDatasetSummary writeSimDataset(const Simulator& sim, const std::string& out_d
   writeText(dir / "mav0/cam0/data.csv", cam_csv.str());
   writeText(dir / "mav0/cam1/data.csv", cam_csv.str());
   writeText(dir / "groundtruth/cam0.tum", cam_tum.str());
+  if (sim.config().drift) writeVioDrift(sim, dir);
 
   std::vector<Eigen::Vector3f> points;
   std::vector<std::array<uint8_t, 3>> colors;

@@ -11,6 +11,12 @@
 //   DIR/groundtruth/surface.ply           points on every mesh triangle that some left image sees,
 //                                         about surface_spacing_m apart, coloured with the surface albedo
 //   DIR/groundtruth/calibration.yaml      the rig in the project's layout (writeStereoCalibration)
+// With sim.drift (`cenote sim --drift`; the model in vio_drift.h):
+//   DIR/vio_trajectory.tum                left camera poses a drifting VIO reported live, TUM, at the
+//                                         image timestamps
+//   DIR/loop_closures/<t>.tum             one file per correction event, named by the time it became
+//                                         known (seconds, 6 decimals, the images' clock): the corrected
+//                                         left camera pose of every frame up to then
 // Threads: frames are rendered and written on all OpenMP threads; the files are identical whatever
 // the thread count.
 #pragma once

@@ -1,6 +1,12 @@
 // `cenote run`: a recorded stereo sequence with poses in; fused points, depth maps and a timing
-// report out, at camera rate.
+// report out, at camera rate. With --map, the fused points are integrated into an occupancy map;
+// with --corrections DIR too (pipeline/runner/correction_events.h), the map keeps its frames in a
+// frame store (mapping/history/map_history.h) and each loop-closure correction is applied when
+// the run's fused frames pass its time (the rest at the end of the run).
 #include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -13,8 +19,10 @@
 #include "pipeline/dataset/stereo_dataset.h"
 #include "common/yaml_section.h"
 #include "eval/report/html_report.h"
+#include "mapping/history/map_history.h"
 #include "mapping/io/map_io.h"
 #include "mapping/occupancy_map.h"
+#include "pipeline/runner/correction_events.h"
 #include "pipeline/runner/runner.h"
 
 namespace cenote::apps {
@@ -25,7 +33,8 @@ std::atomic<bool> g_stop{false};
 extern "C" void onInterrupt(int) { g_stop = true; }
 
 struct RunOptions {
-  std::string dataset, format = "auto", trajectory, trajectory_format, trajectory_times, pose_frame, config, out, map;
+  std::string dataset, format = "auto", trajectory, trajectory_format, trajectory_times, pose_frame, config, out, map,
+                       corrections;
   int fusion_views = 0, max_frames = -1;
   bool write_depth = false, report = false;
   double voxel_m = -1.0, keyframe_translation_m = -1.0, keyframe_rotation_deg = -1.0;
@@ -60,18 +69,34 @@ mapping::MapConfig mapConfig(const RunOptions& o) {
   return config;
 }
 
+// The corrections of a run: each event's poses go to the map history when the run reaches them.
+struct CorrectionReplay {
+  std::vector<pipeline::CorrectionEvent> events;
+  size_t next = 0;
+  mapping::CorrectionSummary total;
+  double ms = 0.0;
+
+  void apply(mapping::MapHistory& history, const pipeline::CorrectionEvent& event) {
+    std::vector<mapping::CorrectedPose> poses;
+    poses.reserve(event.poses.size());
+    for (const io::StampedPose& p : event.poses.poses()) poses.push_back({p.t_s, p.T_world_cam});
+    const auto t0 = std::chrono::steady_clock::now();
+    const mapping::CorrectionSummary s = history.correct(poses);
+    ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    total.frames_moved += s.frames_moved;
+    total.frames_replayed += s.frames_replayed;
+    total.blocks_rebuilt += s.blocks_rebuilt;
+    total.blocks_kept += s.blocks_kept;
+  }
+  // Applies the events known before t_s.
+  void applyUntil(mapping::MapHistory& history, double t_s) {
+    while (next < events.size() && events[next].t_s < t_s) apply(history, events[next++]);
+  }
+};
+
 void run(const RunOptions& o) {
   pipeline::Runner runner(makeConfig(o));
-  // The map stage: every fused batch is integrated (free space along each ray, a hit at its end).
-  std::unique_ptr<mapping::OccupancyMap> map;
-  pipeline::PointSink sink;
-  if (!o.map.empty()) {
-    mapping::mapFormatOf(o.map);  // an unknown extension fails now, not after the run
-    map = std::make_unique<mapping::OccupancyMap>(mapConfig(o));
-    sink = [&map](const PointBatch& batch) {
-      if (!batch.empty()) map->integrate(batch);
-    };
-  }
+  if (!o.corrections.empty() && o.map.empty()) throw Error("--corrections " + o.corrections + " needs --map");
   const std::unique_ptr<pipeline::StereoDataset> dataset = pipeline::openDataset(o.dataset,
                                                                                  pipeline::parseDatasetFormat(o.format));
   const pipeline::CameraTrajectory camera = pipeline::loadCameraTrajectory(
@@ -81,6 +106,33 @@ void run(const RunOptions& o) {
             << camera.fileFrame() << " poses" << (camera.frame_assumed ? ", assumed" : "") << ")\n";
   if (camera.frame_assumed) std::cerr << "note: " << camera.note << "\n";
 
+  // The map stage: every fused batch is integrated (free space along each ray, a hit at its end).
+  std::unique_ptr<mapping::OccupancyMap> map;
+  std::unique_ptr<mapping::MapHistory> history;
+  CorrectionReplay replay;
+  pipeline::PointSink sink;
+  if (!o.map.empty()) {
+    mapping::mapFormatOf(o.map);  // an unknown extension fails now, not after the run
+    map = std::make_unique<mapping::OccupancyMap>(mapConfig(o));
+    sink = [&map](const PointBatch& batch, const Eigen::Isometry3d&) {
+      if (!batch.empty()) map->integrate(batch);
+    };
+  }
+  if (!o.corrections.empty()) {
+    replay.events = pipeline::readCorrectionEvents(o.corrections, camera.file_describes_body, dataset->T_body_cam());
+    history = std::make_unique<mapping::MapHistory>(*map);
+    const double max_gap_s = runner.config().run.pose_max_gap_s;
+    sink = [&, max_gap_s](const PointBatch& batch, const Eigen::Isometry3d& T_world_cam) {
+      if (batch.empty()) return;
+      replay.applyUntil(*history, batch.t_s);
+      // The corrections give poses of the raw camera (as the trajectory): T_raw_cam is the
+      // rectification's rotation, the same for every frame.
+      const std::optional<Eigen::Isometry3d> T_world_raw = trajectory.poseAt(batch.t_s, max_gap_s);
+      if (!T_world_raw) throw Error("run: no pose at t = " + std::to_string(batch.t_s) + " s for a fused frame");
+      history->integrate(batch, T_world_cam, T_world_raw->inverse() * T_world_cam);
+    };
+  }
+
   g_stop = false;
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
@@ -89,6 +141,16 @@ void run(const RunOptions& o) {
                                           [&bar](size_t done, size_t total) { bar.update(done, total); });
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
+  if (history) {
+    // The events the run reached: up to its last frame.
+    const double end_s = dataset->size() > 0 ? dataset->timestamp(std::min(dataset->size(), report.frames_in) - 1) : 0.0;
+    replay.applyUntil(*history, std::nextafter(end_s, HUGE_VAL));
+    std::printf("corrections: %zu of %zu events applied: %zu frames moved, %zu replayed, %zu blocks rebuilt, %zu kept "
+                "(frames dropped from the store), %.1f ms; frame store %zu frames, %.1f MB\n",
+                replay.next, replay.events.size(), replay.total.frames_moved, replay.total.frames_replayed,
+                replay.total.blocks_rebuilt, replay.total.blocks_kept, replay.ms, history->numFrames(),
+                history->storeBytes() / 1048576.0);
+  }
 
   report.pose_frame = camera.fileFrame();
   report.pose_frame_assumed = camera.frame_assumed;
@@ -134,6 +196,9 @@ void registerRunCommand(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--out", o->out, "Output folder")->required();
   cmd->add_option("--map", o->map, "Integrate the fused points into an occupancy map saved here (.vdb, .bt, .ot)");
+  cmd->add_option("--corrections", o->corrections,
+                  "Folder of loop-closure corrections (<time s>.tum: corrected poses of past frames, in the "
+                  "trajectory's frame), each applied to the map when the run reaches its time");
   cmd->callback([o] { run(*o); });
 }
 

@@ -1,7 +1,7 @@
 // `cenote sim`: renders a simulated underwater stereo sequence (sim/) and writes it as an
 // EuRoC-layout dataset with ground truth (layout in sim/sim_dataset.h).
 //   cenote sim --scene cave|reef|wreck --frames N --out DIR [--width 800 --height 600] [--rate 15]
-//              [--seed S] [--baseline 0.12] [--exposure-ratio R] [--noise SIGMA] [--config FILE]
+//              [--seed S] [--baseline 0.12] [--exposure-ratio R] [--noise SIGMA] [--drift] [--config FILE]
 // Settings: defaults, then the `sim:` section of --config, then the options given here.
 #include <omp.h>
 
@@ -27,6 +27,7 @@ struct SimOptions {
   std::optional<double> rate, baseline, exposure_ratio, noise, speed, turbidity, k1, k2, hfov;
   std::optional<int64_t> seed;
   bool quiet = false;
+  bool drift = false;
 };
 
 sim::SimConfig makeConfig(const SimOptions& o) {
@@ -57,6 +58,7 @@ sim::SimConfig makeConfig(const SimOptions& o) {
   if (o.k1) config.k1 = *o.k1;
   if (o.k2) config.k2 = *o.k2;
   if (o.hfov) config.hfov_deg = *o.hfov;
+  if (o.drift) config.drift = true;
   throwIfInvalid(config.validate(), "sim");
   return config;
 }
@@ -107,6 +109,8 @@ void registerSimCommand(CLI::App& app) {
   cmd->add_option("--k1", o->k1, "Radial distortion k1 of both cameras (default 0)");
   cmd->add_option("--k2", o->k2, "Radial distortion k2 of both cameras (default 0)");
   cmd->add_option("--config", o->config, "YAML file with a `sim:` section (options given here override it)");
+  cmd->add_flag("--drift", o->drift,
+                "Also write vio_trajectory.tum (a drifting VIO's live poses) and loop_closures/ (sim.drift)");
   cmd->add_flag("--quiet", o->quiet, "No progress output");
   cmd->callback([o] { run(*o); });
 }

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "mapping/detail/block_table.h"
@@ -127,6 +128,44 @@ class ColorStore {
     ColorStore kept;
     forEach([&](const VoxelIndex& ijk, int32_t packed) { kept.set(ijk, packed); });
     *this = std::move(kept);
+  }
+  // Makes `packed_by_offset` (ascending offsets) the only colours of `block`. Precondition:
+  // inPackRange(block).
+  template <typename Range>
+  void replaceBlock(const BlockIndex& block, const Range& packed_by_offset) {
+    uint32_t slot = table_.find(packIndex(block));
+    if (slot == BlockTable::kNone) {
+      if (packed_by_offset.begin() == packed_by_offset.end()) return;
+      bool inserted;
+      slot = table_.findOrInsert(packIndex(block), inserted);
+      blocks_.emplace_back();
+    }
+    BlockColors& colors = blocks_[slot];
+    colors = BlockColors();
+    for (const auto& [offset, packed] : packed_by_offset) {
+      colors.has[offset >> 6] |= 1ull << (offset & 63);
+      colors.packed.push_back(packed);
+    }
+    uint16_t before = 0;
+    for (int w = 0; w < 8; ++w) {
+      colors.before[w] = before;
+      before = static_cast<uint16_t>(before + __builtin_popcountll(colors.has[w]));
+    }
+  }
+  // The colours of `block` as (offset, packed), ascending offset.
+  std::vector<std::pair<int, int32_t>> blockColors(const BlockIndex& block) const {
+    std::vector<std::pair<int, int32_t>> out;
+    if (!inPackRange(block)) return out;
+    const uint32_t slot = table_.find(packIndex(block));
+    if (slot == BlockTable::kNone) return out;
+    const BlockColors& colors = blocks_[slot];
+    size_t i = 0;
+    for (int w = 0; w < 8; ++w) {
+      for (uint64_t bits = colors.has[w]; bits != 0; bits &= bits - 1) {
+        out.emplace_back(w * 64 + __builtin_ctzll(bits), colors.packed[i++]);
+      }
+    }
+    return out;
   }
   void clear() { *this = ColorStore(); }
   // Blocks with an entry, including those left without colours that eraseIf has not yet dropped.

@@ -99,6 +99,7 @@ void FramePipeline::fusionStage() {
         const FusedFrame* result = window->push(*frame);
         if (!result) continue;
         out.frame.t_s = result->frame.t_s;
+        out.frame.T_world_cam = result->frame.T_world_cam;
         // The window reuses its buffers at the next push: copy the maps only when they are kept.
         if (keep_maps_) {
           out.frame.depth = result->frame.depth.clone();

@@ -27,7 +27,7 @@ namespace cenote::pipeline {
 
 // What comes out for every fused reference frame (or every frame, without fusion).
 struct FusedOutput {
-  DepthFrame frame;   // t_s always; depth, confidence and colour only with keep_maps
+  DepthFrame frame;   // t_s and T_world_cam always; depth, confidence and colour only with keep_maps
   PointBatch points;  // world frame, origin = the reference camera's centre
 };
 

@@ -133,7 +133,7 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
       output_timer.add(msSince(t0));
       if (sink) {
         const auto t1 = Clock::now();
-        sink(item->points);
+        sink(item->points, item->frame.T_world_cam);
         sink_timer.add(msSince(t1));
       }
       if (progress) progress(read_done.load(), total);

@@ -55,8 +55,9 @@ struct RunReport {
   std::string toTable() const;
 };
 
-// Called on the output thread with every batch of fused points (world frame).
-using PointSink = std::function<void(const PointBatch&)>;
+// Called on the output thread with every batch of fused points (world frame) and the pose of the
+// rectified left camera that saw them (T_world_cam, FusedFrame's).
+using PointSink = std::function<void(const PointBatch&, const Eigen::Isometry3d& T_world_cam)>;
 // Called on the output thread after each frame: frames done (processed or skipped) of total.
 using ProgressCallback = std::function<void(size_t done, size_t total)>;
 

@@ -2,6 +2,7 @@
 
 #include <malloc.h>
 
+#include "common/error.h"
 #include "server/cpu/cpu_scheduling.h"
 
 namespace cenote::server {
@@ -31,6 +32,11 @@ MapHost::MapHost(std::unique_ptr<mapping::OccupancyMap> map, const MapHostOption
       writer_(options.ingest_nice) {
   // A loaded map: derive everything once before serving (stats() walks the grid: ask once).
   const mapping::MapStats loaded = map_->stats();
+  if (options.frame_history) {
+    history_ = std::make_unique<mapping::MapHistory>(*map_);
+    // What a loaded map holds came from no stored frame: corrections leave those blocks as they are.
+    if (loaded.occupied + loaded.free > 0) history_->seal(map_->constAccessor().knownBlocks());
+  }
   if (loaded.occupied + loaded.free > 0) {
     distance_->rebuild();
     frontiers_->rebuild();
@@ -68,28 +74,73 @@ mapping::MapDelta MapHost::change(Change&& apply, bool forgets) {
   });
 }
 
-mapping::MapDelta MapHost::integrate(const PointBatch& batch, const std::optional<Eigen::Isometry3d>& T_world_cam) {
-  mapping::MapDelta delta = change([&] { return map_->integrate(batch); }, false);
+mapping::MapDelta MapHost::integrate(const PointBatch& batch) {
+  mapping::MapDelta delta = change([&] { return history_ ? history_->integrate(batch) : map_->integrate(batch); }, false);
+  if (live_) live_->post(batch, std::nullopt);
+  std::lock_guard<std::mutex> lock(derived_mutex_);
+  ++batches_;
+  return delta;
+}
+
+mapping::MapDelta MapHost::integrateFrame(const PointBatch& batch, const Eigen::Isometry3d& T_world_cam,
+                                          const Eigen::Isometry3d& T_pose_cam) {
+  mapping::MapDelta delta = change(
+      [&] { return history_ ? history_->integrate(batch, T_world_cam, T_pose_cam) : map_->integrate(batch); }, false);
   if (live_) live_->post(batch, T_world_cam);
   std::lock_guard<std::mutex> lock(derived_mutex_);
   ++batches_;
   return delta;
 }
 
+mapping::CorrectionSummary MapHost::correctPoses(const std::vector<mapping::CorrectedPose>& poses) {
+  if (!history_) {
+    throw FailedPreconditionError("correct poses: the server keeps no frame history (server.frame_history is false)");
+  }
+  // In steps on the writer thread, one ray march each: frames that arrive meanwhile are integrated
+  // between them, and the final replay includes them where they touch the affected blocks.
+  std::lock_guard<std::mutex> one_at_a_time(correction_mutex_);
+  mapping::CorrectionPlan plan = writer_.run([&] { return history_->planCorrection(poses); });
+  for (size_t i = 0; i < plan.moved.size(); ++i) writer_.run([&] { history_->moveFrame(plan, i); });
+  mapping::CorrectionSummary summary;
+  change(
+      [&] {
+        summary = history_->finishCorrection(plan);
+        return summary.delta;
+      },
+      false);
+  return summary;
+}
+
+// Clears and crops are not replayed from the frame store: the blocks they changed keep their
+// state in later corrections.
 mapping::MapDelta MapHost::clearBox(const mapping::Aabb& box_m) {
-  return change([&] { return map_->clearBox(box_m); }, true);
+  return change([&] { return sealed(map_->clearBox(box_m)); }, true);
 }
 
 mapping::MapDelta MapHost::clearSphere(const Eigen::Vector3d& centre_m, double radius_m) {
-  return change([&] { return map_->clearSphere(centre_m, radius_m); }, true);
+  return change([&] { return sealed(map_->clearSphere(centre_m, radius_m)); }, true);
 }
 
 mapping::MapDelta MapHost::cropToRadius(const Eigen::Vector3d& centre_m, double radius_m) {
-  return change([&] { return map_->cropToRadius(centre_m, radius_m); }, true);
+  return change([&] { return sealed(map_->cropToRadius(centre_m, radius_m)); }, true);
 }
 
 mapping::MapDelta MapHost::reset() {
-  return change([&] { return map_->reset(); }, true);
+  return change(
+      [&] {
+        mapping::MapDelta delta = map_->reset();
+        if (history_) history_->clear();
+        return delta;
+      },
+      true);
+}
+
+mapping::MapDelta MapHost::sealed(mapping::MapDelta delta) {
+  if (history_) {
+    history_->seal(delta.changed_blocks);
+    history_->releaseScratch();
+  }
+  return delta;
 }
 
 uint64_t MapHost::batchesIntegrated() const {

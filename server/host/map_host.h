@@ -27,6 +27,7 @@
 #include "common/point_batch.h"
 #include "mapping/distance/distance_field.h"
 #include "mapping/frontier/frontier_map.h"
+#include "mapping/history/map_history.h"
 #include "mapping/occupancy_map.h"
 #include "server/host/change_feed.h"
 #include "server/host/map_host_options.h"
@@ -46,11 +47,21 @@ class MapHost {
   ChangeFeed& feed() { return feed_; }
 
   // @throws cenote::Error for a bad batch (the map is then unchanged).
-  // T_world_cam: the camera's pose when known (frames), for the live viewer (setLiveFeed).
-  mapping::MapDelta integrate(const PointBatch& batch, const std::optional<Eigen::Isometry3d>& T_world_cam = {});
+  mapping::MapDelta integrate(const PointBatch& batch);
+  // A fused frame of the server's pipeline, seen by the camera T_world_cam (the rectified left
+  // camera); T_pose_cam: that camera in the frame CorrectPoses gives poses of (the raw left camera).
+  // With options.frame_history it is kept for corrections; otherwise integrate(batch).
+  mapping::MapDelta integrateFrame(const PointBatch& batch, const Eigen::Isometry3d& T_world_cam,
+                                   const Eigen::Isometry3d& T_pose_cam);
   // Integrated batches are handed on to `live` (the viewer's camera and cloud); null: none. Call
   // before serving.
   void setLiveFeed(viewer::LiveFeed* live) { live_ = live; }
+  // Applies corrected poses of past frames (mapping/history/map_history.h) on the writer thread, in
+  // steps of one moved frame's ray march each, between which other changes (ingest) run; then the
+  // blocks are rebuilt and swapped in one change, which goes to the feed and the derived
+  // structures like any other. One correction at a time (a second waits).
+  // @throws FailedPreconditionError without a frame history; Error for bad poses (nothing changes).
+  mapping::CorrectionSummary correctPoses(const std::vector<mapping::CorrectedPose>& poses);
   mapping::MapDelta clearBox(const mapping::Aabb& box_m);
   mapping::MapDelta clearSphere(const Eigen::Vector3d& centre_m, double radius_m);
   mapping::MapDelta cropToRadius(const Eigen::Vector3d& centre_m, double radius_m);
@@ -76,8 +87,12 @@ class MapHost {
   template <typename Change>
   mapping::MapDelta change(Change&& apply, bool forgets);
   void derivedLoop();
+  // Marks the blocks a clear or crop changed as not to be rebuilt by corrections.
+  mapping::MapDelta sealed(mapping::MapDelta delta);
 
   std::unique_ptr<mapping::OccupancyMap> map_;
+  std::unique_ptr<mapping::MapHistory> history_;  // with options.frame_history; used on the writer thread
+  std::mutex correction_mutex_;                   // one correction's steps at a time
   std::unique_ptr<mapping::DistanceField> distance_;
   std::unique_ptr<mapping::FrontierMap> frontiers_;
   ChangeFeed feed_;

@@ -58,6 +58,7 @@ class FrameStream {
               IngestCounters& counters, IngestTimings& timings)
       : host_(host),
         settings_(settings),
+        T_raw_rect_(pipeline::rectifiedFromRaw(rectifier)),
         admission_(rectifier, settings.pipeline.run),
         limits_{settings.server.limits.max_image_pixels, rectifier.geometry().image_size},
         poses_(poses),
@@ -164,7 +165,7 @@ class FrameStream {
       if (out->points.empty()) continue;
       try {
         const auto t0 = Clock::now();
-        host_.integrate(out->points, out->frame.T_world_cam);
+        host_.integrateFrame(out->points, out->frame.T_world_cam, T_raw_rect_);
         timings_.add("integrate", msSince(t0));
       } catch (const std::exception& e) {
         integrate_error_ = std::string("integration failed: ") + e.what();
@@ -175,6 +176,7 @@ class FrameStream {
 
   MapHost& host_;
   const ServerSettings& settings_;
+  const Eigen::Isometry3d T_raw_rect_;  // the rectified camera in the raw one's frame (CorrectPoses' poses)
   pipeline::FrameAdmission admission_;
   const FrameLimits limits_;
   PoseBuffer& poses_;
@@ -287,6 +289,31 @@ grpc::Status IngestService::IntegratePoints(grpc::ServerContext* context, const 
                                             v1::BatchAck* reply) {
   return guard_.run(context, "Ingest/IntegratePoints", [&] {
     integrateBatch(*request, *reply);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status IngestService::CorrectPoses(grpc::ServerContext* context, const v1::PoseCorrection* request,
+                                         v1::CorrectionAck* reply) {
+  return guard_.run(context, "Ingest/CorrectPoses", [&] {
+    const int64_t limit = settings_.server.limits.max_poses;
+    if (request->poses_size() > limit) {
+      throw resourceExhausted("poses: " + std::to_string(request->poses_size()) +
+                              " corrected poses, more than server.limits.max_poses = " + std::to_string(limit));
+    }
+    std::vector<mapping::CorrectedPose> poses;
+    poses.reserve(request->poses_size());
+    for (int i = 0; i < request->poses_size(); ++i) {
+      const v1::PoseStamped& wire = request->poses(i);
+      poses.push_back({wire.timestamp_s(), finitePose(wire.pose(), "poses[" + std::to_string(i) + "].pose")});
+    }
+    const mapping::CorrectionSummary summary = host_.correctPoses(poses);
+    reply->set_frames_moved(summary.frames_moved);
+    reply->set_frames_replayed(summary.frames_replayed);
+    reply->set_blocks_rebuilt(summary.blocks_rebuilt);
+    reply->set_blocks_kept(summary.blocks_kept);
+    reply->set_changed_blocks(summary.delta.changed_blocks.size());
+    reply->set_map_version(host_.map().version());
     return grpc::Status::OK;
   });
 }

@@ -77,6 +77,8 @@ class IngestService final : public v1::Ingest::Service {
   grpc::Status StreamPoints(grpc::ServerContext* context,
                             grpc::ServerReaderWriter<v1::BatchAck, v1::PointBatch>* stream) override;
   grpc::Status IntegratePoints(grpc::ServerContext* context, const v1::PointBatch* request, v1::BatchAck* reply) override;
+  grpc::Status CorrectPoses(grpc::ServerContext* context, const v1::PoseCorrection* request,
+                            v1::CorrectionAck* reply) override;
 
   const IngestCounters& counters() const { return counters_; }
   const PoseBuffer& poses() const { return poses_; }

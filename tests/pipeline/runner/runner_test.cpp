@@ -52,7 +52,8 @@ TEST(Runner, FusedPointsLieOnThePlaneAndEveryFrameIsCounted) {
   const std::atomic<bool> stop{false};
   size_t sunk = 0;
   Runner runner(smallConfig());
-  const RunReport r = runner.run(*f.dataset, f.trajectory, f.out_dir, stop, [&](const PointBatch& b) { sunk += b.size(); });
+  const RunReport r = runner.run(*f.dataset, f.trajectory, f.out_dir, stop,
+                                 [&](const PointBatch& b, const Eigen::Isometry3d&) { sunk += b.size(); });
   EXPECT_EQ(r.frames_in, 9u);
   EXPECT_EQ(r.frames_processed, 9u);
   EXPECT_EQ(r.frames_fused, 7u);  // a window of 3 emits from the third frame on
@@ -172,7 +173,7 @@ TEST(Runner, OutlierRemovalFiltersEachFusedFrameBeforeTheFileAndTheMap) {
   c.run.outlier_stddev_mul = 1.0;
   size_t sunk = 0;
   const RunReport r = Runner(c).run(*f.dataset, f.trajectory, f.out_dir, stop,
-                                    [&](const PointBatch& b) { sunk += b.size(); });
+                                    [&](const PointBatch& b, const Eigen::Isometry3d&) { sunk += b.size(); });
   std::vector<Eigen::Vector3f> expected;
   for (const PointBatch& b : fused) {
     const PointBatch kept = removeStatisticalOutliers(b, 8, 1.0);

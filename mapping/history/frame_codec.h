@@ -1,0 +1,45 @@
+// frame_codec.h: the bytes of one stored frame (frame_store.h): the frame's points, rounded in its
+// camera's frame, and the voxel updates its integration made, each section deflated on its own
+// (libdeflate) so that a replay of the updates never inflates the points.
+//   points: quantised camera-frame points q = round(p_cam / quantum) (int32 per axis), as zigzag
+//     LEB128 deltas from the previous point (neighbouring pixels: mostly 1-2 bytes per axis), then RGB.
+//   updates: touched blocks in ascending packed order (BatchUpdates' order) as LEB128 deltas of
+//     their packed keys, each block's free and hit masks (16 words), then the hit voxels' mean
+//     colours (zigzag deltas of their voxel index, RGB).
+// Units: voxel indices, metres for poses, `quantum_m` for points. Threads: pure functions.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "mapping/integration/batch_updates.h"
+
+namespace cenote::mapping::history {
+
+// A frame's points as the store keeps them.
+struct FramePoints {
+  std::vector<Eigen::Vector3i> quantised;      // p_cam / quantum_m, rounded
+  std::vector<std::array<uint8_t, 3>> colors;  // one per point, or empty
+};
+
+// The updates of a frame's integration, restricted to nothing: every block it touched.
+struct FrameUpdates {
+  std::vector<uint64_t> keys;  // detail::packIndex of each touched block, ascending
+  std::vector<BlockMasks> masks;
+  std::vector<EndpointColor> colors;  // mean colour of each hit voxel (BatchUpdates::colors order)
+
+  // Copies a finished BatchUpdates.
+  static FrameUpdates of(const BatchUpdates& updates);
+};
+
+// Encodes / decodes one section (deflated; `level` 1-12 as libdeflate's).
+std::string encodePoints(const FramePoints& points, int level);
+std::string encodeUpdates(const FrameUpdates& updates, int level);
+// @throws Error naming `where` for bytes that do not decode (a damaged file).
+FramePoints decodePoints(const std::string& bytes, const std::string& where);
+FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where);
+
+}  // namespace cenote::mapping::history

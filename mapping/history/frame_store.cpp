@@ -1,0 +1,149 @@
+#include "mapping/history/frame_store.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+
+#include "common/error.h"
+
+namespace cenote::mapping::history {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string systemError() { return std::strerror(errno); }
+
+}  // namespace
+
+FrameStore::FrameStore(const std::string& dir, uint64_t max_bytes) : max_bytes_(max_bytes) {
+  if (dir.empty()) {
+    std::string pattern = (fs::temp_directory_path() / "cenote-frames-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) {
+      throw IoError("frame store: cannot create a folder " + pattern + " in the temp folder: " + systemError());
+    }
+    dir_ = pattern;
+    own_dir_ = true;
+  } else {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (!fs::is_directory(dir)) {
+      throw IoError("frame store: map.history_dir " + dir + " cannot be created" + (ec ? ": " + ec.message() : ""));
+    }
+    dir_ = dir;
+  }
+}
+
+FrameStore::~FrameStore() {
+  clear();
+  if (own_dir_) {
+    std::error_code ec;
+    fs::remove(dir_, ec);
+  }
+}
+
+std::string FrameStore::pathOf(uint32_t seq) const { return dir_ + "/" + std::to_string(seq) + ".frame"; }
+
+const FrameStore::Entry& FrameStore::entryOf(uint32_t seq) const {
+  const auto it = frames_.find(seq);
+  if (it == frames_.end()) throw NotFoundError("frame store: frame " + std::to_string(seq) + " is not in the store");
+  return it->second;
+}
+
+const FrameMeta& FrameStore::meta(uint32_t seq) const { return entryOf(seq).meta; }
+
+void FrameStore::put(uint32_t seq, const FrameMeta& meta, const std::string& points, const std::string& updates) {
+  const std::string path = pathOf(seq);
+  const std::string tmp = path + ".tmp";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw IoError("frame store: cannot create " + tmp + ": " + systemError());
+  auto writeAll = [&](const std::string& bytes) {
+    size_t done = 0;
+    while (done < bytes.size()) {
+      const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) return false;
+      done += static_cast<size_t>(n);
+    }
+    return true;
+  };
+  if (!writeAll(points) || !writeAll(updates)) {
+    const int error = errno;
+    const std::string why = std::strerror(error);
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    if (error == ENOSPC) throw ResourceExhaustedError("frame store: disk full writing " + tmp);
+    throw IoError("frame store: cannot write " + tmp + ": " + why);
+  }
+  ::close(fd);
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = systemError();
+    ::unlink(tmp.c_str());
+    throw IoError("frame store: cannot rename " + tmp + ": " + why);
+  }
+  Entry& entry = frames_[seq];
+  bytes_ -= entry.points_bytes + entry.updates_bytes;
+  entry.meta = meta;
+  entry.points_bytes = points.size();
+  entry.updates_bytes = updates.size();
+  bytes_ += points.size() + updates.size();
+}
+
+std::string FrameStore::readRange(uint32_t seq, uint64_t offset, uint64_t size) const {
+  const std::string path = pathOf(seq);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw IoError("frame store: cannot open " + path + ": " + systemError());
+  std::string out(size, '\0');
+  size_t done = 0;
+  while (done < size) {
+    const ssize_t n = ::pread(fd, out.data() + done, size - done, static_cast<off_t>(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const std::string why = n == 0 ? "it is shorter than written" : systemError();
+      ::close(fd);
+      throw IoError("frame store: cannot read " + path + ": " + why);
+    }
+    done += static_cast<size_t>(n);
+  }
+  ::close(fd);
+  return out;
+}
+
+std::string FrameStore::readPoints(uint32_t seq) const {
+  const Entry& e = entryOf(seq);
+  return readRange(seq, 0, e.points_bytes);
+}
+
+std::string FrameStore::readUpdates(uint32_t seq) const {
+  const Entry& e = entryOf(seq);
+  return readRange(seq, e.points_bytes, e.updates_bytes);
+}
+
+void FrameStore::erase(uint32_t seq) {
+  const auto it = frames_.find(seq);
+  if (it == frames_.end()) return;
+  bytes_ -= it->second.points_bytes + it->second.updates_bytes;
+  frames_.erase(it);
+  ::unlink(pathOf(seq).c_str());
+}
+
+void FrameStore::clear() {
+  for (const auto& [seq, entry] : frames_) ::unlink(pathOf(seq).c_str());
+  frames_.clear();
+  bytes_ = 0;
+}
+
+std::vector<uint32_t> FrameStore::overBudget() const {
+  std::vector<uint32_t> out;
+  uint64_t bytes = bytes_;
+  for (auto it = frames_.begin(); it != frames_.end() && bytes > max_bytes_; ++it) {
+    out.push_back(it->first);
+    bytes -= it->second.points_bytes + it->second.updates_bytes;
+  }
+  return out;
+}
+
+}  // namespace cenote::mapping::history

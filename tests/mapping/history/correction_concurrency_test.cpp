@@ -1,0 +1,111 @@
+// Readers during a pose correction (mapping/history/map_history.h): every block they read is either
+// its state before the correction or after it, never a mix, and the map ends as the one built from
+// scratch with the corrected poses. Part of mapping_concurrency_test, which ThreadSanitizer builds
+// (-DCENOTE_TSAN=ON) run.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <map>
+#include <thread>
+
+#include "mapping/history/map_history.h"
+#include "tests/mapping/support/drifted_frames.h"
+
+namespace cenote::mapping {
+namespace {
+
+bool sameBlock(const BlockView& a, const BlockView& b) {
+  if (a.known != b.known) return false;
+  for (int i = 0; i < kBlockVoxels; ++i) {
+    if (((a.known[i >> 6] >> (i & 63)) & 1) && a.log_odds[i] != b.log_odds[i]) return false;
+  }
+  return true;
+}
+
+std::map<std::array<int, 3>, BlockView> blocksOf(const OccupancyMap& map) {
+  std::map<std::array<int, 3>, BlockView> out;
+  auto acc = map.constAccessor();
+  for (const BlockIndex& b : acc.knownBlocks()) acc.readBlock(b, out[{b.x(), b.y(), b.z()}]);
+  return out;
+}
+
+TEST(CorrectionConcurrency, ReadersSeeEachBlockOldOrNewNeverAMix) {
+  MapConfig config;
+  config.voxel_size_m = 0.05;
+  config.publish_blocks = 4;  // many short exclusive sections: readers interleave often
+  config.num_threads = 1;     // keeps OpenMP (not built for ThreadSanitizer) out
+  const std::string base = (std::filesystem::path(::testing::TempDir()) / "correction-concurrency").string();
+  config.history_dir = base + "-drifted";
+  test::PinholeCamera camera;
+  camera.width = 80;
+  camera.height = 60;
+  camera.fx = camera.fy = 60.0;
+  camera.cx = 39.5;
+  camera.cy = 29.5;
+  const auto frames = test::driftedRoomSweep(12, camera, 0.2, 2.0, config.history_quantum_m);
+  OccupancyMap map(config);
+  MapHistory history(map);
+  MapConfig truth_config = config;
+  truth_config.history_dir = base + "-truth";
+  OccupancyMap truth(truth_config);
+  MapHistory truth_history(truth);
+  std::vector<CorrectedPose> poses;
+  for (const auto& f : frames) {
+    history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+    truth_history.integrate(f.batchAt(f.T_true), f.T_true);
+    poses.push_back({f.t_s, f.T_true});
+  }
+  const auto before = blocksOf(map);
+  const auto after = blocksOf(truth);
+  std::vector<BlockIndex> blocks;
+  for (const auto& [b, view] : before) blocks.emplace_back(b[0], b[1], b[2]);
+  for (const auto& [b, view] : after) {
+    if (before.count(b) == 0) blocks.emplace_back(b[0], b[1], b[2]);
+  }
+  const BlockView unknown{};
+  auto stateOf = [&](const std::map<std::array<int, 3>, BlockView>& m, const BlockIndex& b) -> const BlockView& {
+    const auto it = m.find({b.x(), b.y(), b.z()});
+    return it == m.end() ? unknown : it->second;
+  };
+
+  std::atomic<bool> done{false};
+  std::atomic<size_t> reads{0}, mixed{0}, saw_old{0}, saw_new{0};
+  std::vector<std::thread> readers;
+  for (int t = 0; t < 2; ++t) {
+    readers.emplace_back([&, t] {
+      BlockView view;
+      while (!done.load()) {
+        for (size_t i = t; i < blocks.size(); i += 2) {
+          {
+            auto acc = map.constAccessor();
+            acc.readBlock(blocks[i], view);
+          }
+          const bool is_old = sameBlock(view, stateOf(before, blocks[i]));
+          const bool is_new = sameBlock(view, stateOf(after, blocks[i]));
+          mixed += !is_old && !is_new;
+          saw_old += is_old && !is_new;
+          saw_new += is_new && !is_old;
+          ++reads;
+        }
+      }
+    });
+  }
+  while (reads.load() < blocks.size()) std::this_thread::yield();  // readers are running
+  const CorrectionSummary summary = history.correct(poses);
+  const size_t reads_then = reads.load();
+  while (reads.load() < reads_then + 2 * blocks.size()) std::this_thread::yield();  // and read the new state
+  done = true;
+  for (auto& r : readers) r.join();
+  EXPECT_GT(summary.frames_moved, 0u);
+  EXPECT_EQ(mixed.load(), 0u) << "of " << reads.load() << " block reads";
+  EXPECT_GT(saw_old.load(), 0u);
+  EXPECT_GT(saw_new.load(), 0u);
+  const auto final_blocks = blocksOf(map);
+  for (const BlockIndex& b : blocks) {
+    EXPECT_TRUE(sameBlock(stateOf(final_blocks, b), stateOf(after, b))) << "block " << b.transpose();
+  }
+}
+
+}  // namespace
+}  // namespace cenote::mapping

@@ -1,0 +1,291 @@
+// Pose corrections (mapping/history/map_history.h): the corrected map against the map built from
+// scratch with the corrected poses, block by block; the frame store's codec, budget and errors.
+#include "mapping/history/map_history.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <map>
+
+#include "common/error.h"
+#include "mapping/history/frame_codec.h"
+#include "tests/mapping/support/drifted_frames.h"
+
+namespace cenote::mapping {
+namespace {
+
+MapConfig historyConfig() {
+  MapConfig config;
+  config.voxel_size_m = 0.05;
+  config.num_threads = 2;
+  // A folder per test (ctest runs tests in parallel).
+  config.history_dir = (std::filesystem::path(::testing::TempDir()) /
+                        ("frames-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name())))
+                           .string();
+  return config;
+}
+
+test::PinholeCamera smallCamera() {
+  test::PinholeCamera camera;
+  camera.width = 96;
+  camera.height = 72;
+  camera.fx = camera.fy = 70.0;
+  camera.cx = 47.5;
+  camera.cy = 35.5;
+  return camera;
+}
+
+std::vector<CorrectedPose> truePoses(const std::vector<test::DriftedFrame>& frames) {
+  std::vector<CorrectedPose> poses;
+  for (const auto& f : frames) poses.push_back({f.t_s, f.T_true});
+  return poses;
+}
+
+// Blocks of either map whose known voxels, log-odds or colours differ; voxels whose state differs,
+// and voxels known in either.
+struct MapDifference {
+  size_t blocks = 0;
+  size_t voxels_differing = 0;
+  size_t voxels_known = 0;
+  double agreement() const { return voxels_known == 0 ? 1.0 : 1.0 - double(voxels_differing) / voxels_known; }
+};
+MapDifference compare(const OccupancyMap& a, const OccupancyMap& b) {
+  auto acc_a = a.constAccessor();
+  auto acc_b = b.constAccessor();
+  std::vector<BlockIndex> blocks = acc_a.knownBlocks();
+  for (const BlockIndex& block : acc_b.knownBlocks()) blocks.push_back(block);
+  std::sort(blocks.begin(), blocks.end(), [](const BlockIndex& x, const BlockIndex& y) {
+    return std::lexicographical_compare(x.data(), x.data() + 3, y.data(), y.data() + 3);
+  });
+  blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+  MapDifference d;
+  for (const BlockIndex& block : blocks) {
+    BlockView va, vb;
+    acc_a.readBlock(block, va);
+    acc_b.readBlock(block, vb);
+    bool same = va.known == vb.known;
+    for (int i = 0; i < kBlockVoxels; ++i) {
+      const bool ka = (va.known[i >> 6] >> (i & 63)) & 1, kb = (vb.known[i >> 6] >> (i & 63)) & 1;
+      if (!ka && !kb) continue;
+      ++d.voxels_known;
+      const VoxelState sa = !ka ? VoxelState::kUnknown
+                                : (a.model().isOccupied(va.log_odds[i]) ? VoxelState::kOccupied : VoxelState::kFree);
+      const VoxelState sb = !kb ? VoxelState::kUnknown
+                                : (b.model().isOccupied(vb.log_odds[i]) ? VoxelState::kOccupied : VoxelState::kFree);
+      d.voxels_differing += sa != sb;
+      same &= ka == kb && va.log_odds[i] == vb.log_odds[i];
+    }
+    const auto ca = acc_a.blockColors(block), cb = acc_b.blockColors(block);
+    same &= ca.size() == cb.size();
+    for (size_t i = 0; same && i < ca.size(); ++i) {
+      same &= ca[i].offset == cb[i].offset && ca[i].rgb == cb[i].rgb && ca[i].count == cb[i].count;
+    }
+    d.blocks += !same;
+  }
+  return d;
+}
+
+TEST(FrameCodec, PointsAndUpdatesDecodeToWhatWasEncoded) {
+  history::FramePoints points;
+  points.quantised = {{0, 0, 0}, {-5, 1200, 70000}, {-5, 1201, -2000000000}, {2000000000, -1, 3}};
+  points.colors = {{1, 2, 3}, {255, 0, 7}, {9, 9, 9}, {0, 0, 0}};
+  const history::FramePoints back = history::decodePoints(history::encodePoints(points, 1), "test");
+  EXPECT_EQ(back.quantised, points.quantised);
+  EXPECT_EQ(back.colors, points.colors);
+
+  history::FrameUpdates updates;
+  updates.keys = {5, 6, 1ull << 60};
+  updates.masks.resize(3);
+  updates.masks[0].free[3] = 0xdeadbeefull;
+  updates.masks[2].hit[7] = ~0ull;
+  updates.colors = {{VoxelIndex(-3, 4, 5), {10, 20, 30}}, {VoxelIndex(100, -4, 5), {1, 2, 3}}};
+  const history::FrameUpdates u = history::decodeUpdates(history::encodeUpdates(updates, 1), "test");
+  EXPECT_EQ(u.keys, updates.keys);
+  ASSERT_EQ(u.masks.size(), 3u);
+  EXPECT_EQ(u.masks[0].free, updates.masks[0].free);
+  EXPECT_EQ(u.masks[2].hit, updates.masks[2].hit);
+  ASSERT_EQ(u.colors.size(), 2u);
+  EXPECT_EQ(u.colors[1].ijk, VoxelIndex(100, -4, 5));
+  EXPECT_EQ(u.colors[1].rgb, (std::array<uint8_t, 3>{1, 2, 3}));
+}
+
+TEST(FrameCodec, DamagedBytesAreAnIoErrorNamingTheFrame) {
+  std::string bytes = history::encodeUpdates(history::FrameUpdates{}, 1);
+  bytes.resize(bytes.size() - 1);
+  try {
+    history::decodeUpdates(bytes, "frame 7");
+    FAIL() << "no error";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("frame store: frame 7 does not decode"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MapHistory, CorrectedMapEqualsTheMapBuiltFromScratchWithTheCorrectedPoses) {
+  const MapConfig config = historyConfig();
+  const auto frames = test::driftedRoomSweep(24, smallCamera(), 0.25, 3.0, config.history_quantum_m);
+  OccupancyMap drifted(config), truth(config);
+  MapHistory history(drifted);
+  MapConfig truth_config = config;
+  truth_config.history_dir += "-truth";
+  OccupancyMap truth_map(truth_config);
+  MapHistory truth_history(truth_map);
+  for (const auto& f : frames) {
+    history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+    truth_history.integrate(f.batchAt(f.T_true), f.T_true);
+  }
+  const MapDifference before = compare(drifted, truth_map);
+  const auto poses = truePoses(frames);
+  const CorrectionSummary summary = history.correct(poses);
+  const MapDifference after = compare(drifted, truth_map);
+  std::printf("uncorrected: %zu blocks differ, state agreement %.4f; corrected: %zu blocks, %.4f (%zu moved, %zu "
+              "replayed, %zu blocks rebuilt)\n",
+              before.blocks, before.agreement(), after.blocks, after.agreement(), summary.frames_moved,
+              summary.frames_replayed, summary.blocks_rebuilt);
+  // Frame 0 has no drift; the drift of frame 1 (1.1 cm, 0.13 deg) is above the thresholds.
+  EXPECT_EQ(summary.frames_moved, frames.size() - 1);
+  EXPECT_EQ(summary.blocks_kept, 0u);
+  EXPECT_EQ(after.blocks, 0u);
+  EXPECT_EQ(after.voxels_differing, 0u);
+  EXPECT_LT(before.agreement(), 0.9);  // the drifted map is wrong enough to matter
+  EXPECT_FALSE(summary.delta.isEmpty());
+
+  // A second, identical correction moves nothing.
+  const CorrectionSummary again = history.correct(poses);
+  EXPECT_EQ(again.frames_moved, 0u);
+  EXPECT_TRUE(again.delta.isEmpty());
+}
+
+TEST(MapHistory, FramesIntegratedBetweenTheStepsOfACorrectionAreReplayedToo) {
+  const MapConfig config = historyConfig();
+  const auto frames = test::driftedRoomSweep(24, smallCamera(), 0.25, 3.0, config.history_quantum_m);
+  OccupancyMap map(config);
+  MapHistory history(map);
+  MapConfig reference_config = config;
+  reference_config.history_dir += "-reference";
+  OccupancyMap reference(reference_config);
+  MapHistory reference_history(reference);
+  std::vector<CorrectedPose> poses;
+  for (size_t i = 0; i < 18; ++i) {
+    history.integrate(frames[i].batchAt(frames[i].T_drifted), frames[i].T_drifted);
+    poses.push_back({frames[i].t_s, frames[i].T_true});
+  }
+  for (const auto& f : frames) reference_history.integrate(f.batchAt(f.T_true), f.T_true);
+  // The last 6 frames arrive (with their true poses) while the correction of the first 18 runs.
+  CorrectionPlan plan = history.planCorrection(poses);
+  ASSERT_EQ(plan.moved.size(), 17u);
+  size_t next = 0;
+  for (size_t i = 0; i < plan.moved.size(); ++i) {
+    history.moveFrame(plan, i);
+    if (i % 3 == 0 && next < 6) {
+      const auto& f = frames[18 + next++];
+      history.integrate(f.batchAt(f.T_true), f.T_true);
+    }
+  }
+  ASSERT_EQ(next, 6u);
+  const CorrectionSummary summary = history.finishCorrection(plan);
+  EXPECT_EQ(summary.frames_moved, 17u);
+  EXPECT_EQ(compare(map, reference).blocks, 0u);
+}
+
+TEST(MapHistory, PartialCorrectionMovesOnlyTheFramesItCoversAndFramesWithoutPoseStay) {
+  const MapConfig config = historyConfig();
+  const auto frames = test::driftedRoomSweep(16, smallCamera(), 0.2, 2.0, config.history_quantum_m);
+  OccupancyMap map(config);
+  MapHistory history(map);
+  MapConfig reference_config = config;
+  reference_config.history_dir += "-reference";
+  OccupancyMap reference(reference_config);
+  MapHistory reference_history(reference);
+  // Frames 10-15 corrected; frame 3 integrated without a pose (as streamed points are).
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const auto& f = frames[i];
+    if (i == 3) {
+      history.integrate(f.batchAt(f.T_drifted));
+      reference_history.integrate(f.batchAt(f.T_drifted));
+      continue;
+    }
+    history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+    const Eigen::Isometry3d& T = i >= 10 ? f.T_true : f.T_drifted;
+    reference_history.integrate(f.batchAt(T), T);
+  }
+  std::vector<CorrectedPose> poses;
+  for (size_t i = 10; i < frames.size(); ++i) poses.push_back({frames[i].t_s, frames[i].T_true});
+  const CorrectionSummary summary = history.correct(poses);
+  EXPECT_EQ(summary.frames_moved, 6u);
+  EXPECT_GT(summary.frames_replayed, 6u);  // earlier frames share blocks with the moved ones
+  EXPECT_EQ(compare(map, reference).blocks, 0u);
+}
+
+TEST(MapHistory, InterpolatesBetweenCorrectedPosesWithinTheGap) {
+  MapConfig config = historyConfig();
+  const auto frames = test::driftedRoomSweep(9, smallCamera(), 0.1, 0.0, config.history_quantum_m);
+  OccupancyMap map(config);
+  MapHistory history(map);
+  for (const auto& f : frames) history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+  // Every other frame's pose, shifted by 1 m: the ones between are interpolated (gap 0.2 s).
+  std::vector<CorrectedPose> poses;
+  for (size_t i = 0; i < frames.size(); i += 2) {
+    Eigen::Isometry3d T = frames[i].T_drifted;
+    T.translation().x() += 1.0;
+    poses.push_back({frames[i].t_s, T});
+  }
+  EXPECT_EQ(history.correct(poses).frames_moved, 9u);
+  map.reset();
+  history.clear();
+  for (const auto& f : frames) history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+  MapConfig tight = config;
+  tight.correction_max_gap_s = 0.15;
+  tight.history_dir += "-tight";  // gaps of 0.2 s are too long now: only the sampled frames move
+  OccupancyMap map2(tight);
+  MapHistory history2(map2);
+  for (const auto& f : frames) history2.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+  EXPECT_EQ(history2.correct(poses).frames_moved, 5u);
+}
+
+TEST(MapHistory, StoreBeyondItsBudgetDropsTheOldestFramesAndKeepsTheirBlocks) {
+  MapConfig config = historyConfig();
+  config.history_max_mb = 1;
+  const auto frames = test::driftedRoomSweep(30, smallCamera(), 0.2, 2.0, config.history_quantum_m);
+  OccupancyMap map(config);
+  MapHistory history(map);
+  for (const auto& f : frames) history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+  EXPECT_LT(history.numFrames(), frames.size());
+  EXPECT_LE(history.storeBytes(), 1u << 20);
+  const size_t bytes_on_disk = [&] {
+    size_t total = 0;
+    for (const auto& e : std::filesystem::directory_iterator(history.store().dir())) total += e.file_size();
+    return total;
+  }();
+  EXPECT_EQ(bytes_on_disk, history.storeBytes());
+  const CorrectionSummary summary = history.correct(truePoses(frames));
+  EXPECT_EQ(summary.frames_moved, history.numFrames());
+  EXPECT_GT(summary.blocks_kept, 0u);
+}
+
+TEST(MapHistory, RejectsPosesOutOfOrderOrNotRigid) {
+  const MapConfig config = historyConfig();
+  OccupancyMap map(config);
+  MapHistory history(map);
+  std::vector<CorrectedPose> poses(2);
+  poses[0].t_s = 1.0;
+  poses[1].t_s = 1.0;
+  try {
+    history.correct(poses);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "correction: pose 1 (t = 1.000000 s) must come after the previous pose (t = 1.000000 s)");
+  }
+  poses[1].t_s = 2.0;
+  poses[1].T_world_pose.linear()(0, 0) = 2.0;
+  try {
+    history.correct(poses);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(),
+                 "correction: pose 1 (t = 2.000000 s) must be a rigid transform (its rotation is not orthonormal with "
+                 "determinant 1)");
+  }
+}
+
+}  // namespace
+}  // namespace cenote::mapping
