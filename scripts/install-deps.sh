@@ -9,6 +9,8 @@ PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config git
   # pipeline: images, calibration, SIMD, threads
   libopencv-dev libeigen3-dev libhwy-dev libdeflate-dev zlib1g-dev
+  # ROS 2 recordings: MCAP chunks (zstd, lz4), rosbag2 sqlite3 storage
+  libzstd-dev liblz4-dev libsqlite3-dev
   # command line, config, logs
   libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   # mapping: volumetric map (OpenVDB, TBB), OctoMap as peer, reference and file format
@@ -31,6 +33,8 @@ PACKAGES=(
   clang-format
   # test data scripts
   python3 python3-numpy
+  # the paper's dataset layout written by tests (OpenCV FileStorage); MCAP test recordings (npm ci)
+  python3-opencv nodejs
 )
 
 missing=()
@@ -68,4 +72,12 @@ if [ ! -f /usr/include/pcl-1.13/pcl/io/pcd_io.h ] && [ ! -f "$PCL_HEADERS/usr/in
   $SUDO mkdir -p "$PCL_HEADERS"
   $SUDO dpkg-deb -x "$work"/libpcl-dev_*.deb "$PCL_HEADERS"
   rm -rf "$work"
+fi
+
+# npm for the MCAP test recordings (tests/io/bag/gen, npm ci at build time): Debian's npm, unless the
+# installed nodejs already brings its own (NodeSource's does, and conflicts with Debian's npm package).
+if ! command -v npm >/dev/null 2>&1; then
+  echo "install-deps: installing npm"
+  [ "$updated" -eq 1 ] || $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends npm
 fi
