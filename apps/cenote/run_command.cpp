@@ -111,8 +111,9 @@ void run(const RunOptions& o) {
 void registerRunCommand(CLI::App& app) {
   auto o = std::make_shared<RunOptions>();
   CLI::App* cmd = app.add_subcommand("run", "Run the real-time pipeline over a recorded stereo sequence");
-  cmd->add_option("--dataset", o->dataset, "EuRoC folder (holding mav0/) or KITTI sequence folder")->required();
-  cmd->add_option("--format", o->format, "Dataset layout")->check(CLI::IsMember({"auto", "euroc", "kitti"}));
+  cmd->add_option("--dataset", o->dataset, "EuRoC folder (holding mav0/), KITTI sequence folder or the paper's layout")
+      ->required();
+  cmd->add_option("--format", o->format, "Dataset layout")->check(CLI::IsMember({"auto", "euroc", "kitti", "paper"}));
   cmd->add_option("--trajectory", o->trajectory, "Poses (TUM, EuRoC CSV or KITTI); default: the dataset's ground truth");
   cmd->add_option("--trajectory-format", o->trajectory_format, "Trajectory format (default: detected)")
       ->check(CLI::IsMember({"tum", "euroc", "kitti"}));

@@ -5,6 +5,7 @@
 #include "common/error.h"
 #include "pipeline/dataset/euroc_dataset.h"
 #include "pipeline/dataset/kitti_dataset.h"
+#include "pipeline/dataset/paper_dataset.h"
 
 namespace cenote::pipeline {
 namespace fs = std::filesystem;
@@ -13,7 +14,8 @@ DatasetFormat parseDatasetFormat(const std::string& name) {
   if (name == "auto") return DatasetFormat::kAuto;
   if (name == "euroc") return DatasetFormat::kEuroc;
   if (name == "kitti") return DatasetFormat::kKitti;
-  throw Error("dataset format '" + name + "': must be auto, euroc or kitti");
+  if (name == "paper") return DatasetFormat::kPaper;
+  throw Error("dataset format '" + name + "': must be auto, euroc, kitti or paper");
 }
 
 TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::TrajectoryFormat format) const {
@@ -32,12 +34,16 @@ std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetForma
       format = DatasetFormat::kEuroc;
     } else if (fs::exists(fs::path(path) / "times.txt") && fs::exists(fs::path(path) / "calib.txt")) {
       format = DatasetFormat::kKitti;
+    } else if (PaperDataset::looksLike(path)) {
+      format = DatasetFormat::kPaper;
     } else {
       throw Error("dataset " + path +
-                  ": unknown layout (expected EuRoC mav0/cam0/data.csv or a KITTI sequence with times.txt and calib.txt)");
+                  ": unknown layout (expected EuRoC mav0/cam0/data.csv, a KITTI sequence with times.txt and calib.txt, "
+                  "or the paper's left/, right/, filename_mapping.csv and intrinsics.yaml)");
     }
   }
   if (format == DatasetFormat::kEuroc) return std::make_unique<EurocDataset>(path);
+  if (format == DatasetFormat::kPaper) return std::make_unique<PaperDataset>(path);
   return std::make_unique<KittiDataset>(path);
 }
 

@@ -1,6 +1,7 @@
 // stereo_dataset.h: a recorded stereo sequence on disk, read frame by frame.
 //   EuRoC / ASL layout (SVIn2, OKVIS, Kimera, OpenVINS users): euroc_dataset.h
 //   KITTI odometry layout: kitti_dataset.h
+//   the reference paper's layout (left/, right/, poses.txt, intrinsics.yaml): paper_dataset.h
 // A dataset knows its frames' timestamps, its calibration, where its left camera sits in the frame
 // that its default trajectory describes (T_traj_cam), and which trajectory file that is.
 // Units: seconds, metres. Threads: load() is const and may run on any one thread at a time per
@@ -53,15 +54,18 @@ class StereoDataset {
   // the frame T_body_cam starts from; TUM: the camera, assumed). The dataset's own file named by
   // its path gives the same source as defaultTrajectory().
   virtual TrajectorySource trajectoryFile(const std::string& path, io::TrajectoryFormat format) const;
+  // The reference point cloud the dataset ships with (the paper's layout: colmap.ply), if any.
+  virtual std::optional<std::string> referenceCloud() const { return std::nullopt; }
   virtual std::string describe() const = 0;
 };
 
-enum class DatasetFormat { kAuto, kEuroc, kKitti };
+enum class DatasetFormat { kAuto, kEuroc, kKitti, kPaper };
 
-// "auto", "euroc" or "kitti". @throws cenote::Error otherwise.
+// "auto", "euroc", "kitti" or "paper". @throws cenote::Error otherwise.
 DatasetFormat parseDatasetFormat(const std::string& name);
 
-// Opens `path`; kAuto recognises EuRoC by mav0/cam0/data.csv and KITTI by times.txt + calib.txt.
+// Opens `path`; kAuto recognises EuRoC by mav0/cam0/data.csv, KITTI by times.txt + calib.txt and the
+// paper's layout by filename_mapping.csv + intrinsics.yaml + left/ + right/.
 // @throws cenote::Error naming the path and what was expected when it is neither.
 std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetFormat format = DatasetFormat::kAuto);
 
