@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "io/bag/cdr_wire.h"
 #include "io/bag/ros1_wire.h"
 
 namespace cenote::io {
@@ -17,10 +18,11 @@ void expectType(const RecordedMessage& m, const char* type) {
 // Parses the message with the wire of its topic's encoding, adding the topic and offset to errors.
 template <class Parse>
 auto decode(const RecordedMessage& m, Parse&& parse) {
-  if (m.topic->encoding == MessageEncoding::kCdr) {
-    throw FailedPreconditionError("topic " + m.topic->name + ": CDR messages are not supported yet");
-  }
   try {
+    if (m.topic->encoding == MessageEncoding::kCdr) {
+      CdrWire wire(m.data);
+      return parse(wire);
+    }
     Ros1Wire wire(m.data);
     return parse(wire);
   } catch (const IoError& e) {
