@@ -323,9 +323,9 @@ void registerEvalCommand(CLI::App& app) {
   traj->add_option("--align", t->align, "Alignment")->capture_default_str()->check(CLI::IsMember({"sim3", "se3", "none"}));
   traj->add_option("--format", t->format, "File format (of both, unless --reference-format)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"auto", "tum", "euroc", "kitti", "colmap"}));
+      ->check(CLI::IsMember({"auto", "tum", "euroc", "kitti", "colmap", "okvis"}));
   traj->add_option("--reference-format", t->reference_format, "Format of the reference when it differs")
-      ->check(CLI::IsMember({"auto", "tum", "euroc", "kitti", "colmap"}));
+      ->check(CLI::IsMember({"auto", "tum", "euroc", "kitti", "colmap", "okvis"}));
   traj->add_option("--estimate-times", t->estimate_times, "KITTI: timestamps file of the estimate");
   traj->add_option("--reference-times", t->reference_times, "KITTI: timestamps file of the reference");
   traj->add_option("--tolerance", t->tolerance_s, "Largest time difference of an associated pair, s")

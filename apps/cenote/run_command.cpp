@@ -61,7 +61,15 @@ mapping::MapConfig mapConfig(const RunOptions& o) {
 }
 
 void run(const RunOptions& o) {
-  pipeline::Runner runner(makeConfig(o));
+  pipeline::PipelineConfig config = makeConfig(o);
+  const std::unique_ptr<pipeline::StereoDataset> dataset = pipeline::openDataset(o.dataset,
+                                                                                 pipeline::parseDatasetFormat(o.format));
+  const pipeline::CameraTrajectory camera = pipeline::loadCameraTrajectory(
+      *dataset, {o.trajectory, o.trajectory_format, o.trajectory_times, config.run.pose_frame});
+  // Keyframe poses seconds apart are no trajectory to interpolate: only the frames at a keyframe get a
+  // pose (a gap of 1 us, Trajectory::poseAt's tolerance of the same time, interpolates nothing).
+  if (camera.keyframes_only) config.run.pose_max_gap_s = 1e-6;
+  pipeline::Runner runner(config);
   // The map stage: every fused batch is integrated (free space along each ray, a hit at its end).
   std::unique_ptr<mapping::OccupancyMap> map;
   pipeline::PointSink sink;
@@ -72,14 +80,13 @@ void run(const RunOptions& o) {
       if (!batch.empty()) map->integrate(batch);
     };
   }
-  const std::unique_ptr<pipeline::StereoDataset> dataset = pipeline::openDataset(o.dataset,
-                                                                                 pipeline::parseDatasetFormat(o.format));
-  const pipeline::CameraTrajectory camera = pipeline::loadCameraTrajectory(
-      *dataset, {o.trajectory, o.trajectory_format, o.trajectory_times, runner.config().run.pose_frame});
   const io::Trajectory& trajectory = camera.trajectory;
   std::cerr << dataset->describe() << "; trajectory " << trajectory.name() << " (" << trajectory.size() << " poses, "
             << camera.fileFrame() << " poses" << (camera.frame_assumed ? ", assumed" : "") << ")\n";
   if (camera.frame_assumed) std::cerr << "note: " << camera.note << "\n";
+  if (camera.keyframes_only)
+    std::cerr << "note: the poses are keyframes only (" << trajectory.size()
+              << "): only the frames at a keyframe are processed\n";
 
   g_stop = false;
   std::signal(SIGINT, onInterrupt);
@@ -93,6 +100,8 @@ void run(const RunOptions& o) {
   report.pose_frame = camera.fileFrame();
   report.pose_frame_assumed = camera.frame_assumed;
   report.pose_frame_hint = camera.note;
+  report.keyframes_only = camera.keyframes_only;
+  report.pose_keyframes = camera.keyframes_only ? trajectory.size() : 0;
   const std::string report_path = (std::filesystem::path(o.out) / "report.json").string();
   std::ofstream(report_path) << report.toJson();
   std::cout << report.toTable();
@@ -114,9 +123,10 @@ void registerRunCommand(CLI::App& app) {
   cmd->add_option("--dataset", o->dataset, "EuRoC folder (holding mav0/), KITTI sequence folder or the paper's layout")
       ->required();
   cmd->add_option("--format", o->format, "Dataset layout")->check(CLI::IsMember({"auto", "euroc", "kitti", "paper"}));
-  cmd->add_option("--trajectory", o->trajectory, "Poses (TUM, EuRoC CSV or KITTI); default: the dataset's ground truth");
+  cmd->add_option("--trajectory", o->trajectory,
+                  "Poses (TUM, EuRoC CSV, KITTI, OKVIS / SVIn2 CSV, OpenVINS); default: the dataset's ground truth");
   cmd->add_option("--trajectory-format", o->trajectory_format, "Trajectory format (default: detected)")
-      ->check(CLI::IsMember({"tum", "euroc", "kitti"}));
+      ->check(CLI::IsMember({"tum", "euroc", "kitti", "okvis", "svin2", "openvins"}));
   cmd->add_option("--trajectory-times", o->trajectory_times,
                   "Times of KITTI poses (one a line, seconds); default: the KITTI sequence's times.txt");
   cmd->add_option("--pose-frame", o->pose_frame, "What the poses describe (default: the format's convention)")

@@ -22,8 +22,8 @@ TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::Traj
   TrajectorySource source;
   source.path = path;
   source.format = format;
-  source.describes_body = format == io::TrajectoryFormat::kEuroc;
-  source.frame_assumed = format != io::TrajectoryFormat::kEuroc;
+  source.describes_body = io::describesBody(format);
+  source.frame_assumed = !io::describesBody(format);
   return source;
 }
 

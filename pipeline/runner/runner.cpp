@@ -191,6 +191,7 @@ std::string RunReport::toJson() const {
     j["pose_frame_assumed"] = pose_frame_assumed;
     if (!pose_frame_hint.empty()) j["pose_frame_hint"] = pose_frame_hint;
   }
+  if (keyframes_only) j["pose_keyframes_only"] = pose_keyframes;
   j["wall_s"] = wall_s;
   j["fps"] = fps;
   j["peak_memory_mb"] = peak_memory_mb;
@@ -210,6 +211,10 @@ std::string RunReport::toTable() const {
     << (skipped_out_of_order > 0 ? std::to_string(skipped_out_of_order) + " out of time order, " : "") << skipped_no_pose
     << " without pose, " << skipped_not_keyframe << " not keyframes, " << skipped_unreadable << " unreadable"
     << (interrupted ? " (interrupted)" : "") << "\n";
+  if (keyframes_only) {
+    t << "poses: keyframes only (" << pose_keyframes
+      << "): frames between keyframes have no pose of their own and are skipped, as in the paper\n";
+  }
   t << "stage           median ms    p95 ms   frames\n";
   for (const char* name : {"read_rectify", "stereo", "fusion", "output", "map"}) {
     const auto it = stages.find(name);
@@ -264,7 +269,24 @@ CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const Trajec
   }
   const io::Trajectory trajectory = io::Trajectory::read(source.path, source.format, source.kitti_times);
   out.trajectory = out.file_describes_body ? trajectory.transformedBy(T_body_cam) : trajectory;
+  out.keyframes_only = isKeyframeTrajectory(out.trajectory, dataset);
   return out;
+}
+
+bool isKeyframeTrajectory(const io::Trajectory& trajectory, const StereoDataset& dataset) {
+  constexpr double kSameTime = 1e-6;
+  const std::vector<io::StampedPose>& poses = trajectory.poses();
+  if (poses.size() < 2 || dataset.size() == 0) return false;
+  std::vector<double> frames(dataset.size());
+  for (size_t i = 0; i < frames.size(); ++i) frames[i] = dataset.timestamp(i);
+  std::sort(frames.begin(), frames.end());
+  for (const io::StampedPose& p : poses) {
+    const auto at = std::lower_bound(frames.begin(), frames.end(), p.t_s - kSameTime);
+    if (at == frames.end() || *at > p.t_s + kSameTime) return false;  // a pose between frames: not a keyframe
+  }
+  const auto first = std::lower_bound(frames.begin(), frames.end(), poses.front().t_s - kSameTime);
+  const auto last = std::upper_bound(frames.begin(), frames.end(), poses.back().t_s + kSameTime);
+  return 4 * poses.size() < 3 * static_cast<size_t>(last - first);
 }
 
 io::Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,

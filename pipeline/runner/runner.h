@@ -44,6 +44,10 @@ struct RunReport {
   std::string pose_frame;
   bool pose_frame_assumed = false;
   std::string pose_frame_hint;
+  // The pose source had keyframes only (CameraTrajectory::keyframes_only), `pose_keyframes` of them:
+  // only the frames at a keyframe were processed, the others counted as without pose.
+  bool keyframes_only = false;
+  size_t pose_keyframes = 0;
   double wall_s = 0.0;
   double fps = 0.0;                            // frames processed per second of wall time
   double peak_memory_mb = 0.0;                 // resident set, high-water mark of the process
@@ -80,7 +84,7 @@ class Runner {
 // Which trajectory a run uses (the options of `cenote run`).
 struct TrajectoryRequest {
   std::string path;    // empty: the dataset's own ground truth
-  std::string format;  // "tum", "euroc", "kitti"; empty: detected from the file
+  std::string format;  // "tum", "euroc", "kitti", "okvis", "openvins"; empty: detected from the file
   std::string times;   // times of a format without timestamps (KITTI); empty: the dataset's
                        // own (a KITTI sequence's times.txt)
   PoseFrame pose_frame = PoseFrame::kAuto;
@@ -95,8 +99,17 @@ struct CameraTrajectory {
   // (the camera) changes the map; `note` then says so and how to choose.
   bool frame_assumed = false;
   std::string note;  // one line for a person; empty when nothing was assumed
+  // true: a pose source of keyframes only (isKeyframeTrajectory); the run then poses only the frames
+  // with a pose of their own (`cenote run` sets run.pose_max_gap_s to 1 us) and its report says so.
+  bool keyframes_only = false;
   const char* fileFrame() const { return file_describes_body ? "body" : "camera"; }
 };
+
+// True when `trajectory` holds keyframes only, as VIO systems write them (OKVIS / SVIn2 keyframe
+// poses, ORB-SLAM3's KeyFrameTrajectory.txt): at least 2 poses, every pose at the timestamp of one of
+// the dataset's frames (within 1 us), and fewer poses than 3/4 of the frames between its first and
+// last pose. Interpolating between keyframes seconds apart would invent poses.
+bool isKeyframeTrajectory(const io::Trajectory& trajectory, const StereoDataset& dataset);
 
 // The trajectory of the dataset's left camera: `request.path` (read the way the dataset reads its
 // own files, StereoDataset::trajectoryFile: a KITTI sequence times KITTI poses with its times.txt
