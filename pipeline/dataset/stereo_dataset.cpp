@@ -13,7 +13,8 @@ DatasetFormat parseDatasetFormat(const std::string& name) {
   if (name == "auto") return DatasetFormat::kAuto;
   if (name == "euroc") return DatasetFormat::kEuroc;
   if (name == "kitti") return DatasetFormat::kKitti;
-  throw Error("dataset format '" + name + "': must be auto, euroc or kitti");
+  if (name == "bag") return DatasetFormat::kRecording;
+  throw Error("dataset format '" + name + "': must be auto, euroc, kitti or bag");
 }
 
 TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::TrajectoryFormat format) const {
@@ -24,6 +25,25 @@ TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::Traj
   source.frame_assumed = format != io::TrajectoryFormat::kEuroc;
   return source;
 }
+
+namespace {
+
+class IndexCursor final : public FrameCursor {
+ public:
+  explicit IndexCursor(const StereoDataset& dataset) : dataset_(dataset) {}
+  bool next() override { return ++index_ < dataset_.size(); }
+  double timestamp() const override { return dataset_.timestamp(index_); }
+  std::string frameName() const override { return dataset_.frameName(index_); }
+  StereoFrame load() override { return dataset_.load(index_); }
+
+ private:
+  const StereoDataset& dataset_;
+  size_t index_ = static_cast<size_t>(-1);
+};
+
+}  // namespace
+
+std::unique_ptr<FrameCursor> StereoDataset::frames() const { return std::make_unique<IndexCursor>(*this); }
 
 std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetFormat format) {
   if (!fs::exists(path)) throw Error("dataset " + path + ": no such folder");
@@ -36,6 +56,9 @@ std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetForma
       throw Error("dataset " + path +
                   ": unknown layout (expected EuRoC mav0/cam0/data.csv or a KITTI sequence with times.txt and calib.txt)");
     }
+  }
+  if (format == DatasetFormat::kRecording) {
+    throw Error("dataset " + path + ": a recording is opened with its topics (openRecordingDataset)");
   }
   if (format == DatasetFormat::kEuroc) return std::make_unique<EurocDataset>(path);
   return std::make_unique<KittiDataset>(path);
