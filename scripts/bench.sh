@@ -14,3 +14,6 @@ echo "== run_throughput (cenote run on a simulated 800x600 cave, 112 disparities
 echo "| run | fps | read+rectify ms | stereo ms | fusion ms | output ms | peak MiB | / paper's best |"
 echo "|---|---|---|---|---|---|---|---|"
 bash "$here/bench/run_throughput.sh" "$build/apps/cenote" "$here"
+echo
+echo "== bag_throughput (cenote run on a ROS 1 bag of JPEG pairs beside the same frames as PNG folders)"
+bash "$here/bench/bag_throughput.sh" "$build/apps/cenote" "$here"

@@ -16,5 +16,7 @@ void registerEvalMapCommand(CLI::App& eval_cmd);
 void registerSimCommand(CLI::App& app);
 // `cenote map`: integrate, info, export, query (mapping/).
 void registerMapCommand(CLI::App& app);
+// `cenote bag info`: what a recording holds.
+void registerBagCommand(CLI::App& app);
 
 }  // namespace cenote::apps

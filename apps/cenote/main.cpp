@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   cenote::apps::registerEvalCommand(app);
   cenote::apps::registerSimCommand(app);
   cenote::apps::registerMapCommand(app);
+  cenote::apps::registerBagCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -61,6 +61,12 @@ std::string textField(const std::map<std::string, std::string>& fields, const ch
   return it->second;
 }
 
+void checkCompression(const std::string& compression, const std::string& what) {
+  if (compression != "none" && compression != "bz2" && compression != "lz4") {
+    throw IoError(what + ": unknown compression '" + compression + "' (a ROS 1 bag's chunks are none, bz2 or lz4)");
+  }
+}
+
 std::int64_t timeNs(std::uint64_t packed) {
   return static_cast<std::int64_t>(packed & 0xffffffffu) * 1000000000 + static_cast<std::int64_t>(packed >> 32);
 }
@@ -248,7 +254,9 @@ void Ros1Bag::readIndex(std::uint64_t index_pos) {
     if (!readFileRecord(chunk_pos, chunk, false) || chunk.op != kOpChunk) {
       throw IoError(where(chunk_pos) + ": the index names a chunk here, but there is none");
     }
-    ++compressions_[textField(chunk.fields, "compression", where(chunk_pos))];
+    const std::string compression = textField(chunk.fields, "compression", where(chunk_pos));
+    checkCompression(compression, where(chunk_pos) + " (chunk)");
+    ++compressions_[compression];
     chunk_stored_ += chunk.data_len;
     chunk_uncompressed_ += field<std::uint32_t>(chunk.fields, "size", where(chunk_pos));
     for (std::uint64_t pos = chunk.data_pos + chunk.data_len; pos < index_pos;) {
@@ -299,9 +307,7 @@ bool Ros1Bag::loadChunk(const Record& r) {
   const std::string what = where(r.pos) + " (chunk)";
   const std::string compression = textField(r.fields, "compression", what);
   const std::uint32_t size = field<std::uint32_t>(r.fields, "size", what);
-  if (compression != "none" && compression != "bz2" && compression != "lz4") {
-    throw IoError(what + ": unknown compression '" + compression + "' (a ROS 1 bag's chunks are none, bz2 or lz4)");
-  }
+  checkCompression(compression, what);
   // A chunk being written when the recorder stopped has a data length of 0 (rosbag fills it in when
   // the chunk closes) or one past the end of the file.
   const std::uint64_t available = file_size_ - std::min(file_size_, r.data_pos);

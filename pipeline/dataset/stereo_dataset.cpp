@@ -15,7 +15,8 @@ DatasetFormat parseDatasetFormat(const std::string& name) {
   if (name == "euroc") return DatasetFormat::kEuroc;
   if (name == "kitti") return DatasetFormat::kKitti;
   if (name == "paper") return DatasetFormat::kPaper;
-  throw Error("dataset format '" + name + "': must be auto, euroc, kitti or paper");
+  if (name == "bag") return DatasetFormat::kRecording;
+  throw Error("dataset format '" + name + "': must be auto, euroc, kitti, paper or bag");
 }
 
 TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::TrajectoryFormat format) const {
@@ -26,6 +27,25 @@ TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::Traj
   source.frame_assumed = !io::describesBody(format);
   return source;
 }
+
+namespace {
+
+class IndexCursor final : public FrameCursor {
+ public:
+  explicit IndexCursor(const StereoDataset& dataset) : dataset_(dataset) {}
+  bool next() override { return ++index_ < dataset_.size(); }
+  double timestamp() const override { return dataset_.timestamp(index_); }
+  std::string frameName() const override { return dataset_.frameName(index_); }
+  StereoFrame load() override { return dataset_.load(index_); }
+
+ private:
+  const StereoDataset& dataset_;
+  size_t index_ = static_cast<size_t>(-1);
+};
+
+}  // namespace
+
+std::unique_ptr<FrameCursor> StereoDataset::frames() const { return std::make_unique<IndexCursor>(*this); }
 
 std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetFormat format) {
   if (!fs::exists(path)) throw Error("dataset " + path + ": no such folder");
@@ -41,6 +61,9 @@ std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetForma
                   ": unknown layout (expected EuRoC mav0/cam0/data.csv, a KITTI sequence with times.txt and calib.txt, "
                   "or the paper's left/, right/, filename_mapping.csv and intrinsics.yaml)");
     }
+  }
+  if (format == DatasetFormat::kRecording) {
+    throw Error("dataset " + path + ": a recording is opened with its topics (openRecordingDataset)");
   }
   if (format == DatasetFormat::kEuroc) return std::make_unique<EurocDataset>(path);
   if (format == DatasetFormat::kPaper) return std::make_unique<PaperDataset>(path);

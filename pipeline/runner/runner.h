@@ -30,7 +30,8 @@
 namespace cenote::pipeline {
 
 struct RunReport {
-  size_t frames_in = 0;             // frames in the dataset (up to run.max_frames)
+  size_t frames_in = 0;             // frames in the dataset (up to run.max_frames); a recording's: the
+                                    // pairs read (its expected count when interrupted)
   size_t frames_processed = 0;      // frames that went through stereo
   size_t frames_fused = 0;          // fused reference frames emitted (or raw frames without fusion)
   size_t skipped_out_of_order = 0;  // timestamps not after the previous frame's (frame_admission.h)
@@ -39,6 +40,10 @@ struct RunReport {
   size_t skipped_unreadable = 0;
   size_t points_written = 0;
   bool interrupted = false;
+  // What the source counted (a recording: "unpaired_images", "out_of_order_images") and, for a
+  // recording cut short, where it stopped (FrameCursor::truncation()); in report.json as "source".
+  std::map<std::string, std::uint64_t> source_counts;
+  std::string source_truncation;
   // What the trajectory's poses were taken to describe ("camera" or "body"; empty: not set) and
   // whether that was assumed (CameraTrajectory::frame_assumed), with the hint printed for it.
   std::string pose_frame;
@@ -108,7 +113,8 @@ struct CameraTrajectory {
 // True when `trajectory` holds keyframes only, as VIO systems write them (OKVIS / SVIn2 keyframe
 // poses, ORB-SLAM3's KeyFrameTrajectory.txt): at least 2 poses, every pose at the timestamp of one of
 // the dataset's frames (within 1 us), and fewer poses than 3/4 of the frames between its first and
-// last pose. Interpolating between keyframes seconds apart would invent poses.
+// last pose. Interpolating between keyframes seconds apart would invent poses. False for a dataset
+// whose frames are known only when read front to back (a recording).
 bool isKeyframeTrajectory(const io::Trajectory& trajectory, const StereoDataset& dataset);
 
 // The trajectory of the dataset's left camera: `request.path` (read the way the dataset reads its
