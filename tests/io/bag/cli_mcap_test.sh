@@ -3,8 +3,9 @@
 # (`cenote sim`, EuRoC layout) converted to MCAP by the MCAP team's own writer (tests/io/bag/gen/
 # euroc_to_mcap.js: @mcap/core, CDR from Foxglove's serialiser) gives the same points.ply, byte for
 # byte, and the same voxels as the folder it came from, with raw (sensor_msgs/Image) or PNG
-# (CompressedImage) images and uncompressed, zstd or lz4 chunks. A recording cut short runs to the cut
-# and says where it stopped.
+# (CompressedImage) images and uncompressed, zstd or lz4 chunks; so does a ROS 2 sqlite3 bag of the
+# same messages (mcap_to_db3.py), with or without its metadata.yaml. A recording cut short runs to the
+# cut and says where it stopped.
 # Usage: cli_mcap_test.sh <cenote binary> <source dir> <build dir of tests/io/bag/gen (node_modules)>
 set -u
 cenote=$1
@@ -47,6 +48,24 @@ for variant in "raw none image_raw" "raw zstd image_raw" "png lz4 image_raw/comp
     fail "$1-$2: the voxels differ from the folder's: $(head -c 400 "$work/$1-$2.json")"
   echo "$1 images, $2 chunks: the folder's points and voxels"
 done
+
+# The same messages in a ROS 2 sqlite3 bag (mcap_to_db3.py: Python's sqlite3, rosbag2's tables): the
+# folder's points and voxels too, also from the .db3 file alone without its metadata.yaml.
+$py "$source_dir/tests/io/bag/gen/mcap_to_db3.py" "$work/raw-none.mcap" "$work/dive_db3" || fail "mcap_to_db3.py failed"
+run db3 --dataset "$work/dive_db3" --left /cam0/image_raw --right /cam1/image_raw --pose-topic /odom --pose-frame body \
+  --calibration "$work/dive/mav0/cam0/sensor.yaml"
+cmp -s "$work/euroc-out/points.ply" "$work/db3-out/points.ply" || fail "db3: points.ply differs from the folder's"
+"$cenote" eval map --estimate "$work/db3.vdb" --reference "$work/euroc.vdb" --json "$work/db3.json" >/dev/null 2>&1 ||
+  fail "cenote eval map (db3) failed"
+[ "$(json "$work/db3.json" 'd["agreement"] == 1.0 and d["known_either"] == d["known_both"] > 0')" = True ] ||
+  fail "db3: the voxels differ from the folder's"
+rm "$work/dive_db3/metadata.yaml"
+run db3-unfinished --dataset "$work/dive_db3" --left /cam0/image_raw --right /cam1/image_raw --pose-topic /odom \
+  --pose-frame body --calibration "$work/dive/mav0/cam0/sensor.yaml"
+cmp -s "$work/euroc-out/points.ply" "$work/db3-unfinished-out/points.ply" || fail "db3 without metadata.yaml: other points"
+grep -q "no metadata.yaml (the recorder did not finish): read the 1 .db3 file in the folder" "$work/db3-unfinished.txt" ||
+  fail "a bag without metadata.yaml is not reported: $(grep -i metadata "$work/db3-unfinished.txt")"
+echo "ROS 2 .db3 bag: the folder's points and voxels"
 
 # `cenote bag info` lists the MCAP's topics with their counts.
 "$cenote" bag info "$work/raw-zstd.mcap" >"$work/info.txt" 2>&1 || fail "cenote bag info failed: $(cat "$work/info.txt")"
