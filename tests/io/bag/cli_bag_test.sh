@@ -110,6 +110,10 @@ expect_error 1 "error: recording $work/raw-none.bag has no CameraInfo topic /lef
 $py "$source_dir/tests/io/bag/write_test_bags.py" "$work/small" || fail "write_test_bags.py failed"
 expect_error 1 "error: topic /cam/bayer: image encoding bayer_rggb8 is a raw Bayer mosaic; cenote reads mono8, bgr8, rgb8, bgra8 and rgba8 (debayer it first: record image_mono or image_color, or run image_proc)" \
   run --dataset "$work/small/messages.bag" --left /cam/bayer --right /cam/mono --calibration "$calib" --pose-topic /odom --out "$work/x"
+expect_error 1 "error: calibration $calib is for 320x240 images, but those on /cam/mono are 3x2" \
+  run --dataset "$work/small/messages.bag" --left /cam/mono --right /cam/bgr --calibration "$calib" --pose-topic /odom --out "$work/x"
+expect_error 1 "error: topic /odom in $work/small/messages.bag has type nav_msgs/Odometry, not sensor_msgs/Image or sensor_msgs/CompressedImage" \
+  run --dataset "$work/small/messages.bag" --left /odom --right /cam/bgr --calibration "$calib" --pose-topic /odom --out "$work/x"
 chunk=$(json "$work/small/expected.json" 'd["zstd.bag"]["first_chunk_pos"]')
 expect_error 1 "error: bag $work/small/zstd.bag, byte $chunk (chunk): unknown compression 'zstd' (a ROS 1 bag's chunks are none, bz2 or lz4)" \
   bag info "$work/small/zstd.bag"
