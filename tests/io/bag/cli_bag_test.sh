@@ -5,7 +5,7 @@
 # or PNG images and uncompressed, bz2 or lz4 chunks, and with the calibration from CameraInfo and
 # poses from TF; at least 92 % voxel agreement with JPEG at quality 95. Jittered right stamps with one right image
 # dropped: every other frame paired, one unpaired image counted. A bag cut mid-chunk runs and says
-# where it stopped. Bad input: the exact messages.
+# where it stopped. Memory does not grow with the bag. Bad input: the exact messages.
 # Usage: cli_bag_test.sh <cenote binary> <source dir>
 set -u
 cenote=$1
@@ -92,6 +92,23 @@ processed=$(json "$work/cut-out/report.json" 'd["frames_processed"]')
 [ "$processed" -gt 0 ] && [ "$processed" -lt $frames ] || fail "cut bag: $processed frames processed"
 "$cenote" bag info "$work/cut.bag" >"$work/cut-info.txt" 2>&1 || fail "bag info on the cut bag failed"
 grep -qF "cut short:   $truncation" "$work/cut-info.txt" || fail "bag info does not say where the bag was cut"
+
+# Bounded memory: a bag five times as long peaks within 10 % of the short one.
+"$cenote" sim --scene reef --frames $((5 * frames)) --width 320 --height 240 --quiet --out "$work/long" >/dev/null 2>&1 ||
+  fail "cenote sim (long) failed"
+$py "$source_dir/tests/io/bag/euroc_to_bag.py" "$work/long" "$work/long.bag" --images png --compression lz4 ||
+  fail "euroc_to_bag.py (long)"
+for name in png-lz4 long; do  # no map: the map grows with the volume seen, the reading must not
+  dive=$work/dive
+  [ $name = long ] && dive=$work/long
+  "$cenote" run --dataset "$work/$name.bag" --pose-topic /odom --pose-frame body --calibration "$dive/mav0/cam0/sensor.yaml" \
+    --out "$work/$name-memory" >/dev/null 2>&1 || fail "cenote run ($name, no map) failed"
+done
+short_mb=$(json "$work/png-lz4-memory/report.json" 'd["peak_memory_mb"]')
+long_mb=$(json "$work/long-memory/report.json" 'd["peak_memory_mb"]')
+echo "peak memory: $frames-frame bag $short_mb MiB, $((5 * frames))-frame bag $long_mb MiB"
+$py -c "import sys; sys.exit(0 if $long_mb <= 1.1 * $short_mb else 1)" ||
+  fail "memory grows with the bag: $short_mb MiB for $frames frames, $long_mb MiB for $((5 * frames))"
 
 # bag info: topics, types, counts and rates, compression.
 "$cenote" bag info "$work/png-lz4.bag" >"$work/baginfo.txt" 2>&1 || fail "cenote bag info failed"
