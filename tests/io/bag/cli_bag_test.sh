@@ -122,6 +122,8 @@ expect_error 1 "error: topic /cam_fl/image_raw is not in $work/raw-none.bag; its
   run --dataset "$work/raw-none.bag" --left /cam_fl/image_raw --right /right/image_raw --calibration "$calib" --pose-topic /odom --out "$work/x"
 expect_error 1 "error: pose topic /vio/odom is not in $work/raw-none.bag; its pose topics: /odom (nav_msgs/Odometry)" \
   run --dataset "$work/raw-none.bag" --calibration "$calib" --pose-topic /vio/odom --out "$work/x"
+expect_error 1 "error: pose topic /left/image_raw in $work/raw-none.bag has type sensor_msgs/Image, not nav_msgs/Odometry, geometry_msgs/PoseStamped, geometry_msgs/TransformStamped or tf2_msgs/TFMessage" \
+  run --dataset "$work/raw-none.bag" --calibration "$calib" --pose-topic /left/image_raw --out "$work/x"
 expect_error 1 "error: recording $work/raw-none.bag has no CameraInfo topic /left/camera_info for the calibration; give --calibration FILE" \
   run --dataset "$work/raw-none.bag" --pose-topic /odom --out "$work/x"
 $py "$source_dir/tests/io/bag/write_test_bags.py" "$work/small" || fail "write_test_bags.py failed"
