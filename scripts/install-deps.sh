@@ -28,8 +28,10 @@ PACKAGES=(
   # server TLS tests make their certificates
   openssl
   # ROS 1 bags (io/bag/ros1_bag.cpp): bz2 and lz4-frame chunks; the tests' bags are written by ROS's own
-  # rosbag (python3-rosbag) with the message classes of sensor_msgs, geometry_msgs, nav_msgs and tf2_msgs
+  # rosbag (python3-rosbag) with the message classes of sensor_msgs, geometry_msgs, nav_msgs and tf2_msgs,
+  # their images encoded (PNG, JPEG) and rigs rectified (CameraInfo) by OpenCV's Python bindings
   libbz2-dev liblz4-dev python3-rosbag python3-sensor-msgs python3-geometry-msgs python3-nav-msgs python3-tf2-msgs
+  python3-opencv
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # the format check (scripts/check-format.sh: clang-format 14, as .clang-format was tuned for)

@@ -279,22 +279,60 @@ void Ros1Bag::readIndex(std::uint64_t index_pos) {
   index_pos_ = index_pos;
 }
 
-void Ros1Bag::scan() {
-  // One pass over every chunk, counting what is there; the real pass starts again from the top.
-  std::uint64_t messages = 0;
-  std::vector<bool> seen;
-  RecordedMessage m;
-  while (next({}, m)) {
-    const std::size_t i = static_cast<std::size_t>(m.topic - topics_.data());
-    seen.resize(topics_.size(), false);
-    TopicInfo& t = topics_[i];
-    ++t.message_count;
-    if (!seen[i] || m.log_time_ns < t.first_ns) t.first_ns = m.log_time_ns;
-    if (!seen[i] || m.log_time_ns > t.last_ns) t.last_ns = m.log_time_ns;
-    seen[i] = true;
-    ++messages;
+void Ros1Bag::countMessage(std::size_t topic, std::int64_t ns, std::uint64_t n) {
+  TopicInfo& t = topics_[topic];
+  if (t.message_count == 0 || ns < t.first_ns) t.first_ns = ns;
+  if (t.message_count == 0 || ns > t.last_ns) t.last_ns = ns;
+  t.message_count += n;
+  scanned_messages_ += n;
+}
+
+bool Ros1Bag::countFromIndex(const Record& chunk) {
+  // The index records rosbag writes after each chunk it closes: each connection's message times.
+  struct Entries {
+    std::size_t topic;
+    std::int64_t first, last;
+    std::uint64_t n;
+  };
+  std::vector<Entries> entries;
+  std::vector<std::uint8_t> data;
+  for (std::uint64_t pos = chunk.data_pos + chunk.data_len; pos < file_size_;) {
+    Record r;
+    if (!readFileRecord(pos, r, true) || r.op != kOpIndex || r.data_pos + r.data_len > file_size_) break;
+    const auto c = connections_.find(field<std::uint32_t>(r.fields, "conn", where(pos)));
+    if (c == connections_.end()) return false;  // a connection first defined inside this chunk
+    data.resize(r.data_len);
+    readAt(r.data_pos, data.data(), data.size());
+    Entries e{c->second.topic, 0, 0, 0};
+    for (std::size_t i = 0; i + 12 <= data.size(); i += 12, ++e.n) {
+      const std::int64_t ns = timeNs(loadLe<std::uint64_t>(data.data() + i));
+      e.first = e.n == 0 ? ns : std::min(e.first, ns);
+      e.last = e.n == 0 ? ns : std::max(e.last, ns);
+    }
+    if (e.n > 0) entries.push_back(e);
+    pos = r.data_pos + r.data_len;
   }
-  truncation_ = stop_ + "no index; " + std::to_string(messages) + " complete messages read";
+  if (entries.empty()) return false;
+  for (const Entries& e : entries) {
+    countMessage(e.topic, e.first, 0);
+    countMessage(e.topic, e.last, e.n);
+  }
+  ++compressions_[textField(chunk.fields, "compression", where(chunk.pos))];
+  chunk_stored_ += chunk.data_len;
+  chunk_uncompressed_ += field<std::uint32_t>(chunk.fields, "size", where(chunk.pos));
+  return true;
+}
+
+void Ros1Bag::scan() {
+  // One pass over the bag, counting what is there: a chunk rosbag closed is counted from the index
+  // records after it (no decompression) once its connections are known; the others (the first
+  // chunks, which define the connections, and the one cut short) are read. The real pass then
+  // starts again from the top.
+  scanning_ = true;
+  RecordedMessage m;
+  while (next({}, m)) countMessage(static_cast<std::size_t>(m.topic - topics_.data()), m.log_time_ns, 1);
+  scanning_ = false;
+  truncation_ = stop_ + "no index; " + std::to_string(scanned_messages_) + " complete messages read";
   in_chunk_ = false;
   done_ = false;
   chunk_.clear();
@@ -402,6 +440,13 @@ bool Ros1Bag::next(const std::vector<std::string>& wanted, RecordedMessage& out)
       break;
     }
     if (r.op == kOpChunk) {
+      const bool whole = !(r.data_len == 0 && field<std::uint32_t>(r.fields, "size", where(r.pos)) == 0) &&
+                         r.data_pos + r.data_len <= file_size_;
+      if (scanning_ && whole && countFromIndex(r)) {
+        checkCompression(textField(r.fields, "compression", where(r.pos)), where(r.pos) + " (chunk)");
+        pos_ = r.data_pos + r.data_len;
+        continue;
+      }
       chunk_cut_ = !loadChunk(r);
       chunk_file_pos_ = r.pos;
       chunk_off_ = 0;

@@ -6,7 +6,8 @@
 // Memory: one chunk at a time (the recorder's chunk size, 768 KiB by default, or one larger
 // message), whatever the bag's length.
 // A bag cut short (the recorder killed: index_pos 0 or past the end, the last chunk partial) is
-// scanned once when opened (for its topics) and read up to the last complete message;
+// scanned when opened (for its topics: the index records after each closed chunk, and the chunks
+// that define connections or were cut) and read up to the last complete message;
 // truncation() says where it stopped. A complete chunk whose data do not decompress, an unknown
 // compression or a malformed record is an IoError naming the file and the byte offset.
 // Threads: one user at a time.
@@ -59,6 +60,8 @@ class Ros1Bag final : public Recording {
   bool readFileRecord(std::uint64_t pos, Record& record, bool allow_partial);
   void readIndex(std::uint64_t index_pos);
   void scan();
+  bool countFromIndex(const Record& chunk);
+  void countMessage(std::size_t topic, std::int64_t ns, std::uint64_t n);
   // Reads and decompresses the chunk of `record` into chunk_; false when its data are cut short
   // (chunk_ holds what could be recovered).
   bool loadChunk(const Record& record);
@@ -77,6 +80,8 @@ class Ros1Bag final : public Recording {
   std::uint64_t chunk_stored_ = 0, chunk_uncompressed_ = 0;
   std::string truncation_;
   std::string stop_;  // where the scan stopped, the start of truncation_
+  bool scanning_ = false;
+  std::uint64_t scanned_messages_ = 0;
 
   // Reading position: the next top-level record, and inside the current chunk.
   std::uint64_t pos_ = 0;

@@ -5,7 +5,7 @@
 # or PNG images and uncompressed, bz2 or lz4 chunks, and with the calibration from CameraInfo and
 # poses from TF; at least 92 % voxel agreement with JPEG at quality 95. Jittered right stamps with one right image
 # dropped: every other frame paired, one unpaired image counted. A bag cut mid-chunk runs and says
-# where it stopped. Bad input: the exact messages.
+# where it stopped. Memory does not grow with the bag. Bad input: the exact messages.
 # Usage: cli_bag_test.sh <cenote binary> <source dir>
 set -u
 cenote=$1
@@ -93,6 +93,23 @@ processed=$(json "$work/cut-out/report.json" 'd["frames_processed"]')
 "$cenote" bag info "$work/cut.bag" >"$work/cut-info.txt" 2>&1 || fail "bag info on the cut bag failed"
 grep -qF "cut short:   $truncation" "$work/cut-info.txt" || fail "bag info does not say where the bag was cut"
 
+# Bounded memory: a bag five times as long peaks within 10 % of the short one.
+"$cenote" sim --scene reef --frames $((5 * frames)) --width 320 --height 240 --quiet --out "$work/long" >/dev/null 2>&1 ||
+  fail "cenote sim (long) failed"
+$py "$source_dir/tests/io/bag/euroc_to_bag.py" "$work/long" "$work/long.bag" --images png --compression lz4 ||
+  fail "euroc_to_bag.py (long)"
+for name in png-lz4 long; do  # no map: the map grows with the volume seen, the reading must not
+  dive=$work/dive
+  [ $name = long ] && dive=$work/long
+  "$cenote" run --dataset "$work/$name.bag" --pose-topic /odom --pose-frame body --calibration "$dive/mav0/cam0/sensor.yaml" \
+    --out "$work/$name-memory" >/dev/null 2>&1 || fail "cenote run ($name, no map) failed"
+done
+short_mb=$(json "$work/png-lz4-memory/report.json" 'd["peak_memory_mb"]')
+long_mb=$(json "$work/long-memory/report.json" 'd["peak_memory_mb"]')
+echo "peak memory: $frames-frame bag $short_mb MiB, $((5 * frames))-frame bag $long_mb MiB"
+$py -c "import sys; sys.exit(0 if $long_mb <= 1.1 * $short_mb else 1)" ||
+  fail "memory grows with the bag: $short_mb MiB for $frames frames, $long_mb MiB for $((5 * frames))"
+
 # bag info: topics, types, counts and rates, compression.
 "$cenote" bag info "$work/png-lz4.bag" >"$work/baginfo.txt" 2>&1 || fail "cenote bag info failed"
 grep -qE "/odom +[0-9]+ msgs @ 200.0 Hz : nav_msgs/Odometry" "$work/baginfo.txt" || fail "bag info: /odom line: $(cat "$work/baginfo.txt")"
@@ -105,11 +122,17 @@ expect_error 1 "error: topic /cam_fl/image_raw is not in $work/raw-none.bag; its
   run --dataset "$work/raw-none.bag" --left /cam_fl/image_raw --right /right/image_raw --calibration "$calib" --pose-topic /odom --out "$work/x"
 expect_error 1 "error: pose topic /vio/odom is not in $work/raw-none.bag; its pose topics: /odom (nav_msgs/Odometry)" \
   run --dataset "$work/raw-none.bag" --calibration "$calib" --pose-topic /vio/odom --out "$work/x"
+expect_error 1 "error: pose topic /left/image_raw in $work/raw-none.bag has type sensor_msgs/Image, not nav_msgs/Odometry, geometry_msgs/PoseStamped, geometry_msgs/TransformStamped or tf2_msgs/TFMessage" \
+  run --dataset "$work/raw-none.bag" --calibration "$calib" --pose-topic /left/image_raw --out "$work/x"
 expect_error 1 "error: recording $work/raw-none.bag has no CameraInfo topic /left/camera_info for the calibration; give --calibration FILE" \
   run --dataset "$work/raw-none.bag" --pose-topic /odom --out "$work/x"
 $py "$source_dir/tests/io/bag/write_test_bags.py" "$work/small" || fail "write_test_bags.py failed"
 expect_error 1 "error: topic /cam/bayer: image encoding bayer_rggb8 is a raw Bayer mosaic; cenote reads mono8, bgr8, rgb8, bgra8 and rgba8 (debayer it first: record image_mono or image_color, or run image_proc)" \
   run --dataset "$work/small/messages.bag" --left /cam/bayer --right /cam/mono --calibration "$calib" --pose-topic /odom --out "$work/x"
+expect_error 1 "error: calibration $calib is for 320x240 images, but those on /cam/mono are 3x2" \
+  run --dataset "$work/small/messages.bag" --left /cam/mono --right /cam/bgr --calibration "$calib" --pose-topic /odom --out "$work/x"
+expect_error 1 "error: topic /odom in $work/small/messages.bag has type nav_msgs/Odometry, not sensor_msgs/Image or sensor_msgs/CompressedImage" \
+  run --dataset "$work/small/messages.bag" --left /odom --right /cam/bgr --calibration "$calib" --pose-topic /odom --out "$work/x"
 chunk=$(json "$work/small/expected.json" 'd["zstd.bag"]["first_chunk_pos"]')
 expect_error 1 "error: bag $work/small/zstd.bag, byte $chunk (chunk): unknown compression 'zstd' (a ROS 1 bag's chunks are none, bz2 or lz4)" \
   bag info "$work/small/zstd.bag"

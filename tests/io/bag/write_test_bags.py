@@ -6,7 +6,8 @@ Usage: write_test_bags.py OUT_DIR. Writes:
   seq_{none,bz2,lz4}.bag  240 mono8 images (/cam/image, 16x8, pixel value = index) and 240 Odometry
                         (/odom) in 4 KiB chunks, so that there are many chunks
   cut_{none,bz2,lz4}.bag  the same cut in the middle of a chunk (the index gone)
-  crashed_none.bag      cut as a killed recorder leaves it: index_pos 0 in the bag header
+  crashed_{none,bz2,lz4}.bag  cut as a killed recorder leaves them: index_pos 0 in the bag header,
+                        data length and size 0 in the header of the chunk being written
   zstd.bag              seq_none.bag with its first chunk's compression renamed 'zstd'
   expected.json         for each cut bag: its size, the cut chunk's position and the number of
                         complete messages before the cut, from rosbag's own index
@@ -139,13 +140,19 @@ for compression in ("none", "bz2", "lz4"):
         f.write(raw[:cut])
     expected["cut_%s.bag" % compression] = {"size": cut, "chunk_pos": cut_chunk.pos, "complete": complete,
                                             "first_chunk_pos": chunks[0].pos}
+    # As a killed recorder leaves it: rosbag writes index_pos 0 when it opens the bag and a chunk
+    # header with data length and size 0 when it opens a chunk, and fills them in only on closing.
+    crashed = bytearray(raw[:cut])
+    at = crashed.index(b"index_pos=") + len(b"index_pos=")
+    crashed[at:at + 8] = struct.pack("<Q", 0)
+    header_len = struct.unpack_from("<I", crashed, cut_chunk.pos)[0]
+    at = crashed.index(b"size=", cut_chunk.pos, cut_chunk.pos + 4 + header_len) + len(b"size=")
+    crashed[at:at + 4] = struct.pack("<I", 0)
+    struct.pack_into("<I", crashed, cut_chunk.pos + 4 + header_len, 0)
+    with open(os.path.join(out, "crashed_%s.bag" % compression), "wb") as f:
+        f.write(crashed)
+    expected["crashed_%s.bag" % compression] = dict(expected["cut_%s.bag" % compression])
     if compression == "none":
-        crashed = bytearray(raw[:cut])
-        at = crashed.index(b"index_pos=") + len(b"index_pos=")
-        crashed[at:at + 8] = struct.pack("<Q", 0)
-        with open(os.path.join(out, "crashed_none.bag"), "wb") as f:
-            f.write(crashed)
-        expected["crashed_none.bag"] = dict(expected["cut_none.bag"])
         zstd = bytearray(raw)
         at = zstd.index(b"compression=none", chunks[0].pos)
         zstd[at:at + 16] = b"compression=zstd"
