@@ -17,3 +17,7 @@ bash "$here/bench/run_throughput.sh" "$build/apps/cenote" "$here"
 echo
 echo "== bag_throughput (cenote run on a ROS 1 bag of JPEG pairs beside the same frames as PNG folders)"
 bash "$here/bench/bag_throughput.sh" "$build/apps/cenote" "$here"
+echo
+echo "== mcap_throughput (cenote run on a ROS 2 MCAP of PNG pairs beside the same frames as PNG folders)"
+cmake --build "$build" --target ros2_bag_data >/dev/null
+bash "$here/bench/mcap_throughput.sh" "$build/apps/cenote" "$here" "$build"
