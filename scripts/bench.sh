@@ -14,3 +14,10 @@ echo "== run_throughput (cenote run on a simulated 800x600 cave, 112 disparities
 echo "| run | fps | read+rectify ms | stereo ms | fusion ms | output ms | peak MiB | / paper's best |"
 echo "|---|---|---|---|---|---|---|---|"
 bash "$here/bench/run_throughput.sh" "$build/apps/cenote" "$here"
+echo
+echo "== bag_throughput (cenote run on a ROS 1 bag of JPEG pairs beside the same frames as PNG folders)"
+bash "$here/bench/bag_throughput.sh" "$build/apps/cenote" "$here"
+echo
+echo "== mcap_throughput (cenote run on a ROS 2 MCAP of PNG pairs beside the same frames as PNG folders)"
+cmake --build "$build" --target ros2_bag_data >/dev/null
+bash "$here/bench/mcap_throughput.sh" "$build/apps/cenote" "$here" "$build"

@@ -9,6 +9,8 @@ PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config git
   # pipeline: images, calibration, SIMD, threads
   libopencv-dev libeigen3-dev libhwy-dev libdeflate-dev zlib1g-dev libjpeg-dev
+  # ROS 2 recordings: MCAP chunks (zstd, lz4), rosbag2 sqlite3 storage
+  libzstd-dev liblz4-dev libsqlite3-dev
   # command line, config, logs
   libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   # mapping: volumetric map (OpenVDB, TBB), OctoMap as peer, reference and file format
@@ -25,6 +27,11 @@ PACKAGES=(
   python3-protobuf
   # server TLS tests make their certificates
   openssl
+  # ROS 1 bags (io/bag/ros1_bag.cpp): bz2 and lz4-frame chunks; the tests' bags are written by ROS's own
+  # rosbag (python3-rosbag) with the message classes of sensor_msgs, geometry_msgs, nav_msgs and tf2_msgs,
+  # their images encoded (PNG, JPEG) and rigs rectified (CameraInfo) by OpenCV's Python bindings
+  libbz2-dev liblz4-dev python3-rosbag python3-sensor-msgs python3-geometry-msgs python3-nav-msgs python3-tf2-msgs
+  python3-opencv
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # the format check (scripts/check-format.sh: clang-format 14, as .clang-format was tuned for)
@@ -33,6 +40,8 @@ PACKAGES=(
   python3 python3-numpy
   # the live viewer's browser test: headless Chromium (driven by npm playwright-core, web/)
   chromium
+  # the paper's dataset layout written by tests (OpenCV FileStorage); MCAP test recordings (npm ci)
+  python3-opencv nodejs
 )
 # `make fuzz` (install-deps.sh --fuzz): clang and its libFuzzer runtime; CI's `make test` needs neither.
 if [ "${1:-}" = "--fuzz" ]; then
@@ -83,4 +92,12 @@ if [ ! -f /usr/include/pcl-1.13/pcl/io/pcd_io.h ] && [ ! -f "$PCL_HEADERS/usr/in
   $SUDO mkdir -p "$PCL_HEADERS"
   $SUDO dpkg-deb -x "$work"/libpcl-dev_*.deb "$PCL_HEADERS"
   rm -rf "$work"
+fi
+
+# npm for the MCAP test recordings (tests/io/bag/gen, npm ci at build time): Debian's npm, unless the
+# installed nodejs already brings its own (NodeSource's does, and conflicts with Debian's npm package).
+if ! command -v npm >/dev/null 2>&1; then
+  echo "install-deps: installing npm"
+  [ "$updated" -eq 1 ] || $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends npm
 fi

@@ -18,5 +18,7 @@ void registerSimCommand(CLI::App& app);
 void registerMapCommand(CLI::App& app);
 // `cenote view`: a saved map in the live viewer (server/viewer/).
 void registerViewCommand(CLI::App& app);
+// `cenote bag info`: what a recording holds.
+void registerBagCommand(CLI::App& app);
 
 }  // namespace cenote::apps

@@ -28,6 +28,7 @@
 #include "eval/trajectory/trajectory_alignment.h"
 #include "eval/trajectory/trajectory_io.h"
 #include "io/image/image_io.h"
+#include "pipeline/dataset/stereo_dataset.h"
 
 namespace cenote::apps {
 namespace {
@@ -198,9 +199,18 @@ std::vector<Eigen::Vector3f> loadCloud(const std::string& path, double voxel_m, 
   return eval::voxelDownsample(cloud.points, voxel_m);
 }
 
-void runCloud(const CloudOptions& o) {
+// --target: a cloud file, or a dataset folder that ships a reference cloud (the paper's colmap.ply).
+std::string targetCloud(const std::string& target) {
+  if (!std::filesystem::is_directory(target)) return target;
+  const std::optional<std::string> cloud = pipeline::openDataset(target)->referenceCloud();
+  if (!cloud) throw NotFoundError("--target " + target + ": the dataset has no reference cloud (colmap.ply)");
+  return *cloud;
+}
+
+void runCloud(CloudOptions o) {
   checkOutputs(o.out);
   if (!(o.voxel_m >= 0.0)) throw Error("--voxel " + num(o.voxel_m) + ": must be >= 0 (0 = no downsampling)");
+  o.target = targetCloud(o.target);
   const std::vector<Eigen::Vector3f> source = loadCloud(o.source, o.voxel_m, "--source");
   const std::vector<Eigen::Vector3f> target = loadCloud(o.target, o.voxel_m, "--target");
   const eval::CloudEvaluation e = eval::evaluateClouds(source, target, o.metrics);
@@ -297,7 +307,7 @@ void registerEvalCommand(CLI::App& app) {
   auto c = std::make_shared<CloudOptions>();
   CLI::App* cloud = eval_cmd->add_subcommand("cloud", "Point clouds: accuracy, completeness, precision, recall");
   cloud->add_option("--source", c->source, "Estimated cloud (PLY or PCD)")->required();
-  cloud->add_option("--target", c->target, "Reference cloud (PLY or PCD)")->required();
+  cloud->add_option("--target", c->target, "Reference cloud (PLY or PCD), or a dataset folder with colmap.ply")->required();
   cloud->add_option("--threshold", c->metrics.threshold_m, "Precision/recall distance, metres")->capture_default_str();
   cloud->add_option("--voxel", c->voxel_m, "Voxel-downsample both clouds first, metres (paper: 0.001; 0 = none)")
       ->capture_default_str();
@@ -313,9 +323,9 @@ void registerEvalCommand(CLI::App& app) {
   traj->add_option("--align", t->align, "Alignment")->capture_default_str()->check(CLI::IsMember({"sim3", "se3", "none"}));
   traj->add_option("--format", t->format, "File format (of both, unless --reference-format)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"auto", "tum", "euroc", "kitti", "colmap"}));
+      ->check(CLI::IsMember({"auto", "tum", "euroc", "kitti", "colmap", "okvis"}));
   traj->add_option("--reference-format", t->reference_format, "Format of the reference when it differs")
-      ->check(CLI::IsMember({"auto", "tum", "euroc", "kitti", "colmap"}));
+      ->check(CLI::IsMember({"auto", "tum", "euroc", "kitti", "colmap", "okvis"}));
   traj->add_option("--estimate-times", t->estimate_times, "KITTI: timestamps file of the estimate");
   traj->add_option("--reference-times", t->reference_times, "KITTI: timestamps file of the reference");
   traj->add_option("--tolerance", t->tolerance_s, "Largest time difference of an associated pair, s")

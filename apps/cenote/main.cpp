@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   cenote::apps::registerSimCommand(app);
   cenote::apps::registerMapCommand(app);
   cenote::apps::registerViewCommand(app);
+  cenote::apps::registerBagCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -16,6 +16,7 @@
 #include "apps/cenote/commands.h"
 #include "apps/cenote/progress_bar.h"
 #include "common/error.h"
+#include "pipeline/dataset/recording_dataset.h"
 #include "pipeline/dataset/stereo_dataset.h"
 #include "common/yaml_section.h"
 #include "eval/report/html_report.h"
@@ -35,6 +36,7 @@ extern "C" void onInterrupt(int) { g_stop = true; }
 struct RunOptions {
   std::string dataset, format = "auto", trajectory, trajectory_format, trajectory_times, pose_frame, config, out, map,
                        corrections;
+  std::string left, right, calibration, pose_topic, tf_parent, tf_child;  // recordings
   int fusion_views = 0, max_frames = -1;
   bool write_depth = false, report = false;
   double voxel_m = -1.0, keyframe_translation_m = -1.0, keyframe_rotation_deg = -1.0;
@@ -69,6 +71,63 @@ mapping::MapConfig mapConfig(const RunOptions& o) {
   return config;
 }
 
+// The `bag:` section of the configuration file (defaults without one).
+pipeline::RecordingConfig bagConfig(const RunOptions& o) {
+  pipeline::RecordingConfig config;
+  if (o.config.empty()) return config;
+  YamlSection root(loadYamlFile(o.config), "", o.config);
+  YamlSection section = root.section("bag");
+  config.read(section);
+  section.finish();
+  return config;
+}
+
+// A ROS 2 bag folder: metadata.yaml and .db3 files, or .db3 files alone (a recorder that never finished).
+bool isRos2BagFolder(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return false;
+  for (const fs::directory_entry& e : fs::directory_iterator(path, ec))
+    if (e.path().extension() == ".db3") return true;
+  return false;
+}
+
+bool isRecording(const RunOptions& o) {
+  return o.format == "bag" ||
+         (o.format == "auto" && (std::filesystem::is_regular_file(o.dataset) || isRos2BagFolder(o.dataset)));
+}
+
+std::unique_ptr<pipeline::StereoDataset> openDataset(const RunOptions& o) {
+  if (isRecording(o)) {
+    return std::make_unique<pipeline::RecordingDataset>(
+        o.dataset, pipeline::RecordingTopics{o.left, o.right, o.calibration, "", ""}, bagConfig(o));
+  }
+  for (const auto& [flag, value] : {std::pair{"--left", &o.left}, std::pair{"--right", &o.right},
+                                    std::pair{"--calibration", &o.calibration}, std::pair{"--pose-topic", &o.pose_topic}}) {
+    if (!value->empty()) {
+      throw Error(std::string(flag) + " is for recordings (.bag, .mcap, a ROS 2 bag); " + o.dataset + " is a folder");
+    }
+  }
+  return pipeline::openDataset(o.dataset, pipeline::parseDatasetFormat(o.format));
+}
+
+// The poses of a recording's pose topic, as the raw left camera's (composed with T_body_cam when
+// they are body poses).
+pipeline::CameraTrajectory poseTopicTrajectory(const pipeline::StereoDataset& dataset, const RunOptions& o,
+                                               pipeline::PoseFrame pose_frame) {
+  pipeline::CameraTrajectory out;
+  const io::Trajectory poses = pipeline::readPoseTopic(o.dataset, o.pose_topic, o.tf_parent, o.tf_child);
+  out.file_describes_body = pose_frame == pipeline::PoseFrame::kBody;
+  const bool extrinsics_matter = !dataset.T_body_cam().isApprox(Eigen::Isometry3d::Identity(), 1e-12);
+  out.frame_assumed = pose_frame == pipeline::PoseFrame::kAuto && extrinsics_matter;
+  if (out.frame_assumed) {
+    out.note = "poses of " + o.pose_topic + " taken as camera poses (a pose topic does not say); pass --pose-frame body " +
+               "if they are body (IMU) poses";
+  }
+  out.trajectory = out.file_describes_body ? poses.transformedBy(dataset.T_body_cam()) : poses;
+  return out;
+}
+
 // The corrections of a run: each event's poses go to the map history when the run reaches them.
 struct CorrectionReplay {
   std::vector<pipeline::CorrectionEvent> events;
@@ -95,21 +154,35 @@ struct CorrectionReplay {
 };
 
 void run(const RunOptions& o) {
-  pipeline::Runner runner(makeConfig(o));
+  pipeline::PipelineConfig config = makeConfig(o);
   if (!o.corrections.empty() && o.map.empty()) throw Error("--corrections " + o.corrections + " needs --map");
-  const std::unique_ptr<pipeline::StereoDataset> dataset = pipeline::openDataset(o.dataset,
-                                                                                 pipeline::parseDatasetFormat(o.format));
-  const pipeline::CameraTrajectory camera = pipeline::loadCameraTrajectory(
-      *dataset, {o.trajectory, o.trajectory_format, o.trajectory_times, runner.config().run.pose_frame});
+  const std::unique_ptr<pipeline::StereoDataset> dataset = openDataset(o);
+  if (!o.pose_topic.empty() && !o.trajectory.empty()) throw Error("give --pose-topic or --trajectory, not both");
+  if (isRecording(o) && o.pose_topic.empty() && o.trajectory.empty()) {
+    throw Error("no poses for recording " + o.dataset + ": give --pose-topic TOPIC (`cenote bag info " + o.dataset +
+                "` lists its topics) or --trajectory FILE");
+  }
+  const pipeline::CameraTrajectory camera = o.pose_topic.empty()
+                                                ? pipeline::loadCameraTrajectory(
+                                                      *dataset, {o.trajectory, o.trajectory_format, o.trajectory_times,
+                                                                 config.run.pose_frame})
+                                                : poseTopicTrajectory(*dataset, o, config.run.pose_frame);
+  // Keyframe poses seconds apart are no trajectory to interpolate: only the frames at a keyframe get a
+  // pose (a gap of 1 us, Trajectory::poseAt's tolerance of the same time, interpolates nothing).
+  if (camera.keyframes_only) config.run.pose_max_gap_s = 1e-6;
+  pipeline::Runner runner(config);
   const io::Trajectory& trajectory = camera.trajectory;
   std::cerr << dataset->describe() << "; trajectory " << trajectory.name() << " (" << trajectory.size() << " poses, "
             << camera.fileFrame() << " poses" << (camera.frame_assumed ? ", assumed" : "") << ")\n";
   if (camera.frame_assumed) std::cerr << "note: " << camera.note << "\n";
-
+  if (camera.keyframes_only)
+    std::cerr << "note: the poses are keyframes only (" << trajectory.size()
+              << "): only the frames at a keyframe are processed\n";
   // The map stage: every fused batch is integrated (free space along each ray, a hit at its end).
   std::unique_ptr<mapping::OccupancyMap> map;
   std::unique_ptr<mapping::MapHistory> history;
   CorrectionReplay replay;
+  double last_batch_t_s = 0.0;
   pipeline::PointSink sink;
   if (!o.map.empty()) {
     mapping::mapFormatOf(o.map);  // an unknown extension fails now, not after the run
@@ -124,6 +197,7 @@ void run(const RunOptions& o) {
     const double max_gap_s = runner.config().run.pose_max_gap_s;
     sink = [&, max_gap_s](const PointBatch& batch, const Eigen::Isometry3d& T_world_cam) {
       if (batch.empty()) return;
+      last_batch_t_s = batch.t_s;
       replay.applyUntil(*history, batch.t_s);
       // The corrections give poses of the raw camera (as the trajectory): T_raw_cam is the
       // rectification's rotation, the same for every frame.
@@ -141,9 +215,13 @@ void run(const RunOptions& o) {
                                           [&bar](size_t done, size_t total) { bar.update(done, total); });
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
+
   if (history) {
     // The events the run reached: up to its last frame.
-    const double end_s = dataset->size() > 0 ? dataset->timestamp(std::min(dataset->size(), report.frames_in) - 1) : 0.0;
+    // A recording is read front to back and has no timestamp by index: its last fused frame's time.
+    const double end_s = isRecording(o)        ? last_batch_t_s
+                         : dataset->size() > 0 ? dataset->timestamp(std::min(dataset->size(), report.frames_in) - 1)
+                                               : 0.0;
     replay.applyUntil(*history, std::nextafter(end_s, HUGE_VAL));
     std::printf("corrections: %zu of %zu events applied: %zu frames moved, %zu replayed, %zu blocks rebuilt, %zu kept "
                 "(frames dropped from the store), %.1f ms; frame store %zu frames, %.1f MB\n",
@@ -155,6 +233,8 @@ void run(const RunOptions& o) {
   report.pose_frame = camera.fileFrame();
   report.pose_frame_assumed = camera.frame_assumed;
   report.pose_frame_hint = camera.note;
+  report.keyframes_only = camera.keyframes_only;
+  report.pose_keyframes = camera.keyframes_only ? trajectory.size() : 0;
   const std::string report_path = (std::filesystem::path(o.out) / "report.json").string();
   std::ofstream(report_path) << report.toJson();
   std::cout << report.toTable();
@@ -173,11 +253,29 @@ void run(const RunOptions& o) {
 void registerRunCommand(CLI::App& app) {
   auto o = std::make_shared<RunOptions>();
   CLI::App* cmd = app.add_subcommand("run", "Run the real-time pipeline over a recorded stereo sequence");
-  cmd->add_option("--dataset", o->dataset, "EuRoC folder (holding mav0/) or KITTI sequence folder")->required();
-  cmd->add_option("--format", o->format, "Dataset layout")->check(CLI::IsMember({"auto", "euroc", "kitti"}));
-  cmd->add_option("--trajectory", o->trajectory, "Poses (TUM, EuRoC CSV or KITTI); default: the dataset's ground truth");
+  cmd->add_option("--dataset", o->dataset,
+                  "EuRoC folder (holding mav0/), KITTI sequence folder, the paper's layout, or a recording (ROS 1 bag, "
+                  "MCAP, ROS 2 bag folder or .db3)")
+      ->required();
+  cmd->add_option("--format", o->format, "Dataset layout (auto: a file or a ROS 2 bag folder is a recording)")
+      ->check(CLI::IsMember({"auto", "euroc", "kitti", "paper", "bag"}));
+  cmd->add_option("--left", o->left, "Recording: left image topic (default: the first rig preset of bag.rigs found)");
+  cmd->add_option("--right", o->right, "Recording: right image topic");
+  cmd->add_option("--calibration", o->calibration,
+                  "Recording: calibration file (OpenCV YAML, EuRoC cam0/sensor.yaml, KITTI calib.txt, the paper's "
+                  "intrinsics.yaml); default: the cameras' CameraInfo topics");
+  cmd->add_option(
+      "--pose-topic", o->pose_topic,
+      "Recording: poses (nav_msgs/Odometry, geometry_msgs/PoseStamped or TransformStamped, tf2_msgs/TFMessage)");
+  cmd->add_option("--tf-parent", o->tf_parent, "Recording: the parent frame of the TF pair (--pose-topic /tf)");
+  cmd->add_option("--tf-child", o->tf_child, "Recording: the child frame of the TF pair (--pose-topic /tf)");
+  cmd->add_option("--trajectory", o->trajectory,
+                  "Poses (TUM, EuRoC CSV, KITTI, OKVIS / SVIn2 CSV, OpenVINS); default: the dataset's ground truth");
   cmd->add_option("--trajectory-format", o->trajectory_format, "Trajectory format (default: detected)")
-      ->check(CLI::IsMember({"tum", "euroc", "kitti"}));
+      ->check(CLI::IsMember({"tum", "euroc", "kitti", "okvis", "svin2", "openvins"}));
+  cmd->add_option("--corrections", o->corrections,
+                  "Folder of loop-closure corrections (<time s>.tum: corrected poses of past frames, in the "
+                  "trajectory's frame), each applied to the map when the run reaches its time");
   cmd->add_option("--trajectory-times", o->trajectory_times,
                   "Times of KITTI poses (one a line, seconds); default: the KITTI sequence's times.txt");
   cmd->add_option("--pose-frame", o->pose_frame, "What the poses describe (default: the format's convention)")
@@ -196,9 +294,6 @@ void registerRunCommand(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--out", o->out, "Output folder")->required();
   cmd->add_option("--map", o->map, "Integrate the fused points into an occupancy map saved here (.vdb, .bt, .ot)");
-  cmd->add_option("--corrections", o->corrections,
-                  "Folder of loop-closure corrections (<time s>.tum: corrected poses of past frames, in the "
-                  "trajectory's frame), each applied to the map when the run reaches its time");
   cmd->callback([o] { run(*o); });
 }
 

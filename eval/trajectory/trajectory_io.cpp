@@ -39,7 +39,8 @@ TrajectoryFileFormat parseTrajectoryFileFormat(const std::string& name) {
   if (name == "euroc") return TrajectoryFileFormat::kEuroc;
   if (name == "kitti") return TrajectoryFileFormat::kKitti;
   if (name == "colmap") return TrajectoryFileFormat::kColmap;
-  throw Error("trajectory format '" + name + "': must be auto, tum, euroc, kitti or colmap");
+  if (name == "okvis") return TrajectoryFileFormat::kOkvis;
+  throw Error("trajectory format '" + name + "': must be auto, tum, euroc, kitti, colmap or okvis");
 }
 
 const char* toString(TrajectoryFileFormat format) {
@@ -49,6 +50,7 @@ const char* toString(TrajectoryFileFormat format) {
     case TrajectoryFileFormat::kEuroc: return "euroc";
     case TrajectoryFileFormat::kKitti: return "kitti";
     case TrajectoryFileFormat::kColmap: return "colmap";
+    case TrajectoryFileFormat::kOkvis: return "okvis";
   }
   return "?";
 }
@@ -65,8 +67,10 @@ TrajectoryFileFormat detectTrajectoryFileFormat(const std::string& path) {
     break;
   }
   switch (io::detectTrajectoryFormat(path)) {
-    case io::TrajectoryFormat::kTum: return TrajectoryFileFormat::kTum;
+    case io::TrajectoryFormat::kTum:
+    case io::TrajectoryFormat::kOpenVins: return TrajectoryFileFormat::kTum;
     case io::TrajectoryFormat::kEuroc: return TrajectoryFileFormat::kEuroc;
+    case io::TrajectoryFormat::kOkvis: return TrajectoryFileFormat::kOkvis;
     case io::TrajectoryFormat::kKitti: return TrajectoryFileFormat::kKitti;
   }
   return TrajectoryFileFormat::kTum;
@@ -145,6 +149,7 @@ std::vector<io::StampedPose> readTrajectoryFile(const std::string& path, Traject
     case TrajectoryFileFormat::kColmap: poses = readColmapImagesTxt(path); break;
     case TrajectoryFileFormat::kTum: poses = io::Trajectory::read(path, io::TrajectoryFormat::kTum).poses(); break;
     case TrajectoryFileFormat::kEuroc: poses = io::Trajectory::read(path, io::TrajectoryFormat::kEuroc).poses(); break;
+    case TrajectoryFileFormat::kOkvis: poses = io::Trajectory::read(path, io::TrajectoryFormat::kOkvis).poses(); break;
     case TrajectoryFileFormat::kKitti:
       poses = io::Trajectory::read(path, io::TrajectoryFormat::kKitti, kitti_times).poses();
       break;

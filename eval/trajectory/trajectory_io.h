@@ -16,9 +16,9 @@
 
 namespace cenote::eval {
 
-enum class TrajectoryFileFormat { kAuto, kTum, kEuroc, kKitti, kColmap };
+enum class TrajectoryFileFormat { kAuto, kTum, kEuroc, kKitti, kColmap, kOkvis };
 
-// "auto", "tum", "euroc", "kitti" or "colmap". @throws cenote::Error otherwise.
+// "auto", "tum", "euroc", "kitti", "colmap" or "okvis" (OKVIS / SVIn2 CSV). @throws cenote::Error otherwise.
 TrajectoryFileFormat parseTrajectoryFileFormat(const std::string& name);
 const char* toString(TrajectoryFileFormat format);
 

@@ -7,6 +7,7 @@
 
 #include "common/error.h"
 #include "common/pose_check.h"
+#include "io/trajectory/vio_trajectory.h"
 
 namespace cenote::io {
 namespace {
@@ -111,12 +112,14 @@ Trajectory::Trajectory(std::vector<StampedPose> poses, std::string name)
 
 Trajectory Trajectory::read(const std::string& path, TrajectoryFormat format, const std::string& kitti_times) {
   switch (format) {
-    case TrajectoryFormat::kTum: {
+    case TrajectoryFormat::kTum:
+    case TrajectoryFormat::kOpenVins: {
       const TumTrajectory tum = TumTrajectory::read(path);
       return Trajectory(tum.poses(), path);
     }
     case TrajectoryFormat::kEuroc: return readEuroc(path);
     case TrajectoryFormat::kKitti: return readKitti(path, kitti_times);
+    case TrajectoryFormat::kOkvis: return readOkvisCsv(path);
   }
   throw Error("unknown trajectory format");
 }
@@ -154,6 +157,8 @@ const char* toString(TrajectoryFormat format) {
     case TrajectoryFormat::kTum: return "tum";
     case TrajectoryFormat::kEuroc: return "euroc";
     case TrajectoryFormat::kKitti: return "kitti";
+    case TrajectoryFormat::kOkvis: return "okvis";
+    case TrajectoryFormat::kOpenVins: return "openvins";
   }
   return "?";
 }
@@ -162,7 +167,13 @@ TrajectoryFormat parseTrajectoryFormat(const std::string& name) {
   if (name == "tum") return TrajectoryFormat::kTum;
   if (name == "euroc") return TrajectoryFormat::kEuroc;
   if (name == "kitti") return TrajectoryFormat::kKitti;
-  throw Error("trajectory format '" + name + "': must be tum, euroc or kitti");
+  if (name == "okvis" || name == "svin2") return TrajectoryFormat::kOkvis;
+  if (name == "openvins") return TrajectoryFormat::kOpenVins;
+  throw Error("trajectory format '" + name + "': must be tum, euroc, kitti, okvis (svin2) or openvins");
+}
+
+bool describesBody(TrajectoryFormat format) {
+  return format == TrajectoryFormat::kEuroc || format == TrajectoryFormat::kOkvis || format == TrajectoryFormat::kOpenVins;
 }
 
 TrajectoryFormat detectTrajectoryFormat(const std::string& path) {
@@ -170,13 +181,15 @@ TrajectoryFormat detectTrajectoryFormat(const std::string& path) {
   std::string line;
   std::vector<double> v;
   while (std::getline(in, line)) {
+    if (line.find("p_WS_W_x") != std::string::npos) return TrajectoryFormat::kOkvis;
     if (!isDataLine(line)) continue;
     if (line.find(',') != std::string::npos) return TrajectoryFormat::kEuroc;
     if (parseNumbers(line, ' ', v) && v.size() == 8) return TrajectoryFormat::kTum;
     if (parseNumbers(line, ' ', v) && v.size() == 12) return TrajectoryFormat::kKitti;
     break;
   }
-  throw Error(path + ": cannot tell the trajectory format (TUM: 8 numbers a line, KITTI: 12, EuRoC: CSV)");
+  throw Error(path + ": cannot tell the trajectory format (TUM: 8 numbers a line, KITTI: 12, EuRoC: CSV, OKVIS: CSV "
+                     "with a p_WS_W_x header)");
 }
 
 }  // namespace cenote::io

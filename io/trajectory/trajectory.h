@@ -19,7 +19,8 @@
 
 namespace cenote::io {
 
-enum class TrajectoryFormat { kTum, kEuroc, kKitti };
+// kOkvis: the CSV of OKVIS and SVIn2 (io/trajectory/vio_trajectory.h); kOpenVins: TUM rows of the IMU.
+enum class TrajectoryFormat { kTum, kEuroc, kKitti, kOkvis, kOpenVins };
 
 class Trajectory {
  public:
@@ -28,7 +29,8 @@ class Trajectory {
   //         non-finite or not a rotation.
   Trajectory(std::vector<StampedPose> poses, std::string name);
 
-  // TUM: `t tx ty tz qx qy qz qw`. EuRoC: CSV `t_ns, px, py, pz, qw, qx, qy, qz[, ...]`.
+  // TUM: `t tx ty tz qx qy qz qw` (seconds, or nanoseconds: tum_trajectory.h). EuRoC: CSV
+  // `t_ns, px, py, pz, qw, qx, qy, qz[, ...]`. OKVIS / SVIn2: vio_trajectory.h. OpenVINS: TUM rows.
   // KITTI: 12 numbers per line (row-major 3x4 [R | t]); timestamps from `kitti_times` (one per
   // line, seconds) or, when empty, the line index at 10 Hz.
   // @throws cenote::Error naming the file and line of the first malformed entry.
@@ -52,9 +54,12 @@ class Trajectory {
 };
 
 const char* toString(TrajectoryFormat format);
-// "tum", "euroc" or "kitti". @throws cenote::Error otherwise.
+// "tum", "euroc", "kitti", "okvis" or "openvins". @throws cenote::Error otherwise.
 TrajectoryFormat parseTrajectoryFormat(const std::string& name);
-// From the file's content: commas -> EuRoC, 8 numbers -> TUM, 12 -> KITTI.
+// True for the formats whose poses are of the body (IMU): EuRoC, OKVIS, OpenVINS.
+bool describesBody(TrajectoryFormat format);
+// From the file's content: a header naming p_WS_W_x -> OKVIS, other commas -> EuRoC, 8 numbers -> TUM
+// (an OpenVINS file reads as TUM: name it to have its poses taken as the IMU's), 12 -> KITTI.
 // @throws cenote::Error when the file is missing or the first data line fits none.
 TrajectoryFormat detectTrajectoryFormat(const std::string& path);
 

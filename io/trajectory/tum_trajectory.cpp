@@ -21,6 +21,7 @@ TumTrajectory TumTrajectory::parse(std::istream& in, const std::string& name) {
   TumTrajectory trajectory;
   std::string line;
   int line_number = 0;
+  bool nanoseconds = false;
   while (std::getline(in, line)) {
     ++line_number;
     if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF files
@@ -53,6 +54,10 @@ TumTrajectory TumTrajectory::parse(std::istream& in, const std::string& name) {
            << ")";
       throw Error(text.str());
     }
+    // Nanoseconds (ORB-SLAM3's EuRoC-style files: "1403636580838555648.000000 ..."), told by the first
+    // pose: 1e11 s would be the year 5138.
+    if (trajectory.poses_.empty()) nanoseconds = v[0] >= 1e11;
+    if (nanoseconds) v[0] *= 1e-9;
     if (!trajectory.poses_.empty() && !(v[0] > trajectory.poses_.back().t_s)) {
       std::ostringstream text;
       text.precision(17);

@@ -1,6 +1,7 @@
 // tum_trajectory.h: camera trajectories in the TUM RGB-D text format, and pose lookup by time.
 // A line is `t tx ty tz qx qy qz qw` (seconds, metres, unit quaternion of the rotation), giving
 // T_world_cam: p_world = R(q) p_cam + t. Lines starting with '#' and blank lines are skipped.
+// Timestamps are seconds, or nanoseconds when the first is 1e11 or more (ORB-SLAM3 writes both).
 // Timestamps must increase strictly. Lookup takes the nearest pose within a tolerance (no
 // interpolation; other formats and interpolation belong to a later component).
 // Threads: a TumTrajectory is immutable after reading; share it freely.

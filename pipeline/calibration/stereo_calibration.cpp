@@ -135,6 +135,56 @@ void writeStereoCalibration(const std::string& path, const StereoCalibration& c)
   });
 }
 
+StereoCalibration readPaperIntrinsics(const std::string& path) {
+  requireFile(path);
+  cv::FileStorage fs;
+  try {
+    fs.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw Error(path + ": not a readable intrinsics file: " + e.what());
+  }
+  if (!fs.isOpened()) throw Error(path + ": not a readable intrinsics file");
+  StereoCalibration c;
+  int width = 0, height = 0;
+  fs["image_width"] >> width;
+  fs["image_height"] >> height;
+  if (width <= 0 || height <= 0) throw Error(path + ": missing image_width / image_height");
+  c.image_size = cv::Size(width, height);
+  c.left.K = cv::Matx33d(readMatrix(fs, path, {"K1", "K_left"}, 3, 3, true));
+  c.right.K = cv::Matx33d(readMatrix(fs, path, {"K2", "K_right"}, 3, 3, true));
+  c.left.distortion = toVector(readMatrix(fs, path, {"D1", "D_left"}, 0, 0, false));
+  c.right.distortion = toVector(readMatrix(fs, path, {"D2", "D_right"}, 0, 0, false));
+  const cv::FileNode baseline_node = fs["baseline"];
+  if (baseline_node.empty() || (!baseline_node.isReal() && !baseline_node.isInt()))
+    throw Error(path + ": missing baseline (millimetres)");
+  const double baseline_mm = static_cast<double>(baseline_node);
+  if (!(baseline_mm > 0))
+    throw Error(path + ": baseline = " + std::to_string(baseline_mm) + ": must be positive (millimetres)");
+  const cv::Mat R = readMatrix(fs, path, {"R"}, 3, 3, false);
+  if (!R.empty()) c.R = cv::Matx33d(R);
+  const cv::Mat T = readMatrix(fs, path, {"T"}, 3, 1, false);
+  if (T.empty()) {
+    c.T = cv::Vec3d(-baseline_mm * 1e-3, 0.0, 0.0);
+  } else {
+    const cv::Vec3d t(T.at<double>(0), T.at<double>(1), T.at<double>(2));
+    const double length = cv::norm(t);
+    if (std::abs(length - baseline_mm) <= 0.01 * baseline_mm) {
+      c.T = t * 1e-3;
+    } else if (std::abs(length * 1e3 - baseline_mm) <= 0.01 * baseline_mm) {
+      c.T = t;
+    } else {
+      throw Error(path + ": T has length " + std::to_string(length) +
+                  ", which matches baseline = " + std::to_string(baseline_mm) + " mm neither in millimetres nor in metres");
+    }
+  }
+  try {
+    c.validate();
+  } catch (const Error& e) {
+    throw Error(path + ": " + e.what());
+  }
+  return c;
+}
+
 namespace {
 
 // EuRoC files start with "%YAML:1.0", which is OpenCV's spelling, not YAML's.
@@ -250,14 +300,15 @@ StereoCalibration readKittiCalibration(const std::string& path, const cv::Size& 
 
 namespace {
 
-enum class CalibrationFileKind { kOpenCv, kEuroc, kKitti };
+enum class CalibrationFileKind { kOpenCv, kEuroc, kKitti, kPaper };
 
 // KITTI: a line "P0:" (or P1..P3) followed by 12 numbers (OpenCV's rectified layout has "P1:" keys
-// too, followed by a matrix); EuRoC / Kalibr: T_BS and intrinsics keys.
+// too, followed by a matrix); EuRoC / Kalibr: T_BS and intrinsics keys; the paper's intrinsics.yaml:
+// a baseline key.
 CalibrationFileKind calibrationFileKind(const std::string& path) {
   std::ifstream in(path);
   std::string line;
-  bool t_bs = false, intrinsics = false;
+  bool t_bs = false, intrinsics = false, baseline = false;
   while (std::getline(in, line)) {
     if (line.size() > 2 && line[0] == 'P' && line[1] >= '0' && line[1] <= '3' && line[2] == ':') {
       std::istringstream values(line.substr(3));
@@ -267,8 +318,10 @@ CalibrationFileKind calibrationFileKind(const std::string& path) {
     }
     t_bs = t_bs || line.rfind("T_BS:", 0) == 0;
     intrinsics = intrinsics || line.rfind("intrinsics:", 0) == 0;
+    baseline = baseline || line.rfind("baseline:", 0) == 0;
   }
-  return t_bs && intrinsics ? CalibrationFileKind::kEuroc : CalibrationFileKind::kOpenCv;
+  if (t_bs && intrinsics) return CalibrationFileKind::kEuroc;
+  return baseline ? CalibrationFileKind::kPaper : CalibrationFileKind::kOpenCv;
 }
 
 }  // namespace
@@ -305,6 +358,7 @@ StereoCalibration readCalibrationFile(const std::string& path, cv::Size image_si
       }
       return readEurocSensorPair(path, right.string());
     }
+    case CalibrationFileKind::kPaper: return readPaperIntrinsics(path);
     case CalibrationFileKind::kOpenCv: break;
   }
   try {

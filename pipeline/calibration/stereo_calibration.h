@@ -50,6 +50,15 @@ StereoCalibration readEurocSensorPair(const std::string& left_sensor_yaml, const
 // Camera-to-body transform (T_BS) of one EuRoC sensor.yaml. @throws cenote::Error.
 cv::Matx44d readEurocBodyFromSensor(const std::string& sensor_yaml);
 
+// The reference paper's `intrinsics.yaml` (OpenCV FileStorage; pipeline/dataset/paper_dataset.h):
+//   image_width, image_height; K1, D1 (left), K2, D2 (right) (also K_left, D_left, K_right, D_right);
+//   baseline: the rig's baseline in millimetres; R, T (optional: identity and (-baseline, 0, 0))
+//   mapping the left camera to the right, T in millimetres like the baseline (or in metres: T is
+//   taken in the unit whose length matches the baseline within 1 %).
+// @throws cenote::Error naming the file and key: missing keys, a T whose length matches the baseline
+//         in neither unit, an invalid calibration.
+StereoCalibration readPaperIntrinsics(const std::string& path);
+
 // Any stereo calibration file cenote reads, recognised by its content; what `cenote stereo
 // --calib` and `cenote-server --calibration` take:
 //   KITTI calib.txt (rows "P0: ..."): rows P2 / P3 when its folder holds image_2 and image_3 (the
@@ -57,6 +66,7 @@ cv::Matx44d readEurocBodyFromSensor(const std::string& sensor_yaml);
 //     left image, else `image_size`;
 //   EuRoC / Kalibr sensor.yaml (T_BS, intrinsics): the left camera's, <mav0>/cam0/sensor.yaml,
 //     read with its sibling <mav0>/cam1/sensor.yaml (readEurocSensorPair);
+//   the paper's intrinsics.yaml (a FileStorage YAML with a `baseline` key: readPaperIntrinsics);
 //   otherwise OpenCV FileStorage YAML (readStereoCalibration).
 // @param image_size the size of the images to rectify, for a KITTI file beside no images (it has
 //        no size of its own); empty: unknown.

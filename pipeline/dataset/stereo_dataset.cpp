@@ -5,6 +5,7 @@
 #include "common/error.h"
 #include "pipeline/dataset/euroc_dataset.h"
 #include "pipeline/dataset/kitti_dataset.h"
+#include "pipeline/dataset/paper_dataset.h"
 
 namespace cenote::pipeline {
 namespace fs = std::filesystem;
@@ -13,17 +14,38 @@ DatasetFormat parseDatasetFormat(const std::string& name) {
   if (name == "auto") return DatasetFormat::kAuto;
   if (name == "euroc") return DatasetFormat::kEuroc;
   if (name == "kitti") return DatasetFormat::kKitti;
-  throw Error("dataset format '" + name + "': must be auto, euroc or kitti");
+  if (name == "paper") return DatasetFormat::kPaper;
+  if (name == "bag") return DatasetFormat::kRecording;
+  throw Error("dataset format '" + name + "': must be auto, euroc, kitti, paper or bag");
 }
 
 TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::TrajectoryFormat format) const {
   TrajectorySource source;
   source.path = path;
   source.format = format;
-  source.describes_body = format == io::TrajectoryFormat::kEuroc;
-  source.frame_assumed = format != io::TrajectoryFormat::kEuroc;
+  source.describes_body = io::describesBody(format);
+  source.frame_assumed = !io::describesBody(format);
   return source;
 }
+
+namespace {
+
+class IndexCursor final : public FrameCursor {
+ public:
+  explicit IndexCursor(const StereoDataset& dataset) : dataset_(dataset) {}
+  bool next() override { return ++index_ < dataset_.size(); }
+  double timestamp() const override { return dataset_.timestamp(index_); }
+  std::string frameName() const override { return dataset_.frameName(index_); }
+  StereoFrame load() override { return dataset_.load(index_); }
+
+ private:
+  const StereoDataset& dataset_;
+  size_t index_ = static_cast<size_t>(-1);
+};
+
+}  // namespace
+
+std::unique_ptr<FrameCursor> StereoDataset::frames() const { return std::make_unique<IndexCursor>(*this); }
 
 std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetFormat format) {
   if (!fs::exists(path)) throw Error("dataset " + path + ": no such folder");
@@ -32,12 +54,19 @@ std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetForma
       format = DatasetFormat::kEuroc;
     } else if (fs::exists(fs::path(path) / "times.txt") && fs::exists(fs::path(path) / "calib.txt")) {
       format = DatasetFormat::kKitti;
+    } else if (PaperDataset::looksLike(path)) {
+      format = DatasetFormat::kPaper;
     } else {
       throw Error("dataset " + path +
-                  ": unknown layout (expected EuRoC mav0/cam0/data.csv or a KITTI sequence with times.txt and calib.txt)");
+                  ": unknown layout (expected EuRoC mav0/cam0/data.csv, a KITTI sequence with times.txt and calib.txt, "
+                  "or the paper's left/, right/, filename_mapping.csv and intrinsics.yaml)");
     }
   }
+  if (format == DatasetFormat::kRecording) {
+    throw Error("dataset " + path + ": a recording is opened with its topics (openRecordingDataset)");
+  }
   if (format == DatasetFormat::kEuroc) return std::make_unique<EurocDataset>(path);
+  if (format == DatasetFormat::kPaper) return std::make_unique<PaperDataset>(path);
   return std::make_unique<KittiDataset>(path);
 }
 

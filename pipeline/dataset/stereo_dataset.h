@@ -1,6 +1,8 @@
 // stereo_dataset.h: a recorded stereo sequence on disk, read frame by frame.
 //   EuRoC / ASL layout (SVIn2, OKVIS, Kimera, OpenVINS users): euroc_dataset.h
 //   KITTI odometry layout: kitti_dataset.h
+//   the reference paper's layout (left/, right/, poses.txt, intrinsics.yaml): paper_dataset.h
+//   ROS 1 bag, MCAP, ROS 2 bag (read front to back only): recording_dataset.h
 // A dataset knows its frames' timestamps, its calibration, where its left camera sits in the frame
 // that its default trajectory describes (T_traj_cam), and which trajectory file that is.
 // Units: seconds, metres. Threads: load() is const and may run on any one thread at a time per
@@ -8,6 +10,8 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -27,6 +31,23 @@ struct TrajectorySource {
   // true: the format does not say which frame its poses describe (TUM; KITTI poses outside a KITTI
   // sequence), so describes_body is the format's habit (the camera), not a fact of the file.
   bool frame_assumed = false;
+};
+
+// The frames of a dataset front to back, in one pass: how `cenote run` reads them. A recording (a
+// ROS bag) is read only this way; folders also by index.
+class FrameCursor {
+ public:
+  virtual ~FrameCursor() = default;
+  // Moves to the next frame; false after the last. @throws cenote::Error for damage it cannot step over.
+  virtual bool next() = 0;
+  virtual double timestamp() const = 0;
+  virtual std::string frameName() const = 0;
+  // The current frame's images, read or decoded only now. @throws cenote::Error when unreadable.
+  virtual StereoFrame load() = 0;
+  // What the source counted on the way ("unpaired_images": ...), for the run report.
+  virtual std::map<std::string, std::uint64_t> counts() const { return {}; }
+  // Where reading stopped short (a recording cut short), empty otherwise.
+  virtual std::string truncation() const { return ""; }
 };
 
 class StereoDataset {
@@ -53,15 +74,21 @@ class StereoDataset {
   // the frame T_body_cam starts from; TUM: the camera, assumed). The dataset's own file named by
   // its path gives the same source as defaultTrajectory().
   virtual TrajectorySource trajectoryFile(const std::string& path, io::TrajectoryFormat format) const;
+  // The reference point cloud the dataset ships with (the paper's layout: colmap.ply), if any.
+  virtual std::optional<std::string> referenceCloud() const { return std::nullopt; }
   virtual std::string describe() const = 0;
+  // The frames front to back (the default walks index 0 .. size() - 1).
+  virtual std::unique_ptr<FrameCursor> frames() const;
 };
 
-enum class DatasetFormat { kAuto, kEuroc, kKitti };
+enum class DatasetFormat { kAuto, kEuroc, kKitti, kPaper, kRecording };
 
-// "auto", "euroc" or "kitti". @throws cenote::Error otherwise.
+// "auto", "euroc", "kitti", "paper" or "bag". @throws cenote::Error otherwise.
 DatasetFormat parseDatasetFormat(const std::string& name);
 
-// Opens `path`; kAuto recognises EuRoC by mav0/cam0/data.csv and KITTI by times.txt + calib.txt.
+// Opens a folder; kAuto recognises EuRoC by mav0/cam0/data.csv, KITTI by times.txt + calib.txt and the
+// paper's layout by filename_mapping.csv + intrinsics.yaml + left/ + right/.
+// (A recording is opened with its topics: openRecordingDataset, recording_dataset.h.)
 // @throws cenote::Error naming the path and what was expected when it is neither.
 std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetFormat format = DatasetFormat::kAuto);
 

@@ -75,7 +75,7 @@ PipelineConfig PipelineConfig::load(const std::string& path) {
   config.run.read(run);
   run.finish();
   // Sections of other components are read (and checked) by them.
-  for (const char* other : {"map", "server", "sim", "eval"}) top.section(other);
+  for (const char* other : {"map", "server", "sim", "eval", "bag"}) top.section(other);
   top.finish();
   return config;
 }

@@ -80,16 +80,21 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   FrameNames names;
   const auto start = Clock::now();
 
+  const std::unique_ptr<FrameCursor> cursor = dataset.frames();
+  size_t frames_read = 0;
   std::thread reader([&] {
     try {
       FrameAdmission admission(rectifier, rc);
-      for (size_t i = 0; i < total && !failure.failed(); ++i, ++read_done) {
+      for (size_t i = 0; (rc.max_frames == 0 || i < static_cast<size_t>(rc.max_frames)) && !failure.failed();
+           ++i, ++read_done) {
         if (stop.load()) {
           interrupted = true;
           break;
         }
         const auto t0 = Clock::now();
-        const double t = dataset.timestamp(i);
+        if (!cursor->next()) break;
+        ++frames_read;
+        const double t = cursor->timestamp();
         const FrameDecision decision = admission.decide(
             t, [&](double t_s) { return camera_trajectory.poseAt(t_s, rc.pose_max_gap_s); });
         if (decision.admission != Admission::kAdmitted) {
@@ -98,13 +103,13 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
         }
         PosedPair item;
         try {
-          item = admission.admit(dataset.load(i), decision.T_world_raw);
+          item = admission.admit(cursor->load(), decision.T_world_raw);
         } catch (const Error& e) {
           ++unreadable;
           std::fprintf(stderr, "\nwarning: frame %zu (t = %.6f s) skipped: %s\n", i, t, e.what());
           continue;
         }
-        if (rc.write_depth) names.add(item.pair.t_s, dataset.frameName(i));
+        if (rc.write_depth) names.add(item.pair.t_s, cursor->frameName());
         read_timer.add(msSince(t0));
         if (!stages.push(std::move(item))) break;
       }
@@ -156,6 +161,10 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   points.close();
   if (progress) progress(read_done.load(), total);
 
+  // A folder's frames are known before reading; a recording's once read (to the end, or max_frames).
+  if (!interrupted) report.frames_in = frames_read;
+  report.source_counts = cursor->counts();
+  report.source_truncation = cursor->truncation();
   report.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   report.frames_processed = stages.framesProcessed();
   report.frames_fused = stages.framesFused();
@@ -184,6 +193,12 @@ std::string RunReport::toJson() const {
                          {"no_pose", skipped_no_pose},
                          {"not_keyframe", skipped_not_keyframe},
                          {"unreadable", skipped_unreadable}};
+  if (!source_counts.empty() || !source_truncation.empty()) {
+    nlohmann::ordered_json source = nlohmann::ordered_json::object();
+    for (const auto& [name, count] : source_counts) source[name] = count;
+    if (!source_truncation.empty()) source["truncation"] = source_truncation;
+    j["source"] = source;
+  }
   j["points_written"] = points_written;
   j["interrupted"] = interrupted;
   if (!pose_frame.empty()) {
@@ -191,6 +206,7 @@ std::string RunReport::toJson() const {
     j["pose_frame_assumed"] = pose_frame_assumed;
     if (!pose_frame_hint.empty()) j["pose_frame_hint"] = pose_frame_hint;
   }
+  if (keyframes_only) j["pose_keyframes_only"] = pose_keyframes;
   j["wall_s"] = wall_s;
   j["fps"] = fps;
   j["peak_memory_mb"] = peak_memory_mb;
@@ -210,6 +226,16 @@ std::string RunReport::toTable() const {
     << (skipped_out_of_order > 0 ? std::to_string(skipped_out_of_order) + " out of time order, " : "") << skipped_no_pose
     << " without pose, " << skipped_not_keyframe << " not keyframes, " << skipped_unreadable << " unreadable"
     << (interrupted ? " (interrupted)" : "") << "\n";
+  if (keyframes_only) {
+    t << "poses: keyframes only (" << pose_keyframes
+      << "): frames between keyframes have no pose of their own and are skipped, as in the paper\n";
+  }
+  if (!source_counts.empty()) {
+    t << "source:";
+    for (const auto& [name, count] : source_counts) t << " " << name << " " << count;
+    t << "\n";
+  }
+  if (!source_truncation.empty()) t << "source cut short: " << source_truncation << "\n";
   t << "stage           median ms    p95 ms   frames\n";
   for (const char* name : {"read_rectify", "stereo", "fusion", "output", "map"}) {
     const auto it = stages.find(name);
@@ -264,7 +290,28 @@ CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const Trajec
   }
   const io::Trajectory trajectory = io::Trajectory::read(source.path, source.format, source.kitti_times);
   out.trajectory = out.file_describes_body ? trajectory.transformedBy(T_body_cam) : trajectory;
+  out.keyframes_only = isKeyframeTrajectory(out.trajectory, dataset);
   return out;
+}
+
+bool isKeyframeTrajectory(const io::Trajectory& trajectory, const StereoDataset& dataset) {
+  constexpr double kSameTime = 1e-6;
+  const std::vector<io::StampedPose>& poses = trajectory.poses();
+  if (poses.size() < 2 || dataset.size() == 0) return false;
+  std::vector<double> frames(dataset.size());
+  try {
+    for (size_t i = 0; i < frames.size(); ++i) frames[i] = dataset.timestamp(i);
+  } catch (const FailedPreconditionError&) {
+    return false;  // a recording, read front to back only: its frame times are known only in the run
+  }
+  std::sort(frames.begin(), frames.end());
+  for (const io::StampedPose& p : poses) {
+    const auto at = std::lower_bound(frames.begin(), frames.end(), p.t_s - kSameTime);
+    if (at == frames.end() || *at > p.t_s + kSameTime) return false;  // a pose between frames: not a keyframe
+  }
+  const auto first = std::lower_bound(frames.begin(), frames.end(), poses.front().t_s - kSameTime);
+  const auto last = std::upper_bound(frames.begin(), frames.end(), poses.back().t_s + kSameTime);
+  return 4 * poses.size() < 3 * static_cast<size_t>(last - first);
 }
 
 io::Trajectory cameraTrajectory(const StereoDataset& dataset, const std::string& trajectory_path,

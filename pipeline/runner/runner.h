@@ -30,7 +30,8 @@
 namespace cenote::pipeline {
 
 struct RunReport {
-  size_t frames_in = 0;             // frames in the dataset (up to run.max_frames)
+  size_t frames_in = 0;             // frames in the dataset (up to run.max_frames); a recording's: the
+                                    // pairs read (its expected count when interrupted)
   size_t frames_processed = 0;      // frames that went through stereo
   size_t frames_fused = 0;          // fused reference frames emitted (or raw frames without fusion)
   size_t skipped_out_of_order = 0;  // timestamps not after the previous frame's (frame_admission.h)
@@ -39,11 +40,19 @@ struct RunReport {
   size_t skipped_unreadable = 0;
   size_t points_written = 0;
   bool interrupted = false;
+  // What the source counted (a recording: "unpaired_images", "out_of_order_images") and, for a
+  // recording cut short, where it stopped (FrameCursor::truncation()); in report.json as "source".
+  std::map<std::string, std::uint64_t> source_counts;
+  std::string source_truncation;
   // What the trajectory's poses were taken to describe ("camera" or "body"; empty: not set) and
   // whether that was assumed (CameraTrajectory::frame_assumed), with the hint printed for it.
   std::string pose_frame;
   bool pose_frame_assumed = false;
   std::string pose_frame_hint;
+  // The pose source had keyframes only (CameraTrajectory::keyframes_only), `pose_keyframes` of them:
+  // only the frames at a keyframe were processed, the others counted as without pose.
+  bool keyframes_only = false;
+  size_t pose_keyframes = 0;
   double wall_s = 0.0;
   double fps = 0.0;                            // frames processed per second of wall time
   double peak_memory_mb = 0.0;                 // resident set, high-water mark of the process
@@ -81,7 +90,7 @@ class Runner {
 // Which trajectory a run uses (the options of `cenote run`).
 struct TrajectoryRequest {
   std::string path;    // empty: the dataset's own ground truth
-  std::string format;  // "tum", "euroc", "kitti"; empty: detected from the file
+  std::string format;  // "tum", "euroc", "kitti", "okvis", "openvins"; empty: detected from the file
   std::string times;   // times of a format without timestamps (KITTI); empty: the dataset's
                        // own (a KITTI sequence's times.txt)
   PoseFrame pose_frame = PoseFrame::kAuto;
@@ -96,8 +105,18 @@ struct CameraTrajectory {
   // (the camera) changes the map; `note` then says so and how to choose.
   bool frame_assumed = false;
   std::string note;  // one line for a person; empty when nothing was assumed
+  // true: a pose source of keyframes only (isKeyframeTrajectory); the run then poses only the frames
+  // with a pose of their own (`cenote run` sets run.pose_max_gap_s to 1 us) and its report says so.
+  bool keyframes_only = false;
   const char* fileFrame() const { return file_describes_body ? "body" : "camera"; }
 };
+
+// True when `trajectory` holds keyframes only, as VIO systems write them (OKVIS / SVIn2 keyframe
+// poses, ORB-SLAM3's KeyFrameTrajectory.txt): at least 2 poses, every pose at the timestamp of one of
+// the dataset's frames (within 1 us), and fewer poses than 3/4 of the frames between its first and
+// last pose. Interpolating between keyframes seconds apart would invent poses. False for a dataset
+// whose frames are known only when read front to back (a recording).
+bool isKeyframeTrajectory(const io::Trajectory& trajectory, const StereoDataset& dataset);
 
 // The trajectory of the dataset's left camera: `request.path` (read the way the dataset reads its
 // own files, StereoDataset::trajectoryFile: a KITTI sequence times KITTI poses with its times.txt

@@ -10,6 +10,7 @@
 
 #include "common/yaml_section.h"
 #include "mapping/map_config.h"
+#include "pipeline/dataset/recording_config.h"
 #include "pipeline/runner/run_config.h"
 #include "server/server_config.h"
 #include "sim/sim_config.h"
@@ -31,6 +32,9 @@ YamlDefaults codeDefaults() {
   pipeline.fusion.read(fusion);
   YamlSection run = top.section("run");
   pipeline.run.read(run);
+  pipeline::RecordingConfig bag;
+  YamlSection bag_section = top.section("bag");
+  bag.read(bag_section);
   mapping::MapConfig map;
   YamlSection map_section = top.section("map");
   map.read(map_section);

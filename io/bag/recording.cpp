@@ -1,0 +1,34 @@
+#include "io/bag/recording.h"
+
+#include <cstring>
+#include <fstream>
+
+#include "common/error.h"
+#include "io/bag/db3_recording.h"
+#include "io/bag/mcap_recording.h"
+#include "io/bag/ros1_bag.h"
+
+namespace cenote::io {
+
+std::unique_ptr<Recording> openRecording(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw NotFoundError("cannot read recording " + path.string() + ": no such file");
+  if (std::filesystem::is_directory(path, ec)) {
+    if (std::filesystem::exists(path / "metadata.yaml", ec)) return openDb3Recording(path);
+    for (const auto& entry : std::filesystem::directory_iterator(path, ec))
+      if (entry.path().extension() == ".db3") return openDb3Recording(path);  // a recording never finished
+    throw Error("recording " + path.string() + ": a folder, but not a ROS 2 bag (no metadata.yaml, no .db3 file)");
+  }
+  char head[16] = {};
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throwReadError(path.string(), "permission denied", "recording ");
+  in.read(head, sizeof(head));
+  const std::size_t n = static_cast<std::size_t>(in.gcount());
+  if (n >= 9 && std::memcmp(head, "#ROSBAG V", 9) == 0) return std::make_unique<Ros1Bag>(path);
+  if (n >= 8 && std::memcmp(head, "\x89MCAP0\r\n", 8) == 0) return openMcapRecording(path);
+  if (n >= 16 && std::memcmp(head, "SQLite format 3", 16) == 0) return openDb3Recording(path);
+  throw IoError("recording " + path.string() +
+                ": not a ROS 1 bag ('#ROSBAG V2.0'), an MCAP file or a ROS 2 bag (.db3, or a folder with metadata.yaml)");
+}
+
+}  // namespace cenote::io

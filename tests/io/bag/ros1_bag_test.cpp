@@ -1,0 +1,297 @@
+// ROS 1 bags written by ROS's own rosbag (python3-rosbag, tests/io/bag/write_test_bags.py): every
+// message type cenote reads, uncompressed / bz2 / lz4 chunks, bags cut mid-chunk, damage.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "common/error.h"
+#include "io/bag/recording.h"
+#include "io/bag/ros1_bag.h"
+#include "io/bag/ros_image.h"
+#include "io/bag/ros_messages.h"
+#include "tests/support/scratch_dir.h"
+
+namespace cenote::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The bags, written once per test process (its own folder: ctest may run tests side by side).
+struct BagFolder {
+  fs::path dir = test::freshScratchDirectory("ros1_bags_" + std::to_string(getpid()));
+  BagFolder() {
+    const std::string cmd = "/usr/bin/python3 " CENOTE_SOURCE_DIR "/tests/io/bag/write_test_bags.py " + dir.string();
+    if (std::system(cmd.c_str()) != 0) ADD_FAILURE() << "failed: " << cmd;
+  }
+  ~BagFolder() {
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+  }
+};
+const fs::path& bagDir() {
+  static const BagFolder folder;
+  return folder.dir;
+}
+
+nlohmann::json expected() {
+  std::ifstream in(bagDir() / "expected.json");
+  return nlohmann::json::parse(in);
+}
+
+// Every message of `topic`, its bytes copied.
+struct Copied {
+  std::string topic, type;
+  std::int64_t log_time_ns;
+  std::vector<std::uint8_t> data;
+};
+std::vector<Copied> readAll(Recording& bag, const std::vector<std::string>& wanted = {}) {
+  std::vector<Copied> out;
+  RecordedMessage m;
+  while (bag.next(wanted, m)) {
+    out.push_back({m.topic->name, m.topic->type, m.log_time_ns, std::vector<std::uint8_t>(m.data.begin(), m.data.end())});
+  }
+  return out;
+}
+
+// The one message of `topic` in messages.bag.
+class OneMessage {
+ public:
+  explicit OneMessage(const std::string& topic) : bag_(openRecording(bagDir() / "messages.bag")) {
+    if (!bag_->next({topic}, message_)) ADD_FAILURE() << "no message on " << topic;
+  }
+  const RecordedMessage& operator*() const { return message_; }
+
+ private:
+  std::unique_ptr<Recording> bag_;
+  RecordedMessage message_;
+};
+
+const TopicInfo* findTopic(const Recording& bag, const std::string& name) {
+  for (const TopicInfo& t : bag.topics()) {
+    if (t.name == name) return &t;
+  }
+  return nullptr;
+}
+
+TEST(Ros1Bag, TopicsTypesAndCountsComeFromTheIndex) {
+  const auto bag = openRecording(bagDir() / "messages.bag");
+  EXPECT_EQ(bag->topics().size(), 11u);
+  const TopicInfo* info = findTopic(*bag, "/cam/info");
+  ASSERT_NE(info, nullptr);
+  EXPECT_EQ(info->type, "sensor_msgs/CameraInfo");
+  EXPECT_EQ(info->message_count, 1u);
+  EXPECT_EQ(info->first_ns, 1700000000123456789);
+  EXPECT_EQ(bag->truncation(), "");
+  for (const char* c : {"none", "bz2", "lz4"}) {
+    Ros1Bag seq(bagDir() / (std::string("seq_") + c + ".bag"));
+    ASSERT_EQ(seq.topics().size(), 2u) << c;
+    const TopicInfo* image = findTopic(seq, "/cam/image");
+    ASSERT_NE(image, nullptr);
+    EXPECT_EQ(image->message_count, 240u) << c;
+    EXPECT_EQ(image->first_ns, 100'000'000'000) << c;
+    EXPECT_EQ(image->last_ns, 123'900'000'000) << c;
+    EXPECT_EQ(seq.chunkCompressions().size(), 1u);
+    EXPECT_GT(seq.chunkCompressions().at(c), 10u) << c;
+  }
+}
+
+TEST(Ros1Bag, UncompressedBz2AndLz4ChunksGiveTheSameMessagesInFileOrder) {
+  Ros1Bag none(bagDir() / "seq_none.bag");
+  const std::vector<Copied> reference = readAll(none);
+  ASSERT_EQ(reference.size(), 480u);
+  for (std::size_t i = 0; i < reference.size(); ++i) {
+    ASSERT_EQ(reference[i].topic, i % 2 == 0 ? "/cam/image" : "/odom") << "message " << i;
+  }
+  for (const char* c : {"bz2", "lz4"}) {
+    Ros1Bag bag(bagDir() / (std::string("seq_") + c + ".bag"));
+    const std::vector<Copied> got = readAll(bag);
+    ASSERT_EQ(got.size(), reference.size()) << c;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      ASSERT_EQ(got[i].topic, reference[i].topic) << c << " message " << i;
+      ASSERT_EQ(got[i].log_time_ns, reference[i].log_time_ns) << c << " message " << i;
+      ASSERT_EQ(got[i].data, reference[i].data) << c << " message " << i;
+    }
+  }
+  // Only the topics asked for, the pixels as written (value = index).
+  Ros1Bag lz4(bagDir() / "seq_lz4.bag");
+  RecordedMessage m;
+  for (int i = 0; i < 240; ++i) {
+    ASSERT_TRUE(lz4.next({"/cam/image"}, m)) << i;
+    const cv::Mat pixels = imageToMat(decodeImage(m), m.topic->name);
+    ASSERT_EQ(pixels.at<std::uint8_t>(7, 15), i) << "image " << i;
+  }
+  EXPECT_FALSE(lz4.next({"/cam/image"}, m));
+}
+
+TEST(Ros1Bag, ABagCutMidChunkReadsEveryCompleteMessageBeforeTheCut) {
+  const nlohmann::json e = expected();
+  for (const char* name :
+       {"cut_none.bag", "cut_bz2.bag", "cut_lz4.bag", "crashed_none.bag", "crashed_bz2.bag", "crashed_lz4.bag"}) {
+    const nlohmann::json& x = e.at(name);
+    const auto bag = openRecording(bagDir() / name);
+    const std::uint64_t complete = x.at("complete");
+    const std::vector<Copied> got = readAll(*bag);
+    EXPECT_EQ(got.size(), complete) << name;
+    EXPECT_EQ(bag->truncation(), "cut at byte " + std::to_string(x.at("size").get<std::uint64_t>()) +
+                                     ", inside the chunk at byte " +
+                                     std::to_string(x.at("chunk_pos").get<std::uint64_t>()) + ": no index; " +
+                                     std::to_string(complete) + " complete messages read")
+        << name;
+    // The same messages as the whole bag's first ones, and the scan's counts.
+    Ros1Bag whole(bagDir() / "seq_none.bag");
+    const std::vector<Copied> reference = readAll(whole);
+    for (std::size_t i = 0; i < got.size(); ++i) ASSERT_EQ(got[i].data, reference[i].data) << name << " message " << i;
+    std::uint64_t counted = 0;
+    for (const TopicInfo& t : bag->topics()) {
+      counted += t.message_count;
+      // The scan (index records of closed chunks, the cut chunk read) agrees with the messages read.
+      std::uint64_t n = 0;
+      std::int64_t first = 0, last = 0;
+      for (const Copied& c : got) {
+        if (c.topic != t.name) continue;
+        first = n == 0 ? c.log_time_ns : std::min(first, c.log_time_ns);
+        last = n == 0 ? c.log_time_ns : std::max(last, c.log_time_ns);
+        ++n;
+      }
+      EXPECT_EQ(t.message_count, n) << name << " " << t.name;
+      EXPECT_EQ(t.first_ns, first) << name << " " << t.name;
+      EXPECT_EQ(t.last_ns, last) << name << " " << t.name;
+    }
+    EXPECT_EQ(counted, complete) << name;
+  }
+}
+
+TEST(Ros1Bag, UnknownCompressionIsAnIoErrorNamingTheFileAndOffset) {
+  const std::string path = (bagDir() / "zstd.bag").string();
+  const std::uint64_t pos = expected().at("zstd.bag").at("first_chunk_pos");
+  try {
+    Ros1Bag bag(path);  // the index names each chunk's compression: the error comes at once
+    FAIL() << "no error";
+  } catch (const IoError& err) {
+    EXPECT_EQ(std::string(err.what()), "bag " + path + ", byte " + std::to_string(pos) +
+                                           " (chunk): unknown compression 'zstd' (a ROS 1 bag's chunks are none, bz2 "
+                                           "or lz4)");
+  }
+}
+
+TEST(Ros1Bag, CorruptBz2ChunkIsAnIoErrorNamingTheChunk) {
+  const fs::path path = test::freshScratchDirectory("corrupt_bz2") / "corrupt.bag";
+  fs::copy_file(bagDir() / "seq_bz2.bag", path);
+  const std::uint64_t chunk = expected().at("cut_bz2.bag").at("first_chunk_pos");
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(chunk + 200));
+    const char junk[16] = {'j', 'u', 'n', 'k', 'j', 'u', 'n', 'k', 'j', 'u', 'n', 'k', 'j', 'u', 'n', 'k'};
+    f.write(junk, sizeof(junk));
+  }
+  Ros1Bag bag(path);
+  EXPECT_THAT([&] { readAll(bag); },
+              testing::ThrowsMessage<IoError>(testing::StartsWith(
+                  "bag " + path.string() + ", byte " + std::to_string(chunk) + " (chunk): bz2 data are corrupt")));
+}
+
+TEST(Ros1Bag, NotABagAndMissingFileAreNamed) {
+  const fs::path dir = test::freshScratchDirectory("not_a_bag");
+  std::ofstream(dir / "x.bag") << "hello world, not a bag at all";
+  EXPECT_THAT(
+      [&] { openRecording(dir / "x.bag"); },
+      testing::ThrowsMessage<IoError>(testing::HasSubstr("recording " + (dir / "x.bag").string() + ": not a ROS 1 bag")));
+  EXPECT_THAT(
+      [&] { openRecording(dir / "absent.bag"); },
+      testing::ThrowsMessage<NotFoundError>("cannot read recording " + (dir / "absent.bag").string() + ": no such file"));
+}
+
+TEST(RosMessages, ImagesOfEachEncodingBecomeGreyOrBgr) {
+  const cv::Mat mono = imageToMat(decodeImage(*OneMessage("/cam/mono")), "/cam/mono");
+  ASSERT_EQ(mono.type(), CV_8UC1);
+  ASSERT_EQ(mono.size(), cv::Size(3, 2));
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(mono.at<std::uint8_t>(i / 3, i % 3), i);
+  for (const char* topic : {"/cam/bgr", "/cam/rgb"}) {
+    const OneMessage message(topic);
+    const RosImage image = decodeImage(*message);
+    EXPECT_EQ(image.frame_id, "cam0");
+    EXPECT_EQ(image.stamp_ns, 1700000000123456789);
+    const cv::Mat bgr = imageToMat(image, topic);
+    ASSERT_EQ(bgr.type(), CV_8UC3) << topic;
+    for (int i = 0; i < 6; ++i) {
+      EXPECT_EQ(bgr.at<cv::Vec3b>(i / 3, i % 3), cv::Vec3b(i, 10 + i, 20 + i)) << topic << " pixel " << i;
+    }
+  }
+}
+
+TEST(RosMessages, BayerImageIsAClearErrorNamingTheTopic) {
+  EXPECT_THAT([] { imageToMat(decodeImage(*OneMessage("/cam/bayer")), "/cam/bayer"); },
+              testing::ThrowsMessage<Error>(
+                  "topic /cam/bayer: image encoding bayer_rggb8 is a raw Bayer mosaic; cenote reads mono8, bgr8, rgb8, "
+                  "bgra8 and rgba8 (debayer it first: record image_mono or image_color, or run image_proc)"));
+}
+
+TEST(RosMessages, CompressedImagesAreDecodedByTheirBytesNotTheFormatString) {
+  cv::Mat grey(6, 8, CV_8UC1);
+  for (int i = 0; i < 48; ++i) grey.at<std::uint8_t>(i / 8, i % 8) = static_cast<std::uint8_t>(i * 5);
+  const OneMessage png_message("/cam/png"), jpeg_message("/cam/jpeg");  // the bytes the images view
+  const RosCompressedImage png = decodeCompressedImage(*png_message);
+  EXPECT_EQ(png.format, "png");
+  EXPECT_EQ(cv::norm(compressedImageToMat(png, "/cam/png"), grey, cv::NORM_INF), 0.0);
+  const RosCompressedImage jpeg = decodeCompressedImage(*jpeg_message);
+  EXPECT_EQ(jpeg.format, "mono8; jpeg compressed bgr8");
+  const cv::Mat decoded = compressedImageToMat(jpeg, "/cam/jpeg");
+  ASSERT_EQ(decoded.type(), CV_8UC1);
+  EXPECT_LE(cv::norm(decoded, grey, cv::NORM_INF), 3.0);  // JPEG at quality 100
+  RosCompressedImage junk = png;
+  const std::uint8_t bytes[] = {'G', 'I', 'F', '8', '9', 'a', 0, 0};
+  junk.data = bytes;
+  EXPECT_THAT(
+      [&] { compressedImageToMat(junk, "/cam/png"); },
+      testing::ThrowsMessage<Error>("topic /cam/png: compressed image (format 'png', 8 bytes) is neither JPEG nor PNG"));
+}
+
+TEST(RosMessages, CameraInfoFieldsAsWritten) {
+  const RosCameraInfo info = decodeCameraInfo(*OneMessage("/cam/info"));
+  EXPECT_EQ(info.frame_id, "cam1");
+  EXPECT_EQ(info.width, 640u);
+  EXPECT_EQ(info.height, 480u);
+  EXPECT_EQ(info.distortion_model, "plumb_bob");
+  EXPECT_EQ(info.D, (std::vector<double>{-0.1, 0.01, 0.001, -0.002, 0.0}));
+  EXPECT_EQ(info.K, (std::array<double, 9>{400.0, 0, 320.5, 0, 401.0, 240.5, 0, 0, 1}));
+  EXPECT_EQ(info.P, (std::array<double, 12>{390.0, 0, 321.0, -39.0, 0, 390.0, 241.0, 0, 0, 0, 1, 0}));
+}
+
+TEST(RosMessages, OdometryPoseStampedTransformAndTfPairGiveTheSamePose) {
+  for (const char* topic : {"/odom", "/pose", "/tfs", "/tf"}) {
+    const std::optional<RosPose> pose = decodePose(*OneMessage(topic), "world", "cam0");
+    ASSERT_TRUE(pose.has_value()) << topic;
+    EXPECT_EQ(pose->stamp_ns, 1700000000123456789) << topic;
+    const Eigen::Isometry3d T = pose->transform();
+    EXPECT_TRUE(T.translation().isApprox(Eigen::Vector3d(1.5, -2.25, 3.0), 1e-15)) << topic;
+    // q = (0, 0, 0.6, 0.8): a rotation about z by 2 atan2(0.6, 0.8).
+    EXPECT_NEAR(Eigen::AngleAxisd(T.linear()).angle(), 2.0 * std::atan2(0.6, 0.8), 1e-12) << topic;
+  }
+  EXPECT_FALSE(decodePose(*OneMessage("/tf"), "world", "imu").has_value());
+  EXPECT_THAT([] { decodePose(*OneMessage("/cam/info")); },
+              testing::ThrowsMessage<Error>(testing::StartsWith("topic /cam/info has type sensor_msgs/CameraInfo, not a "
+                                                                "pose")));
+  EXPECT_THAT(
+      [] { decodeImage(*OneMessage("/cam/png")); },
+      testing::ThrowsMessage<Error>("topic /cam/png has type sensor_msgs/CompressedImage, expected sensor_msgs/Image"));
+}
+
+TEST(RosMessages, MessageCutShortNamesTypeFieldTopicAndOffset) {
+  const auto bag = openRecording(bagDir() / "messages.bag");
+  RecordedMessage m;
+  ASSERT_TRUE(bag->next({"/cam/info"}, m));
+  m.data = m.data.first(60);  // the header (4 + 8 + 4 + 4), sizes, model (4 + 9), D (4 + 5 * 8) cut
+  EXPECT_THAT([&] { decodeCameraInfo(m); },
+              testing::ThrowsMessage<IoError>(testing::StartsWith(
+                  "topic /cam/info, message at byte " + std::to_string(m.file_offset) + ": sensor_msgs/CameraInfo.D: ")));
+}
+
+}  // namespace
+}  // namespace cenote::io

@@ -1,0 +1,164 @@
+#!/usr/bin/env python3
+"""Writes the ROS 1 bags of tests/io/bag/ with ROS's own rosbag (python3-rosbag), the reference writer.
+
+Usage: write_test_bags.py OUT_DIR. Writes:
+  messages.bag          one message of each type cenote reads, with the values bag_test.cpp expects
+  seq_{none,bz2,lz4}.bag  240 mono8 images (/cam/image, 16x8, pixel value = index) and 240 Odometry
+                        (/odom) in 4 KiB chunks, so that there are many chunks
+  cut_{none,bz2,lz4}.bag  the same cut in the middle of a chunk (the index gone)
+  crashed_{none,bz2,lz4}.bag  cut as a killed recorder leaves them: index_pos 0 in the bag header,
+                        data length and size 0 in the header of the chunk being written
+  zstd.bag              seq_none.bag with its first chunk's compression renamed 'zstd'
+  expected.json         for each cut bag: its size, the cut chunk's position and the number of
+                        complete messages before the cut, from rosbag's own index
+"""
+import json
+import os
+import shutil
+import struct
+import sys
+
+import cv2
+import numpy as np
+import rosbag
+import rospy
+from geometry_msgs.msg import PoseStamped, TransformStamped
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import CameraInfo, CompressedImage, Image
+from tf2_msgs.msg import TFMessage
+
+out = sys.argv[1]
+os.makedirs(out, exist_ok=True)
+
+
+def stamp(sec, nsec):
+    return rospy.Time(sec, nsec)
+
+
+def image(encoding, width, height, channels, data, t):
+    m = Image()
+    m.header.stamp = t
+    m.header.frame_id = "cam0"
+    m.height, m.width, m.encoding, m.is_bigendian = height, width, encoding, 0
+    m.step = width * channels
+    m.data = bytes(data)
+    return m
+
+
+def transform(parent, child, t, xyz, q):
+    m = TransformStamped()
+    m.header.stamp = t
+    m.header.frame_id = parent
+    m.child_frame_id = child
+    m.transform.translation.x, m.transform.translation.y, m.transform.translation.z = xyz
+    r = m.transform.rotation
+    r.x, r.y, r.z, r.w = q
+    return m
+
+
+t0 = stamp(1700000000, 123456789)
+with rosbag.Bag(os.path.join(out, "messages.bag"), "w") as bag:
+    # 3x2 images: mono8 0..5; bgr8 and rgb8 with pixel i = (i, 10 + i, 20 + i) in their own order.
+    bag.write("/cam/mono", image("mono8", 3, 2, 1, range(6), t0), t0)
+    bag.write("/cam/bgr", image("bgr8", 3, 2, 3, [v for i in range(6) for v in (i, 10 + i, 20 + i)], t0), t0)
+    bag.write("/cam/rgb", image("rgb8", 3, 2, 3, [v for i in range(6) for v in (20 + i, 10 + i, i)], t0), t0)
+    bag.write("/cam/bayer", image("bayer_rggb8", 3, 2, 1, range(6), t0), t0)
+    grey = (np.arange(48, dtype=np.uint8).reshape(6, 8) * 5).astype(np.uint8)
+    for topic, ext, fmt in (("/cam/png", ".png", "png"), ("/cam/jpeg", ".jpg", "mono8; jpeg compressed bgr8")):
+        c = CompressedImage()
+        c.header.stamp = t0
+        c.header.frame_id = "cam0"
+        c.format = fmt
+        c.data = cv2.imencode(ext, grey, [cv2.IMWRITE_JPEG_QUALITY, 100] if ext == ".jpg" else [])[1].tobytes()
+        bag.write(topic, c, t0)
+    info = CameraInfo()
+    info.header.stamp = t0
+    info.header.frame_id = "cam1"
+    info.height, info.width = 480, 640
+    info.distortion_model = "plumb_bob"
+    info.D = [-0.1, 0.01, 0.001, -0.002, 0.0]
+    info.K = [400.0, 0, 320.5, 0, 401.0, 240.5, 0, 0, 1]
+    info.R = [1, 0, 0, 0, 1, 0, 0, 0, 1]
+    info.P = [390.0, 0, 321.0, -39.0, 0, 390.0, 241.0, 0, 0, 0, 1, 0]
+    bag.write("/cam/info", info, t0)
+    odom = Odometry()
+    odom.header.stamp = t0
+    odom.header.frame_id = "world"
+    odom.child_frame_id = "cam0"
+    p = odom.pose.pose
+    p.position.x, p.position.y, p.position.z = 1.5, -2.25, 3.0
+    p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w = 0.0, 0.0, 0.6, 0.8
+    bag.write("/odom", odom, t0)
+    ps = PoseStamped()
+    ps.header.stamp = t0
+    ps.header.frame_id = "world"
+    ps.pose = p
+    bag.write("/pose", ps, t0)
+    bag.write("/tfs", transform("world", "cam0", t0, (1.5, -2.25, 3.0), (0.0, 0.0, 0.6, 0.8)), t0)
+    tf = TFMessage()
+    tf.transforms = [transform("odom", "base", t0, (9, 9, 9), (0, 0, 0, 1)),
+                     transform("/world", "/cam0", t0, (1.5, -2.25, 3.0), (0.0, 0.0, 0.6, 0.8))]
+    bag.write("/tf", tf, t0)
+
+expected = {}
+for compression in ("none", "bz2", "lz4"):
+    path = os.path.join(out, "seq_%s.bag" % compression)
+    with rosbag.Bag(path, "w", compression=compression, chunk_threshold=4096) as bag:
+        for i in range(240):
+            t = stamp(100 + i // 10, (i % 10) * 100000000)
+            bag.write("/cam/image", image("mono8", 16, 8, 1, [i % 256] * 128, t), t)
+            odom = Odometry()
+            odom.header.stamp = t
+            odom.header.frame_id = "world"
+            odom.pose.pose.position.x = float(i)
+            odom.pose.pose.orientation.w = 1.0
+            bag.write("/odom", odom, t)
+    # The cut: halfway through the data of the middle chunk.
+    with rosbag.Bag(path) as bag:
+        chunks = bag._chunks
+        headers = bag._chunk_headers
+        cut_chunk = chunks[len(chunks) // 2]
+        h = headers[cut_chunk.pos]
+        cut = h.data_pos + h.compressed_size // 2
+        complete = 0
+        with open(path, "rb") as f:
+            raw = f.read()
+        for conn, entries in bag._connection_indexes.items():
+            for e in entries:
+                ch = headers[e.chunk_pos]
+                if ch.data_pos + ch.compressed_size <= cut:
+                    complete += 1
+                elif e.chunk_pos == cut_chunk.pos and compression == "none":
+                    # An uncompressed record is whole when its data end before the cut.
+                    at = ch.data_pos + e.offset
+                    header_len = struct.unpack_from("<I", raw, at)[0]
+                    data_len = struct.unpack_from("<I", raw, at + 4 + header_len)[0]
+                    if at + 8 + header_len + data_len <= cut:
+                        complete += 1
+    cut_path = os.path.join(out, "cut_%s.bag" % compression)
+    with open(cut_path, "wb") as f:
+        f.write(raw[:cut])
+    expected["cut_%s.bag" % compression] = {"size": cut, "chunk_pos": cut_chunk.pos, "complete": complete,
+                                            "first_chunk_pos": chunks[0].pos}
+    # As a killed recorder leaves it: rosbag writes index_pos 0 when it opens the bag and a chunk
+    # header with data length and size 0 when it opens a chunk, and fills them in only on closing.
+    crashed = bytearray(raw[:cut])
+    at = crashed.index(b"index_pos=") + len(b"index_pos=")
+    crashed[at:at + 8] = struct.pack("<Q", 0)
+    header_len = struct.unpack_from("<I", crashed, cut_chunk.pos)[0]
+    at = crashed.index(b"size=", cut_chunk.pos, cut_chunk.pos + 4 + header_len) + len(b"size=")
+    crashed[at:at + 4] = struct.pack("<I", 0)
+    struct.pack_into("<I", crashed, cut_chunk.pos + 4 + header_len, 0)
+    with open(os.path.join(out, "crashed_%s.bag" % compression), "wb") as f:
+        f.write(crashed)
+    expected["crashed_%s.bag" % compression] = dict(expected["cut_%s.bag" % compression])
+    if compression == "none":
+        zstd = bytearray(raw)
+        at = zstd.index(b"compression=none", chunks[0].pos)
+        zstd[at:at + 16] = b"compression=zstd"
+        with open(os.path.join(out, "zstd.bag"), "wb") as f:
+            f.write(zstd)
+        expected["zstd.bag"] = {"first_chunk_pos": chunks[0].pos}
+
+with open(os.path.join(out, "expected.json"), "w") as f:
+    json.dump(expected, f, indent=1)
