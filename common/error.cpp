@@ -17,7 +17,7 @@ const char* toString(ErrorKind kind) {
 }
 
 ErrorKind ioErrorKind(int errno_value, bool missing_is_not_found) {
-  if (errno_value == ENOSPC || errno_value == EDQUOT) return ErrorKind::kResourceExhausted;
+  if (errno_value == ENOSPC || errno_value == EDQUOT || errno_value == EFBIG) return ErrorKind::kResourceExhausted;
   if (errno_value == ENOENT && missing_is_not_found) return ErrorKind::kNotFound;
   return ErrorKind::kIoFailure;
 }

@@ -50,8 +50,8 @@ using ResourceExhaustedError = KindedError<ErrorKind::kResourceExhausted>;
 using IoError = KindedError<ErrorKind::kIoFailure>;
 using FailedPreconditionError = KindedError<ErrorKind::kFailedPrecondition>;
 
-// The kind of a failed read or write from its errno: ENOSPC and EDQUOT (disk or quota full) are
-// kResourceExhausted, ENOENT kNotFound when `missing_is_not_found` (reads; a write into a missing
+// The kind of a failed read or write from its errno: ENOSPC, EDQUOT and EFBIG (disk, quota or
+// file-size limit full) are kResourceExhausted, ENOENT kNotFound when `missing_is_not_found` (reads; a write into a missing
 // directory is an I/O failure), anything else kIoFailure.
 ErrorKind ioErrorKind(int errno_value, bool missing_is_not_found = false);
 

@@ -23,6 +23,33 @@ namespace {
 
 using openvdb::Coord;
 
+// Writes `temp` through write(std::ostream&) and checks the stream after flushing and closing it:
+// OpenVDB's and OctoMap's own file writers never look, so a full disk (or a file-size limit) would
+// leave a truncated file that then replaced the last good snapshot. @throws ResourceExhaustedError
+// (ENOSPC, EDQUOT, EFBIG) or IoError naming `path`.
+template <typename Write>
+void writeCheckedStream(const std::string& path, const std::string& temp, Write&& write) {
+  std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+  if (!out) throwWriteError(path, "cannot create file", errno);
+  const bool written = write(out);
+  out.flush();
+  const int flush_errno = out ? 0 : errno;
+  out.close();
+  if (!written || flush_errno != 0 || out.fail()) {
+    const int err = flush_errno != 0 ? flush_errno : errno;
+    throwWriteError(path, std::string("write failed (") + (err ? std::strerror(err) : "disk full?") + ")", err);
+  }
+}
+
+// OpenVDB's File::write, on a stream of ours (its Archive::write is protected).
+class VdbStreamWriter : public openvdb::io::File {
+ public:
+  using openvdb::io::File::File;
+  void writeTo(std::ostream& os, const openvdb::GridPtrVec& grids, const openvdb::MetaMap& meta) const {
+    openvdb::io::Archive::write(os, grids, /*seekable=*/true, meta);
+  }
+};
+
 // The map as the grids of a .vdb file, readable by any OpenVDB tool: log_odds (a standard FloatGrid
 // holding copies of the map's leaves) and color (Int32Grid, active where some point hit).
 // Call under the map's shared lock.
@@ -125,7 +152,7 @@ void saveOctomap(const OccupancyMap& map, const std::string& path, bool full) {
         if (acc.color(ijk, rgb)) node->setColor(rgb[0], rgb[1], rgb[2]);
       });
       tree.updateInnerOccupancy();
-      if (!tree.write(temp)) throw IoError("cannot write " + path);
+      writeCheckedStream(path, temp, [&](std::ostream& out) { return tree.write(out); });
     } else {
       octomap::OcTree tree(map.voxelSize());
       setSensorModel(tree, map.config());
@@ -134,7 +161,7 @@ void saveOctomap(const OccupancyMap& map, const std::string& path, bool full) {
         tree.setNodeValue(keyOf(ijk), l, true);
       });
       tree.updateInnerOccupancy();
-      if (!tree.writeBinary(temp)) throw IoError("cannot write " + path);
+      writeCheckedStream(path, temp, [&](std::ostream& out) { return tree.writeBinary(out); });
     }
   });
 }
@@ -157,9 +184,10 @@ void saveVdb(const OccupancyMap& map, const std::string& path, const std::string
   meta.insertMeta("cenote:max_range_m", openvdb::DoubleMetadata(c.max_range_m));
   meta.insertMeta("cenote:frame_id", openvdb::StringMetadata(frame_id));
   writeAtomically(path, Durability::kDurable, [&](const std::string& temp) {
-    openvdb::io::File file(temp);
-    file.write(grids, meta);
-    file.close();
+    writeCheckedStream(path, temp, [&](std::ostream& out) {
+      VdbStreamWriter(temp).writeTo(out, grids, meta);
+      return true;
+    });
   });
 }
 

@@ -91,6 +91,7 @@ grpc_server_credentials* tlsCredentials(const TlsFiles& tls) {
 }  // namespace
 
 Role requiredRole(std::string_view path) {
+  if (path.empty()) return Role::kOperator;  // no :path seen: fail closed
   if (path.substr(0, kCenotePrefix.size()) != kCenotePrefix) return Role::kNone;
   for (std::string_view reader : {"/cenote.v1.Query/", "/cenote.v1.Updates/", "/cenote.v1.Admin/GetStats"}) {
     if (path.substr(0, reader.size()) == reader) return Role::kReader;

@@ -23,7 +23,7 @@ namespace cenote::server {
 enum class Role { kNone, kReader, kOperator };
 
 // The role a method needs. path: gRPC's ":path", "/cenote.v1.Admin/Reset". kNone: anyone (not a
-// cenote service).
+// cenote service); an empty path (none seen) needs the operator.
 Role requiredRole(std::string_view path);
 
 class AccessPolicy {

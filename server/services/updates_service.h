@@ -7,7 +7,8 @@
 // builds every subscriber's next message when the change feed has one for it (one message in
 // flight per subscriber, so gRPC buffers at most one). At most server.limits.max_subscribers at
 // once (more: RESOURCE_EXHAUSTED). shutdown() ends every subscription with UNAVAILABLE (the
-// client may reconnect to the restarted server).
+// client may reconnect to the restarted server). Admin.GetStats times a subscription's set-up
+// (its checks and subscribing), not its life.
 // Threads: gRPC's callback threads, the change feed's publisher and the sender thread.
 #pragma once
 

@@ -18,6 +18,7 @@ TEST(AccessPolicy, ReadersMayQuerySubscribeAndReadStatsOperatorsTheRest) {
   EXPECT_EQ(requiredRole("/cenote.v1.Admin/DownloadSnapshot"), Role::kOperator);
   EXPECT_EQ(requiredRole("/cenote.v1.Ingest/StreamFrames"), Role::kOperator);
   EXPECT_EQ(requiredRole("/cenote.v2.Query/GetMapInfo"), Role::kOperator);  // an unknown cenote method
+  EXPECT_EQ(requiredRole(""), Role::kOperator);                             // no path seen: closed
   EXPECT_EQ(requiredRole("/grpc.health.v1.Health/Check"), Role::kNone);
   EXPECT_EQ(requiredRole("/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo"), Role::kNone);
 }
