@@ -98,6 +98,7 @@ sigset_t blockShutdownSignals() {
 
 int serve(const Options& o) {
   const sigset_t signals = blockShutdownSignals();
+  std::signal(SIGXFSZ, SIG_IGN);  // a file size limit (ulimit -f) fails the snapshot (EFBIG), not the server
   const ServerSettings settings = settingsFrom(o);
   const std::string token = settings.server.token_file.empty() ? ""
                                                                : readTokenFile(settings.server.token_file, "token file");

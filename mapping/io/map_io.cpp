@@ -156,9 +156,15 @@ void saveVdb(const OccupancyMap& map, const std::string& path, const std::string
   meta.insertMeta("cenote:max_range_m", openvdb::DoubleMetadata(c.max_range_m));
   meta.insertMeta("cenote:frame_id", openvdb::StringMetadata(frame_id));
   writeAtomically(path, Durability::kDurable, [&](const std::string& temp) {
+    errno = 0;
     openvdb::io::File file(temp);
     file.write(grids, meta);
     file.close();
+    // OpenVDB never checks its std::ofstream: a write cut short by a full disk or a file size limit
+    // (ulimit -f) shows only in errno, and the truncated file would be committed.
+    if (errno == ENOSPC || errno == EDQUOT || errno == EFBIG || errno == EIO) {
+      throwWriteError(path, std::string("write failed (") + std::strerror(errno) + ")", errno);
+    }
   });
 }
 
