@@ -53,6 +53,7 @@ Error caught(Thrower&& thrower) {
 TEST(Error, FullDiskIsResourceExhaustedOtherWriteFailuresAreIo) {
   EXPECT_EQ(ioErrorKind(ENOSPC), ErrorKind::kResourceExhausted);
   EXPECT_EQ(ioErrorKind(EDQUOT), ErrorKind::kResourceExhausted);
+  EXPECT_EQ(ioErrorKind(EFBIG), ErrorKind::kResourceExhausted);  // a file size limit (ulimit -f)
   EXPECT_EQ(ioErrorKind(EIO), ErrorKind::kIoFailure);
   EXPECT_EQ(ioErrorKind(0), ErrorKind::kIoFailure);
   EXPECT_EQ(ioErrorKind(ENOENT), ErrorKind::kIoFailure);
