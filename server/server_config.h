@@ -21,15 +21,15 @@ namespace cenote::server {
 
 // What one request may ask for. Beyond a limit: RESOURCE_EXHAUSTED naming it.
 struct RequestLimits {
-  int64_t max_message_bytes = 64 << 20;           // of any request or reply (gRPC's receive limit)
-  int64_t max_batch = 100000;                     // points / boxes / segments / rays in one query
-  int64_t max_points_per_batch = 1000000;         // points in one ingested point batch
-  int64_t max_box_voxels = 10000000;              // voxels in one box query or extract
-  int64_t max_query_voxels = 100000000;           // voxels one query request may visit (all its items)
-  int64_t max_snapshots = 10;                     // rotated snapshots kept (host/snapshotter.h)
-  int64_t max_snapshot_bytes = int64_t{8} << 30;  // of map.vdb and the rotated ones; 0: no limit
-  int64_t max_image_pixels = 4096 * 4096;         // of one stereo image
-  int64_t max_poses = 100000;                     // streamed poses kept (200 Hz for over 8 minutes)
+  int64_t max_message_bytes = 64 << 20;    // of any request or reply (gRPC's receive limit)
+  int64_t max_batch = 100000;              // points / boxes / segments / rays in one query
+  int64_t max_points_per_batch = 1000000;  // points in one ingested point batch
+  int64_t max_box_voxels = 10000000;       // voxels in one box query or extract
+  int64_t max_query_voxels = 100000000;    // voxels one query request may visit (all its items)
+  int64_t max_snapshots = 10;              // rotated snapshots kept (host/snapshotter.h)
+  int64_t max_snapshot_bytes = 1LL << 33;  // 8 GiB of map.vdb and the rotated ones; 0: no limit
+  int64_t max_image_pixels = 4096 * 4096;  // of one stereo image
+  int64_t max_poses = 100000;              // streamed poses kept (200 Hz for over 8 minutes)
 };
 
 struct ServerConfig {
