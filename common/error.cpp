@@ -17,6 +17,7 @@ const char* toString(ErrorKind kind) {
 }
 
 ErrorKind ioErrorKind(int errno_value, bool missing_is_not_found) {
+  // EFBIG too: a file size limit (RLIMIT_FSIZE, `ulimit -f`) or the file system's largest file was reached.
   if (errno_value == ENOSPC || errno_value == EDQUOT || errno_value == EFBIG) return ErrorKind::kResourceExhausted;
   if (errno_value == ENOENT && missing_is_not_found) return ErrorKind::kNotFound;
   return ErrorKind::kIoFailure;

@@ -120,6 +120,7 @@ void configureTransport(grpc::ServerBuilder& builder, const TransportConfig& t) 
 
 int serve(const Options& o) {
   const sigset_t signals = blockShutdownSignals();
+  std::signal(SIGXFSZ, SIG_IGN);  // a file size limit (ulimit -f) fails the snapshot (EFBIG), not the server
   const ServerSettings settings = settingsFrom(o);
   const auto access = std::make_shared<const AccessPolicy>(tokenFrom(settings.server.token_file),
                                                            tokenFrom(settings.server.read_token_file));

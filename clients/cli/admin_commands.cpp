@@ -101,7 +101,7 @@ void registerWatch(CLI::App& app, Connection& connection) {
   CLI::App* cmd = app.add_subcommand(
       "watch", "Print the map's update stream, one line per update (the whole map first, as snapshot lines)");
   cmd->add_option("--count", o->count, "Stop after this many updates (0: until interrupted)");
-  cmd->add_option("--region", o->region, "MIN MAX: only blocks touching this box")->expected(2);
+  cmd->add_option("--region", o->region, "MIN MAX: only blocks holding a voxel whose centre lies in this box")->expected(2);
   cmd->callback([o, &connection] {
     client::SubscribeOptions options;
     if (!o->region.empty()) {
