@@ -12,7 +12,7 @@
 //   uncompressed chunk gives the messages wholly inside what is left of it. truncation() says where
 //   ("cut at byte 123456 inside a chunk record: no footer; 812 complete messages read").
 // Errors (IoError naming the file and the record's offset): a CRC mismatch, an unknown compression, a
-// record whose fields run past its end, a chunk larger than 1 GiB uncompressed.
+// record whose fields run past its end, a chunk or message larger than 1 GiB.
 // Threads: one Recording per thread.
 #pragma once
 

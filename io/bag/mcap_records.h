@@ -143,8 +143,8 @@ class RecordCursor {
       }
       pos_ = at + kRecordHeader + len;
       if (op == kMessage || op == kSchema || op == kChannel || op == kChunk) {
-        if (op == kChunk && len > kMaxChunkBytes)
-          fail(at, "chunk: its " + std::to_string(len) + " bytes are more than the 1 GiB this reader holds");
+        if (len > kMaxChunkBytes)  // a damaged length must not allocate gigabytes
+          fail(at, recordName(op) + ": its " + std::to_string(len) + " bytes are more than the 1 GiB this reader holds");
         record_.resize(len);
         readAt(at + kRecordHeader, record_.data(), len);
         Fields fields(record_);
