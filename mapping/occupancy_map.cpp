@@ -8,6 +8,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "mapping/detail/map_impl.h"
 #include "mapping/detail/occupied_mask.h"
@@ -153,12 +154,9 @@ void finishDelta(MapDelta& delta, double s) {
 }  // namespace
 
 const char* toString(VoxelState state) {
-  switch (state) {
-    case VoxelState::kUnknown: return "unknown";
-    case VoxelState::kFree: return "free";
-    case VoxelState::kOccupied: return "occupied";
-  }
-  return "?";
+  constexpr EnumName<VoxelState> kNames[] = {
+      {VoxelState::kUnknown, "unknown"}, {VoxelState::kFree, "free"}, {VoxelState::kOccupied, "occupied"}};
+  return enumName(kNames, state);
 }
 
 void MapDelta::merge(const MapDelta& other) {

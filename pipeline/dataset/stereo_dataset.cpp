@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "pipeline/dataset/euroc_dataset.h"
 #include "pipeline/dataset/kitti_dataset.h"
@@ -10,10 +11,9 @@ namespace cenote::pipeline {
 namespace fs = std::filesystem;
 
 DatasetFormat parseDatasetFormat(const std::string& name) {
-  if (name == "auto") return DatasetFormat::kAuto;
-  if (name == "euroc") return DatasetFormat::kEuroc;
-  if (name == "kitti") return DatasetFormat::kKitti;
-  throw Error("dataset format '" + name + "': must be auto, euroc or kitti");
+  constexpr EnumName<DatasetFormat> kNames[] = {
+      {DatasetFormat::kAuto, "auto"}, {DatasetFormat::kEuroc, "euroc"}, {DatasetFormat::kKitti, "kitti"}};
+  return parseEnumName(kNames, name, "dataset format '" + name + "'");
 }
 
 TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::TrajectoryFormat format) const {
