@@ -58,12 +58,8 @@ int main(int argc, char** argv) {
   app.add_option("--repeat", repeat, "timed runs per row (median)")->capture_default_str()->check(CLI::Range(1, 10000));
   CLI11_PARSE(app, argc, argv);
 
-  test::TestCamera camera;
-  camera.width = 800;
-  camera.height = 600;
-  camera.focal_px = 650.0;
-  test::StereoNoise noise;
-  noise.focal_baseline_px_m = camera.focal_px * 0.15;
+  const test::TestCamera camera{800, 600, 650.0};
+  const test::StereoNoise noise = test::stereoNoiseFor(camera, 0.15);
   const test::Scene scene = test::reefScene();
   constexpr int kMaxViews = 5;
   const auto poses = test::surveyPoses(kMaxViews, 0.12);

@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "common/median.h"
+#include "common/size_format.h"
 #include "mapping/distance/distance_field.h"
 #include "mapping/frontier/frontier_map.h"
 #include "mapping/integration/depth_frame.h"
@@ -341,13 +342,6 @@ VoxelSetDiff compareVoxelSets(const OccupancyMap& map, const octomap::OcTree& tr
   return d;
 }
 
-octomap::Pointcloud toOctomap(const PointBatch& batch) {
-  octomap::Pointcloud cloud;
-  cloud.reserve(batch.size());
-  for (const auto& p : batch.points) cloud.push_back(p.x(), p.y(), p.z());
-  return cloud;
-}
-
 // The command line; see the header comment.
 struct Options {
   int num_frames = 10;
@@ -455,7 +449,7 @@ void runFull(const Options& o, const BenchView& view, const std::vector<PointBat
   tree.setClampingThresMin(0.12);
   tree.setClampingThresMax(0.97);
   std::vector<octomap::Pointcloud> clouds;
-  for (const auto& f : frames) clouds.push_back(toOctomap(f));
+  for (const auto& f : frames) clouds.push_back(test::toOctomap(f));
   const auto t0 = Clock::now();
   for (size_t i = 0; i < frames.size(); ++i) {
     const auto& o = frames[i].origin;
@@ -465,8 +459,8 @@ void runFull(const Options& o, const BenchView& view, const std::vector<PointBat
 
   const MapStats stats = map->stats();
   const VoxelSetDiff diff = compareVoxelSets(*map, tree);
-  const double ours_mb = stats.memory_bytes / 1048576.0;
-  const double octo_mb = tree.memoryUsage() / 1048576.0;
+  const double ours_mib = stats.memory_bytes / 1048576.0;
+  const double octo_mib = tree.memoryUsage() / 1048576.0;
 
   // Lookups: random voxels inside the map's bounds, one thread.
   std::mt19937 rng(5);
@@ -522,16 +516,17 @@ void runFull(const Options& o, const BenchView& view, const std::vector<PointBat
   const size_t num_clusters = updates.num_clusters;
 
   std::printf("## Map\n\n");
-  std::printf("%d frames of %.0fk points (800x600 camera over a rocky sea floor, 1 cm depth noise), "
+  std::printf("%d frames of %s points (800x600 camera over a rocky sea floor, 1 cm depth noise), "
               "%.0f cm voxels, %.0f m max range; %d threads; OctoMap %s, insertPointCloud with discretize on.\n\n",
-              num_frames, points / 1000.0 / frames.size(), voxel_m * 100, max_range_m, threads, "1.9.7");
+              num_frames, formatCount(static_cast<double>(points) / frames.size()).c_str(), voxel_m * 100, max_range_m,
+              threads, "1.9.7");
   std::printf("| measure | cenote | OctoMap | ratio |\n|---|---|---|---|\n");
   std::printf("| integration, ms/frame (%d threads) | %.1f | %.1f | %.1fx |\n", threads, ours_ms, octo_ms,
               octo_ms / ours_ms);
   std::printf("| integration, ms/frame (1 thread) | %.1f | %.1f | %.1fx |\n", ours_1t_ms, octo_ms, octo_ms / ours_1t_ms);
   std::printf("| projective integration of the same views as depth images, ms/frame (%d threads) | %.1f | %.1f | %.1fx |\n",
               threads, projective_ms, octo_ms, octo_ms / projective_ms);
-  std::printf("| memory of the map, MB | %.1f | %.1f | %.2fx |\n", ours_mb, octo_mb, ours_mb / octo_mb);
+  std::printf("| memory of the map, MiB | %.1f | %.1f | %.2fx |\n", ours_mib, octo_mib, ours_mib / octo_mib);
   std::printf("| single voxel lookups, M/s (1 thread) | %.1f | %.1f | %.1fx |\n", ours_lookups / 1e6, octo_lookups / 1e6,
               ours_lookups / octo_lookups);
   std::printf("| voxel lookups in batches of 4096 (ConstAccessor::states), M/s (1 thread) | %.1f | %.1f | %.1fx |\n",

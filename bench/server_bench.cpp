@@ -37,12 +37,14 @@
 #include <random>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include <unistd.h>
 
 #include "clients/cpp/map_client.h"
 #include "common/median.h"
+#include "common/size_format.h"
 #include "mapping/occupancy_map.h"
 #include "mapping/query/map_query.h"
 #include "tests/clients/cpp/server_process.h"
@@ -208,6 +210,21 @@ double processCpuSeconds(pid_t pid) {
   return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
 }
 
+// Medians of 7 runs of integrate() then query(), alternating: (integrate ms, query ms).
+template <typename Integrate, typename Query>
+std::pair<double, double> integrateAndQueryMs(Integrate&& integrate, Query&& query) {
+  std::vector<double> integrate_ms, query_ms;
+  for (int r = 0; r < 7; ++r) {
+    auto t0 = Clock::now();
+    integrate();
+    integrate_ms.push_back(usSince(t0) / 1000.0);
+    t0 = Clock::now();
+    query();
+    query_ms.push_back(usSince(t0) / 1000.0);
+  }
+  return {median(integrate_ms), median(query_ms)};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -334,17 +351,8 @@ int main(int argc, char** argv) {
       out.client_cpu_us = (processCpuSeconds(getpid()) - client_cpu0) * 1e6 / queries;
       out.segment_qps = throughput(
           8, seconds, [&](int t, int i) { clients[static_cast<size_t>(t)]->segments({segments[pick(i * 8 + t)]}); });
-      std::vector<double> integrate_ms, query_ms;
-      for (int r = 0; r < 7; ++r) {
-        auto t1 = Clock::now();
-        map.integratePoints(big_client);
-        integrate_ms.push_back(usSince(t1) / 1000.0);
-        t1 = Clock::now();
-        map.voxels(big_client.points_m);
-        query_ms.push_back(usSince(t1) / 1000.0);
-      }
-      out.integrate_ms = median(integrate_ms);
-      out.query_ms = median(query_ms);
+      std::tie(out.integrate_ms, out.query_ms) = integrateAndQueryMs([&] { map.integratePoints(big_client); },
+                                                                     [&] { map.voxels(big_client.points_m); });
       if (ingest) {
         out.frames = ingest->frames();
         out.ingest_max_ms = ingest->maxMs();
@@ -367,30 +375,21 @@ int main(int argc, char** argv) {
                                            [&](int t, int i) { mapping::queryVoxels(local, {points[pick(i * 8 + t)]}); });
       local_figures.segment_qps = throughput(
           8, seconds, [&](int t, int i) { mapping::checkSegments(local, {local_segments[pick(i * 8 + t)]}, false); });
-      std::vector<double> integrate_ms, query_ms;
-      for (int r = 0; r < 7; ++r) {
-        auto t0 = Clock::now();
-        local.integrate(big);
-        integrate_ms.push_back(usSince(t0) / 1000.0);
-        t0 = Clock::now();
-        mapping::queryVoxels(local, big_client.points_m);
-        query_ms.push_back(usSince(t0) / 1000.0);
-      }
-      local_figures.integrate_ms = median(integrate_ms);
-      local_figures.query_ms = median(query_ms);
+      std::tie(local_figures.integrate_ms, local_figures.query_ms) = integrateAndQueryMs(
+          [&] { local.integrate(big); }, [&] { mapping::queryVoxels(local, big_client.points_m); });
       local_figures.frames = ingest.frames();
       local_figures.ingest_max_ms = ingest.maxMs();
     }
 
     const client::ServerStats stats = map.stats();
-    std::printf(
-        "server_bench: %s, %u hardware threads, map threads %d; map %.2f M voxels (%.1f MB); background ingest at 15 Hz of "
-        "%zu-point frames (%zu on average): %d frames over gRPC (slowest IntegratePoints %.0f ms), %d in "
-        "process (slowest integrate %.0f ms)\n",
-        server ? "own cenote-server on loopback" : target.c_str(), std::thread::hardware_concurrency(), map_threads,
-        static_cast<double>(stats.occupied + stats.free) / 1e6, static_cast<double>(stats.map_memory_bytes) / 1e6,
-        frames.empty() ? size_t{0} : frames.front().size(), frame_points / std::max(1, num_frames), rpc.frames,
-        rpc.ingest_max_ms, local_figures.frames, local_figures.ingest_max_ms);
+    std::printf("server_bench: %s, %u hardware threads, map threads %d; map %s voxels (%s); background ingest at 15 Hz of "
+                "%zu-point frames (%zu on average): %d frames over gRPC (slowest IntegratePoints %.0f ms), %d in "
+                "process (slowest integrate %.0f ms)\n",
+                server ? "own cenote-server on loopback" : target.c_str(), std::thread::hardware_concurrency(), map_threads,
+                formatCount(static_cast<double>(stats.occupied + stats.free)).c_str(),
+                formatBytes(static_cast<double>(stats.map_memory_bytes)).c_str(),
+                frames.empty() ? size_t{0} : frames.front().size(), frame_points / std::max(1, num_frames), rpc.frames,
+                rpc.ingest_max_ms, local_figures.frames, local_figures.ingest_max_ms);
     std::printf("the 100k-point batch: %zu of the %zu points of a 480x360 frame (rays up to 10 m)\n", big.size(),
                 big_frame_points);
     if (server_pid > 0) {

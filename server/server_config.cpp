@@ -139,20 +139,13 @@ ServerSettings ServerSettings::load(const std::string& path) {
   if (path.empty()) return settings;
   settings.pipeline = pipeline::PipelineConfig::load(path);  // stereo, fusion, run; checks the top level
   YamlSection root(loadYamlFile(path), "", path);
-  YamlSection map = root.section("map");
-  settings.map.read(map);
-  map.finish();
-  YamlSection server = root.section("server");
-  settings.server.read(server);
-  server.finish();
+  root.readSection("map", settings.map);
+  root.readSection("server", settings.server);
   return settings;
 }
 
 std::vector<ConfigError> ServerSettings::validate() const {
-  std::vector<ConfigError> errors = pipeline.validate();
-  for (auto& e : map.validate()) errors.push_back(std::move(e));
-  for (auto& e : server.validate()) errors.push_back(std::move(e));
-  return errors;
+  return concatConfigErrors({pipeline.validate(), map.validate(), server.validate()});
 }
 
 }  // namespace cenote::server

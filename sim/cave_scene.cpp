@@ -80,10 +80,7 @@ SimScene buildCave(const SimConfig& config, double path_length_m) {
   // points to the centreline (at theta = 0, up x tangent = -side).
   builder.addGrid(nu, nv, position, material, /*wrap_u=*/true);
 
-  SimScene scene;
-  scene.kind = SimSceneKind::kCave;
-  scene.mesh = builder.finish();
-  setDefaultAlbedo(scene);
+  SimScene scene = sceneWithMesh(SimSceneKind::kCave, builder);
   SceneLighting& light = scene.lighting;
   light.attenuation_per_m = Eigen::Array3f(0.05f, 0.07f, 0.38f) * static_cast<float>(config.turbidity);
   light.backscatter = Eigen::Array3f(0.010f, 0.012f, 0.004f) * static_cast<float>(std::min(1.0, config.turbidity));

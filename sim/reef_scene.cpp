@@ -110,10 +110,7 @@ SimScene buildReef(const SimConfig& config, double path_length_m) {
         return fbm3(x / 1.5, y / 1.5, 2.0, seed + 24, 2) > 0.1 ? Material::kRock : Material::kSand;
       });
 
-  SimScene scene;
-  scene.kind = SimSceneKind::kReef;
-  scene.mesh = builder.finish();
-  setDefaultAlbedo(scene);
+  SimScene scene = sceneWithMesh(SimSceneKind::kReef, builder);
   scene.lighting = sunlitWater(config.turbidity, {0.10f, 0.09f, 0.42f}, {0.30f, 0.24f, 0.03f}, 10.0f,
                                {0.05f, 0.06f, 0.30f});
 

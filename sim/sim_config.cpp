@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "common/yaml_section.h"
 
@@ -40,9 +41,7 @@ std::vector<ConfigError> SimConfig::validate() const {
 }
 
 void SimConfig::read(YamlSection& section) {
-  std::string scene_name = toString(scene);
-  section.read("scene", scene_name);
-  scene = parseSimScene(scene_name);
+  section.readName("scene", scene, parseSimScene);
   section.read("num_frames", num_frames);
   section.read("width_px", width_px);
   section.read("height_px", height_px);
@@ -66,20 +65,13 @@ void SimConfig::read(YamlSection& section) {
   section.read("loop_closure_residual", loop_closure_residual);
 }
 
-const char* toString(SimSceneKind scene) {
-  switch (scene) {
-    case SimSceneKind::kCave: return "cave";
-    case SimSceneKind::kReef: return "reef";
-    case SimSceneKind::kWreck: return "wreck";
-  }
-  return "?";
-}
+constexpr EnumName<SimSceneKind> kSceneNames[] = {
+    {SimSceneKind::kCave, "cave"}, {SimSceneKind::kReef, "reef"}, {SimSceneKind::kWreck, "wreck"}};
+
+const char* toString(SimSceneKind scene) { return enumName(kSceneNames, scene); }
 
 SimSceneKind parseSimScene(const std::string& name) {
-  if (name == "cave") return SimSceneKind::kCave;
-  if (name == "reef") return SimSceneKind::kReef;
-  if (name == "wreck") return SimSceneKind::kWreck;
-  throw Error("sim.scene = " + name + ": must be 'cave', 'reef' or 'wreck'");
+  return parseEnumName(kSceneNames, name, "sim.scene = " + name, NameQuotes::kSingle);
 }
 
 }  // namespace cenote::sim

@@ -32,7 +32,10 @@ SceneLighting sunlitWater(double turbidity, const Eigen::Array3f& attenuation_pe
   return light;
 }
 
-void setDefaultAlbedo(SimScene& scene) {
+SimScene sceneWithMesh(SimSceneKind kind, MeshBuilder& builder) {
+  SimScene scene;
+  scene.kind = kind;
+  scene.mesh = builder.finish();
   auto set = [&](Material m, float b, float g, float r) { scene.albedo[static_cast<size_t>(m)] = {b, g, r}; };
   set(Material::kRock, 0.50f, 0.55f, 0.60f);    // limestone grey-beige
   set(Material::kSand, 0.62f, 0.72f, 0.78f);    // pale sand
@@ -40,6 +43,7 @@ void setDefaultAlbedo(SimScene& scene) {
   set(Material::kSponge, 0.30f, 0.65f, 0.75f);  // yellow sponge
   set(Material::kHull, 0.45f, 0.50f, 0.42f);    // grey-green painted steel
   set(Material::kRust, 0.22f, 0.35f, 0.60f);    // rust brown
+  return scene;
 }
 
 }  // namespace detail

@@ -55,7 +55,9 @@ namespace detail {
 SimScene buildCave(const SimConfig& config, double path_length_m);
 SimScene buildReef(const SimConfig& config, double path_length_m);
 SimScene buildWreck(const SimConfig& config, double path_length_m);
-void setDefaultAlbedo(SimScene& scene);
+// The scene of `kind` with the builder's mesh (builder.finish()) and every material's default albedo;
+// its lighting is the caller's to set.
+SimScene sceneWithMesh(SimSceneKind kind, MeshBuilder& builder);
 // Open water lit by the sun (reef, wreck): attenuation and downwelling scale with turbidity, the
 // backscatter with min(1, turbidity) and a 0.35 share; no rig light.
 SceneLighting sunlitWater(double turbidity, const Eigen::Array3f& attenuation_per_m, const Eigen::Array3f& backscatter,

@@ -100,10 +100,7 @@ SimScene buildWreck(const SimConfig& config, double path_length_m) {
                    k % 3 == 0 ? Material::kRust : Material::kRock, cell);
   }
 
-  SimScene scene;
-  scene.kind = SimSceneKind::kWreck;
-  scene.mesh = builder.finish();
-  setDefaultAlbedo(scene);
+  SimScene scene = sceneWithMesh(SimSceneKind::kWreck, builder);
   scene.lighting = sunlitWater(config.turbidity, {0.13f, 0.10f, 0.45f}, {0.22f, 0.28f, 0.04f}, 14.0f,
                                {0.06f, 0.06f, 0.32f});
 

@@ -18,6 +18,7 @@
 
 #include "apps/cenote/commands.h"
 #include "common/error.h"
+#include "common/size_format.h"
 #include "eval/cloud/cloud_io.h"
 #include "eval/cloud/cloud_metrics.h"
 #include "eval/cloud/voxel_downsample.h"
@@ -94,6 +95,16 @@ void writeOutputs(const OutputOptions& o, const std::string& json, const std::st
     const std::vector<std::string> pngs = eval::writePlots(plot_json, o.plot);
     std::cout << "plots: " << pngs.size() << " PNG files in " << o.plot << "\n";
   }
+}
+
+// --json and --plot of a result whose plots are drawn from its JSON alone (written as <name>.json
+// into a scratch folder for the plotter).
+void writeOutputsPlottedFromJson(const OutputOptions& o, const std::string& json, const std::string& name) {
+  if (o.plot.empty()) return writeOutputs(o, json, "");
+  const ScratchDir scratch;
+  const std::string plot_json = scratch / (name + ".json");
+  eval::writeTextFile(plot_json, json);
+  writeOutputs(o, json, plot_json);
 }
 
 void checkOutputs(const OutputOptions& o) {
@@ -224,14 +235,7 @@ void runCloud(CloudOptions o) {
               {"recall" + at, pct(e.recall)},
               {"F-score" + at, pct(e.fscore)}});
   const std::string json = eval::toJson(e, {o.source, o.target});
-  std::unique_ptr<ScratchDir> scratch;
-  std::string plot_json;
-  if (!o.out.plot.empty()) {
-    scratch = std::make_unique<ScratchDir>();
-    plot_json = *scratch / "cloud.json";
-    eval::writeTextFile(plot_json, json);
-  }
-  writeOutputs(o.out, json, plot_json);
+  writeOutputsPlottedFromJson(o.out, json, "cloud");
 }
 
 // ---- trajectory ----
@@ -261,14 +265,7 @@ void runTraj(const TrajOptions& o) {
               {"ATE median", num(e.ate_median_m, " m")},
               {"ATE max", num(e.ate_max_m, " m")}});
   const std::string json = eval::toJson(e, {o.estimate, o.reference});
-  std::unique_ptr<ScratchDir> scratch;
-  std::string plot_json;
-  if (!o.out.plot.empty()) {
-    scratch = std::make_unique<ScratchDir>();
-    plot_json = *scratch / "trajectory.json";
-    eval::writeTextFile(plot_json, json);
-  }
-  writeOutputs(o.out, json, plot_json);
+  writeOutputsPlottedFromJson(o.out, json, "trajectory");
 }
 
 // ---- report ----
@@ -345,7 +342,7 @@ void registerEvalCommand(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   report->callback([r] {
     const std::string path = eval::writeHtmlReport(r->dir, r->out, r->html);
-    std::cout << "report: " << path << " (" << fs::file_size(path) / 1024 << " KiB)\n";
+    std::cout << "report: " << path << " (" << formatBytes(static_cast<double>(fs::file_size(path))) << ")\n";
   });
 }
 

@@ -50,12 +50,7 @@ struct InputFrame {
 
 pipeline::FusionConfig makeConfig(const FuseOptions& o) {
   pipeline::FusionConfig config;
-  if (!o.config.empty()) {
-    YamlSection root(loadYamlFile(o.config), "", o.config);
-    YamlSection section = root.section("fusion");
-    config.read(section);
-    section.finish();
-  }
+  if (!o.config.empty()) readConfigFile(o.config, "fusion", config);
   if (o.views != -1) config.num_views = o.views;
   if (!std::isnan(o.eps)) config.eps = o.eps;
   if (!o.eps_mode.empty()) config.support_radius = pipeline::parseSupportRadius(o.eps_mode);

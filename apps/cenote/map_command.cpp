@@ -17,6 +17,7 @@
 
 #include "apps/cenote/commands.h"
 #include "common/error.h"
+#include "common/size_format.h"
 #include "common/text_parse.h"
 #include "common/yaml_section.h"
 #include "mapping/distance/distance_field.h"
@@ -54,12 +55,7 @@ struct IntegrateOptions {
 
 void runIntegrate(const IntegrateOptions& o) {
   MapConfig config;
-  if (!o.config.empty()) {
-    YamlSection root(loadYamlFile(o.config), "", o.config);
-    YamlSection section = root.section("map");
-    config.read(section);
-    section.finish();
-  }
+  if (!o.config.empty()) readConfigFile(o.config, "map", config);
   if (!std::isnan(o.resolution)) config.voxel_size_m = o.resolution;
   if (!std::isnan(o.max_range)) config.max_range_m = o.max_range;
   if (!o.sensor_model.empty()) {
@@ -115,9 +111,10 @@ void printInfo(const std::string& path) {
     std::printf("  bounds: [%.3f, %.3f] x [%.3f, %.3f] x [%.3f, %.3f] m\n", s.bounds_m.min_m.x(), s.bounds_m.max_m.x(),
                 s.bounds_m.min_m.y(), s.bounds_m.max_m.y(), s.bounds_m.min_m.z(), s.bounds_m.max_m.z());
   }
-  std::printf("  voxels: %llu occupied, %llu free, %llu unknown within the bounds\n  memory: %.2f MB\n",
+  std::printf("  voxels: %llu occupied, %llu free, %llu unknown within the bounds\n  memory: %s\n",
               static_cast<unsigned long long>(s.occupied), static_cast<unsigned long long>(s.free),
-              static_cast<unsigned long long>(s.unknown_in_bounds), s.memory_bytes / 1048576.0);
+              static_cast<unsigned long long>(s.unknown_in_bounds),
+              formatBytes(static_cast<double>(s.memory_bytes)).c_str());
 }
 
 struct ExportOptions {

@@ -63,11 +63,7 @@ pipeline::PipelineConfig makeConfig(const RunOptions& o) {
 // The `map:` section of the configuration file (defaults without one).
 mapping::MapConfig mapConfig(const RunOptions& o) {
   mapping::MapConfig config;
-  if (o.config.empty()) return config;
-  YamlSection root(loadYamlFile(o.config), "", o.config);
-  YamlSection section = root.section("map");
-  config.read(section);
-  section.finish();
+  if (!o.config.empty()) readConfigFile(o.config, "map", config);
   return config;
 }
 

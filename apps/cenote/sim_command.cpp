@@ -32,12 +32,7 @@ struct SimOptions {
 
 sim::SimConfig makeConfig(const SimOptions& o) {
   sim::SimConfig config;
-  if (!o.config.empty()) {
-    YamlSection root(loadYamlFile(o.config), "", o.config);
-    YamlSection section = root.section("sim");
-    config.read(section);
-    section.finish();
-  }
+  if (!o.config.empty()) readConfigFile(o.config, "sim", config);
   if (!o.scene.empty()) {
     try {
       config.scene = sim::parseSimScene(o.scene);

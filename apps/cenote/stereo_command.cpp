@@ -27,12 +27,7 @@ struct StereoOptions {
 
 pipeline::StereoConfig makeConfig(const StereoOptions& o) {
   pipeline::StereoConfig config;
-  if (!o.config.empty()) {
-    YamlSection root(loadYamlFile(o.config), "", o.config);
-    YamlSection section = root.section("stereo");
-    config.read(section);
-    section.finish();
-  }
+  if (!o.config.empty()) readConfigFile(o.config, "stereo", config);
   if (!o.cost.empty()) {
     config.cost = pipeline::parseMatchingCost(o.cost);
     if (o.window == 0 && config.cost == pipeline::MatchingCost::kCensus) config.window_px = 5;

@@ -12,6 +12,7 @@
 #include "clients/cli/cli_input.h"
 #include "clients/cli/commands.h"
 #include "common/error.h"
+#include "common/size_format.h"
 #include "mapping/io/map_file_format.h"
 
 namespace cenote::cli {
@@ -44,9 +45,10 @@ void registerStats(CLI::App& app, Connection& connection) {
     std::printf("batches_integrated: %llu\nposes_received: %llu\nvoxels: %llu occupied, %llu free\n",
                 static_cast<ull>(s.batches_integrated), static_cast<ull>(s.poses_received), static_cast<ull>(s.occupied),
                 static_cast<ull>(s.free));
-    std::printf("memory: map %.2f MB, process %.2f MB\nmap_version: %llu\nsubscribers: %llu\n",
-                static_cast<double>(s.map_memory_bytes) / 1e6, static_cast<double>(s.process_memory_bytes) / 1e6,
-                static_cast<ull>(s.map_version), static_cast<ull>(s.subscribers));
+    std::printf("memory: map %s, process %s\nmap_version: %llu\nsubscribers: %llu\n",
+                formatBytes(static_cast<double>(s.map_memory_bytes)).c_str(),
+                formatBytes(static_cast<double>(s.process_memory_bytes)).c_str(), static_cast<ull>(s.map_version),
+                static_cast<ull>(s.subscribers));
     if (s.last_snapshot_age_s < 0) {
       std::printf("last_snapshot: none\n");
     } else {
@@ -82,13 +84,13 @@ void registerSnapshot(CLI::App& app, Connection& connection) {
   cmd->callback([o, &connection] {
     if (!o->download.empty()) {
       const uint64_t bytes = connection.client().downloadSnapshot(o->download, parseFormat(o->format));
-      std::printf("downloaded %s: %llu bytes\n", o->download.c_str(), static_cast<ull>(bytes));
+      std::printf("downloaded %s: %s\n", o->download.c_str(), formatBytes(static_cast<double>(bytes)).c_str());
       return;
     }
     if (o->path.empty()) throw CliError("snapshot: give PATH (on the server) or --download FILE");
     const auto r = connection.client().snapshot(o->path, parseFormat(o->format));
-    std::printf("wrote %s on the server: %llu bytes, map version %llu\n", r.path.c_str(), static_cast<ull>(r.bytes),
-                static_cast<ull>(r.map_version));
+    std::printf("wrote %s on the server: %s, map version %llu\n", r.path.c_str(),
+                formatBytes(static_cast<double>(r.bytes)).c_str(), static_cast<ull>(r.map_version));
   });
 }
 

@@ -1,16 +1,14 @@
 // client_types.cpp: names of the client's enums, and batching.h's point-batch split.
 #include "clients/cpp/batching.h"
 #include "clients/cpp/client_types.h"
+#include "common/enum_names.h"
 
 namespace cenote::client {
 
 const char* toString(VoxelState state) {
-  switch (state) {
-    case VoxelState::kUnknown: return "unknown";
-    case VoxelState::kFree: return "free";
-    case VoxelState::kOccupied: return "occupied";
-  }
-  return "invalid";
+  constexpr EnumName<VoxelState> kNames[] = {
+      {VoxelState::kUnknown, "unknown"}, {VoxelState::kFree, "free"}, {VoxelState::kOccupied, "occupied"}};
+  return enumName(kNames, state, "invalid");
 }
 
 std::vector<PointBatch> splitPointBatch(const PointBatch& batch, size_t max_points) {

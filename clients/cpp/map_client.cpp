@@ -299,22 +299,29 @@ ChangeResult MapClient::clearBox(const Box& box) {
   return detail::fromWire(reply);
 }
 
-ChangeResult MapClient::clearSphere(const Eigen::Vector3d& centre_m, double radius_m) {
-  v1::ClearSphereRequest request;
+namespace {
+
+// ClearSphere and Crop: a sphere in, the change out. `impl` is MapClient's Impl.
+template <typename ClientImpl, typename Request>
+ChangeResult sphereChange(const ClientImpl& impl,
+                          grpc::Status (v1::Admin::Stub::*method)(grpc::ClientContext*, const Request&, v1::ChangeReply*),
+                          const Eigen::Vector3d& centre_m, double radius_m) {
+  Request request;
   v1::ChangeReply reply;
   detail::toWire(centre_m, request.mutable_centre());
   request.set_radius_m(radius_m);
-  impl_->unary(*impl_->admin, &v1::Admin::Stub::ClearSphere, request, reply);
+  impl.unary(*impl.admin, method, request, reply);
   return detail::fromWire(reply);
 }
 
+}  // namespace
+
+ChangeResult MapClient::clearSphere(const Eigen::Vector3d& centre_m, double radius_m) {
+  return sphereChange(*impl_, &v1::Admin::Stub::ClearSphere, centre_m, radius_m);
+}
+
 ChangeResult MapClient::crop(const Eigen::Vector3d& centre_m, double radius_m) {
-  v1::CropRequest request;
-  v1::ChangeReply reply;
-  detail::toWire(centre_m, request.mutable_centre());
-  request.set_radius_m(radius_m);
-  impl_->unary(*impl_->admin, &v1::Admin::Stub::Crop, request, reply);
-  return detail::fromWire(reply);
+  return sphereChange(*impl_, &v1::Admin::Stub::Crop, centre_m, radius_m);
 }
 
 ChangeResult MapClient::reset() {

@@ -141,6 +141,7 @@ class IngestStream {
   friend class MapClient;
   struct Impl;
   explicit IngestStream(std::unique_ptr<Impl> impl);
+  static std::unique_ptr<IngestStream> open(MapClient::Impl& client);  // the call of this Item's stream
   std::unique_ptr<Impl> impl_;
 };
 

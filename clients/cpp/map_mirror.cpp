@@ -61,23 +61,18 @@ VoxelState MapMirror::stateAt(const Eigen::Vector3d& point_m) const {
   return state(ijk);
 }
 
-uint64_t MapMirror::occupied() const {
+uint64_t MapMirror::count(VoxelState state) const {
   std::lock_guard lock(mutex_);
   uint64_t n = 0;
   for (const auto& [index, states] : blocks_) {
-    for (VoxelState s : states) n += s == VoxelState::kOccupied;
+    for (VoxelState s : states) n += s == state;
   }
   return n;
 }
 
-uint64_t MapMirror::free() const {
-  std::lock_guard lock(mutex_);
-  uint64_t n = 0;
-  for (const auto& [index, states] : blocks_) {
-    for (VoxelState s : states) n += s == VoxelState::kFree;
-  }
-  return n;
-}
+uint64_t MapMirror::occupied() const { return count(VoxelState::kOccupied); }
+
+uint64_t MapMirror::free() const { return count(VoxelState::kFree); }
 
 size_t MapMirror::numBlocks() const {
   std::lock_guard lock(mutex_);

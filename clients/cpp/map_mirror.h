@@ -50,6 +50,8 @@ class MapMirror {
   };
   using BlockStates = std::array<VoxelState, 512>;
 
+  uint64_t count(VoxelState state) const;  // voxels in `state` over all blocks
+
   mutable std::mutex mutex_;
   std::unordered_map<Eigen::Vector3i, BlockStates, BlockKeyHash, BlockKeyEqual> blocks_;
   bool synced_ = false;

@@ -22,16 +22,19 @@ template <>
 struct StreamWire<PointBatch> {
   using Request = v1::PointBatch;
   using Reply = v1::BatchAck;
+  static constexpr auto kOpen = &v1::Ingest::Stub::StreamPoints;
 };
 template <>
 struct StreamWire<StereoFrame> {
   using Request = v1::StereoFrame;
   using Reply = v1::FrameAck;
+  static constexpr auto kOpen = &v1::Ingest::Stub::StreamFrames;
 };
 template <>
 struct StreamWire<PoseStamped> {
   using Request = v1::PoseStamped;
   using Reply = v1::PoseAck;
+  static constexpr auto kOpen = &v1::Ingest::Stub::StreamPoses;
 };
 
 template <typename Item, typename Ack>
@@ -48,6 +51,15 @@ struct IngestStream<Item, Ack>::Impl {
 
 template <typename Item, typename Ack>
 IngestStream<Item, Ack>::IngestStream(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+template <typename Item, typename Ack>
+std::unique_ptr<IngestStream<Item, Ack>> IngestStream<Item, Ack>::open(MapClient::Impl& client) {
+  auto impl = std::make_unique<Impl>();
+  impl->stub = client.ingest;
+  client.prepare(impl->context, 0.0);
+  impl->stream = (impl->stub.get()->*StreamWire<Item>::kOpen)(&impl->context);
+  return std::unique_ptr<IngestStream>(new IngestStream(std::move(impl)));
+}
 
 template <typename Item, typename Ack>
 IngestStream<Item, Ack>::~IngestStream() {
@@ -92,29 +104,11 @@ template class IngestStream<PointBatch, BatchAck>;
 template class IngestStream<StereoFrame, FrameAck>;
 template class IngestStream<PoseStamped, PoseAck>;
 
-std::unique_ptr<PointsStream> MapClient::openPointsStream() {
-  auto impl = std::make_unique<PointsStream::Impl>();
-  impl->stub = impl_->ingest;
-  impl_->prepare(impl->context, 0.0);
-  impl->stream = impl->stub->StreamPoints(&impl->context);
-  return std::unique_ptr<PointsStream>(new PointsStream(std::move(impl)));
-}
+std::unique_ptr<PointsStream> MapClient::openPointsStream() { return PointsStream::open(*impl_); }
 
-std::unique_ptr<FramesStream> MapClient::openFramesStream() {
-  auto impl = std::make_unique<FramesStream::Impl>();
-  impl->stub = impl_->ingest;
-  impl_->prepare(impl->context, 0.0);
-  impl->stream = impl->stub->StreamFrames(&impl->context);
-  return std::unique_ptr<FramesStream>(new FramesStream(std::move(impl)));
-}
+std::unique_ptr<FramesStream> MapClient::openFramesStream() { return FramesStream::open(*impl_); }
 
-std::unique_ptr<PosesStream> MapClient::openPosesStream() {
-  auto impl = std::make_unique<PosesStream::Impl>();
-  impl->stub = impl_->ingest;
-  impl_->prepare(impl->context, 0.0);
-  impl->stream = impl->stub->StreamPoses(&impl->context);
-  return std::unique_ptr<PosesStream>(new PosesStream(std::move(impl)));
-}
+std::unique_ptr<PosesStream> MapClient::openPosesStream() { return PosesStream::open(*impl_); }
 
 std::vector<BatchAck> MapClient::streamPoints(const std::vector<PointBatch>& batches) {
   std::unique_ptr<PointsStream> stream = openPointsStream();

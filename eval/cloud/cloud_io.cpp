@@ -11,28 +11,13 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "common/scalar_bytes.h"
 #include "io/cloud/pcd_io.h"
 
 namespace cenote::eval {
 namespace {
 
 namespace fs = std::filesystem;
-
-enum class ScalarType { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
-
-int sizeOf(ScalarType t) {
-  switch (t) {
-    case ScalarType::kInt8:
-    case ScalarType::kUint8: return 1;
-    case ScalarType::kInt16:
-    case ScalarType::kUint16: return 2;
-    case ScalarType::kInt32:
-    case ScalarType::kUint32:
-    case ScalarType::kFloat32: return 4;
-    case ScalarType::kFloat64: return 8;
-  }
-  return 0;
-}
 
 bool parsePlyType(const std::string& name, ScalarType& t) {
   static const std::pair<const char*, ScalarType> kNames[] = {
@@ -49,57 +34,6 @@ bool parsePlyType(const std::string& name, ScalarType& t) {
     }
   }
   return false;
-}
-
-// Decodes one binary scalar; `swap` for big-endian data on this little-endian host.
-double decode(const char* src, ScalarType t, bool swap) {
-  char bytes[8];
-  const int n = sizeOf(t);
-  std::memcpy(bytes, src, n);
-  if (swap) std::reverse(bytes, bytes + n);
-  switch (t) {
-    case ScalarType::kInt8: {
-      int8_t v;
-      std::memcpy(&v, bytes, 1);
-      return v;
-    }
-    case ScalarType::kUint8: {
-      uint8_t v;
-      std::memcpy(&v, bytes, 1);
-      return v;
-    }
-    case ScalarType::kInt16: {
-      int16_t v;
-      std::memcpy(&v, bytes, 2);
-      return v;
-    }
-    case ScalarType::kUint16: {
-      uint16_t v;
-      std::memcpy(&v, bytes, 2);
-      return v;
-    }
-    case ScalarType::kInt32: {
-      int32_t v;
-      std::memcpy(&v, bytes, 4);
-      return v;
-    }
-    case ScalarType::kUint32: {
-      uint32_t v;
-      std::memcpy(&v, bytes, 4);
-      return v;
-    }
-    case ScalarType::kFloat32: {
-      float v;
-      std::memcpy(&v, bytes, 4);
-      return v;
-    }
-    case ScalarType::kFloat64: {
-      double v;
-      std::memcpy(&v, bytes, 8);
-      return v;
-    }
-  }
-  return 0.0;
 }
 
 std::string readAll(std::ifstream& in) {
@@ -297,9 +231,9 @@ Cloud readPlyCloud(const std::string& path) {
         const char* base = data.data() + pos;
         for (long i = 0; i < e->count; ++i) {
           const char* r = base + record * i;
-          addPoint(cloud, decode(r + offsets[ix], e->properties[ix].type, swap),
-                   decode(r + offsets[iy], e->properties[iy].type, swap),
-                   decode(r + offsets[iz], e->properties[iz].type, swap));
+          addPoint(cloud, decodeScalar(r + offsets[ix], e->properties[ix].type, swap),
+                   decodeScalar(r + offsets[iy], e->properties[iy].type, swap),
+                   decodeScalar(r + offsets[iz], e->properties[iz].type, swap));
         }
         break;
       }
@@ -312,14 +246,14 @@ Cloud readPlyCloud(const std::string& path) {
         const PlyProperty& p = e->properties[k];
         if (p.is_list) {
           if (pos + sizeOf(p.count_type) > data.size()) throw truncated(i);
-          const auto n = static_cast<long>(decode(data.data() + pos, p.count_type, swap));
+          const auto n = static_cast<long>(decodeScalar(data.data() + pos, p.count_type, swap));
           pos += sizeOf(p.count_type);
           if (n < 0) throw Error(path + ": PLY list of negative length in element '" + e->name + "'");
           if (static_cast<size_t>(n) > (data.size() - pos) / sizeOf(p.type)) throw truncated(i);
           pos += static_cast<size_t>(n) * sizeOf(p.type);
         } else {
           if (pos + sizeOf(p.type) > data.size()) throw truncated(i);
-          values[k] = decode(data.data() + pos, p.type, swap);
+          values[k] = decodeScalar(data.data() + pos, p.type, swap);
           pos += sizeOf(p.type);
         }
       }

@@ -6,6 +6,7 @@
 #include <limits>
 #include <vector>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "eval/depth/colmap_depth_io.h"
 #include "io/image/image_io.h"
@@ -78,13 +79,11 @@ std::map<std::string, DepthFile> listIn(const fs::path& dir, bool prefer_photome
 }  // namespace
 
 const char* toString(DepthFileKind kind) {
-  switch (kind) {
-    case DepthFileKind::kPfm: return "PFM";
-    case DepthFileKind::kPng16: return "16-bit PNG";
-    case DepthFileKind::kColmapGeometric: return "COLMAP geometric";
-    case DepthFileKind::kColmapPhotometric: return "COLMAP photometric";
-  }
-  return "?";
+  constexpr EnumName<DepthFileKind> kNames[] = {{DepthFileKind::kPfm, "PFM"},
+                                                {DepthFileKind::kPng16, "16-bit PNG"},
+                                                {DepthFileKind::kColmapGeometric, "COLMAP geometric"},
+                                                {DepthFileKind::kColmapPhotometric, "COLMAP photometric"}};
+  return enumName(kNames, kind);
 }
 
 std::map<std::string, DepthFile> listDepthMaps(const std::string& dir, bool prefer_photometric) {

@@ -2,7 +2,8 @@
 
 #include <cmath>
 #include <limits>
-#include <nlohmann/json.hpp>
+
+#include "eval/report/metrics_document.h"
 
 namespace cenote::eval {
 namespace {
@@ -39,25 +40,19 @@ OccupancyAgreement summarizeAgreement(const OccupancyConfusion& c) {
 
 std::string toJson(const OccupancyAgreement& a, const OccupancyConfusion& c, const std::string& estimate,
                    const std::string& reference, double voxel_size_m) {
-  nlohmann::ordered_json j;
-  const auto number = [](double v) {
-    return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
-  };
-  j["kind"] = "map";
-  j["units"] = "fractions; voxel_size in metres";
-  j["inputs"] = {{"estimate", estimate}, {"reference", reference}};
+  Json j = metricsDocument("map", "fractions; voxel_size in metres", estimate, reference);
   j["voxel_size"] = voxel_size_m;
-  j["agreement"] = number(a.agreement);
-  j["known_agreement"] = number(a.known_agreement);
-  j["occupied_iou"] = number(a.occupied_iou);
-  j["occupied_precision"] = number(a.occupied_precision);
-  j["occupied_recall"] = number(a.occupied_recall);
+  j["agreement"] = jsonNumber(a.agreement);
+  j["known_agreement"] = jsonNumber(a.known_agreement);
+  j["occupied_iou"] = jsonNumber(a.occupied_iou);
+  j["occupied_precision"] = jsonNumber(a.occupied_precision);
+  j["occupied_recall"] = jsonNumber(a.occupied_recall);
   j["known_either"] = a.known_either;
   j["known_both"] = a.known_both;
   j["occupied_estimate"] = a.occupied_estimate;
   j["occupied_reference"] = a.occupied_reference;
   const char* names[] = {"unknown", "free", "occupied"};
-  nlohmann::ordered_json table;
+  Json table;
   for (int e = 0; e < 3; ++e) {
     for (int r = 0; r < 3; ++r)
       table[std::string("estimate_") + names[e]][std::string("reference_") + names[r]] = c.counts[e][r];

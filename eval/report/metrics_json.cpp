@@ -3,18 +3,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
 
 #include "common/atomic_file.h"
 #include "common/error.h"
+#include "eval/report/metrics_document.h"
 
 namespace cenote::eval {
 namespace {
-
-using Json = nlohmann::ordered_json;
-
-// nlohmann writes NaN and infinity as null; say so explicitly for readers of the code.
-Json number(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
 
 Json histogramJson(const LogHistogram& h) {
   Json edges = Json::array(), counts = Json::array();
@@ -23,20 +18,15 @@ Json histogramJson(const LogHistogram& h) {
   return {{"edges", edges}, {"counts", counts}};
 }
 
-Json inputsJson(const JsonInputs& in) { return {{"estimate", in.estimate}, {"reference", in.reference}}; }
-
 Json xyz(const Eigen::Vector3d& p) { return Json::array({p.x(), p.y(), p.z()}); }
 
 }  // namespace
 
 std::string toJson(const DepthEvaluation& e, const JsonInputs& inputs, const std::vector<HeatmapSample>& heatmaps) {
-  Json j;
-  j["kind"] = "depth";
-  j["units"] = "metres; coverage as a fraction";
-  j["inputs"] = inputsJson(inputs);
-  j["mae"] = number(e.mae_m);
-  j["mom"] = number(e.mom_m);
-  j["coverage"] = number(e.coverage);
+  Json j = metricsDocument("depth", "metres; coverage as a fraction", inputs.estimate, inputs.reference);
+  j["mae"] = jsonNumber(e.mae_m);
+  j["mom"] = jsonNumber(e.mom_m);
+  j["coverage"] = jsonNumber(e.coverage);
   j["frames_matched"] = e.frames.size();
   j["common_px"] = e.common_px;
   j["only_in_estimate"] = e.only_in_estimate;
@@ -44,9 +34,9 @@ std::string toJson(const DepthEvaluation& e, const JsonInputs& inputs, const std
   Json frames = Json::array();
   for (const FrameDepthError& f : e.frames) {
     frames.push_back({{"name", f.name},
-                      {"mean_abs_m", number(f.mean_abs_m)},
-                      {"median_abs_m", number(f.median_abs_m)},
-                      {"coverage", number(f.coverage())},
+                      {"mean_abs_m", jsonNumber(f.mean_abs_m)},
+                      {"median_abs_m", jsonNumber(f.median_abs_m)},
+                      {"coverage", jsonNumber(f.coverage())},
                       {"common_px", f.common_px},
                       {"reference_px", f.reference_px},
                       {"estimate_px", f.estimate_px}});
@@ -59,8 +49,8 @@ std::string toJson(const DepthEvaluation& e, const JsonInputs& inputs, const std
       list.push_back({{"name", h.name},
                       {"error_pfm", h.error_pfm},
                       {"reference_pfm", h.reference_pfm},
-                      {"mean_abs_m", number(h.mean_abs_m)},
-                      {"median_abs_m", number(h.median_abs_m)}});
+                      {"mean_abs_m", jsonNumber(h.mean_abs_m)},
+                      {"median_abs_m", jsonNumber(h.median_abs_m)}});
     }
     j["heatmaps"] = list;
   }
@@ -68,18 +58,15 @@ std::string toJson(const DepthEvaluation& e, const JsonInputs& inputs, const std
 }
 
 std::string toJson(const CloudEvaluation& e, const JsonInputs& inputs) {
-  Json j;
-  j["kind"] = "cloud";
-  j["units"] = "metres; precision, recall and fscore as fractions";
-  j["inputs"] = inputsJson(inputs);
-  j["accuracy"] = number(e.accuracy_m);
-  j["completeness"] = number(e.completeness_m);
-  j["precision"] = number(e.precision);
-  j["recall"] = number(e.recall);
-  j["fscore"] = number(e.fscore);
-  j["threshold"] = number(e.threshold_m);
-  j["accuracy_median"] = number(e.accuracy_median_m);
-  j["completeness_median"] = number(e.completeness_median_m);
+  Json j = metricsDocument("cloud", "metres; precision, recall and fscore as fractions", inputs.estimate, inputs.reference);
+  j["accuracy"] = jsonNumber(e.accuracy_m);
+  j["completeness"] = jsonNumber(e.completeness_m);
+  j["precision"] = jsonNumber(e.precision);
+  j["recall"] = jsonNumber(e.recall);
+  j["fscore"] = jsonNumber(e.fscore);
+  j["threshold"] = jsonNumber(e.threshold_m);
+  j["accuracy_median"] = jsonNumber(e.accuracy_median_m);
+  j["completeness_median"] = jsonNumber(e.completeness_median_m);
   j["source_points"] = e.source_points;
   j["target_points"] = e.target_points;
   Json curve = Json::array();
@@ -94,22 +81,19 @@ std::string toJson(const CloudEvaluation& e, const JsonInputs& inputs) {
 }
 
 std::string toJson(const TrajectoryEvaluation& e, const JsonInputs& inputs) {
-  Json j;
-  j["kind"] = "trajectory";
-  j["units"] = "metres, seconds";
-  j["inputs"] = inputsJson(inputs);
-  j["ate_rmse"] = number(e.ate_rmse_m);
-  j["ate_mean"] = number(e.ate_mean_m);
-  j["ate_median"] = number(e.ate_median_m);
-  j["ate_max"] = number(e.ate_max_m);
+  Json j = metricsDocument("trajectory", "metres, seconds", inputs.estimate, inputs.reference);
+  j["ate_rmse"] = jsonNumber(e.ate_rmse_m);
+  j["ate_mean"] = jsonNumber(e.ate_mean_m);
+  j["ate_median"] = jsonNumber(e.ate_median_m);
+  j["ate_max"] = jsonNumber(e.ate_max_m);
   j["alignment"] = toString(e.alignment);
-  j["scale"] = number(e.T_ref_est.scale);
+  j["scale"] = jsonNumber(e.T_ref_est.scale);
   j["pairs"] = e.pairs.t_s.size();
   j["unmatched_estimate"] = e.pairs.unmatched_estimate;
   j["unmatched_reference"] = e.pairs.unmatched_reference;
   Json rotation = Json::array();
   for (int r = 0; r < 3; ++r) rotation.push_back({e.T_ref_est.R(r, 0), e.T_ref_est.R(r, 1), e.T_ref_est.R(r, 2)});
-  j["T_ref_est"] = {{"scale", number(e.T_ref_est.scale)}, {"R", rotation}, {"t", xyz(e.T_ref_est.t)}};
+  j["T_ref_est"] = {{"scale", jsonNumber(e.T_ref_est.scale)}, {"R", rotation}, {"t", xyz(e.T_ref_est.t)}};
   Json t = Json::array(), ref = Json::array(), aligned = Json::array(), error = Json::array();
   for (size_t i = 0; i < e.pairs.t_s.size(); ++i) {
     t.push_back(e.pairs.t_s[i]);

@@ -6,26 +6,20 @@
 #include <sstream>
 #include <tuple>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "eval/stats/stats.h"
 
 namespace cenote::eval {
 
+constexpr EnumName<Alignment> kAlignmentNames[] = {
+    {Alignment::kSim3, "sim3"}, {Alignment::kSe3, "se3"}, {Alignment::kNone, "none"}};
+
 Alignment parseAlignment(const std::string& name) {
-  if (name == "sim3") return Alignment::kSim3;
-  if (name == "se3") return Alignment::kSe3;
-  if (name == "none") return Alignment::kNone;
-  throw Error("alignment '" + name + "': must be sim3, se3 or none");
+  return parseEnumName(kAlignmentNames, name, "alignment '" + name + "'");
 }
 
-const char* toString(Alignment alignment) {
-  switch (alignment) {
-    case Alignment::kSim3: return "sim3";
-    case Alignment::kSe3: return "se3";
-    case Alignment::kNone: return "none";
-  }
-  return "?";
-}
+const char* toString(Alignment alignment) { return enumName(kAlignmentNames, alignment); }
 
 AssociatedPositions associate(const std::vector<io::StampedPose>& estimate, const std::vector<io::StampedPose>& reference,
                               double tolerance_s) {

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "io/trajectory/trajectory.h"
 
@@ -33,27 +34,16 @@ bool looksLikeColmapImage(const std::string& line) {
 
 }  // namespace
 
+constexpr EnumName<TrajectoryFileFormat> kFileFormatNames[] = {
+    {TrajectoryFileFormat::kAuto, "auto"},     {TrajectoryFileFormat::kTum, "tum"},
+    {TrajectoryFileFormat::kEuroc, "euroc"},   {TrajectoryFileFormat::kKitti, "kitti"},
+    {TrajectoryFileFormat::kColmap, "colmap"}, {TrajectoryFileFormat::kOkvis, "okvis"}};
+
 TrajectoryFileFormat parseTrajectoryFileFormat(const std::string& name) {
-  if (name == "auto") return TrajectoryFileFormat::kAuto;
-  if (name == "tum") return TrajectoryFileFormat::kTum;
-  if (name == "euroc") return TrajectoryFileFormat::kEuroc;
-  if (name == "kitti") return TrajectoryFileFormat::kKitti;
-  if (name == "colmap") return TrajectoryFileFormat::kColmap;
-  if (name == "okvis") return TrajectoryFileFormat::kOkvis;
-  throw Error("trajectory format '" + name + "': must be auto, tum, euroc, kitti, colmap or okvis");
+  return parseEnumName(kFileFormatNames, name, "trajectory format '" + name + "'");
 }
 
-const char* toString(TrajectoryFileFormat format) {
-  switch (format) {
-    case TrajectoryFileFormat::kAuto: return "auto";
-    case TrajectoryFileFormat::kTum: return "tum";
-    case TrajectoryFileFormat::kEuroc: return "euroc";
-    case TrajectoryFileFormat::kKitti: return "kitti";
-    case TrajectoryFileFormat::kColmap: return "colmap";
-    case TrajectoryFileFormat::kOkvis: return "okvis";
-  }
-  return "?";
-}
+const char* toString(TrajectoryFileFormat format) { return enumName(kFileFormatNames, format); }
 
 TrajectoryFileFormat detectTrajectoryFileFormat(const std::string& path) {
   std::ifstream in(path);

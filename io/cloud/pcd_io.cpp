@@ -11,8 +11,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <utility>
 
 #include "common/error.h"
+#include "common/scalar_bytes.h"
 
 namespace cenote::io {
 namespace {
@@ -20,58 +22,19 @@ namespace {
 namespace fs = std::filesystem;
 
 // One scalar of a PCLPointCloud2 field as a double; false for a type we do not read.
-bool decodeScalar(const uint8_t* src, uint8_t datatype, double& value) {
-  switch (datatype) {
-    case pcl::PCLPointField::INT8: {
-      int8_t v;
-      std::memcpy(&v, src, 1);
-      value = v;
+bool decodePclScalar(const uint8_t* src, uint8_t datatype, double& value) {
+  constexpr std::pair<uint8_t, ScalarType> kTypes[] = {
+      {pcl::PCLPointField::INT8, ScalarType::kInt8},       {pcl::PCLPointField::UINT8, ScalarType::kUint8},
+      {pcl::PCLPointField::INT16, ScalarType::kInt16},     {pcl::PCLPointField::UINT16, ScalarType::kUint16},
+      {pcl::PCLPointField::INT32, ScalarType::kInt32},     {pcl::PCLPointField::UINT32, ScalarType::kUint32},
+      {pcl::PCLPointField::FLOAT32, ScalarType::kFloat32}, {pcl::PCLPointField::FLOAT64, ScalarType::kFloat64}};
+  for (const auto& [pcl_type, type] : kTypes) {
+    if (pcl_type == datatype) {
+      value = decodeScalar(src, type);
       return true;
     }
-    case pcl::PCLPointField::UINT8: {
-      uint8_t v;
-      std::memcpy(&v, src, 1);
-      value = v;
-      return true;
-    }
-    case pcl::PCLPointField::INT16: {
-      int16_t v;
-      std::memcpy(&v, src, 2);
-      value = v;
-      return true;
-    }
-    case pcl::PCLPointField::UINT16: {
-      uint16_t v;
-      std::memcpy(&v, src, 2);
-      value = v;
-      return true;
-    }
-    case pcl::PCLPointField::INT32: {
-      int32_t v;
-      std::memcpy(&v, src, 4);
-      value = v;
-      return true;
-    }
-    case pcl::PCLPointField::UINT32: {
-      uint32_t v;
-      std::memcpy(&v, src, 4);
-      value = v;
-      return true;
-    }
-    case pcl::PCLPointField::FLOAT32: {
-      float v;
-      std::memcpy(&v, src, 4);
-      value = v;
-      return true;
-    }
-    case pcl::PCLPointField::FLOAT64: {
-      double v;
-      std::memcpy(&v, src, 8);
-      value = v;
-      return true;
-    }
-    default: return false;
   }
+  return false;
 }
 
 const pcl::PCLPointField* findField(const pcl::PCLPointCloud2& cloud, const std::string& name) {
@@ -197,7 +160,7 @@ PcdPoints readPcd(const std::string& path) {
       const uint8_t* point = cloud.data.data() + row * cloud.row_step + col * cloud.point_step;
       double xyz[3];
       for (int a = 0; a < 3; ++a) {
-        if (!decodeScalar(point + axes[a]->offset, axes[a]->datatype, xyz[a])) {
+        if (!decodePclScalar(point + axes[a]->offset, axes[a]->datatype, xyz[a])) {
           throw Error(path + ": PCD field " + axes[a]->name + " has a type we do not read (PCL datatype " +
                       std::to_string(axes[a]->datatype) + ")");
         }

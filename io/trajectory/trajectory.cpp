@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "common/pose_check.h"
 #include "io/trajectory/vio_trajectory.h"
@@ -34,6 +35,22 @@ bool isDataLine(const std::string& line) {
   return first != std::string::npos && line[first] != '#' && std::isalpha(static_cast<unsigned char>(line[first])) == 0;
 }
 
+// Calls parse(numbers, where, index) for each data line of `in` (the file at `path`): the line's
+// numbers (separated by `separator`; none when a word is not a number), "<path>:<line>: " for its
+// errors, and the number of poses before it. @return the poses that `parse` returned, in file order.
+template <typename Parse>
+std::vector<StampedPose> readPoseLines(std::ifstream& in, const std::string& path, char separator, Parse parse) {
+  std::vector<StampedPose> poses;
+  std::string line;
+  std::vector<double> v;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (!isDataLine(line)) continue;
+    if (!parseNumbers(line, separator, v)) v.clear();
+    poses.push_back(parse(v, path + ":" + std::to_string(number) + ": ", poses.size()));
+  }
+  return poses;
+}
+
 std::ifstream openOrThrow(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw Error("cannot read trajectory " + path + ": no such file or not readable");
@@ -42,15 +59,8 @@ std::ifstream openOrThrow(const std::string& path) {
 
 Trajectory readEuroc(const std::string& path) {
   std::ifstream in = openOrThrow(path);
-  std::vector<StampedPose> poses;
-  std::string line;
-  std::vector<double> v;
-  for (int number = 1; std::getline(in, line); ++number) {
-    if (!isDataLine(line)) continue;
-    const std::string where = path + ":" + std::to_string(number) + ": ";
-    if (!parseNumbers(line, ',', v) || v.size() < 8) {
-      throw Error(where + "expected 't_ns, px, py, pz, qw, qx, qy, qz' (comma separated)");
-    }
+  const auto parse = [](const std::vector<double>& v, const std::string& where, size_t) {
+    if (v.size() < 8) throw Error(where + "expected 't_ns, px, py, pz, qw, qx, qy, qz' (comma separated)");
     const Eigen::Quaterniond q(v[4], v[5], v[6], v[7]);
     if (!std::isfinite(q.norm()) || std::abs(q.norm() - 1.0) > kQuaternionNormTolerance) {
       throw Error(where + "quaternion (qw qx qy qz) is not of unit norm");
@@ -59,9 +69,9 @@ Trajectory readEuroc(const std::string& path) {
     pose.t_s = v[0] * 1e-9;
     pose.T_world_cam.linear() = q.normalized().toRotationMatrix();
     pose.T_world_cam.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
-    poses.push_back(pose);
-  }
-  return Trajectory(std::move(poses), path);
+    return pose;
+  };
+  return Trajectory(readPoseLines(in, path, ',', parse), path);
 }
 
 Trajectory readKitti(const std::string& path, const std::string& times_path) {
@@ -73,14 +83,8 @@ Trajectory readKitti(const std::string& path, const std::string& times_path) {
     double value;
     while (t >> value) times.push_back(value);
   }
-  std::vector<StampedPose> poses;
-  std::string line;
-  std::vector<double> v;
-  for (int number = 1; std::getline(in, line); ++number) {
-    if (!isDataLine(line)) continue;
-    const std::string where = path + ":" + std::to_string(number) + ": ";
-    if (!parseNumbers(line, ' ', v) || v.size() != 12) throw Error(where + "expected 12 numbers (a 3x4 [R | t] row-major)");
-    const size_t index = poses.size();
+  const auto parse = [&](const std::vector<double>& v, const std::string& where, size_t index) {
+    if (v.size() != 12) throw Error(where + "expected 12 numbers (a 3x4 [R | t] row-major)");
     if (!times_path.empty() && index >= times.size()) {
       throw Error(times_path + ": has " + std::to_string(times.size()) + " times but " + path + " has more poses");
     }
@@ -90,9 +94,9 @@ Trajectory readKitti(const std::string& path, const std::string& times_path) {
       for (int c = 0; c < 3; ++c) pose.T_world_cam.linear()(r, c) = v[r * 4 + c];
       pose.T_world_cam.translation()(r) = v[r * 4 + 3];
     }
-    poses.push_back(pose);
-  }
-  return Trajectory(std::move(poses), path);
+    return pose;
+  };
+  return Trajectory(readPoseLines(in, path, ' ', parse), path);
 }
 
 }  // namespace
@@ -152,24 +156,14 @@ Trajectory Trajectory::transformedBy(const Eigen::Isometry3d& T_x_y) const {
   return out;
 }
 
-const char* toString(TrajectoryFormat format) {
-  switch (format) {
-    case TrajectoryFormat::kTum: return "tum";
-    case TrajectoryFormat::kEuroc: return "euroc";
-    case TrajectoryFormat::kKitti: return "kitti";
-    case TrajectoryFormat::kOkvis: return "okvis";
-    case TrajectoryFormat::kOpenVins: return "openvins";
-  }
-  return "?";
-}
+constexpr EnumName<TrajectoryFormat> kFormatNames[] = {
+    {TrajectoryFormat::kTum, "tum"},     {TrajectoryFormat::kEuroc, "euroc"}, {TrajectoryFormat::kKitti, "kitti"},
+    {TrajectoryFormat::kOkvis, "okvis"}, {TrajectoryFormat::kOkvis, "svin2"}, {TrajectoryFormat::kOpenVins, "openvins"}};
+
+const char* toString(TrajectoryFormat format) { return enumName(kFormatNames, format); }
 
 TrajectoryFormat parseTrajectoryFormat(const std::string& name) {
-  if (name == "tum") return TrajectoryFormat::kTum;
-  if (name == "euroc") return TrajectoryFormat::kEuroc;
-  if (name == "kitti") return TrajectoryFormat::kKitti;
-  if (name == "okvis" || name == "svin2") return TrajectoryFormat::kOkvis;
-  if (name == "openvins") return TrajectoryFormat::kOpenVins;
-  throw Error("trajectory format '" + name + "': must be tum, euroc, kitti, okvis (svin2) or openvins");
+  return parseEnumName(kFormatNames, name, "trajectory format '" + name + "'");
 }
 
 bool describesBody(TrajectoryFormat format) {

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <filesystem>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 
 namespace cenote::mapping {
@@ -75,16 +76,14 @@ MapFileFormat resolveMapFileFormat(const std::string& path, MapFileFormat reques
 }
 
 const char* toString(MapFileFormat format) {
-  switch (format) {
-    case MapFileFormat::kUnspecified: return "unspecified";
-    case MapFileFormat::kVdb: return "vdb";
-    case MapFileFormat::kBt: return "bt";
-    case MapFileFormat::kOt: return "ot";
-    case MapFileFormat::kMeshPly: return "mesh-ply";
-    case MapFileFormat::kPointsPly: return "points-ply";
-    case MapFileFormat::kPointsPcd: return "points-pcd";
-  }
-  return "?";
+  constexpr EnumName<MapFileFormat> kNames[] = {{MapFileFormat::kUnspecified, "unspecified"},
+                                                {MapFileFormat::kVdb, "vdb"},
+                                                {MapFileFormat::kBt, "bt"},
+                                                {MapFileFormat::kOt, "ot"},
+                                                {MapFileFormat::kMeshPly, "mesh-ply"},
+                                                {MapFileFormat::kPointsPly, "points-ply"},
+                                                {MapFileFormat::kPointsPcd, "points-pcd"}};
+  return enumName(kNames, format);
 }
 
 const char* extensionOf(MapFileFormat format) {

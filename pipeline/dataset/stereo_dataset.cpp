@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "pipeline/dataset/euroc_dataset.h"
 #include "pipeline/dataset/kitti_dataset.h"
@@ -11,12 +12,12 @@ namespace cenote::pipeline {
 namespace fs = std::filesystem;
 
 DatasetFormat parseDatasetFormat(const std::string& name) {
-  if (name == "auto") return DatasetFormat::kAuto;
-  if (name == "euroc") return DatasetFormat::kEuroc;
-  if (name == "kitti") return DatasetFormat::kKitti;
-  if (name == "paper") return DatasetFormat::kPaper;
-  if (name == "bag") return DatasetFormat::kRecording;
-  throw Error("dataset format '" + name + "': must be auto, euroc, kitti, paper or bag");
+  constexpr EnumName<DatasetFormat> kNames[] = {{DatasetFormat::kAuto, "auto"},
+                                                {DatasetFormat::kEuroc, "euroc"},
+                                                {DatasetFormat::kKitti, "kitti"},
+                                                {DatasetFormat::kPaper, "paper"},
+                                                {DatasetFormat::kRecording, "bag"}};
+  return parseEnumName(kNames, name, "dataset format '" + name + "'");
 }
 
 TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::TrajectoryFormat format) const {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "common/yaml_section.h"
 
@@ -27,20 +28,19 @@ std::vector<ConfigError> FusionConfig::validate() const {
 void FusionConfig::read(YamlSection& section) {
   section.read("num_views", num_views);
   section.read("eps", eps);
-  std::string radius = toString(support_radius);
-  section.read("support_radius", radius);
-  support_radius = parseSupportRadius(radius);
+  section.readName("support_radius", support_radius, parseSupportRadius);
   section.read("min_fused_confidence", min_fused_confidence);
   section.read("min_input_confidence", min_input_confidence);
   section.read("max_depth_m", max_depth_m);
 }
 
-const char* toString(SupportRadius radius) { return radius == SupportRadius::kRelative ? "relative" : "absolute"; }
+constexpr EnumName<SupportRadius> kSupportRadiusNames[] = {{SupportRadius::kRelative, "relative"},
+                                                           {SupportRadius::kAbsolute, "absolute"}};
+
+const char* toString(SupportRadius radius) { return enumName(kSupportRadiusNames, radius); }
 
 SupportRadius parseSupportRadius(const std::string& name) {
-  if (name == "relative") return SupportRadius::kRelative;
-  if (name == "absolute") return SupportRadius::kAbsolute;
-  throw Error("fusion.support_radius = " + name + ": must be 'relative' or 'absolute'");
+  return parseEnumName(kSupportRadiusNames, name, "fusion.support_radius = " + name, NameQuotes::kSingle);
 }
 
 }  // namespace cenote::pipeline

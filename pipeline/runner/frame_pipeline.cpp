@@ -27,14 +27,22 @@ FramePipeline::FramePipeline(const PipelineConfig& config, bool keep_maps, std::
       depths_(config.run.queue_depth),
       outputs_(config.run.queue_depth) {
   throwIfInvalid(config_.validate(), "pipeline configuration");
-  stereo_thread_ = std::thread([this, on_thread_start] {
-    if (on_thread_start) on_thread_start();
-    stereoStage();
-  });
-  fusion_thread_ = std::thread([this, on_thread_start] {
-    if (on_thread_start) on_thread_start();
-    fusionStage();
-  });
+  stereo_thread_ = std::thread(
+      [this, on_thread_start] { runStage(&FramePipeline::stereoStage, depths_, on_thread_start); });
+  fusion_thread_ = std::thread(
+      [this, on_thread_start] { runStage(&FramePipeline::fusionStage, outputs_, on_thread_start); });
+}
+
+template <typename Output>
+void FramePipeline::runStage(void (FramePipeline::*stage)(), Output& output, const std::function<void()>& on_thread_start) {
+  if (on_thread_start) on_thread_start();
+  try {
+    (this->*stage)();
+  } catch (...) {
+    failure_.set(std::current_exception());
+    abort();
+  }
+  output.close();
 }
 
 FramePipeline::~FramePipeline() {
@@ -64,62 +72,50 @@ void FramePipeline::join() {
 }
 
 void FramePipeline::stereoStage() {
-  try {
-    StereoMatcher matcher(config_.stereo);
-    while (std::optional<PosedPair> item = rectified_.pop()) {
-      const auto t0 = Clock::now();
-      const StereoGeometry& g = item->pair.geometry;
-      const DisparityMap map = matcher.match(item->pair.left, item->pair.right);
-      DepthFrame frame;
-      frame.t_s = item->pair.t_s;
-      frame.depth = disparityToDepth(map.disparity, g.fx, g.baseline_m);
-      frame.confidence = map.confidence;
-      frame.color = toBgr(item->pair.left);
-      frame.K = g.K();
-      frame.T_world_cam = item->T_world_cam;
-      ++processed_;
-      stereo_timer_.add(msSince(t0));
-      if (!depths_.push(std::move(frame))) break;
-    }
-  } catch (...) {
-    failure_.set(std::current_exception());
-    abort();
+  StereoMatcher matcher(config_.stereo);
+  while (std::optional<PosedPair> item = rectified_.pop()) {
+    const auto t0 = Clock::now();
+    const StereoGeometry& g = item->pair.geometry;
+    const DisparityMap map = matcher.match(item->pair.left, item->pair.right);
+    DepthFrame frame;
+    frame.t_s = item->pair.t_s;
+    frame.depth = disparityToDepth(map.disparity, g.fx, g.baseline_m);
+    frame.confidence = map.confidence;
+    frame.color = toBgr(item->pair.left);
+    frame.K = g.K();
+    frame.T_world_cam = item->T_world_cam;
+    ++processed_;
+    stereo_timer_.add(msSince(t0));
+    if (!depths_.push(std::move(frame))) break;
   }
-  depths_.close();
 }
 
 void FramePipeline::fusionStage() {
-  try {
-    std::optional<FusionWindow> window;
-    if (config_.run.fuse) window.emplace(config_.fusion);
-    while (std::optional<DepthFrame> frame = depths_.pop()) {
-      const auto t0 = Clock::now();
-      FusedOutput out;
-      if (window) {
-        const FusedFrame* result = window->push(*frame);
-        if (!result) continue;
-        out.frame.t_s = result->frame.t_s;
-        out.frame.T_world_cam = result->frame.T_world_cam;
-        // The window reuses its buffers at the next push: copy the maps only when they are kept.
-        if (keep_maps_) {
-          out.frame.depth = result->frame.depth.clone();
-          out.frame.confidence = result->frame.confidence.clone();
-          out.frame.color = result->frame.color.clone();
-        }
-        out.points = result->points;
-      } else {
-        backProject(*frame, out.points);
-        out.frame = std::move(*frame);
+  std::optional<FusionWindow> window;
+  if (config_.run.fuse) window.emplace(config_.fusion);
+  while (std::optional<DepthFrame> frame = depths_.pop()) {
+    const auto t0 = Clock::now();
+    FusedOutput out;
+    if (window) {
+      const FusedFrame* result = window->push(*frame);
+      if (!result) continue;
+      out.frame.t_s = result->frame.t_s;
+      out.frame.T_world_cam = result->frame.T_world_cam;
+      // The window reuses its buffers at the next push: copy the maps only when they are kept.
+      if (keep_maps_) {
+        out.frame.depth = result->frame.depth.clone();
+        out.frame.confidence = result->frame.confidence.clone();
+        out.frame.color = result->frame.color.clone();
       }
-      ++fused_;
-      fusion_timer_.add(msSince(t0));
-      if (!outputs_.push(std::move(out))) break;
+      out.points = result->points;
+    } else {
+      backProject(*frame, out.points);
+      out.frame = std::move(*frame);
     }
-  } catch (...) {
-    failure_.set(std::current_exception());
-    abort();
+    ++fused_;
+    fusion_timer_.add(msSince(t0));
+    if (!outputs_.push(std::move(out))) break;
   }
-  outputs_.close();
 }
 
 }  // namespace cenote::pipeline

@@ -63,6 +63,10 @@ class FramePipeline {
  private:
   void stereoStage();
   void fusionStage();
+  // Runs `stage` on this thread: its first exception is kept (rethrowIfFailed) and stops every
+  // stage; the stage's `output` is closed either way, which ends the next stage.
+  template <typename Output>
+  void runStage(void (FramePipeline::*stage)(), Output& output, const std::function<void()>& on_thread_start);
   void join();
 
   const PipelineConfig config_;

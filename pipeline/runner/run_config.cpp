@@ -1,5 +1,6 @@
 #include "pipeline/runner/run_config.h"
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "common/yaml_section.h"
 
@@ -22,9 +23,7 @@ std::vector<ConfigError> RunConfig::validate() const {
 void RunConfig::read(YamlSection& section) {
   section.read("queue_depth", queue_depth);
   section.read("pose_max_gap_s", pose_max_gap_s);
-  std::string frame = toString(pose_frame);
-  section.read("pose_frame", frame);
-  pose_frame = parsePoseFrame(frame);
+  section.readName("pose_frame", pose_frame, parsePoseFrame);
   section.read("keyframe_translation_m", keyframe_translation_m);
   section.read("keyframe_rotation_deg", keyframe_rotation_deg);
   section.read("fuse", fuse);
@@ -38,42 +37,26 @@ void RunConfig::read(YamlSection& section) {
 
 std::string pointsFileName(const RunConfig& config) { return "points." + config.points_format; }
 
-const char* toString(PoseFrame frame) {
-  switch (frame) {
-    case PoseFrame::kAuto: return "auto";
-    case PoseFrame::kBody: return "body";
-    case PoseFrame::kCamera: return "camera";
-  }
-  return "?";
-}
+constexpr EnumName<PoseFrame> kPoseFrameNames[] = {
+    {PoseFrame::kAuto, "auto"}, {PoseFrame::kBody, "body"}, {PoseFrame::kCamera, "camera"}};
+
+const char* toString(PoseFrame frame) { return enumName(kPoseFrameNames, frame); }
 
 PoseFrame parsePoseFrame(const std::string& name) {
-  if (name == "auto") return PoseFrame::kAuto;
-  if (name == "body") return PoseFrame::kBody;
-  if (name == "camera") return PoseFrame::kCamera;
-  throw Error("run.pose_frame = " + name + ": must be auto, body or camera");
+  return parseEnumName(kPoseFrameNames, name, "run.pose_frame = " + name);
 }
 
 std::vector<ConfigError> PipelineConfig::validate() const {
-  std::vector<ConfigError> all = stereo.validate();
-  for (auto& e : fusion.validate()) all.push_back(e);
-  for (auto& e : run.validate()) all.push_back(e);
-  return all;
+  return concatConfigErrors({stereo.validate(), fusion.validate(), run.validate()});
 }
 
 PipelineConfig PipelineConfig::load(const std::string& path) {
   PipelineConfig config;
   const YAML::Node root = loadYamlFile(path);
   YamlSection top(root, "", path);
-  YamlSection stereo = top.section("stereo");
-  config.stereo.read(stereo);
-  stereo.finish();
-  YamlSection fusion = top.section("fusion");
-  config.fusion.read(fusion);
-  fusion.finish();
-  YamlSection run = top.section("run");
-  config.run.read(run);
-  run.finish();
+  top.readSection("stereo", config.stereo);
+  top.readSection("fusion", config.fusion);
+  top.readSection("run", config.run);
   // Sections of other components are read (and checked) by them.
   for (const char* other : {"map", "server", "sim", "eval", "bag"}) top.section(other);
   top.finish();

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "common/error.h"
+#include "common/size_format.h"
 #include "pipeline/calibration/rectifier.h"
 #include "io/image/image_io.h"
 #include "pipeline/fusion/outlier_removal.h"
@@ -245,8 +246,8 @@ std::string RunReport::toTable() const {
                   it->second.frames);
     t << line;
   }
-  t << "end to end: " << fps << " fps over " << wall_s << " s, peak memory " << peak_memory_mb << " MiB, " << points_written
-    << " points\n";
+  t << "end to end: " << fps << " fps over " << wall_s << " s, peak memory " << formatBytes(peak_memory_mb * 1048576.0)
+    << ", " << points_written << " points\n";
   return t.str();
 }
 

@@ -1,5 +1,6 @@
 #include "pipeline/stereo/stereo_config.h"
 
+#include "common/enum_names.h"
 #include "common/error.h"
 #include "common/yaml_section.h"
 
@@ -93,20 +94,14 @@ std::vector<ConfigError> StereoConfig::validate() const {
 }
 
 void StereoConfig::read(YamlSection& section) {
-  std::string cost_name = toString(cost);
-  section.read("cost", cost_name);
-  cost = parseMatchingCost(cost_name);
+  section.readName("cost", cost, parseMatchingCost);
   section.read("num_disparities", num_disparities);
   section.read("min_disparity_px", min_disparity_px);
   section.read("window_px", window_px);
-  std::string prefilter_name = toString(prefilter);
-  section.read("prefilter", prefilter_name);
-  prefilter = parsePrefilter(prefilter_name);
+  section.readName("prefilter", prefilter, parsePrefilter);
   section.read("prefilter_cap", prefilter_cap);
   section.read("num_paths", num_paths);
-  std::string search_name = toString(search);
-  section.read("search", search_name);
-  search = parseSearchMode(search_name);
+  section.readName("search", search, parseSearchMode);
   section.read("coarse_scale", coarse_scale);
   section.read("p1", p1);
   section.read("p2", p2);
@@ -122,28 +117,26 @@ void StereoConfig::read(YamlSection& section) {
   section.read("strip_overlap_px", strip_overlap_px);
 }
 
-const char* toString(MatchingCost cost) { return cost == MatchingCost::kSad ? "sad" : "census"; }
+constexpr EnumName<MatchingCost> kCostNames[] = {{MatchingCost::kSad, "sad"}, {MatchingCost::kCensus, "census"}};
+constexpr EnumName<Prefilter> kPrefilterNames[] = {{Prefilter::kNone, "none"}, {Prefilter::kSobelX, "sobel_x"}};
+constexpr EnumName<SearchMode> kSearchNames[] = {{SearchMode::kFull, "full"}, {SearchMode::kBand, "band"}};
 
-const char* toString(Prefilter prefilter) { return prefilter == Prefilter::kNone ? "none" : "sobel_x"; }
+const char* toString(MatchingCost cost) { return enumName(kCostNames, cost); }
 
-const char* toString(SearchMode search) { return search == SearchMode::kFull ? "full" : "band"; }
+const char* toString(Prefilter prefilter) { return enumName(kPrefilterNames, prefilter); }
+
+const char* toString(SearchMode search) { return enumName(kSearchNames, search); }
 
 SearchMode parseSearchMode(const std::string& name) {
-  if (name == "full") return SearchMode::kFull;
-  if (name == "band") return SearchMode::kBand;
-  throw Error("stereo.search = " + name + ": must be 'full' or 'band'");
+  return parseEnumName(kSearchNames, name, "stereo.search = " + name, NameQuotes::kSingle);
 }
 
 Prefilter parsePrefilter(const std::string& name) {
-  if (name == "none") return Prefilter::kNone;
-  if (name == "sobel_x") return Prefilter::kSobelX;
-  throw Error("stereo.prefilter = " + name + ": must be 'none' or 'sobel_x'");
+  return parseEnumName(kPrefilterNames, name, "stereo.prefilter = " + name, NameQuotes::kSingle);
 }
 
 MatchingCost parseMatchingCost(const std::string& name) {
-  if (name == "sad") return MatchingCost::kSad;
-  if (name == "census") return MatchingCost::kCensus;
-  throw Error("stereo.cost = " + name + ": must be 'sad' or 'census'");
+  return parseEnumName(kCostNames, name, "stereo.cost = " + name, NameQuotes::kSingle);
 }
 
 }  // namespace cenote::pipeline

@@ -21,12 +21,8 @@ int main(int argc, char** argv) {
   const std::filesystem::path out = argv[1];
   std::filesystem::create_directories(out / "depth");
   std::filesystem::create_directories(out / "color");
-  test::TestCamera camera;
-  camera.width = 160;
-  camera.height = 120;
-  camera.focal_px = 130.0;
-  test::StereoNoise noise;
-  noise.focal_baseline_px_m = camera.focal_px * 0.15;
+  const test::TestCamera camera{160, 120, 130.0};
+  const test::StereoNoise noise = test::stereoNoiseFor(camera, 0.15);
   const auto poses = test::surveyPoses(5, 0.12);
   std::ofstream traj(out / "traj.txt");
   traj << "# timestamp tx ty tz qx qy qz qw\n";

@@ -201,9 +201,7 @@ TEST_F(SimulatedDive, BadFramesAreRejectedWithTheirStatusAndTheMapIsUnchanged) {
   frames->WritesDone();
   EXPECT_TRUE(frames->Finish().ok());
 
-  auto info_context = contextWithDeadline();
-  v1::MapInfo info;
-  ASSERT_TRUE(stubs.query->GetMapInfo(info_context.get(), v1::MapInfoRequest(), &info).ok());
+  const v1::MapInfo info = mapInfo(stubs);
   EXPECT_EQ(info.map_version(), 0u);
   EXPECT_EQ(info.occupied() + info.free(), 0u);
 
@@ -369,9 +367,7 @@ TEST(ServerPointIngest, OversizedAndBrokenBatchesAreRefusedAndTheMapIsUnchanged)
   nan_origin.mutable_origin()->set_z(INFINITY);
   EXPECT_EQ(call(nan_origin).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
 
-  auto info_context = contextWithDeadline();
-  v1::MapInfo info;
-  ASSERT_TRUE(stubs.query->GetMapInfo(info_context.get(), v1::MapInfoRequest(), &info).ok());
+  v1::MapInfo info = mapInfo(stubs);
   EXPECT_EQ(info.map_version(), 0u);
   EXPECT_EQ(info.occupied() + info.free(), 0u);
 
@@ -394,8 +390,7 @@ TEST(ServerPointIngest, OversizedAndBrokenBatchesAreRefusedAndTheMapIsUnchanged)
   // Positive control: a good batch of the same shape goes into the same map, so the map stayed
   // empty above because the batches were refused, not because nothing ever reaches it.
   ASSERT_TRUE(call(wallBatch(2.0, 0.2, 0.05, 1.0)).ok());
-  auto after_context = contextWithDeadline();
-  ASSERT_TRUE(stubs.query->GetMapInfo(after_context.get(), v1::MapInfoRequest(), &info).ok());
+  info = mapInfo(stubs);
   EXPECT_GT(info.map_version(), 0u);
   EXPECT_GT(info.occupied(), 0u);
   fs::remove(config);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
 
 #include <string>
 #include <vector>
@@ -34,6 +35,15 @@ inline std::unique_ptr<grpc::ClientContext> contextWithDeadline(double seconds =
   context->set_deadline(std::chrono::system_clock::now() +
                         std::chrono::milliseconds(static_cast<int64_t>(seconds * 1000.0)));
   return context;
+}
+
+// Query.GetMapInfo of the server behind `stubs` (a failed call fails the test and gives an empty info).
+inline v1::MapInfo mapInfo(Stubs& stubs) {
+  auto context = contextWithDeadline();
+  v1::MapInfo info;
+  const grpc::Status status = stubs.query->GetMapInfo(context.get(), v1::MapInfoRequest(), &info);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  return info;
 }
 
 // Voxels known in either map whose state differs, and the number known in either.

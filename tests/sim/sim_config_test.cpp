@@ -4,6 +4,7 @@
 
 #include "common/error.h"
 #include "common/yaml_section.h"
+#include "tests/support/error_message.h"
 
 namespace cenote::sim {
 namespace {
@@ -26,9 +27,7 @@ TEST(SimConfig, ReportsEveryFailedRuleWithKeyAndValue) {
 TEST(SimConfig, ReadsSectionAndRejectsUnknownKey) {
   SimConfig c;
   YamlSection root(YAML::Load("sim: {scene: wreck, num_frames: 7, noise_sigma: 0.5}"), "", "test.yaml");
-  YamlSection section = root.section("sim");
-  c.read(section);
-  section.finish();
+  root.readSection("sim", c);
   EXPECT_EQ(c.scene, SimSceneKind::kWreck);
   EXPECT_EQ(c.num_frames, 7);
   EXPECT_DOUBLE_EQ(c.noise_sigma, 0.5);
@@ -42,11 +41,8 @@ TEST(SimConfig, ReadsSectionAndRejectsUnknownKey) {
 
 TEST(SimConfig, DefaultYamlSectionReadsAndEqualsTheDefaults) {
   const std::string path = std::string(CENOTE_SOURCE_DIR) + "/config/default.yaml";
-  YamlSection root(loadYamlFile(path), "", path);
-  YamlSection section = root.section("sim");
   SimConfig c;
-  c.read(section);
-  section.finish();
+  readConfigFile(path, "sim", c);
   EXPECT_EQ(errorsOf(c), "");
   const SimConfig d;
   EXPECT_EQ(c.scene, d.scene);
@@ -58,12 +54,8 @@ TEST(SimConfig, DefaultYamlSectionReadsAndEqualsTheDefaults) {
 
 TEST(SimConfig, UnknownSceneNameIsAnError) {
   EXPECT_EQ(parseSimScene("reef"), SimSceneKind::kReef);
-  try {
-    parseSimScene("ocean");
-    FAIL() << "expected an error";
-  } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "sim.scene = ocean: must be 'cave', 'reef' or 'wreck'");
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { parseSimScene("ocean"); }),
+            "sim.scene = ocean: must be 'cave', 'reef' or 'wreck'");
 }
 
 }  // namespace

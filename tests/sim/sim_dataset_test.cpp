@@ -16,20 +16,14 @@
 #include "pipeline/calibration/stereo_calibration.h"
 #include "sim/scene_mesh.h"
 #include "sim/simulator.h"
+#include "tests/sim/support/small_config.h"
 
 namespace cenote::sim {
 namespace {
 
 namespace fs = std::filesystem;
 
-SimConfig smallConfig(SimSceneKind scene, int frames) {
-  SimConfig c;
-  c.scene = scene;
-  c.num_frames = frames;
-  c.width_px = 400;
-  c.height_px = 300;
-  return c;
-}
+using test::smallConfig;
 
 class SimDataset : public ::testing::Test {
  protected:

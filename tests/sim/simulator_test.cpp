@@ -1,5 +1,6 @@
 // Simulator ground truth: depth on the mesh, consistency between frames, determinism.
 #include "sim/simulator.h"
+#include "tests/sim/support/small_config.h"
 
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -15,14 +16,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-SimConfig smallConfig(SimSceneKind scene, int frames = 6) {
-  SimConfig c;
-  c.scene = scene;
-  c.num_frames = frames;
-  c.width_px = 400;
-  c.height_px = 300;
-  return c;
-}
+using test::smallConfig;
 
 Eigen::Vector3d backProject(const Simulator& sim, const Eigen::Isometry3d& T_world_cam, int x, int y, double z) {
   const PinholeCamera& cam = sim.rig().camera;

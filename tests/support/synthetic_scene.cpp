@@ -206,4 +206,10 @@ bool isGrossError(double estimate_m, double truth_m, double focal_baseline_px_m,
   return std::abs(estimate_m - truth_m) > disparity_px * truth_m * truth_m / focal_baseline_px_m;
 }
 
+StereoNoise stereoNoiseFor(const TestCamera& camera, double baseline_m) {
+  StereoNoise noise;
+  noise.focal_baseline_px_m = camera.focal_px * baseline_m;
+  return noise;
+}
+
 }  // namespace cenote::test

@@ -64,6 +64,9 @@ struct StereoNoise {
   double min_confidence = 0.6, max_confidence = 1.4;  // confidence uniform in this range, unrelated to error
 };
 
+// StereoNoise of a rig of `camera` with baseline `baseline_m` (f b = camera.focal_px * baseline_m).
+StereoNoise stereoNoiseFor(const TestCamera& camera, double baseline_m);
+
 struct NoisyDepth {
   cv::Mat depth;       // CV_32F, +inf in holes
   cv::Mat confidence;  // CV_32F, 0 in holes

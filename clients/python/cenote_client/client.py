@@ -156,18 +156,20 @@ class MapClient:
         step = max(1, self.max_batch)
         return [(i, min(n, i + step)) for i in range(0, max(n, 1), step)]
 
+    def _point_calls(self, pts, method, stub_method, request_type):
+        """The replies of one call of stub_method per chunk of the (N, 3) points pts, each sent as
+        request_type(xyz=...)."""
+        return [self._call(method, stub_method, request_type(xyz=pts[a:b].ravel().tolist()))
+                for a, b in self._chunks(len(pts))]
+
     # -- queries ----------------------------------------------------------------------------------
     def voxels(self, points):
         """States (uint8, VoxelState) and occupancy probabilities (float32, 0.5 where unknown) of
         the voxels holding each point."""
-        pts = _points(points, "points")
-        states, probs = [], []
-        for a, b in self._chunks(len(pts)):
-            req = self.pb.query.VoxelsRequest(xyz=pts[a:b].ravel().tolist())
-            reply = self._call("Query/GetVoxels", self._query.GetVoxels, req)
-            states.append(np.array(reply.states, dtype=np.uint8))
-            probs.append(np.array(reply.probabilities, dtype=np.float32))
-        return np.concatenate(states), np.concatenate(probs)
+        replies = self._point_calls(_points(points, "points"), "Query/GetVoxels", self._query.GetVoxels,
+                                    self.pb.query.VoxelsRequest)
+        return (np.concatenate([np.array(r.states, dtype=np.uint8) for r in replies]),
+                np.concatenate([np.array(r.probabilities, dtype=np.float32) for r in replies]))
 
     def boxes(self, mins, maxs):
         """Unknown / free / occupied voxel counts of each box [mins[i], maxs[i]]."""
@@ -246,14 +248,10 @@ class MapClient:
         """Distance to the nearest occupied voxel (float32, max_distance_m where none is nearer) and
         its gradient ((N, 3) float32, unit, away from the obstacle; zero at max) at each point.
         Unknown voxels are not obstacles: check voxels() too."""
-        pts = _points(points, "points")
-        dist, grad = [], []
-        for a, b in self._chunks(len(pts)):
-            req = self.pb.query.DistancesRequest(xyz=pts[a:b].ravel().tolist())
-            reply = self._call("Query/GetDistances", self._query.GetDistances, req)
-            dist.append(np.array(reply.distances_m, dtype=np.float32))
-            grad.append(np.array(reply.gradients, dtype=np.float32).reshape(-1, 3))
-        return np.concatenate(dist), np.concatenate(grad)
+        replies = self._point_calls(_points(points, "points"), "Query/GetDistances", self._query.GetDistances,
+                                    self.pb.query.DistancesRequest)
+        return (np.concatenate([np.array(r.distances_m, dtype=np.float32) for r in replies]),
+                np.concatenate([np.array(r.gradients, dtype=np.float32).reshape(-1, 3) for r in replies]))
 
     def frontiers(self, position, region=None, max_clusters=0):
         """Frontier clusters sorted by distance of their centroid from position; region: only

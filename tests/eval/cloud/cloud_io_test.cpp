@@ -8,6 +8,7 @@
 #include "common/error.h"
 #include "io/cloud/ply_io.h"
 #include "tests/eval/eval_test_util.h"
+#include "tests/support/error_message.h"
 
 namespace cenote::eval {
 namespace {
@@ -21,12 +22,7 @@ void put(std::ofstream& out, T v, bool big_endian = false) {
 }
 
 std::string errorOf(const std::string& path) {
-  try {
-    readCloud(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
+  return cenote::test::errorMessage([&] { readCloud(path); });
 }
 
 TEST(CloudIo, ReadsCenotesOwnPly) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 
 #include "common/error.h"
@@ -22,6 +23,11 @@ cv::Mat ramp(int w, int h, float base) {
     for (int x = 0; x < w; ++x) m.at<float>(y, x) = base + 0.01f * x + 0.1f * y;
   }
   return m;
+}
+
+// Creates the folders `names` in `dir` (the estimate's and the reference's depth maps).
+void makeFolders(const test::TempDir& dir, std::initializer_list<const char*> names) {
+  for (const char* name : names) std::filesystem::create_directories(dir / name);
 }
 
 TEST(DepthMetrics, NoCommonPixelGivesNaNErrorsAndZeroCoverage) {
@@ -63,8 +69,7 @@ TEST(DepthMetrics, DatasetMaeIsPooledAndMomIsMedianOfMedians) {
 
 TEST(DepthMetrics, IdenticalFoldersGivePerfectScores) {
   test::TempDir dir;
-  std::filesystem::create_directories(dir / "est");
-  std::filesystem::create_directories(dir / "ref");
+  makeFolders(dir, {"est", "ref"});
   for (int i = 0; i < 3; ++i) {
     const cv::Mat d = ramp(16, 12, 1.0f + i);
     const std::string name = "10" + std::to_string(i) + ".000000";
@@ -121,8 +126,7 @@ TEST(DepthMetrics, MatchesOurPfmWithColmapBinaryAndPngByImageName) {
 
 TEST(DepthMetrics, ReferenceScaleAndMaxDepthApply) {
   test::TempDir dir;
-  std::filesystem::create_directories(dir / "est");
-  std::filesystem::create_directories(dir / "ref");
+  makeFolders(dir, {"est", "ref"});
   const cv::Mat d = ramp(8, 8, 1.0f);
   io::writePfm(dir / "est/a.pfm", d);
   io::writePfm(dir / "ref/a.pfm", d * 0.5f);
@@ -138,8 +142,7 @@ TEST(DepthMetrics, ReferenceScaleAndMaxDepthApply) {
 
 TEST(DepthMetrics, NumericNamesPairWithinToleranceOnly) {
   test::TempDir dir;
-  std::filesystem::create_directories(dir / "est");
-  std::filesystem::create_directories(dir / "ref");
+  makeFolders(dir, {"est", "ref"});
   const cv::Mat d = ramp(4, 4, 1.0f);
   // Nanosecond names one writer rounded through a double: 85 ns apart.
   io::writePfm(dir / "est/1700000000066666752.depth.pfm", d);
@@ -159,8 +162,7 @@ TEST(DepthMetrics, NumericNamesPairWithinToleranceOnly) {
 
 TEST(DepthMetrics, SizeMismatchNamesBothFiles) {
   test::TempDir dir;
-  std::filesystem::create_directories(dir / "est");
-  std::filesystem::create_directories(dir / "ref");
+  makeFolders(dir, {"est", "ref"});
   io::writePfm(dir / "est/a.pfm", ramp(8, 8, 1.0f));
   io::writePfm(dir / "ref/a.pfm", ramp(8, 7, 1.0f));
   try {
@@ -175,9 +177,7 @@ TEST(DepthMetrics, SizeMismatchNamesBothFiles) {
 
 TEST(DepthMetrics, NoCommonNameAndEmptyFolderAreErrors) {
   test::TempDir dir;
-  std::filesystem::create_directories(dir / "est");
-  std::filesystem::create_directories(dir / "ref");
-  std::filesystem::create_directories(dir / "empty");
+  makeFolders(dir, {"est", "ref", "empty"});
   io::writePfm(dir / "est/a.pfm", ramp(4, 4, 1.0f));
   io::writePfm(dir / "ref/b.pfm", ramp(4, 4, 1.0f));
   EXPECT_THROW(evaluateDepthFolders(dir / "est", dir / "ref"), Error);

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "tests/support/error_message.h"
 
 namespace cenote::io {
 namespace {
@@ -26,12 +27,7 @@ std::string readFile(const std::string& path) {
 }
 
 std::string errorOf(const std::string& path) {
-  try {
-    readPcd(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
+  return cenote::test::errorMessage([&] { readPcd(path); });
 }
 
 // The header lines of a PCD file up to and including DATA, and the offset of the body.

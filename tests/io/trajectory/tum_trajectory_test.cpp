@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "tests/support/error_message.h"
 
 namespace cenote::io {
 namespace {
@@ -15,12 +16,7 @@ TumTrajectory parse(const std::string& text) {
 }
 
 std::string errorOf(const std::string& text) {
-  try {
-    parse(text);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
+  return cenote::test::errorMessage([&] { parse(text); });
 }
 
 TEST(TumTrajectory, EmptyFileGivesNoPoses) {

@@ -85,7 +85,7 @@ TEST(VioFormats, NamesAndBodyFrames) {
     parseTrajectoryFormat("orb");
     FAIL() << "expected an Error";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), "trajectory format 'orb': must be tum, euroc, kitti, okvis (svin2) or openvins");
+    EXPECT_EQ(std::string(e.what()), "trajectory format 'orb': must be tum, euroc, kitti, okvis, svin2 or openvins");
   }
 }
 

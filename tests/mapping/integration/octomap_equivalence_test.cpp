@@ -16,6 +16,8 @@ namespace cenote::mapping {
 namespace {
 
 using test::countNotIn;
+using test::forEachLeafVoxel;
+using test::insertPointCloud;
 using test::VoxelSets;
 using test::voxelSets;
 
@@ -38,44 +40,19 @@ void configureOctree(octomap::OcTree& tree, const MapConfig& c) {
 Agreement compare(const OccupancyMap& map, const octomap::OcTree& tree) {
   Agreement a;
   auto acc = map.constAccessor();
-  const double s = map.voxelSize();
-  size_t octomap_known = 0;
-  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
-    // Pruned leaves stand for 2^k voxels per side.
-    const double size = it.getSize();
-    const int n = static_cast<int>(std::lround(size / s));
-    const octomap::point3d c = it.getCoordinate();
-    const VoxelIndex first = map.toIndex(
-        Eigen::Vector3d(c.x() - size / 2 + s / 2, c.y() - size / 2 + s / 2, c.z() - size / 2 + s / 2));
-    const bool occupied = tree.isNodeOccupied(*it);
-    const double p = it->getOccupancy();
-    for (int i = 0; i < n; ++i) {
-      for (int j = 0; j < n; ++j) {
-        for (int k = 0; k < n; ++k) {
-          ++octomap_known;
-          const VoxelIndex ijk = first + VoxelIndex(i, j, k);
-          const VoxelState ours = acc.state(ijk);
-          if (ours == VoxelState::kUnknown) {
-            ++a.only_octomap;
-            continue;
-          }
-          ++a.both_known;
-          if ((ours == VoxelState::kOccupied) == occupied) ++a.same_state;
-          if (std::fabs(acc.probability(ijk) - p) < 1e-4) ++a.same_probability;
-        }
-      }
+  forEachLeafVoxel(tree, map, [&](const VoxelIndex& ijk, const auto& leaf) {
+    const VoxelState ours = acc.state(ijk);
+    if (ours == VoxelState::kUnknown) {
+      ++a.only_octomap;
+      return;
     }
-  }
+    ++a.both_known;
+    if ((ours == VoxelState::kOccupied) == tree.isNodeOccupied(*leaf)) ++a.same_state;
+    if (std::fabs(acc.probability(ijk) - leaf->getOccupancy()) < 1e-4) ++a.same_probability;
+  });
   const MapStats stats = map.stats();
   a.only_ours = stats.occupied + stats.free - a.both_known;
   return a;
-}
-
-octomap::Pointcloud toOctomap(const PointBatch& batch) {
-  octomap::Pointcloud cloud;
-  cloud.reserve(batch.size());
-  for (const auto& p : batch.points) cloud.push_back(p.x(), p.y(), p.z());
-  return cloud;
 }
 
 // A sea floor with rocks, seen from six poses of a survey, with stereo-like depth noise.
@@ -100,6 +77,15 @@ std::vector<PointBatch> surveyFrames(uint32_t seed) {
   return frames;
 }
 
+// Whole rays (ray_stop_run 0) at 5 cm up to 8 m: the survey's settings.
+MapConfig exactRays() {
+  MapConfig config;
+  config.ray_stop_run = 0;
+  config.voxel_size_m = 0.05;
+  config.max_range_m = 8.0;
+  return config;
+}
+
 // The same survey into our map and into OctoMap's insertPointCloud (same origins, endpoints,
 // resolution, sensor model and range), then the voxel-by-voxel comparison.
 Agreement integrateBothAndCompare(const MapConfig& config, uint32_t seed, bool discretize) {
@@ -108,8 +94,7 @@ Agreement integrateBothAndCompare(const MapConfig& config, uint32_t seed, bool d
   configureOctree(tree, config);
   for (const PointBatch& frame : surveyFrames(seed)) {
     map.integrate(frame);
-    tree.insertPointCloud(toOctomap(frame), octomap::point3d(frame.origin.x(), frame.origin.y(), frame.origin.z()),
-                          config.max_range_m, false, discretize);
+    insertPointCloud(tree, frame, config.max_range_m, discretize);
   }
   return compare(map, tree);
 }
@@ -120,11 +105,7 @@ Agreement integrateBothAndCompare(const MapConfig& config, uint32_t seed, bool d
 // map carves and the other does not then differs by one miss. No difference in state is expected
 // beyond a handful of voxels, and not a single one on the occupied side of the model.
 TEST(OctomapEquivalence, ExactRaysGiveSameStatesAsInsertPointCloudWithDiscretize) {
-  MapConfig config;
-  config.ray_stop_run = 0;
-  config.voxel_size_m = 0.05;
-  config.max_range_m = 8.0;
-  const Agreement a = integrateBothAndCompare(config, 7, true);
+  const Agreement a = integrateBothAndCompare(exactRays(), 7, true);
   const double known = static_cast<double>(a.both_known);
   ASSERT_GT(a.both_known, 100000u);
   EXPECT_GE(a.same_state / known, 0.999) << a.same_state << " of " << a.both_known;
@@ -142,11 +123,7 @@ TEST(OctomapEquivalence, ExactRaysGiveSameStatesAsInsertPointCloudWithDiscretize
 // centre cross slightly different voxels near the end, so some voxels near surfaces get one more
 // miss in OctoMap. The states must still agree on >= 99 % of the voxels known to both.
 TEST(OctomapEquivalence, ExactRaysAtLeast99PercentSameStatesAsInsertPointCloudPerPoint) {
-  MapConfig config;
-  config.ray_stop_run = 0;
-  config.voxel_size_m = 0.05;
-  config.max_range_m = 8.0;
-  const Agreement a = integrateBothAndCompare(config, 11, false);
+  const Agreement a = integrateBothAndCompare(exactRays(), 11, false);
   const double known = static_cast<double>(a.both_known);
   ASSERT_GT(a.both_known, 100000u);
   EXPECT_GE(a.same_state / known, 0.99) << a.same_state << " of " << a.both_known;
@@ -227,8 +204,7 @@ ScanComparison integrateScanIntoBoth(const MapConfig& config) {
   map.integrate(scan);
   octomap::OcTree tree(config.voxel_size_m);
   configureOctree(tree, config);
-  tree.insertPointCloud(toOctomap(scan), octomap::point3d(scan.origin.x(), scan.origin.y(), scan.origin.z()),
-                        config.max_range_m, false, true);
+  insertPointCloud(tree, scan, config.max_range_m, true);
   return {voxelSets(map), voxelSets(tree, map)};
 }
 

@@ -9,17 +9,13 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "tests/support/error_message.h"
 
 namespace cenote::mapping {
 namespace {
 
 std::string errorOf(const std::string& path, MapFileFormat requested) {
-  try {
-    resolveMapFileFormat(path, requested);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
+  return cenote::test::errorMessage([&] { resolveMapFileFormat(path, requested); });
 }
 
 TEST(MapFileFormat, EveryCaseOfTheSharedTable) {

@@ -1,5 +1,6 @@
 #include "tests/mapping/support/analytic_scene.h"
 
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -83,24 +84,45 @@ double Scene::distanceToSurface(const Eigen::Vector3d& p) const {
   return best;
 }
 
-PointBatch renderBatch(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_world_cam,
-                       double max_depth_m, double noise_m, uint32_t seed) {
-  PointBatch batch;
-  batch.origin = T_world_cam.translation();
+namespace {
+
+// Casts the ray of every pixel, row by row, from the camera's centre into the scene, and calls
+// hit(u, v, d_cam, d_world, range_m) for each that meets a surface within max_depth_m: d_cam the
+// pixel's ray at z = 1, d_world its unit direction, range_m the distance with Gaussian noise of
+// sigma noise_m (drawn from `seed` in pixel order, hits only).
+template <typename Hit>
+void castPixelRays(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_world_cam,
+                   double max_depth_m, double noise_m, uint32_t seed, Hit&& hit) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, noise_m > 0.0 ? noise_m : 1.0);
-  batch.points.reserve(static_cast<size_t>(camera.width) * camera.height);
+  const Eigen::Vector3d origin = T_world_cam.translation();
   for (int v = 0; v < camera.height; ++v) {
     for (int u = 0; u < camera.width; ++u) {
       const Eigen::Vector3d d_cam((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
       const Eigen::Vector3d d = (T_world_cam.linear() * d_cam).normalized();
-      const auto t = scene.intersect(batch.origin, d, max_depth_m);
+      const auto t = scene.intersect(origin, d, max_depth_m);
       if (!t) continue;
-      const double range = *t + (noise_m > 0.0 ? noise(rng) : 0.0);
-      batch.points.push_back((batch.origin + range * d).cast<float>());
-      batch.colors.push_back({static_cast<uint8_t>(u % 256), static_cast<uint8_t>(v % 256), 128});
+      hit(u, v, d_cam, d, *t + (noise_m > 0.0 ? noise(rng) : 0.0));
     }
   }
+}
+
+std::array<uint8_t, 3> pixelColor(int u, int v) {
+  return {static_cast<uint8_t>(u % 256), static_cast<uint8_t>(v % 256), 128};
+}
+
+}  // namespace
+
+PointBatch renderBatch(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_world_cam,
+                       double max_depth_m, double noise_m, uint32_t seed) {
+  PointBatch batch;
+  batch.origin = T_world_cam.translation();
+  batch.points.reserve(static_cast<size_t>(camera.width) * camera.height);
+  castPixelRays(scene, camera, T_world_cam, max_depth_m, noise_m, seed,
+                [&](int u, int v, const Eigen::Vector3d&, const Eigen::Vector3d& d, double range_m) {
+                  batch.points.push_back((batch.origin + range_m * d).cast<float>());
+                  batch.colors.push_back(pixelColor(u, v));
+                });
   return batch;
 }
 
@@ -116,21 +138,14 @@ DepthFrame renderDepth(const Scene& scene, const PinholeCamera& camera, const Ei
   frame.T_world_cam = T_world_cam;
   frame.depth_m.assign(static_cast<size_t>(camera.width) * camera.height, std::numeric_limits<float>::quiet_NaN());
   frame.colors.resize(frame.depth_m.size());
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, noise_m > 0.0 ? noise_m : 1.0);
-  const Eigen::Vector3d origin = T_world_cam.translation();
   for (int v = 0; v < camera.height; ++v) {
-    for (int u = 0; u < camera.width; ++u) {
-      const size_t i = static_cast<size_t>(v) * camera.width + u;
-      frame.colors[i] = {static_cast<uint8_t>(u % 256), static_cast<uint8_t>(v % 256), 128};
-      const Eigen::Vector3d d_cam((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
-      const Eigen::Vector3d d = (T_world_cam.linear() * d_cam).normalized();
-      const auto t = scene.intersect(origin, d, max_depth_m);
-      if (!t) continue;
-      const double range = *t + (noise_m > 0.0 ? noise(rng) : 0.0);
-      frame.depth_m[i] = static_cast<float>(range / d_cam.norm());  // z = range * cos(angle to the axis)
-    }
+    for (int u = 0; u < camera.width; ++u) frame.colors[static_cast<size_t>(v) * camera.width + u] = pixelColor(u, v);
   }
+  castPixelRays(scene, camera, T_world_cam, max_depth_m, noise_m, seed,
+                [&](int u, int v, const Eigen::Vector3d& d_cam, const Eigen::Vector3d&, double range_m) {
+                  // z = range * cos(angle to the axis)
+                  frame.depth_m[static_cast<size_t>(v) * camera.width + u] = static_cast<float>(range_m / d_cam.norm());
+                });
   return frame;
 }
 

@@ -34,21 +34,12 @@ VoxelSets voxelSets(const OccupancyMap& map) {
   return sets;
 }
 
-// OctoMap's leaves, pruned ones expanded to their voxels (voxel size `s`).
+// OctoMap's leaves, pruned ones expanded to their voxels.
 VoxelSets voxelSets(const octomap::OcTree& tree, const OccupancyMap& map) {
   VoxelSets sets;
-  const double s = map.voxelSize();
-  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
-    const double size = it.getSize();
-    const int n = static_cast<int>(std::lround(size / s));
-    const octomap::point3d c = it.getCoordinate();
-    const VoxelIndex first = map.toIndex(
-        Eigen::Vector3d(c.x() - size / 2 + s / 2, c.y() - size / 2 + s / 2, c.z() - size / 2 + s / 2));
-    std::vector<uint64_t>& out = tree.isNodeOccupied(*it) ? sets.occupied : sets.free;
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j)
-        for (int k = 0; k < n; ++k) out.push_back(packVoxel(first + VoxelIndex(i, j, k)));
-  }
+  forEachLeafVoxel(tree, map, [&](const VoxelIndex& ijk, const auto& leaf) {
+    (tree.isNodeOccupied(*leaf) ? sets.occupied : sets.free).push_back(packVoxel(ijk));
+  });
   std::sort(sets.free.begin(), sets.free.end());
   std::sort(sets.occupied.begin(), sets.occupied.end());
   return sets;
@@ -58,6 +49,18 @@ size_t countNotIn(const std::vector<uint64_t>& a, const std::vector<uint64_t>& b
   std::vector<uint64_t> rest;
   std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(rest));
   return rest.size();
+}
+
+octomap::Pointcloud toOctomap(const PointBatch& batch) {
+  octomap::Pointcloud cloud;
+  cloud.reserve(batch.size());
+  for (const auto& p : batch.points) cloud.push_back(p.x(), p.y(), p.z());
+  return cloud;
+}
+
+void insertPointCloud(octomap::OcTree& tree, const PointBatch& batch, double max_range_m, bool discretize) {
+  tree.insertPointCloud(toOctomap(batch), octomap::point3d(batch.origin.x(), batch.origin.y(), batch.origin.z()),
+                        max_range_m, false, discretize);
 }
 
 }  // namespace cenote::mapping::test

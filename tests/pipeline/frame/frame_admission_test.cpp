@@ -58,6 +58,24 @@ StereoFrame texturedFrame(const cv::Size& size, double t_s) {
   return frame;
 }
 
+// Keyframe choice on a tilted rig: its rectifier, a textured frame of its size, and the admission.
+struct Keyframes {
+  Keyframes(double translation_m, double rotation_deg) : admission(rectifier, keyframesAt(translation_m, rotation_deg)) {}
+  Admission decide(double t_s, const Eigen::Isometry3d& T_world_raw) {
+    return admission.decide(t_s, always(T_world_raw)).admission;
+  }
+  // Decides the frame at t_s with the pose T_world_raw, which must be admitted, and admits its images.
+  void admitKeyframe(double t_s, const Eigen::Isometry3d& T_world_raw) {
+    const FrameDecision d = admission.decide(t_s, always(T_world_raw));
+    ASSERT_EQ(d.admission, Admission::kAdmitted) << "t = " << t_s;
+    admission.admit(frame, d.T_world_raw);
+  }
+
+  const Rectifier rectifier{tiltedRig()};
+  const StereoFrame frame = texturedFrame(rectifier.geometry().image_size, 0.0);
+  FrameAdmission admission;
+};
+
 TEST(FrameAdmission, FirstFrameWithAPoseIsAdmittedWithThatPose) {
   const Rectifier rectifier(tiltedRig());
   FrameAdmission admission(rectifier, RunConfig{});
@@ -121,52 +139,36 @@ TEST(FrameAdmission, NoPoseIsRefusedButSetsTheTime) {
 }
 
 TEST(FrameAdmission, TranslationThresholdIsMeasuredFromTheLastAdmittedFrame) {
-  const Rectifier rectifier(tiltedRig());
-  const StereoFrame frame = texturedFrame(rectifier.geometry().image_size, 0.0);
-  FrameAdmission admission(rectifier, keyframesAt(0.5, 0.0));
-  FrameDecision d = admission.decide(1.0, always(at(0.0)));
-  ASSERT_EQ(d.admission, Admission::kAdmitted);
-  admission.admit(frame, d.T_world_raw);
-  EXPECT_EQ(admission.decide(2.0, always(at(0.3))).admission, Admission::kNotKeyframe);
-  EXPECT_EQ(admission.decide(3.0, always(at(0.49))).admission, Admission::kNotKeyframe);
+  Keyframes k(0.5, 0.0);
+  k.admitKeyframe(1.0, at(0.0));
+  EXPECT_EQ(k.decide(2.0, at(0.3)), Admission::kNotKeyframe);
+  EXPECT_EQ(k.decide(3.0, at(0.49)), Admission::kNotKeyframe);
   // 0.6 m from the admitted frame at 0; (0.3 and 0.49 were never admitted, so not 0.11 m from 0.49).
-  d = admission.decide(4.0, always(at(0.6)));
-  ASSERT_EQ(d.admission, Admission::kAdmitted);
-  admission.admit(frame, d.T_world_raw);
-  EXPECT_EQ(admission.decide(5.0, always(at(1.0))).admission, Admission::kNotKeyframe);
-  EXPECT_EQ(admission.decide(6.0, always(at(1.2))).admission, Admission::kAdmitted);
+  k.admitKeyframe(4.0, at(0.6));
+  EXPECT_EQ(k.decide(5.0, at(1.0)), Admission::kNotKeyframe);
+  EXPECT_EQ(k.decide(6.0, at(1.2)), Admission::kAdmitted);
 }
 
 TEST(FrameAdmission, RotationThresholdIsMeasuredFromTheLastAdmittedFrame) {
-  const Rectifier rectifier(tiltedRig());
-  const StereoFrame frame = texturedFrame(rectifier.geometry().image_size, 0.0);
-  FrameAdmission admission(rectifier, keyframesAt(0.0, 10.0));
-  FrameDecision d = admission.decide(1.0, always(at(0.0, 0.0)));
-  ASSERT_EQ(d.admission, Admission::kAdmitted);
-  admission.admit(frame, d.T_world_raw);
+  Keyframes k(0.0, 10.0);
+  k.admitKeyframe(1.0, at(0.0, 0.0));
   // Translation is not a threshold here: 5 m of travel alone does not make a keyframe.
-  EXPECT_EQ(admission.decide(2.0, always(at(5.0, 6.0))).admission, Admission::kNotKeyframe);
-  d = admission.decide(3.0, always(at(0.0, 11.0)));
-  ASSERT_EQ(d.admission, Admission::kAdmitted);
-  admission.admit(frame, d.T_world_raw);
-  EXPECT_EQ(admission.decide(4.0, always(at(0.0, 20.0))).admission, Admission::kNotKeyframe);
-  EXPECT_EQ(admission.decide(5.0, always(at(0.0, 21.5))).admission, Admission::kAdmitted);
+  EXPECT_EQ(k.decide(2.0, at(5.0, 6.0)), Admission::kNotKeyframe);
+  k.admitKeyframe(3.0, at(0.0, 11.0));
+  EXPECT_EQ(k.decide(4.0, at(0.0, 20.0)), Admission::kNotKeyframe);
+  EXPECT_EQ(k.decide(5.0, at(0.0, 21.5)), Admission::kAdmitted);
 }
 
 TEST(FrameAdmission, DecidedButNeverAdmittedFrameIsNotTheKeyframeReference) {
-  const Rectifier rectifier(tiltedRig());
-  const StereoFrame frame = texturedFrame(rectifier.geometry().image_size, 0.0);
-  FrameAdmission admission(rectifier, keyframesAt(0.5, 0.0));
-  FrameDecision d = admission.decide(1.0, always(at(0.0)));
-  ASSERT_EQ(d.admission, Admission::kAdmitted);
-  admission.admit(frame, d.T_world_raw);
+  Keyframes k(0.5, 0.0);
+  k.admitKeyframe(1.0, at(0.0));
   // Admitted by decide() at 1 m but its images never arrive (admit() is not called).
-  ASSERT_EQ(admission.decide(2.0, always(at(1.0))).admission, Admission::kAdmitted);
+  ASSERT_EQ(k.decide(2.0, at(1.0)), Admission::kAdmitted);
   // 1.2 m is 0.2 m from the frame at 1 m but 1.2 m from the last admitted one at 0: a keyframe.
-  EXPECT_EQ(admission.decide(3.0, always(at(1.2))).admission, Admission::kAdmitted);
+  EXPECT_EQ(k.decide(3.0, at(1.2)), Admission::kAdmitted);
   // Positive control: once a frame at 1.2 m is admitted, 1.4 m is too close.
-  admission.admit(frame, at(1.2));
-  EXPECT_EQ(admission.decide(4.0, always(at(1.4))).admission, Admission::kNotKeyframe);
+  k.admission.admit(k.frame, at(1.2));
+  EXPECT_EQ(k.decide(4.0, at(1.4)), Admission::kNotKeyframe);
 }
 
 TEST(FrameAdmission, FailedAdmitDoesNotBecomeTheKeyframeReference) {

@@ -112,11 +112,8 @@ TEST(FusionConfig, ReadsYamlAndRejectsUnknownKeys) {
 // error passes 5 cm for the simulator's rig (see the comment in config/default.yaml).
 TEST(FusionConfig, DefaultYamlSectionIsValidAndMatchesTheDefaults) {
   const std::string path = std::string(CENOTE_SOURCE_DIR) + "/config/default.yaml";
-  YamlSection root(loadYamlFile(path), "", path);
-  YamlSection section = root.section("fusion");
   FusionConfig c;
-  c.read(section);
-  section.finish();
+  readConfigFile(path, "fusion", c);
   EXPECT_TRUE(c.validate().empty());
   const FusionConfig d;
   EXPECT_EQ(c.num_views, d.num_views);

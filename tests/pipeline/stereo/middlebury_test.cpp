@@ -44,6 +44,17 @@ BadPixelStats evaluate(const StereoPairWithTruth& pair, const StereoConfig& conf
   return s;
 }
 
+// The matches of SAD 3x3 on 4 paths with the setting `flag` off, then on.
+std::pair<DisparityMap, DisparityMap> matchesWithoutAndWith(const StereoPairWithTruth& pair, bool StereoConfig::*flag) {
+  StereoConfig config = configFor(pair, MatchingCost::kSad, 3, 4);
+  std::pair<DisparityMap, DisparityMap> maps;
+  config.*flag = false;
+  evaluate(pair, config, &maps.first);
+  config.*flag = true;
+  evaluate(pair, config, &maps.second);
+  return maps;
+}
+
 // OpenCV's StereoSGBM with the same window, disparities and penalties; its disparities are
 // fixed point (x16) and invalid below minDisparity.
 BadPixelStats evaluateOpenCv(const StereoPairWithTruth& pair, const StereoConfig& config, int mode) {
@@ -64,6 +75,26 @@ BadPixelStats evaluateOpenCv(const StereoPairWithTruth& pair, const StereoConfig
   std::cout << pair.name << " OpenCV StereoSGBM mode " << mode << ": bad-1 " << s.bad1 << " %, bad-2 " << s.bad2
             << " %, density " << s.density << " %\n";
   return s;
+}
+
+// SAD 3x3 on 4 paths: bad-2 no worse than OpenCV's SGBM in its 4-path (HH4) and 3-way modes, same settings.
+void expectBad2NoWorseThanOpenCvSgbm(const StereoPairWithTruth& pair) {
+  const StereoConfig config = configFor(pair, MatchingCost::kSad, 3, 4);
+  const double ours = evaluate(pair, config).bad2;
+  const double hh4 = evaluateOpenCv(pair, config, cv::StereoSGBM::MODE_HH4).bad2;
+  const double three_way = evaluateOpenCv(pair, config, cv::StereoSGBM::MODE_SGBM_3WAY).bad2;
+  EXPECT_LE(ours, hh4);
+  EXPECT_LE(ours, three_way);
+}
+
+// SAD 3x3 on 4 paths, band and full search: bad-2 no worse than the better of OpenCV's SGBM modes
+// (HH4, 3-way) with the band's settings.
+void expectBandAndFullSearchBad2NoWorseThanOpenCvSgbm(const StereoPairWithTruth& pair) {
+  const StereoConfig band = configFor(pair, MatchingCost::kSad, 3, 4, SearchMode::kBand);
+  const double opencv = std::min(evaluateOpenCv(pair, band, cv::StereoSGBM::MODE_HH4).bad2,
+                                 evaluateOpenCv(pair, band, cv::StereoSGBM::MODE_SGBM_3WAY).bad2);
+  EXPECT_LE(evaluate(pair, band).bad2, opencv);
+  EXPECT_LE(evaluate(pair, configFor(pair, MatchingCost::kSad, 3, 4, SearchMode::kFull)).bad2, opencv);
 }
 
 #define REQUIRE_PAIR(var, loader) \
@@ -97,11 +128,7 @@ TEST(MiddleburyCones, EightPathsNoWorseThanFour) {
 
 TEST(MiddleburyCones, LeftRightCheckRemovesMoreBadThanGoodPixels) {
   REQUIRE_PAIR(pair, test::loadCones);
-  StereoConfig config = configFor(*pair, MatchingCost::kSad, 3, 4);
-  DisparityMap plain, checked;
-  evaluate(*pair, config, &plain);
-  config.lr_check = true;
-  evaluate(*pair, config, &checked);
+  const auto [plain, checked] = matchesWithoutAndWith(*pair, &StereoConfig::lr_check);
   int removed_bad = 0, removed_good = 0;
   for (int y = 0; y < pair->mask.rows; ++y) {
     for (int x = 0; x < pair->mask.cols; ++x) {
@@ -157,11 +184,7 @@ double sparsificationArea(const StereoPairWithTruth& pair, const DisparityMap& m
 // The reason for excluding d*-1..d*+1 from the second minimum: measured, not assumed.
 TEST(MiddleburyCones, PkrnExcludingNeighboursRanksBetterThanNaiveSecondMinimum) {
   REQUIRE_PAIR(pair, test::loadCones);
-  StereoConfig config = configFor(*pair, MatchingCost::kSad, 3, 4);
-  DisparityMap excluded, naive;
-  evaluate(*pair, config, &excluded);
-  config.pkrn_exclude_neighbours = false;
-  evaluate(*pair, config, &naive);
+  const auto [naive, excluded] = matchesWithoutAndWith(*pair, &StereoConfig::pkrn_exclude_neighbours);
   const double e = sparsificationArea(*pair, excluded), n = sparsificationArea(*pair, naive);
   std::cout << "PKRN sparsification area (mean bad-1 over 5..100 % most confident): " << e << " % excluding neighbours vs "
             << n << " % naive\n";
@@ -170,22 +193,12 @@ TEST(MiddleburyCones, PkrnExcludingNeighboursRanksBetterThanNaiveSecondMinimum) 
 
 TEST(MiddleburyCloth3, Bad2NoWorseThanOpenCvSgbm) {
   REQUIRE_PAIR(pair, test::loadCloth3);
-  const StereoConfig config = configFor(*pair, MatchingCost::kSad, 3, 4);
-  const double ours = evaluate(*pair, config).bad2;
-  const double hh4 = evaluateOpenCv(*pair, config, cv::StereoSGBM::MODE_HH4).bad2;
-  const double three_way = evaluateOpenCv(*pair, config, cv::StereoSGBM::MODE_SGBM_3WAY).bad2;
-  EXPECT_LE(ours, hh4);
-  EXPECT_LE(ours, three_way);
+  expectBad2NoWorseThanOpenCvSgbm(*pair);
 }
 
 TEST(MiddleburyMotorcycle, Bad2NoWorseThanOpenCvSgbm) {
   REQUIRE_PAIR(pair, test::loadMotorcycle);
-  const StereoConfig config = configFor(*pair, MatchingCost::kSad, 3, 4);
-  const double ours = evaluate(*pair, config).bad2;
-  const double hh4 = evaluateOpenCv(*pair, config, cv::StereoSGBM::MODE_HH4).bad2;
-  const double three_way = evaluateOpenCv(*pair, config, cv::StereoSGBM::MODE_SGBM_3WAY).bad2;
-  EXPECT_LE(ours, hh4);
-  EXPECT_LE(ours, three_way);
+  expectBad2NoWorseThanOpenCvSgbm(*pair);
 }
 
 // Coarse to fine (SearchMode::kBand) against the same thresholds as the full search, whichever
@@ -206,20 +219,12 @@ TEST(MiddleburyCones, BandSearchMeetsTheFullSearchThresholds) {
 
 TEST(MiddleburyCloth3, BandAndFullSearchBad2NoWorseThanOpenCvSgbm) {
   REQUIRE_PAIR(pair, test::loadCloth3);
-  const StereoConfig band = configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kBand);
-  const double opencv = std::min(evaluateOpenCv(*pair, band, cv::StereoSGBM::MODE_HH4).bad2,
-                                 evaluateOpenCv(*pair, band, cv::StereoSGBM::MODE_SGBM_3WAY).bad2);
-  EXPECT_LE(evaluate(*pair, band).bad2, opencv);
-  EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kFull)).bad2, opencv);
+  expectBandAndFullSearchBad2NoWorseThanOpenCvSgbm(*pair);
 }
 
 TEST(MiddleburyMotorcycle, BandAndFullSearchBad2NoWorseThanOpenCvSgbm) {
   REQUIRE_PAIR(pair, test::loadMotorcycle);
-  const StereoConfig band = configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kBand);
-  const double opencv = std::min(evaluateOpenCv(*pair, band, cv::StereoSGBM::MODE_HH4).bad2,
-                                 evaluateOpenCv(*pair, band, cv::StereoSGBM::MODE_SGBM_3WAY).bad2);
-  EXPECT_LE(evaluate(*pair, band).bad2, opencv);
-  EXPECT_LE(evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kFull)).bad2, opencv);
+  expectBandAndFullSearchBad2NoWorseThanOpenCvSgbm(*pair);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include "common/error.h"
 #include "common/yaml_section.h"
+#include "tests/support/error_message.h"
 
 namespace cenote::pipeline {
 namespace {
@@ -82,12 +83,7 @@ TEST(StereoConfig, ReadsYamlAndRejectsUnknownCostName) {
   EXPECT_EQ(c.num_paths, 8);
   EXPECT_TRUE(c.lr_check);
   YamlSection bad(YAML::Load("{cost: ncc}"), "stereo", "c.yaml");
-  try {
-    c.read(bad);
-    FAIL() << "expected an error";
-  } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "stereo.cost = ncc: must be 'sad' or 'census'");
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { c.read(bad); }), "stereo.cost = ncc: must be 'sad' or 'census'");
 }
 
 TEST(StereoConfig, ReadsSearchModeAndRejectsUnknownName) {
@@ -101,12 +97,7 @@ TEST(StereoConfig, ReadsSearchModeAndRejectsUnknownName) {
   c.num_disparities = kBandDisparities;  // a range no wider than the band is searched in full
   EXPECT_FALSE(c.usesBand());
   YamlSection bad(YAML::Load("{search: coarse}"), "stereo", "c.yaml");
-  try {
-    c.read(bad);
-    FAIL() << "expected an error";
-  } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "stereo.search = coarse: must be 'full' or 'band'");
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { c.read(bad); }), "stereo.search = coarse: must be 'full' or 'band'");
 }
 
 TEST(StereoConfig, CoarseScaleIsTwoOrFourAndShrinksTheRangeOutwards) {
