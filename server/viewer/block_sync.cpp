@@ -86,8 +86,16 @@ SyncStep BlockSync::next(const mapping::OccupancyMap::ConstAccessor& access, con
   for (const uint64_t k : dirty_) dirty.emplace_back(distance2(k), k);
   byDistance(dirty);
   size_t reached = 0;
+  std::vector<uint64_t> held;  // sent less than resend_s ago: they stay dirty
   for (; reached < dirty.size(); ++reached) {
     const uint64_t k = dirty[reached].second;
+    if (resend_ns_ > 0) {
+      const auto recent = sent_.find(k);
+      if (recent != sent_.end() && time_ns < recent->second.time_ns + resend_ns_) {
+        held.push_back(k);
+        continue;
+      }
+    }
     access.readBlockMasks(unkey(k), known, occupied);
     const uint64_t n = countOccupied(occupied);
     if (n == 0) {
@@ -111,6 +119,7 @@ SyncStep BlockSync::next(const mapping::OccupancyMap::ConstAccessor& access, con
     spent += coarse;
   }
   for (size_t i = 0; i < reached; ++i) dirty_.erase(dirty[i].second);
+  for (const uint64_t k : held) dirty_.insert(k);
   // Upgrade the nearest to full detail while the budget lasts.
   for (Planned& p : planned) {
     if (p.full) continue;

@@ -36,8 +36,13 @@ struct SyncStep {
 
 class BlockSync {
  public:
-  BlockSync(std::string frame_id, ColorBy color_by, double refresh_s = 5.0)
-      : frame_id_(std::move(frame_id)), color_by_(color_by), refresh_ns_(static_cast<uint64_t>(refresh_s * 1e9)) {}
+  // resend_s: a block the client has is sent again at most this often (it waits, dirty, while the
+  // map goes on changing it); refresh_s: the same for a stale block (see above).
+  BlockSync(std::string frame_id, ColorBy color_by, double refresh_s = 5.0, double resend_s = 0.0)
+      : frame_id_(std::move(frame_id)),
+        color_by_(color_by),
+        refresh_ns_(static_cast<uint64_t>(refresh_s * 1e9)),
+        resend_ns_(static_cast<uint64_t>(resend_s * 1e9)) {}
 
   // Every block the client has and every block given (the map's known blocks) become dirty: the
   // whole map is sent again (a new client, or a change feed that dropped changes).
@@ -71,6 +76,7 @@ class BlockSync {
   std::string frame_id_;
   ColorBy color_by_;
   uint64_t refresh_ns_;
+  uint64_t resend_ns_;
   std::unordered_map<uint64_t, Sent> sent_;  // blocks the client has, and as what
   std::unordered_set<uint64_t> dirty_;
   std::unordered_set<uint64_t> stale_;  // full blocks changed since sent, with the same occupied voxels

@@ -205,8 +205,9 @@ void FeedWorker::tick(std::vector<std::shared_ptr<Client>>& clients, double dt_s
       c->map_subscription = map_subscription;
       c->sync.reset();
       if (map_subscription) {
-        c->sync = std::make_unique<BlockSync>(
-            sources_.frame_id, config_.color_by == "height" ? ColorBy::kHeight : ColorBy::kImage, config_.refresh_s);
+        c->sync = std::make_unique<BlockSync>(sources_.frame_id,
+                                              config_.color_by == "height" ? ColorBy::kHeight : ColorBy::kImage,
+                                              config_.refresh_s, config_.resend_s);
         const auto access = map.constAccessor();
         c->sync->markAll(access.knownBlocks());
       }
