@@ -14,3 +14,7 @@ echo "== run_throughput (cenote run on a simulated 800x600 cave, 112 disparities
 echo "| run | fps | read+rectify ms | stereo ms | fusion ms | output ms | peak MiB | / paper's best |"
 echo "|---|---|---|---|---|---|---|---|"
 bash "$here/bench/run_throughput.sh" "$build/apps/cenote" "$here"
+echo
+echo "== viewer_bench (cenote-server's live viewer: CPU per frame without / with a client, bytes sent)"
+CENOTE_PYTHON_STUBS="$build/clients/python/gen" /usr/bin/python3 "$here/bench/viewer_bench.py" \
+  "$build/apps/cenote" "$build/server/cenote-server" "$here"
