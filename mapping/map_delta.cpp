@@ -1,17 +1,15 @@
 // The plain value types of voxel_types.h: voxel state names and merging change records.
 #include <algorithm>
 
+#include "common/enum_names.h"
 #include "mapping/voxel_types.h"
 
 namespace cenote::mapping {
 
 const char* toString(VoxelState state) {
-  switch (state) {
-    case VoxelState::kUnknown: return "unknown";
-    case VoxelState::kFree: return "free";
-    case VoxelState::kOccupied: return "occupied";
-  }
-  return "?";
+  constexpr EnumName<VoxelState> kNames[] = {
+      {VoxelState::kUnknown, "unknown"}, {VoxelState::kFree, "free"}, {VoxelState::kOccupied, "occupied"}};
+  return enumName(kNames, state);
 }
 
 void MapDelta::merge(const MapDelta& other) {

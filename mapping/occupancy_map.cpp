@@ -8,7 +8,6 @@
 #include <cmath>
 #include <sstream>
 
-#include "common/enum_names.h"
 #include "common/error.h"
 #include "mapping/detail/map_impl.h"
 #include "mapping/detail/block_bits.h"
@@ -103,12 +102,6 @@ void finishDelta(MapDelta& delta, double s) {
 }
 
 }  // namespace
-
-const char* toString(VoxelState state) {
-  constexpr EnumName<VoxelState> kNames[] = {
-      {VoxelState::kUnknown, "unknown"}, {VoxelState::kFree, "free"}, {VoxelState::kOccupied, "occupied"}};
-  return enumName(kNames, state);
-}
 
 OccupancyMap::OccupancyMap(const MapConfig& config) : config_(config) {
   throwIfInvalid(config.validate(), "map configuration");
