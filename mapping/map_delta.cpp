@@ -1,18 +1,9 @@
-// The plain value types of voxel_types.h: voxel state names and merging change records.
+// The plain value types of voxel_types.h: merging change records (voxel state names: occupancy_map.cpp).
 #include <algorithm>
 
 #include "mapping/voxel_types.h"
 
 namespace cenote::mapping {
-
-const char* toString(VoxelState state) {
-  switch (state) {
-    case VoxelState::kUnknown: return "unknown";
-    case VoxelState::kFree: return "free";
-    case VoxelState::kOccupied: return "occupied";
-  }
-  return "?";
-}
 
 void MapDelta::merge(const MapDelta& other) {
   // Both lists are sorted and unique: a linear merge (the server merges every frame's delta into
