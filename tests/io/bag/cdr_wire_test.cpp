@@ -5,33 +5,18 @@
 
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <nlohmann/json.hpp>
+#include "tests/io/bag/ros2_test_data.h"
 
 namespace cenote::io {
 namespace {
 
 namespace fs = std::filesystem;
-using Bytes = std::vector<std::uint8_t>;
+using test::Bytes;
+using test::kData;
+using test::stampOf;
 
-const fs::path kData = CENOTE_ROS2_BAG_DATA;
-
-Bytes sample(const std::string& name) {
-  std::ifstream in(kData / "cdr" / (name + ".cdr"), std::ios::binary);
-  return Bytes(std::istreambuf_iterator<char>(in), {});
-}
-
-const nlohmann::json& values(const std::string& name) {
-  static const nlohmann::json json = [] {
-    std::ifstream in(kData / "expected.json");
-    return nlohmann::json::parse(in);
-  }();
-  return json["cdr"][name]["message"];
-}
-
-std::int64_t stampOf(const nlohmann::json& header) {
-  return header["stamp"]["sec"].get<std::int64_t>() * 1000000000 + header["stamp"]["nanosec"].get<std::int64_t>();
-}
+Bytes sample(const std::string& name) { return test::cdrSample(name); }
+const nlohmann::json& values(const std::string& name) { return test::cdrValues(name); }
 
 void expectHeader(CdrWire& w, const nlohmann::json& header) {
   std::string frame;

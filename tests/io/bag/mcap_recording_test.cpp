@@ -13,29 +13,17 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "tests/io/bag/ros2_test_data.h"
 
 namespace cenote::io {
 namespace {
 
 namespace fs = std::filesystem;
-using Bytes = std::vector<std::uint8_t>;
+using test::Bytes;
+using test::fromHex;
+using test::kData;
 
-const fs::path kData = CENOTE_ROS2_BAG_DATA;
-
-const nlohmann::json& expected() {
-  static const nlohmann::json json = [] {
-    std::ifstream in(kData / "expected.json");
-    return nlohmann::json::parse(in);
-  }();
-  return json;
-}
-
-Bytes fromHex(const std::string& hex) {
-  Bytes out(hex.size() / 2);
-  for (std::size_t i = 0; i < out.size(); ++i)
-    out[i] = static_cast<std::uint8_t>(std::stoi(hex.substr(2 * i, 2), nullptr, 16));
-  return out;
-}
+const nlohmann::json& expected() { return test::expectedJson(); }
 
 Bytes readFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -98,18 +86,7 @@ class McapFile : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(McapFile, TopicsCountsAndTimeSpansAreTheWritersOnes) {
   const std::unique_ptr<Recording> rec = openMcapRecording(kData / (GetParam() + ".mcap"));
-  const std::vector<TopicInfo>& topics = rec->topics();
-  nlohmann::json want = expected()["topics"];  // the writer's order; topics() are sorted by name
-  std::sort(want.begin(), want.end(), [](const auto& a, const auto& b) { return a["name"] < b["name"]; });
-  ASSERT_EQ(topics.size(), want.size()) << "the json channel /diagnostics is not a topic";
-  for (std::size_t i = 0; i < want.size(); ++i) {
-    EXPECT_EQ(topics[i].name, want[i]["name"]);
-    EXPECT_EQ(topics[i].type, want[i]["type"]) << topics[i].name;
-    EXPECT_EQ(topics[i].encoding, MessageEncoding::kCdr) << topics[i].name;
-    EXPECT_EQ(topics[i].message_count, want[i]["count"].get<std::uint64_t>()) << topics[i].name;
-    EXPECT_EQ(topics[i].first_ns, std::stoll(want[i]["first_ns"].get<std::string>())) << topics[i].name;
-    EXPECT_EQ(topics[i].last_ns, std::stoll(want[i]["last_ns"].get<std::string>())) << topics[i].name;
-  }
+  test::expectTopics(*rec, expected()["topics"]);
   EXPECT_EQ(rec->truncation(), "");
 }
 
