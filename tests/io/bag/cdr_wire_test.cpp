@@ -7,16 +7,10 @@
 
 #include "tests/io/bag/ros2_test_data.h"
 
-namespace cenote::io {
+namespace cenote::io::test {
 namespace {
 
 namespace fs = std::filesystem;
-using test::Bytes;
-using test::kData;
-using test::stampOf;
-
-Bytes sample(const std::string& name) { return test::cdrSample(name); }
-const nlohmann::json& values(const std::string& name) { return test::cdrValues(name); }
 
 void expectHeader(CdrWire& w, const nlohmann::json& header) {
   std::string frame;
@@ -42,8 +36,8 @@ void expectTransform(CdrWire& w, const nlohmann::json& t) {  // geometry_msgs/Tr
 }
 
 TEST(CdrWire, ImageFromTheIndependentSerialiser) {
-  const Bytes bytes = sample("image");
-  const nlohmann::json& v = values("image");
+  const Bytes bytes = cdrSample("image");
+  const nlohmann::json& v = cdrValues("image");
   CdrWire w(bytes);
   EXPECT_TRUE(w.isLittleEndian());
   expectHeader(w, v["header"]);
@@ -59,8 +53,8 @@ TEST(CdrWire, ImageFromTheIndependentSerialiser) {
 }
 
 TEST(CdrWire, CompressedImage) {
-  const Bytes bytes = sample("compressed_image");
-  const nlohmann::json& v = values("compressed_image");
+  const Bytes bytes = cdrSample("compressed_image");
+  const nlohmann::json& v = cdrValues("compressed_image");
   CdrWire w(bytes);
   expectHeader(w, v["header"]);
   EXPECT_EQ(w.str(), v["format"]);
@@ -71,8 +65,8 @@ TEST(CdrWire, CompressedImage) {
 }
 
 TEST(CdrWire, CameraInfoDoublesAlignedAfterStrings) {
-  const Bytes bytes = sample("camera_info");
-  const nlohmann::json& v = values("camera_info");
+  const Bytes bytes = cdrSample("camera_info");
+  const nlohmann::json& v = cdrValues("camera_info");
   CdrWire w(bytes);
   expectHeader(w, v["header"]);
   EXPECT_EQ(w.u32(), 3u);
@@ -92,8 +86,8 @@ TEST(CdrWire, CameraInfoDoublesAlignedAfterStrings) {
 
 TEST(CdrWire, OdometryPoseStampedAndTransforms) {
   {
-    const Bytes bytes = sample("odometry");
-    const nlohmann::json& v = values("odometry");
+    const Bytes bytes = cdrSample("odometry");
+    const nlohmann::json& v = cdrValues("odometry");
     CdrWire w(bytes);
     expectHeader(w, v["header"]);
     EXPECT_EQ(w.str(), v["child_frame_id"]);
@@ -105,21 +99,21 @@ TEST(CdrWire, OdometryPoseStampedAndTransforms) {
     EXPECT_EQ(w.offset(), bytes.size());
   }
   {
-    const Bytes bytes = sample("pose_stamped");
+    const Bytes bytes = cdrSample("pose_stamped");
     CdrWire w(bytes);
-    expectHeader(w, values("pose_stamped")["header"]);
-    expectPose(w, values("pose_stamped")["pose"]);
+    expectHeader(w, cdrValues("pose_stamped")["header"]);
+    expectPose(w, cdrValues("pose_stamped")["pose"]);
     EXPECT_EQ(w.offset(), bytes.size());
   }
   {
-    const Bytes bytes = sample("transform_stamped");
+    const Bytes bytes = cdrSample("transform_stamped");
     CdrWire w(bytes);
-    expectTransform(w, values("transform_stamped"));
+    expectTransform(w, cdrValues("transform_stamped"));
     EXPECT_EQ(w.offset(), bytes.size());
   }
   {
-    const Bytes bytes = sample("tf_message");
-    const nlohmann::json& v = values("tf_message");
+    const Bytes bytes = cdrSample("tf_message");
+    const nlohmann::json& v = cdrValues("tf_message");
     CdrWire w(bytes);
     ASSERT_EQ(w.length(), 2u);
     expectTransform(w, v["transforms"][0]);
@@ -143,7 +137,7 @@ TEST(CdrWire, BigEndianBytesCheckedByHand) {
 }
 
 TEST(CdrWire, BytesThatRunOutAndForeignEncapsulations) {
-  Bytes bytes = sample("odometry");
+  Bytes bytes = cdrSample("odometry");
   bytes.resize(bytes.size() - 3);
   CdrWire w(bytes);
   std::string frame;
@@ -168,4 +162,4 @@ TEST(CdrWire, BytesThatRunOutAndForeignEncapsulations) {
 }
 
 }  // namespace
-}  // namespace cenote::io
+}  // namespace cenote::io::test

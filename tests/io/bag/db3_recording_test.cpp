@@ -12,15 +12,10 @@
 #include "common/error.h"
 #include "tests/io/bag/ros2_test_data.h"
 
-namespace cenote::io {
+namespace cenote::io::test {
 namespace {
 
 namespace fs = std::filesystem;
-using test::Bytes;
-using test::expectedJson;
-using test::expectTopics;
-using test::fromHex;
-using test::kData;
 
 void expectMessages(Recording& rec, const nlohmann::json& want, const std::vector<std::string>& wanted) {
   RecordedMessage m;
@@ -119,4 +114,4 @@ TEST(Db3Recording, CompressedBagIsAClearError) {
 }
 
 }  // namespace
-}  // namespace cenote::io
+}  // namespace cenote::io::test

@@ -15,15 +15,10 @@
 #include "common/error.h"
 #include "tests/io/bag/ros2_test_data.h"
 
-namespace cenote::io {
+namespace cenote::io::test {
 namespace {
 
 namespace fs = std::filesystem;
-using test::Bytes;
-using test::fromHex;
-using test::kData;
-
-const nlohmann::json& expected() { return test::expectedJson(); }
 
 Bytes readFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -45,7 +40,7 @@ struct Message {
 
 std::vector<Message> expectedMessages() {
   std::vector<Message> out;
-  for (const auto& m : expected()["messages"])
+  for (const auto& m : expectedJson()["messages"])
     out.push_back({m["topic"], std::stoll(m["log_time_ns"].get<std::string>()), fromHex(m["data"])});
   return out;
 }
@@ -71,13 +66,13 @@ struct Chunk {
 };
 std::vector<Chunk> chunks(const std::string& file) {
   std::vector<Chunk> out;
-  for (const auto& c : expected()["files"][file]["chunks"])
+  for (const auto& c : expectedJson()["files"][file]["chunks"])
     out.push_back({std::stoull(c["start"].get<std::string>()), std::stoull(c["length"].get<std::string>())});
   return out;
 }
 // How many messages lie in chunks before chunk k.
 std::size_t messagesBeforeChunk(const std::string& file, std::size_t k) {
-  const auto& of = expected()["files"][file]["chunk_of_message"];
+  const auto& of = expectedJson()["files"][file]["chunk_of_message"];
   return static_cast<std::size_t>(
       std::count_if(of.begin(), of.end(), [&](const auto& c) { return c.template get<std::size_t>() < k; }));
 }
@@ -86,7 +81,7 @@ class McapFile : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(McapFile, TopicsCountsAndTimeSpansAreTheWritersOnes) {
   const std::unique_ptr<Recording> rec = openMcapRecording(kData / (GetParam() + ".mcap"));
-  test::expectTopics(*rec, expected()["topics"]);
+  expectTopics(*rec, expectedJson()["topics"]);
   EXPECT_EQ(rec->truncation(), "");
 }
 
@@ -228,4 +223,4 @@ TEST(McapRecording, NotAnMcapFileAndMissingFile) {
 }
 
 }  // namespace
-}  // namespace cenote::io
+}  // namespace cenote::io::test
