@@ -18,6 +18,13 @@ void expectHeader(CdrWire& w, const nlohmann::json& header) {
   EXPECT_EQ(frame, header["frame_id"]);
 }
 
+// A uint8[] field: its length, then that many bytes, the json's.
+void expectByteArray(CdrWire& w, const nlohmann::json& want) {
+  const std::uint32_t n = w.length();
+  const std::span<const std::uint8_t> data = w.bytes(n);
+  EXPECT_EQ(Bytes(data.begin(), data.end()), want.get<Bytes>());
+}
+
 void expectDoubles(CdrWire& w, const nlohmann::json& want, const char* field) {
   for (std::size_t i = 0; i < want.size(); ++i) EXPECT_EQ(w.f64(), want[i].get<double>()) << field << "[" << i << "]";
 }
@@ -46,9 +53,7 @@ TEST(CdrWire, ImageFromTheIndependentSerialiser) {
   EXPECT_EQ(w.str(), v["encoding"]);
   EXPECT_EQ(w.u8(), v["is_bigendian"].get<int>());
   EXPECT_EQ(w.u32(), v["step"].get<std::uint32_t>());
-  const std::uint32_t n = w.length();
-  const std::span<const std::uint8_t> data = w.bytes(n);
-  EXPECT_EQ(Bytes(data.begin(), data.end()), v["data"].get<Bytes>());
+  expectByteArray(w, v["data"]);
   EXPECT_EQ(w.offset(), bytes.size());
 }
 
@@ -58,9 +63,7 @@ TEST(CdrWire, CompressedImage) {
   CdrWire w(bytes);
   expectHeader(w, v["header"]);
   EXPECT_EQ(w.str(), v["format"]);
-  const std::uint32_t n = w.length();
-  const std::span<const std::uint8_t> data = w.bytes(n);
-  EXPECT_EQ(Bytes(data.begin(), data.end()), v["data"].get<Bytes>());
+  expectByteArray(w, v["data"]);
   EXPECT_EQ(w.offset(), bytes.size());
 }
 
