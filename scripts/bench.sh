@@ -21,3 +21,7 @@ echo
 echo "== recording_throughput mcap (cenote run on a ROS 2 MCAP of PNG pairs beside the same frames as PNG folders)"
 cmake --build "$build" --target ros2_bag_data >/dev/null
 bash "$here/bench/recording_throughput.sh" "$build/apps/cenote" "$here" "$build" mcap
+echo
+echo "== viewer_bench (cenote-server's live viewer: CPU per frame without / with a client, bytes sent)"
+CENOTE_PYTHON_STUBS="$build/clients/python/gen" /usr/bin/python3 "$here/bench/viewer_bench.py" \
+  "$build/apps/cenote" "$build/server/cenote-server" "$here"

@@ -3,6 +3,7 @@
 #include <libdeflate.h>
 
 #include <cstring>
+#include <functional>
 #include <memory>
 
 #include "common/error.h"
@@ -43,6 +44,10 @@ class Reader {
   uint8_t byte() {
     if (pos_ >= bytes_.size()) fail("it ends early");
     return static_cast<uint8_t>(bytes_[pos_++]);
+  }
+  void skip(size_t n) {
+    if (bytes_.size() - pos_ < n) fail("it ends early");
+    pos_ += n;
   }
   uint64_t word() {
     if (bytes_.size() - pos_ < 8) fail("it ends early");
@@ -170,25 +175,37 @@ std::string encodeUpdates(const FrameUpdates& updates, int level) {
 }
 
 FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where) {
+  return decodeUpdates(bytes, where, [](uint64_t) { return true; });
+}
+
+FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where, const std::function<bool(uint64_t)>& keep) {
   const std::string raw = inflate(bytes, where);
   Reader r(raw, where);
   FrameUpdates out;
   const size_t n = r.count(129);
-  out.keys.resize(n);
-  out.masks.resize(n);
+  out.keys.reserve(n);
   uint64_t previous = 0;
   for (size_t b = 0; b < n; ++b) {
-    out.keys[b] = previous + r.varint();
-    previous = out.keys[b];
-    for (uint64_t& w : out.masks[b].free) w = r.word();
-    for (uint64_t& w : out.masks[b].hit) w = r.word();
+    const uint64_t key = previous + r.varint();
+    previous = key;
+    if (!keep(key)) {
+      r.skip(16 * 8);
+      out.others.push_back(key);
+      continue;
+    }
+    out.keys.push_back(key);
+    BlockMasks& masks = out.masks.emplace_back();
+    for (uint64_t& w : masks.free) w = r.word();
+    for (uint64_t& w : masks.hit) w = r.word();
   }
-  out.colors.resize(r.count(6));
+  const size_t colors = r.count(6);
   VoxelIndex last = VoxelIndex::Zero();
-  for (EndpointColor& c : out.colors) {
+  for (size_t i = 0; i < colors; ++i) {
+    EndpointColor c;
     for (int k = 0; k < 3; ++k) c.ijk[k] = static_cast<int>(last[k] + unzigzag(r.varint()));
     last = c.ijk;
     for (int k = 0; k < 3; ++k) c.rgb[k] = r.byte();
+    if (keep(detail::packIndex(blockOf(c.ijk)))) out.colors.push_back(c);
   }
   r.finish();
   return out;

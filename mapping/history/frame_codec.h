@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,7 @@ struct FrameUpdates {
   std::vector<uint64_t> keys;  // detail::packIndex of each touched block, ascending
   std::vector<BlockMasks> masks;
   std::vector<EndpointColor> colors;  // mean colour of each hit voxel (BatchUpdates::colors order)
+  std::vector<uint64_t> others;       // decodeUpdates with `keep`: the touched blocks it left out
 
   // Copies a finished BatchUpdates.
   static FrameUpdates of(const BatchUpdates& updates);
@@ -41,5 +43,8 @@ std::string encodeUpdates(const FrameUpdates& updates, int level);
 // @throws Error naming `where` for bytes that do not decode (a damaged file).
 FramePoints decodePoints(const std::string& bytes, const std::string& where);
 FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where);
+// Only the blocks keep(packed key) accepts, with their masks and colours; the others' keys go to
+// `others` (a replay needs the masks of the blocks it rebuilds only).
+FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where, const std::function<bool(uint64_t)>& keep);
 
 }  // namespace cenote::mapping::history

@@ -151,8 +151,9 @@ void MapHistory::unindex(uint32_t seq, const std::vector<uint64_t>& keys) {
 
 void MapHistory::enforceBudget() {
   for (uint32_t seq : store_.overBudget()) {
-    const FrameUpdates updates = history::decodeUpdates(store_.readUpdates(seq), "frame " + std::to_string(seq));
-    for (uint64_t key : updates.keys) {
+    const FrameUpdates updates = history::decodeUpdates(store_.readUpdates(seq), "frame " + std::to_string(seq),
+                                                        [](uint64_t) { return false; });
+    for (uint64_t key : updates.others) {
       sealed_.insert(key);
       frames_of_block_.erase(key);  // never replayed now
     }
@@ -203,7 +204,8 @@ void MapHistory::moveFrame(CorrectionPlan& plan, size_t i) {
   if (!store_.contains(seq)) return;  // dropped (budget) or cleared since the plan: its blocks are sealed
   const MapConfig& config = map_.config();
   const std::string where = "frame " + std::to_string(seq);
-  const FrameUpdates old_updates = history::decodeUpdates(store_.readUpdates(seq), where);
+  // The old blocks' keys only (all in `others`).
+  const FrameUpdates old_updates = history::decodeUpdates(store_.readUpdates(seq), where, [](uint64_t) { return false; });
   const std::string points_bytes = store_.readPoints(seq);
   const FramePoints points = history::decodePoints(points_bytes, where);
   FrameMeta meta = store_.meta(seq);
@@ -220,9 +222,9 @@ void MapHistory::moveFrame(CorrectionPlan& plan, size_t i) {
   const FrameUpdates new_updates = FrameUpdates::of(rays_.updates());
   meta.T_world_cam = T_world_cam;
   store_.put(seq, meta, points_bytes, history::encodeUpdates(new_updates, kDeflateLevel));
-  unindex(seq, old_updates.keys);
+  unindex(seq, old_updates.others);
   index(seq, new_updates.keys);
-  plan.affected.insert(old_updates.keys.begin(), old_updates.keys.end());
+  plan.affected.insert(old_updates.others.begin(), old_updates.others.end());
   plan.affected.insert(new_updates.keys.begin(), new_updates.keys.end());
 }
 
@@ -265,10 +267,10 @@ CorrectionSummary MapHistory::finishCorrection(CorrectionPlan& plan) {
   std::vector<RebuiltBlock> rebuilt(keys.size());
   const LogOddsModel& model = map_.model();
   for (uint32_t seq : frames) {
-    const FrameUpdates updates = history::decodeUpdates(store_.readUpdates(seq), "frame " + std::to_string(seq));
+    const FrameUpdates updates = history::decodeUpdates(store_.readUpdates(seq), "frame " + std::to_string(seq),
+                                                        [&](uint64_t key) { return slot_of.count(key) != 0; });
     for (size_t b = 0; b < updates.keys.size(); ++b) {
       const auto it = slot_of.find(updates.keys[b]);
-      if (it == slot_of.end()) continue;
       BlockView& view = rebuilt[it->second].view;
       const BlockMasks& masks = updates.masks[b];
       for (int w = 0; w < 8; ++w) {

@@ -37,24 +37,24 @@ mapping::BlockIndex BlockSync::unkey(uint64_t k) {
   return {axis(k >> 42), axis(k >> 21), axis(k)};
 }
 
-void BlockSync::setLevel(uint64_t k, Lod lod) {
-  auto [it, inserted] = sent_.emplace(k, lod);
-  if (!inserted) {
-    if (it->second == Lod::kCoarse) --coarse_;
-    it->second = lod;
-  }
+void BlockSync::setLevel(uint64_t k, Lod lod, const std::array<uint64_t, 8>& occupied, uint64_t time_ns) {
+  auto [it, inserted] = sent_.try_emplace(k);
+  if (!inserted && it->second.lod == Lod::kCoarse) --coarse_;
+  it->second = {lod, occupied, time_ns};
   if (lod == Lod::kCoarse) ++coarse_;
+  stale_.erase(k);
 }
 
 void BlockSync::forget(uint64_t k) {
   const auto it = sent_.find(k);
   if (it == sent_.end()) return;
-  if (it->second == Lod::kCoarse) --coarse_;
+  if (it->second.lod == Lod::kCoarse) --coarse_;
   sent_.erase(it);
+  stale_.erase(k);
 }
 
 void BlockSync::markAll(const std::vector<mapping::BlockIndex>& known_blocks) {
-  for (const auto& [k, lod] : sent_) dirty_.insert(k);
+  for (const auto& [k, sent] : sent_) dirty_.insert(k);
   for (const auto& b : known_blocks) dirty_.insert(key(b));
 }
 
@@ -86,8 +86,16 @@ SyncStep BlockSync::next(const mapping::OccupancyMap::ConstAccessor& access, con
   for (const uint64_t k : dirty_) dirty.emplace_back(distance2(k), k);
   byDistance(dirty);
   size_t reached = 0;
+  std::vector<uint64_t> held;  // sent less than resend_s ago: they stay dirty
   for (; reached < dirty.size(); ++reached) {
     const uint64_t k = dirty[reached].second;
+    if (resend_ns_ > 0) {
+      const auto recent = sent_.find(k);
+      if (recent != sent_.end() && time_ns < recent->second.time_ns + resend_ns_) {
+        held.push_back(k);
+        continue;
+      }
+    }
     access.readBlockMasks(unkey(k), known, occupied);
     const uint64_t n = countOccupied(occupied);
     if (n == 0) {
@@ -100,12 +108,18 @@ SyncStep BlockSync::next(const mapping::OccupancyMap::ConstAccessor& access, con
       }
       continue;
     }
+    const auto sent = sent_.find(k);
+    if (sent != sent_.end() && sent->second.lod == Lod::kFull && sent->second.occupied == occupied) {
+      stale_.insert(k);  // the same cubes: only colours and probabilities may have moved
+      continue;
+    }
     const double coarse = static_cast<double>(SceneUpdateWriter::entityBytes(1));
     if (spent + coarse > budget_bytes && (!planned.empty() || !writer.empty())) break;
     planned.push_back({k, dirty[reached].first, n, n == 1});
     spent += coarse;
   }
   for (size_t i = 0; i < reached; ++i) dirty_.erase(dirty[i].second);
+  for (const uint64_t k : held) dirty_.insert(k);
   // Upgrade the nearest to full detail while the budget lasts.
   for (Planned& p : planned) {
     if (p.full) continue;
@@ -117,8 +131,8 @@ SyncStep BlockSync::next(const mapping::OccupancyMap::ConstAccessor& access, con
   // Budget to spare once nothing is dirty: refine coarse blocks, nearest first.
   if (dirty_.empty() && coarse_ > 0) {
     std::vector<std::pair<double, uint64_t>> coarse;
-    for (const auto& [k, lod] : sent_) {
-      if (lod == Lod::kCoarse &&
+    for (const auto& [k, sent] : sent_) {
+      if (sent.lod == Lod::kCoarse &&
           std::none_of(planned.begin(), planned.end(), [&](const Planned& p) { return p.key == k; })) {
         coarse.emplace_back(distance2(k), k);
       }
@@ -130,6 +144,22 @@ SyncStep BlockSync::next(const mapping::OccupancyMap::ConstAccessor& access, con
       const double full = static_cast<double>(SceneUpdateWriter::entityBytes(n));
       if (spent + full > budget_bytes && (!planned.empty() || !writer.empty())) break;
       planned.push_back({k, d2, n, true});
+      spent += full;
+    }
+  }
+
+  // Budget still to spare: refresh stale blocks sent at least refresh_s ago, nearest first.
+  if (dirty_.empty() && coarse_ == 0 && !stale_.empty()) {
+    std::vector<std::pair<double, uint64_t>> stale;
+    for (const uint64_t k : stale_) {
+      if (time_ns >= sent_[k].time_ns + refresh_ns_) stale.emplace_back(distance2(k), k);
+    }
+    byDistance(stale);
+    for (const auto& [d2, k] : stale) {
+      access.readBlockMasks(unkey(k), known, occupied);
+      const double full = static_cast<double>(SceneUpdateWriter::entityBytes(countOccupied(occupied)));
+      if (spent + full > budget_bytes) break;
+      planned.push_back({k, d2, countOccupied(occupied), true});
       spent += full;
     }
   }
@@ -165,7 +195,7 @@ SyncStep BlockSync::next(const mapping::OccupancyMap::ConstAccessor& access, con
     }
     if (p.full) {
       writer.blockEntity(block, cubes, voxel_m, false, n, probabilities);
-      setLevel(p.key, Lod::kFull);
+      setLevel(p.key, Lod::kFull, occupied, time_ns);
       ++step.full_blocks;
       step.full_voxels += n;
     } else {
@@ -175,7 +205,7 @@ SyncStep BlockSync::next(const mapping::OccupancyMap::ConstAccessor& access, con
                        {static_cast<uint8_t>(mean.x() + 0.5), static_cast<uint8_t>(mean.y() + 0.5),
                         static_cast<uint8_t>(mean.z() + 0.5)}});
       writer.blockEntity(block, cubes, static_cast<float>(block_m), true, n, {});
-      setLevel(p.key, Lod::kCoarse);
+      setLevel(p.key, Lod::kCoarse, occupied, time_ns);
       ++step.coarse_blocks;
     }
   }

@@ -8,6 +8,10 @@
 // refined, nearest first. So a slow link gets the whole map's shape first and detail later, and
 // what waits is a set of blocks, never a queue of messages: a block changed ten times is sent once,
 // as it is then.
+// Most changes of a block only carve free space or move a probability: a changed block whose
+// occupied voxels are those the client has at full detail is not sent again then (it would cost as
+// much as a new one). It is only stale: its colours and probabilities are refreshed with budget to
+// spare, once refresh_s has passed since it was sent.
 // Blocks are read from the map when sent (ConstAccessor), so the client converges to the map.
 // Units: metres, world frame. Threads: one thread per BlockSync.
 #pragma once
@@ -32,7 +36,13 @@ struct SyncStep {
 
 class BlockSync {
  public:
-  BlockSync(std::string frame_id, ColorBy color_by) : frame_id_(std::move(frame_id)), color_by_(color_by) {}
+  // resend_s: a block the client has is sent again at most this often (it waits, dirty, while the
+  // map goes on changing it); refresh_s: the same for a stale block (see above).
+  BlockSync(std::string frame_id, ColorBy color_by, double refresh_s = 5.0, double resend_s = 0.0)
+      : frame_id_(std::move(frame_id)),
+        color_by_(color_by),
+        refresh_ns_(static_cast<uint64_t>(refresh_s * 1e9)),
+        resend_ns_(static_cast<uint64_t>(resend_s * 1e9)) {}
 
   // Every block the client has and every block given (the map's known blocks) become dirty: the
   // whole map is sent again (a new client, or a change feed that dropped changes).
@@ -44,23 +54,33 @@ class BlockSync {
   SyncStep next(const mapping::OccupancyMap::ConstAccessor& access, const Eigen::Vector3d& camera_m, double budget_bytes,
                 uint64_t time_ns);
 
-  // Nothing dirty and nothing coarse: the client has the map as it is.
+  // Nothing dirty and nothing coarse: the client has every occupied voxel of the map (stale
+  // blocks may still have older colours and probabilities).
   bool settled() const { return dirty_.empty() && coarse_ == 0; }
   size_t dirtyBlocks() const { return dirty_.size(); }
   size_t coarseBlocks() const { return coarse_; }
+  size_t staleBlocks() const { return stale_.size(); }
 
  private:
   enum class Lod : uint8_t { kCoarse = 1, kFull = 2 };
+  struct Sent {
+    Lod lod = Lod::kCoarse;
+    std::array<uint64_t, 8> occupied{};  // the block's occupied voxels when sent
+    uint64_t time_ns = 0;
+  };
   static uint64_t key(const mapping::BlockIndex& b);
   static mapping::BlockIndex unkey(uint64_t k);
-  void setLevel(uint64_t k, Lod lod);
+  void setLevel(uint64_t k, Lod lod, const std::array<uint64_t, 8>& occupied, uint64_t time_ns);
   void forget(uint64_t k);
 
   std::string frame_id_;
   ColorBy color_by_;
-  std::unordered_map<uint64_t, Lod> sent_;  // blocks the client has, and at which level
+  uint64_t refresh_ns_;
+  uint64_t resend_ns_;
+  std::unordered_map<uint64_t, Sent> sent_;  // blocks the client has, and as what
   std::unordered_set<uint64_t> dirty_;
-  size_t coarse_ = 0;  // blocks of sent_ at kCoarse
+  std::unordered_set<uint64_t> stale_;  // full blocks changed since sent, with the same occupied voxels
+  size_t coarse_ = 0;                   // blocks of sent_ at kCoarse
 };
 
 }  // namespace cenote::server::viewer

@@ -123,7 +123,8 @@ const std::string& mapStatsSchema() {
                                       {"bytes_sent", integer()},
                                       {"clients", integer()},
                                       {"client_dirty_blocks", integer()},
-                                      {"client_coarse_blocks", integer()}})
+                                      {"client_coarse_blocks", integer()},
+                                      {"client_stale_blocks", integer()}})
         .dump();
   }();
   return schema;

@@ -13,6 +13,8 @@ std::vector<ConfigError> ViewerConfig::validate() const {
   errors.check(tick_s >= 0.005 && tick_s <= 10.0, "tick_s", tick_s, "must be in [0.005, 10]");
   errors.check(stats_period_s >= 0.05 && stats_period_s <= 3600.0, "stats_period_s", stats_period_s,
                "must be in [0.05, 3600]");
+  errors.check(refresh_s >= 0.0 && refresh_s <= 86400.0, "refresh_s", refresh_s, "must be in [0, 86400]");
+  errors.check(resend_s >= 0.0 && resend_s <= 3600.0, "resend_s", resend_s, "must be in [0, 3600]");
   errors.check(max_cloud_points >= 0 && max_cloud_points <= 1000000, "max_cloud_points", max_cloud_points,
                "must be in [0, 1000000] (0: no point cloud channel data)");
   errors.check(max_trajectory_poses >= 1 && max_trajectory_poses <= 1000000, "max_trajectory_poses", max_trajectory_poses,
@@ -26,6 +28,8 @@ void ViewerConfig::read(YamlSection& section) {
   section.read("budget_bytes_per_s", budget_bytes_per_s);
   section.read("tick_s", tick_s);
   section.read("stats_period_s", stats_period_s);
+  section.read("refresh_s", refresh_s);
+  section.read("resend_s", resend_s);
   section.read("max_cloud_points", max_cloud_points);
   section.read("max_trajectory_poses", max_trajectory_poses);
   section.read("color_by", color_by);

@@ -20,6 +20,9 @@ struct ViewerConfig {
   double budget_bytes_per_s = 1.0e6;  // what one client is sent at most, averaged over a second
   double tick_s = 0.05;               // how often each client's feed is brought up to date
   double stats_period_s = 1.0;        // map statistics and frontiers at most this often
+  double refresh_s = 5.0;             // a block whose occupied voxels did not change is sent again (colours,
+                                      // probabilities) at most this often, budget allowing
+  double resend_s = 1.0;              // a block the client has is sent again at most this often while the map changes it
   int max_cloud_points = 5000;        // the latest fused cloud, thinned to at most this many points
   int max_trajectory_poses = 1000;    // camera poses kept and sent (the oldest are dropped)
   std::string color_by = "image";     // cube colours: "image" (the map's colour) or "height"

@@ -206,7 +206,8 @@ void FeedWorker::tick(std::vector<std::shared_ptr<Client>>& clients, double dt_s
       c->sync.reset();
       if (map_subscription) {
         c->sync = std::make_unique<BlockSync>(sources_.frame_id,
-                                              config_.color_by == "height" ? ColorBy::kHeight : ColorBy::kImage);
+                                              config_.color_by == "height" ? ColorBy::kHeight : ColorBy::kImage,
+                                              config_.refresh_s, config_.resend_s);
         const auto access = map.constAccessor();
         c->sync->markAll(access.knownBlocks());
       }
@@ -244,7 +245,8 @@ void FeedWorker::tick(std::vector<std::shared_ptr<Client>>& clients, double dt_s
                                       {"bytes_sent", bytes_sent_.load()},
                                       {"clients", clients.size()},
                                       {"client_dirty_blocks", c->sync ? c->sync->dirtyBlocks() : 0},
-                                      {"client_coarse_blocks", c->sync ? c->sync->coarseBlocks() : 0}};
+                                      {"client_coarse_blocks", c->sync ? c->sync->coarseBlocks() : 0},
+                                      {"client_stale_blocks", c->sync ? c->sync->staleBlocks() : 0}};
         emit(kStatsChannel, stats.dump());
       }
       if (frontier_subscription && sources_.frontiers) {

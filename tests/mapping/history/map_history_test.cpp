@@ -8,6 +8,7 @@
 #include <map>
 
 #include "common/error.h"
+#include "mapping/detail/block_table.h"
 #include "mapping/history/frame_codec.h"
 #include "tests/mapping/support/drifted_frames.h"
 
@@ -107,6 +108,16 @@ TEST(FrameCodec, PointsAndUpdatesDecodeToWhatWasEncoded) {
   ASSERT_EQ(u.colors.size(), 2u);
   EXPECT_EQ(u.colors[1].ijk, VoxelIndex(100, -4, 5));
   EXPECT_EQ(u.colors[1].rgb, (std::array<uint8_t, 3>{1, 2, 3}));
+
+  // Only the blocks asked for keep their masks and colours; the others' keys are listed.
+  const VoxelIndex coloured(-3, 4, 5);
+  const uint64_t its_block = detail::packIndex(blockOf(coloured));
+  const history::FrameUpdates some = history::decodeUpdates(history::encodeUpdates(updates, 1), "test",
+                                                            [&](uint64_t key) { return key == 6 || key == its_block; });
+  EXPECT_EQ(some.keys, (std::vector<uint64_t>{6}));
+  EXPECT_EQ(some.others, (std::vector<uint64_t>{5, 1ull << 60}));
+  ASSERT_EQ(some.colors.size(), 1u);
+  EXPECT_EQ(some.colors[0].ijk, coloured);
 }
 
 TEST(FrameCodec, DamagedBytesAreAnIoErrorNamingTheFrame) {

@@ -168,7 +168,8 @@ TEST(Runner, OutlierRemovalFiltersEachFusedFrameBeforeTheFileAndTheMap) {
   const std::atomic<bool> stop{false};
   PipelineConfig c = smallConfig();
   std::vector<PointBatch> fused;
-  Runner(c).run(*f.dataset, f.trajectory, f.out_dir + "_all", stop, [&](const PointBatch& b) { fused.push_back(b); });
+  Runner(c).run(*f.dataset, f.trajectory, f.out_dir + "_all", stop,
+                [&](const PointBatch& b, const Eigen::Isometry3d&) { fused.push_back(b); });
   c.run.outlier_neighbours = 8;
   c.run.outlier_stddev_mul = 1.0;
   size_t sunk = 0;

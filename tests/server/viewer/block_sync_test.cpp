@@ -170,3 +170,33 @@ TEST(BlockSync, AResyncAfterChangesConvergesToTheMapAsItIsNow) {
 
 }  // namespace
 }  // namespace cenote::server::viewer
+
+namespace cenote::server::viewer {
+namespace {
+
+TEST(BlockSync, ABlockWithTheSameOccupiedVoxelsIsOnlyRefreshedAfterRefreshS) {
+  mapping::OccupancyMap map{mapping::MapConfig{}};
+  map.integrate(wall(0.5, 0.04));
+  BlockSync sync("world", ColorBy::kImage, 5.0);
+  {
+    const auto access = map.constAccessor();
+    sync.markAll(access.knownBlocks());
+    const SyncStep first = sync.next(access, Eigen::Vector3d::Zero(), 1e9, 1000000000ull);
+    ASSERT_GT(first.full_blocks, 0u);
+  }
+  const mapping::MapDelta again = map.integrate(wall(0.5, 0.04));  // the same hits: probabilities rise
+  ASSERT_FALSE(again.isEmpty());
+  sync.markChanged(again.changed_blocks);
+  const auto access = map.constAccessor();
+  const SyncStep soon = sync.next(access, Eigen::Vector3d::Zero(), 1e9, 2000000000ull);
+  EXPECT_TRUE(soon.message.empty());
+  EXPECT_TRUE(sync.settled());
+  const size_t stale = sync.staleBlocks();
+  EXPECT_GT(stale, 0u);
+  const SyncStep later = sync.next(access, Eigen::Vector3d::Zero(), 1e9, 6000000001ull);
+  EXPECT_EQ(later.full_blocks, stale);
+  EXPECT_EQ(sync.staleBlocks(), 0u);
+}
+
+}  // namespace
+}  // namespace cenote::server::viewer
