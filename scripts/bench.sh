@@ -15,12 +15,12 @@ echo "| run | fps | read+rectify ms | stereo ms | fusion ms | output ms | peak M
 echo "|---|---|---|---|---|---|---|---|"
 bash "$here/bench/run_throughput.sh" "$build/apps/cenote" "$here"
 echo
-echo "== bag_throughput (cenote run on a ROS 1 bag of JPEG pairs beside the same frames as PNG folders)"
-bash "$here/bench/bag_throughput.sh" "$build/apps/cenote" "$here"
+echo "== recording_throughput bag (cenote run on a ROS 1 bag of JPEG pairs beside the same frames as PNG folders)"
+bash "$here/bench/recording_throughput.sh" "$build/apps/cenote" "$here" "$build" bag
 echo
-echo "== mcap_throughput (cenote run on a ROS 2 MCAP of PNG pairs beside the same frames as PNG folders)"
+echo "== recording_throughput mcap (cenote run on a ROS 2 MCAP of PNG pairs beside the same frames as PNG folders)"
 cmake --build "$build" --target ros2_bag_data >/dev/null
-bash "$here/bench/mcap_throughput.sh" "$build/apps/cenote" "$here" "$build"
+bash "$here/bench/recording_throughput.sh" "$build/apps/cenote" "$here" "$build" mcap
 echo
 echo "== viewer_bench (cenote-server's live viewer: CPU per frame without / with a client, bytes sent)"
 CENOTE_PYTHON_STUBS="$build/clients/python/gen" /usr/bin/python3 "$here/bench/viewer_bench.py" \

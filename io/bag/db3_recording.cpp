@@ -61,17 +61,7 @@ class Db3Recording final : public Recording {
   Db3Recording(std::vector<fs::path> files, std::string truncation)
       : files_(std::move(files)), truncation_(std::move(truncation)) {
     for (const fs::path& file : files_) readTopics(file);
-    // By name, as `rosbag info` lists them.
-    std::vector<int> order(topics_.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return topics_[a].name < topics_[b].name; });
-    std::vector<int> rank(order.size());
-    std::vector<TopicInfo> sorted;
-    for (std::size_t i = 0; i < order.size(); ++i) {
-      rank[order[i]] = static_cast<int>(i);
-      sorted.push_back(topics_[order[i]]);
-    }
-    topics_ = std::move(sorted);
+    const std::vector<int> rank = sortTopicsByName(topics_);
     for (auto& ids : topic_of_id_)
       for (auto& [id, topic] : ids)
         if (topic >= 0) topic = rank[topic];

@@ -67,17 +67,7 @@ McapRecording::McapRecording(const std::filesystem::path& path) : path_(path) {
                     ": not an MCAP file (its first 8 bytes are not the MCAP magic 89 4d 43 41 50 30 0d 0a)");
   }
   if (!readSummary()) scan();
-  // By name, as `rosbag info` lists them.
-  std::vector<int> order(topics_.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return topics_[a].name < topics_[b].name; });
-  std::vector<int> rank(order.size());
-  std::vector<TopicInfo> sorted;
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    rank[order[i]] = static_cast<int>(i);
-    sorted.push_back(topics_[order[i]]);
-  }
-  topics_ = std::move(sorted);
+  const std::vector<int> rank = sortTopicsByName(topics_);
   for (auto& [channel, topic] : channel_topic_)
     if (topic >= 0) topic = rank[topic];
   cursor_.emplace(path_, file_size_, [this](std::uint8_t op, Fields& f, std::uint64_t) { define(op, f, false); });

@@ -1,5 +1,6 @@
 #include "io/bag/recording.h"
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 
@@ -9,6 +10,21 @@
 #include "io/bag/ros1_bag.h"
 
 namespace cenote::io {
+
+std::vector<int> sortTopicsByName(std::vector<TopicInfo>& topics) {
+  std::vector<int> order(topics.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return topics[a].name < topics[b].name; });
+  std::vector<int> rank(order.size());
+  std::vector<TopicInfo> sorted;
+  sorted.reserve(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    rank[order[i]] = static_cast<int>(i);
+    sorted.push_back(std::move(topics[order[i]]));
+  }
+  topics = std::move(sorted);
+  return rank;
+}
 
 std::unique_ptr<Recording> openRecording(const std::filesystem::path& path) {
   std::error_code ec;

@@ -50,6 +50,10 @@ class Recording {
   virtual std::string truncation() const = 0;
 };
 
+/// Sorts `topics` by name, as `rosbag info` lists them. @return where each topic went: the new index
+/// of the topic that was at index i.
+std::vector<int> sortTopicsByName(std::vector<TopicInfo>& topics);
+
 /// Opens a .bag (ROS 1, format 2.0), .mcap or a ROS 2 bag folder / .db3, told apart by their first bytes
 /// (a folder by its metadata.yaml). Throws NotFoundError or IoError with a message naming the path.
 std::unique_ptr<Recording> openRecording(const std::filesystem::path& path);

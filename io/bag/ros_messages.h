@@ -111,134 +111,144 @@ std::optional<RosPose> decodePose(const RecordedMessage& message, const std::str
 
 namespace detail {
 
-// Runs `read` and adds "<type>.<field>: " to an IoError, field being what `read` last set.
-template <class F>
-auto withField(const char* type, const char*& field, F&& read) {
-  try {
-    return read();
-  } catch (const IoError& e) {
-    throw IoError(std::string(type) + "." + field + ": " + e.what());
-  }
-}
-
-template <class Wire, std::size_t N>
-void readDoubles(Wire& w, std::array<double, N>& out) {
-  for (double& v : out) v = w.f64();
-}
-
+// A wire reader that names the field being read: an IoError from `w` becomes
+// "<type>.<field>: <what>" (e.g. "sensor_msgs/Image.step: ROS 1 message: u32 of 4 bytes ...").
 template <class Wire>
-void readPose(Wire& w, RosPose& p) {
-  for (double& v : p.position) v = w.f64();
-  for (double& v : p.orientation_xyzw) v = w.f64();
-}
+class FieldReader {
+ public:
+  FieldReader(Wire& w, const char* type) : w_(w), type_(type) {}
+
+  // Runs `read` with the field named `field`.
+  template <class F>
+  auto read(const char* field, F&& read) {
+    try {
+      return read();
+    } catch (const IoError& e) {
+      throw IoError(std::string(type_) + "." + field + ": " + e.what());
+    }
+  }
+
+  std::int64_t header(std::string* frame_id) {
+    return read("header", [&] { return w_.headerStampNs(frame_id); });
+  }
+  std::uint8_t u8(const char* field) {
+    return read(field, [&] { return w_.u8(); });
+  }
+  std::uint32_t u32(const char* field) {
+    return read(field, [&] { return w_.u32(); });
+  }
+  std::string str(const char* field) {
+    return read(field, [&] { return w_.str(); });
+  }
+  // A variable-size byte array (uint8[]).
+  std::span<const std::uint8_t> bytes(const char* field) {
+    return read(field, [&] { return w_.bytes(w_.length()); });
+  }
+  // A variable-size array of doubles (float64[]).
+  std::vector<double> doubles(const char* field) {
+    return read(field, [&] {
+      std::vector<double> out(w_.length());
+      for (double& v : out) v = w_.f64();
+      return out;
+    });
+  }
+  // A fixed-size array of doubles (float64[N]).
+  template <std::size_t N>
+  void doubles(const char* field, std::array<double, N>& out) {
+    read(field, [&] { readDoubles(out); });
+  }
+  // geometry_msgs/Pose or geometry_msgs/Transform: a translation and a quaternion x y z w.
+  void pose(const char* field, RosPose& p) {
+    read(field, [&] {
+      readDoubles(p.position);
+      readDoubles(p.orientation_xyzw);
+    });
+  }
+
+ private:
+  template <std::size_t N>
+  void readDoubles(std::array<double, N>& out) {
+    for (double& v : out) v = w_.f64();
+  }
+
+  Wire& w_;
+  const char* type_;
+};
 
 }  // namespace detail
 
 template <class Wire>
 RosImage parseImage(Wire& w) {
-  const char* field = "header";
-  return detail::withField("sensor_msgs/Image", field, [&] {
-    RosImage m;
-    m.stamp_ns = w.headerStampNs(&m.frame_id);
-    field = "height";
-    m.height = w.u32();
-    field = "width";
-    m.width = w.u32();
-    field = "encoding";
-    m.encoding = w.str();
-    field = "is_bigendian";
-    m.is_bigendian = w.u8();
-    field = "step";
-    m.step = w.u32();
-    field = "data";
-    m.data = w.bytes(w.length());
-    return m;
-  });
+  detail::FieldReader<Wire> r(w, "sensor_msgs/Image");
+  RosImage m;
+  m.stamp_ns = r.header(&m.frame_id);
+  m.height = r.u32("height");
+  m.width = r.u32("width");
+  m.encoding = r.str("encoding");
+  m.is_bigendian = r.u8("is_bigendian");
+  m.step = r.u32("step");
+  m.data = r.bytes("data");
+  return m;
 }
 
 template <class Wire>
 RosCompressedImage parseCompressedImage(Wire& w) {
-  const char* field = "header";
-  return detail::withField("sensor_msgs/CompressedImage", field, [&] {
-    RosCompressedImage m;
-    m.stamp_ns = w.headerStampNs(&m.frame_id);
-    field = "format";
-    m.format = w.str();
-    field = "data";
-    m.data = w.bytes(w.length());
-    return m;
-  });
+  detail::FieldReader<Wire> r(w, "sensor_msgs/CompressedImage");
+  RosCompressedImage m;
+  m.stamp_ns = r.header(&m.frame_id);
+  m.format = r.str("format");
+  m.data = r.bytes("data");
+  return m;
 }
 
 template <class Wire>
 RosCameraInfo parseCameraInfo(Wire& w) {
-  const char* field = "header";
-  return detail::withField("sensor_msgs/CameraInfo", field, [&] {
-    RosCameraInfo m;
-    m.stamp_ns = w.headerStampNs(&m.frame_id);
-    field = "height";
-    m.height = w.u32();
-    field = "width";
-    m.width = w.u32();
-    field = "distortion_model";
-    m.distortion_model = w.str();
-    field = "D";
-    m.D.resize(w.length());
-    for (double& v : m.D) v = w.f64();
-    field = "K";
-    detail::readDoubles(w, m.K);
-    field = "R";
-    detail::readDoubles(w, m.R);
-    field = "P";
-    detail::readDoubles(w, m.P);
-    return m;  // binning and region of interest follow; cenote reads full-resolution images only
-  });
+  detail::FieldReader<Wire> r(w, "sensor_msgs/CameraInfo");
+  RosCameraInfo m;
+  m.stamp_ns = r.header(&m.frame_id);
+  m.height = r.u32("height");
+  m.width = r.u32("width");
+  m.distortion_model = r.str("distortion_model");
+  m.D = r.doubles("D");
+  r.doubles("K", m.K);
+  r.doubles("R", m.R);
+  r.doubles("P", m.P);
+  return m;  // binning and region of interest follow; cenote reads full-resolution images only
 }
 
 template <class Wire>
 RosPose parseOdometry(Wire& w) {
-  const char* field = "header";
-  return detail::withField("nav_msgs/Odometry", field, [&] {
-    RosPose p;
-    p.stamp_ns = w.headerStampNs(&p.frame_id);
-    field = "child_frame_id";
-    p.child_frame_id = w.str();
-    field = "pose";
-    detail::readPose(w, p);
-    return p;  // the covariance and the twist follow
-  });
+  detail::FieldReader<Wire> r(w, "nav_msgs/Odometry");
+  RosPose p;
+  p.stamp_ns = r.header(&p.frame_id);
+  p.child_frame_id = r.str("child_frame_id");
+  r.pose("pose", p);
+  return p;  // the covariance and the twist follow
 }
 
 template <class Wire>
 RosPose parsePoseStamped(Wire& w) {
-  const char* field = "header";
-  return detail::withField("geometry_msgs/PoseStamped", field, [&] {
-    RosPose p;
-    p.stamp_ns = w.headerStampNs(&p.frame_id);
-    field = "pose";
-    detail::readPose(w, p);
-    return p;
-  });
+  detail::FieldReader<Wire> r(w, "geometry_msgs/PoseStamped");
+  RosPose p;
+  p.stamp_ns = r.header(&p.frame_id);
+  r.pose("pose", p);
+  return p;
 }
 
 template <class Wire>
 RosPose parseTransformStamped(Wire& w) {
-  const char* field = "header";
-  return detail::withField("geometry_msgs/TransformStamped", field, [&] {
-    RosPose p;
-    p.stamp_ns = w.headerStampNs(&p.frame_id);
-    field = "child_frame_id";
-    p.child_frame_id = w.str();
-    field = "transform";
-    detail::readPose(w, p);
-    return p;
-  });
+  detail::FieldReader<Wire> r(w, "geometry_msgs/TransformStamped");
+  RosPose p;
+  p.stamp_ns = r.header(&p.frame_id);
+  p.child_frame_id = r.str("child_frame_id");
+  r.pose("transform", p);
+  return p;
 }
 
 template <class Wire>
 std::vector<RosPose> parseTfMessage(Wire& w) {
-  const char* field = "transforms";
-  return detail::withField("tf2_msgs/TFMessage", field, [&] {
+  detail::FieldReader<Wire> r(w, "tf2_msgs/TFMessage");
+  return r.read("transforms", [&] {
     const std::uint32_t n = w.length();
     std::vector<RosPose> out;
     out.reserve(n);

@@ -4,10 +4,8 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 
 #include "common/error.h"
-#include "io/image/image_io.h"
 
 namespace cenote::pipeline {
 namespace fs = std::filesystem;
@@ -49,15 +47,6 @@ std::vector<CsvImage> readImageList(const fs::path& camera_dir) {
   return images;
 }
 
-Eigen::Isometry3d toIsometry(const cv::Matx44d& T) {
-  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) out.linear()(r, c) = T(r, c);
-    out.translation()(r) = T(r, 3);
-  }
-  return out;
-}
-
 }  // namespace
 
 EurocDataset::EurocDataset(const std::string& root) {
@@ -82,16 +71,12 @@ EurocDataset::EurocDataset(const std::string& root) {
   }
   unpaired_ += right.size() - j;
   calibration_ = readEurocSensorPair((mav0 / "cam0" / "sensor.yaml").string(), (mav0 / "cam1" / "sensor.yaml").string());
-  T_body_cam_ = toIsometry(readEurocBodyFromSensor((mav0 / "cam0" / "sensor.yaml").string()));
+  T_body_cam_ = readEurocBodyCamera((mav0 / "cam0" / "sensor.yaml").string());
 }
 
 StereoFrame EurocDataset::load(size_t index) const {
   const Frame& f = frames_.at(index);
-  StereoFrame frame;
-  frame.t_s = f.t_s;
-  frame.left = io::readImage(f.left, cv::IMREAD_UNCHANGED);
-  frame.right = io::readImage(f.right, cv::IMREAD_UNCHANGED);
-  return frame;
+  return readStereoFrame(f.t_s, f.left, f.right);
 }
 
 std::optional<TrajectorySource> EurocDataset::defaultTrajectory() const {

@@ -72,11 +72,8 @@ KittiDataset::KittiDataset(const std::string& sequence_dir) : dir_(sequence_dir)
 std::string KittiDataset::frameName(size_t index) const { return frameStem(index); }
 
 StereoFrame KittiDataset::load(size_t index) const {
-  StereoFrame frame;
-  frame.t_s = times_.at(index);
-  frame.left = io::readImage((fs::path(left_dir_) / (frameStem(index) + ".png")).string(), cv::IMREAD_UNCHANGED);
-  frame.right = io::readImage((fs::path(right_dir_) / (frameStem(index) + ".png")).string(), cv::IMREAD_UNCHANGED);
-  return frame;
+  return readStereoFrame(times_.at(index), (fs::path(left_dir_) / (frameStem(index) + ".png")).string(),
+                         (fs::path(right_dir_) / (frameStem(index) + ".png")).string());
 }
 
 std::optional<TrajectorySource> KittiDataset::defaultTrajectory() const {

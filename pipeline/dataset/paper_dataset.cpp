@@ -2,10 +2,8 @@
 
 #include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 
 #include "common/error.h"
-#include "io/image/image_io.h"
 
 namespace cenote::pipeline {
 namespace fs = std::filesystem;
@@ -71,11 +69,7 @@ PaperDataset::PaperDataset(const std::string& root) : root_(root) {
 
 StereoFrame PaperDataset::load(size_t index) const {
   const Frame& f = frames_.at(index);
-  StereoFrame frame;
-  frame.t_s = f.t_s;
-  frame.left = io::readImage(f.left, cv::IMREAD_UNCHANGED);
-  frame.right = io::readImage(f.right, cv::IMREAD_UNCHANGED);
-  return frame;
+  return readStereoFrame(f.t_s, f.left, f.right);
 }
 
 std::optional<TrajectorySource> PaperDataset::defaultTrajectory() const {

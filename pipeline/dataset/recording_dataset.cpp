@@ -130,15 +130,6 @@ class RecordingCursor final : public FrameCursor {
   bool ended_ = false;
 };
 
-Eigen::Isometry3d toIsometry(const cv::Matx44d& T) {
-  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) out.linear()(r, c) = T(r, c);
-    out.translation()(r) = T(r, 3);
-  }
-  return out;
-}
-
 }  // namespace
 
 StereoCalibration calibrationFromCameraInfo(const io::RosCameraInfo& left, const io::RosCameraInfo& right,
@@ -215,7 +206,7 @@ RecordingDataset::RecordingDataset(const std::string& path, const RecordingTopic
     calibration_ = readCalibrationFile(topics.calibration);
     calibration_source_ = "calibration " + topics.calibration;
     if (fs::path(topics.calibration).filename() == "sensor.yaml") {
-      T_body_cam_ = toIsometry(readEurocBodyFromSensor(topics.calibration));
+      T_body_cam_ = readEurocBodyCamera(topics.calibration);
     }
   } else {
     const std::string li = topics.left_info.empty() ? infoTopicFor(left_) : topics.left_info;

@@ -1,9 +1,11 @@
 #include "pipeline/dataset/stereo_dataset.h"
 
 #include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 
 #include "common/enum_names.h"
 #include "common/error.h"
+#include "io/image/image_io.h"
 #include "pipeline/dataset/euroc_dataset.h"
 #include "pipeline/dataset/kitti_dataset.h"
 #include "pipeline/dataset/paper_dataset.h"
@@ -18,6 +20,24 @@ DatasetFormat parseDatasetFormat(const std::string& name) {
                                                 {DatasetFormat::kPaper, "paper"},
                                                 {DatasetFormat::kRecording, "bag"}};
   return parseEnumName(kNames, name, "dataset format '" + name + "'");
+}
+
+StereoFrame readStereoFrame(double t_s, const std::string& left_path, const std::string& right_path) {
+  StereoFrame frame;
+  frame.t_s = t_s;
+  frame.left = io::readImage(left_path, cv::IMREAD_UNCHANGED);
+  frame.right = io::readImage(right_path, cv::IMREAD_UNCHANGED);
+  return frame;
+}
+
+Eigen::Isometry3d readEurocBodyCamera(const std::string& sensor_yaml) {
+  const cv::Matx44d T = readEurocBodyFromSensor(sensor_yaml);
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out.linear()(r, c) = T(r, c);
+    out.translation()(r) = T(r, 3);
+  }
+  return out;
 }
 
 TrajectorySource StereoDataset::trajectoryFile(const std::string& path, io::TrajectoryFormat format) const {

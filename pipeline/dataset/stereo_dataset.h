@@ -86,6 +86,13 @@ enum class DatasetFormat { kAuto, kEuroc, kKitti, kPaper, kRecording };
 // "auto", "euroc", "kitti", "paper" or "bag". @throws cenote::Error otherwise.
 DatasetFormat parseDatasetFormat(const std::string& name);
 
+// The raw frame at `t_s` from its two image files, read unchanged (8 or 16 bit, as recorded).
+// @throws cenote::Error naming the file when an image is missing or unreadable.
+StereoFrame readStereoFrame(double t_s, const std::string& left_path, const std::string& right_path);
+
+// T_body_cam of an EuRoC sensor.yaml (its T_BS). @throws cenote::Error as readEurocBodyFromSensor.
+Eigen::Isometry3d readEurocBodyCamera(const std::string& sensor_yaml);
+
 // Opens a folder; kAuto recognises EuRoC by mav0/cam0/data.csv, KITTI by times.txt + calib.txt and the
 // paper's layout by filename_mapping.csv + intrinsics.yaml + left/ + right/.
 // (A recording is opened with its topics: openRecordingDataset, recording_dataset.h.)

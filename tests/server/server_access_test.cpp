@@ -4,7 +4,6 @@
 // beyond loopback without a token, or with one but without TLS, is refused at start-up unless
 // --allow-insecure-remote says otherwise, and then it is logged.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <filesystem>
 #include <fstream>
@@ -19,12 +18,6 @@ namespace {
 namespace fs = std::filesystem;
 using client::test::ServerProcess;
 using client::test::ServerProcessOptions;
-
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("cenote-access-" + std::to_string(getpid())) / name;
-  fs::create_directories(dir);
-  return dir;
-}
 
 std::unique_ptr<grpc::ClientContext> withToken(const std::string& token) {
   auto context = contextWithDeadline();
@@ -45,7 +38,7 @@ uint64_t occupied(Stubs& stubs, const std::string& token) {
 }
 
 TEST(ServerAccess, EachTokenGetsItsCodeAndAPlannerCannotReset) {
-  const fs::path dir = scratch("roles");
+  const fs::path dir = scratchDir("access", "roles");
   std::ofstream(dir / "planner") << "planner-secret\n";
   ServerProcess server(CENOTE_SERVER_BINARY,
                        {.token = "operator-secret", .extra_args = {"--read-token-file", (dir / "planner").string()}});
@@ -92,30 +85,22 @@ TEST(ServerAccess, EachTokenGetsItsCodeAndAPlannerCannotReset) {
   fs::remove_all(dir.parent_path());
 }
 
-// Runs the server to completion; @return exit status and everything it printed.
-std::pair<int, std::string> runToExit(const std::string& args) {
-  const fs::path log = scratch("exit") / "log.txt";
-  const int status = std::system((std::string(CENOTE_SERVER_BINARY) + " " + args + " > " + log.string() + " 2>&1").c_str());
-  std::ifstream in(log);
-  return {WEXITSTATUS(status), std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>())};
-}
-
 TEST(ServerAccess, ListeningBeyondLoopbackWithoutTokenOrTlsIsRefusedAtStartUp) {
-  const fs::path dir = scratch("exposure");
+  const fs::path dir = scratchDir("access", "exposure");
   std::ofstream(dir / "token") << "operator-secret\n";
-  auto [status, text] = runToExit("--listen 0.0.0.0:0 --snapshot-dir " + (dir / "snapshots").string());
+  auto [status, text] = runServerToExit(dir, "--listen 0.0.0.0:0 --snapshot-dir " + (dir / "snapshots").string());
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("cenote-server: error: refusing to start: listening on 0.0.0.0:0 (beyond loopback) without a "
                       "token: anyone who reaches the port may feed, reset or download the map."),
             std::string::npos)
       << text;
-  std::tie(status, text) = runToExit("--listen 0.0.0.0:0 --token-file " + (dir / "token").string());
+  std::tie(status, text) = runServerToExit(dir, "--listen 0.0.0.0:0 --token-file " + (dir / "token").string());
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("cenote-server: error: refusing to start: listening on 0.0.0.0:0 (beyond loopback) with a "
                       "token but without TLS: the token crosses the network in clear text."),
             std::string::npos)
       << text;
-  std::tie(status, text) = runToExit("--listen 127.0.0.1:0 --read-token-file " + (dir / "token").string());
+  std::tie(status, text) = runServerToExit(dir, "--listen 127.0.0.1:0 --read-token-file " + (dir / "token").string());
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("server.read_token_file"), std::string::npos) << text;
 

@@ -23,12 +23,6 @@ namespace fs = std::filesystem;
 using client::test::ServerProcess;
 using client::test::ServerProcessOptions;
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("cenote-fault-" + std::to_string(getpid())) / name;
-  fs::create_directories(dir);
-  return dir;
-}
-
 // Load on the server while the test waits: one thread integrating a new wall every 1/15 s, and 8
 // planners querying points and segments. Counts the calls that failed with anything but the
 // server going away.
@@ -83,7 +77,7 @@ class Load {
 };
 
 TEST(ServerFaults, AfterEachOfThreeKillsUnderLoadTheLastSnapshotLoadsAndIsServedWhole) {
-  const fs::path dir = scratch("kill");
+  const fs::path dir = scratchDir("fault", "kill");
   std::mt19937 rng(16);
   std::uniform_int_distribution<int> kill_after_ms(300, 1500);
   std::string load;  // the snapshot the next round starts from
@@ -139,14 +133,15 @@ grpc::Status snapshot(Stubs& stubs, const std::string& path) {
 }
 
 TEST(ServerFaults, OnAFullDiskASnapshotFailsNamingTheFileAndThePreviousOneStaysWhole) {
-  const fs::path dir = scratch("full");
+  const fs::path dir = scratchDir("fault", "full");
   // The server with a file-size limit of 256 KiB (RLIMIT_FSIZE) and SIGXFSZ ignored, so that a
   // write beyond it fails with EFBIG as a full disk's does with ENOSPC.
   const fs::path wrapper = dir / "limited-server.sh";
   std::ofstream(wrapper) << "#!/bin/bash\nulimit -f 256\ntrap '' XFSZ\nexec " << CENOTE_SERVER_BINARY << " \"$@\"\n";
   fs::permissions(wrapper, fs::perms::owner_all);
-  std::ofstream(dir / "config.yaml") << "server:\n  snapshot_period_s: 0\n  snapshot_on_shutdown: false\n";
-  ServerProcess server(wrapper.string(), {.extra_args = {"--config", (dir / "config.yaml").string()}});
+  ServerProcess server(
+      wrapper.string(),
+      {.extra_args = {"--config", writeConfig(dir, "server:\n  snapshot_period_s: 0\n  snapshot_on_shutdown: false\n")}});
   Stubs stubs(server.target());
 
   auto context = contextWithDeadline();

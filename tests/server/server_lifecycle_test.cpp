@@ -4,7 +4,6 @@
 // with a message naming the key.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <sys/wait.h>
 
 #include <filesystem>
 #include <fstream>
@@ -28,14 +27,8 @@ void integrate(Stubs& stubs, const v1::PointBatch& batch) {
   ASSERT_TRUE(status.ok()) << status.error_message();
 }
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("cenote-lifecycle-" + std::to_string(getpid())) / name;
-  fs::create_directories(dir);
-  return dir;
-}
-
 TEST(ServerLifecycle, SigtermWritesASnapshotThatRestoresTheSameMap) {
-  const fs::path dir = scratch("sigterm");
+  const fs::path dir = scratchDir("lifecycle", "sigterm");
   std::unique_ptr<mapping::OccupancyMap> before;
   std::string snapshot;
   {
@@ -60,7 +53,7 @@ TEST(ServerLifecycle, SigtermWritesASnapshotThatRestoresTheSameMap) {
 }
 
 TEST(ServerLifecycle, AfterKillNineTheLastPeriodicSnapshotLoads) {
-  const fs::path dir = scratch("kill9");
+  const fs::path dir = scratchDir("lifecycle", "kill9");
   std::unique_ptr<mapping::OccupancyMap> before;
   {
     ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--snapshot-period", "0.2"}});
@@ -90,36 +83,27 @@ TEST(ServerLifecycle, AfterKillNineTheLastPeriodicSnapshotLoads) {
   fs::remove_all(dir.parent_path());
 }
 
-// Runs the server to completion; @return exit status and everything it printed.
-std::pair<int, std::string> runToExit(const std::string& args) {
-  const fs::path log = scratch("exit") / "log.txt";
-  const int status = std::system((std::string(CENOTE_SERVER_BINARY) + " " + args + " > " + log.string() + " 2>&1").c_str());
-  std::ifstream in(log);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return {WEXITSTATUS(status), text};
-}
-
 TEST(ServerLifecycle, BadStartupInputIsRefusedWithAMessageNamingIt) {
-  const fs::path dir = scratch("config");
+  const fs::path dir = scratchDir("lifecycle", "config");
   std::ofstream(dir / "typo.yaml") << "server:\n  listne: 127.0.0.1:1\n";
-  auto [status, text] = runToExit("--config " + (dir / "typo.yaml").string());
+  auto [status, text] = runServerToExit(dir, "--config " + (dir / "typo.yaml").string());
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("server.listne"), std::string::npos) << text;
 
   std::ofstream(dir / "range.yaml")
       << "map:\n  voxel_size_m: -1\nserver:\n  max_frame_streams: 0\n  time_slice_ms: 0.05\n  query_cpus: -1\n";
-  std::tie(status, text) = runToExit("--config " + (dir / "range.yaml").string());
+  std::tie(status, text) = runServerToExit(dir, "--config " + (dir / "range.yaml").string());
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("map.voxel_size_m"), std::string::npos) << text;
   EXPECT_NE(text.find("server.max_frame_streams"), std::string::npos) << text;
   EXPECT_NE(text.find("server.time_slice_ms"), std::string::npos) << text;
   EXPECT_NE(text.find("server.query_cpus"), std::string::npos) << text;
 
-  std::tie(status, text) = runToExit("--listen 127.0.0.1:0 --load " + (dir / "missing.vdb").string());
+  std::tie(status, text) = runServerToExit(dir, "--listen 127.0.0.1:0 --load " + (dir / "missing.vdb").string());
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("missing.vdb: no such file"), std::string::npos) << text;
 
-  std::tie(status, text) = runToExit("--listen 127.0.0.1:0 --token-file " + (dir / "no-token").string());
+  std::tie(status, text) = runServerToExit(dir, "--listen 127.0.0.1:0 --token-file " + (dir / "no-token").string());
   EXPECT_EQ(status, 1);
   EXPECT_NE(text.find("no-token cannot be read"), std::string::npos) << text;
   fs::remove_all(dir.parent_path());

@@ -27,12 +27,6 @@ std::string configFile(const std::string& name, const std::string& yaml) {
   return path.string();
 }
 
-void setVec(v1::Vec3* v, double x, double y, double z) {
-  v->set_x(x);
-  v->set_y(y);
-  v->set_z(z);
-}
-
 v1::SegmentsRequest segments(int n, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   v1::SegmentsRequest request;
   for (int i = 0; i < n; ++i) {

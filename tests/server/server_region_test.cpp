@@ -18,12 +18,6 @@ namespace {
 namespace fs = std::filesystem;
 using client::test::ServerProcess;
 
-void setVec(v1::Vec3* v, double x, double y, double z) {
-  v->set_x(x);
-  v->set_y(y);
-  v->set_z(z);
-}
-
 struct Known {
   mapping::VoxelIndex ijk;
   mapping::VoxelState state;

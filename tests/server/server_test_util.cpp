@@ -2,17 +2,40 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <set>
 #include <sstream>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include "mapping/io/map_io.h"
 
 namespace cenote::server::test {
 
 namespace fs = std::filesystem;
+
+fs::path scratchDir(const std::string& suite, const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("cenote-" + suite + "-" + std::to_string(getpid())) / name;
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string writeConfig(const fs::path& dir, const std::string& yaml) {
+  const fs::path path = dir / "config.yaml";
+  std::ofstream(path) << yaml;
+  return path.string();
+}
+
+std::pair<int, std::string> runServerToExit(const fs::path& dir, const std::string& args) {
+  const fs::path log = dir / "server.log";
+  const int status = std::system((std::string(CENOTE_SERVER_BINARY) + " " + args + " > " + log.string() + " 2>&1").c_str());
+  std::ifstream in(log);
+  return {WEXITSTATUS(status), std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>())};
+}
 
 MapDifference compareMaps(const mapping::OccupancyMap& a, const mapping::OccupancyMap& b) {
   const auto access_a = a.constAccessor();

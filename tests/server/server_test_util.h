@@ -5,7 +5,9 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <sys/types.h>
@@ -44,6 +46,23 @@ inline v1::MapInfo mapInfo(Stubs& stubs) {
   const grpc::Status status = stubs.query->GetMapInfo(context.get(), v1::MapInfoRequest(), &info);
   EXPECT_TRUE(status.ok()) << status.error_message();
   return info;
+}
+
+// A fresh folder <temp>/cenote-<suite>-<pid>/<name> for one test's files; the test removes its
+// parent (fs::remove_all(dir.parent_path())) when it is done.
+std::filesystem::path scratchDir(const std::string& suite, const std::string& name);
+
+// Writes `yaml` to <dir>/config.yaml and returns that path, for the server's --config.
+std::string writeConfig(const std::filesystem::path& dir, const std::string& yaml);
+
+// Runs cenote-server with `args` to its exit, its output in <dir>/server.log.
+// @return its exit status and everything it printed.
+std::pair<int, std::string> runServerToExit(const std::filesystem::path& dir, const std::string& args);
+
+inline void setVec(v1::Vec3* v, double x, double y, double z) {
+  v->set_x(x);
+  v->set_y(y);
+  v->set_z(z);
 }
 
 // Voxels known in either map whose state differs, and the number known in either.

@@ -23,12 +23,6 @@ using client::test::ServerProcessOptions;
 
 constexpr int kWidth = 64, kHeight = 48;
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("cenote-transport-" + std::to_string(getpid())) / name;
-  fs::create_directories(dir);
-  return dir;
-}
-
 // A rectified rig of kWidth x kHeight (OpenCV FileStorage, P1 / P2).
 std::string writeRig(const fs::path& dir) {
   const std::string path = (dir / "rig.yaml").string();
@@ -72,7 +66,7 @@ bool cancelledOrUnavailable(const grpc::Status& s) {
 }
 
 TEST(ServerShutdown, SigtermCancelsOpenStreamsThenWritesTheSnapshotAndExitsZero) {
-  const fs::path dir = scratch("sigterm");
+  const fs::path dir = scratchDir("transport", "sigterm");
   ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--calibration", writeRig(dir)}});
   Stubs stubs(server.target());
   integrate(stubs, wallBatch(2.0, 1.0, 0.02, 1.0));
@@ -177,9 +171,9 @@ TEST(ServerSubscribers, EightHundredIdleSubscribersHoldNoThreadsAndLockNoPlanner
 }
 
 TEST(ServerSubscribers, BeyondTheLimitASubscriberIsRefusedNamingIt) {
-  const fs::path dir = scratch("max-subscribers");
-  std::ofstream(dir / "config.yaml") << "server:\n  limits:\n    max_subscribers: 3\n";
-  ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", (dir / "config.yaml").string()}});
+  const fs::path dir = scratchDir("transport", "max-subscribers");
+  ServerProcess server(CENOTE_SERVER_BINARY,
+                       {.extra_args = {"--config", writeConfig(dir, "server:\n  limits:\n    max_subscribers: 3\n")}});
   Stubs stubs(server.target());
   Subscribers three(stubs.channel, 3);
   ASSERT_EQ(three.subscribed, 3);
@@ -194,9 +188,9 @@ TEST(ServerSubscribers, BeyondTheLimitASubscriberIsRefusedNamingIt) {
 }
 
 TEST(ServerSubscribers, AChangeBeyondTheByteBudgetIsSentAsAResync) {
-  const fs::path dir = scratch("subscriber-bytes");
-  std::ofstream(dir / "config.yaml") << "server:\n  max_subscriber_bytes: 4096\n";
-  ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", (dir / "config.yaml").string()}});
+  const fs::path dir = scratchDir("transport", "subscriber-bytes");
+  ServerProcess server(CENOTE_SERVER_BINARY,
+                       {.extra_args = {"--config", writeConfig(dir, "server:\n  max_subscriber_bytes: 4096\n")}});
   Stubs stubs(server.target());
   Subscribers one(stubs.channel, 1);
   ASSERT_EQ(one.subscribed, 1);
@@ -212,9 +206,9 @@ TEST(ServerSubscribers, AChangeBeyondTheByteBudgetIsSentAsAResync) {
 }
 
 TEST(ServerStreams, BeyondTheLimitAPoseStreamIsRefusedAndPlannersKeepTheirThreads) {
-  const fs::path dir = scratch("ingest-streams");
-  std::ofstream(dir / "config.yaml") << "server:\n  limits:\n    max_ingest_streams: 3\n";
-  ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", (dir / "config.yaml").string()}});
+  const fs::path dir = scratchDir("transport", "ingest-streams");
+  ServerProcess server(CENOTE_SERVER_BINARY,
+                       {.extra_args = {"--config", writeConfig(dir, "server:\n  limits:\n    max_ingest_streams: 3\n")}});
   Stubs stubs(server.target());
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
   std::vector<std::unique_ptr<grpc::ClientReaderWriter<v1::PoseStamped, v1::PoseAck>>> streams;
@@ -243,9 +237,10 @@ TEST(ServerStreams, BeyondTheLimitAPoseStreamIsRefusedAndPlannersKeepTheirThread
 }
 
 TEST(ServerSnapshots, ADownloadBeyondTheLimitIsRefusedNamingIt) {
-  const fs::path dir = scratch("downloads");
-  std::ofstream(dir / "config.yaml") << "server:\n  limits:\n    max_snapshot_downloads: 1\n";
-  ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", (dir / "config.yaml").string()}});
+  const fs::path dir = scratchDir("transport", "downloads");
+  ServerProcess server(
+      CENOTE_SERVER_BINARY,
+      {.extra_args = {"--config", writeConfig(dir, "server:\n  limits:\n    max_snapshot_downloads: 1\n")}});
   Stubs stubs(server.target());
   for (int i = 0; i < 3; ++i) integrate(stubs, wallBatch(2.0 + i, 1.5 + i, 0.02, 1.0 + i));
   // A download of the mesh (the largest format) whose first 1 MiB chunk is read and the rest not,

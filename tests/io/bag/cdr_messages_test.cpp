@@ -5,40 +5,20 @@
 
 #include <cmath>
 #include <fstream>
-#include <nlohmann/json.hpp>
 
 #include "common/error.h"
 #include "io/bag/recording.h"
 #include "io/bag/ros_messages.h"
+#include "tests/io/bag/ros2_test_data.h"
 
-namespace cenote::io {
+namespace cenote::io::test {
 namespace {
 
 namespace fs = std::filesystem;
-using Bytes = std::vector<std::uint8_t>;
-
-const fs::path kData = CENOTE_ROS2_BAG_DATA;
-
-Bytes sample(const std::string& name) {
-  std::ifstream in(kData / "cdr" / (name + ".cdr"), std::ios::binary);
-  return Bytes(std::istreambuf_iterator<char>(in), {});
-}
-
-const nlohmann::json& values(const std::string& name) {
-  static const nlohmann::json json = [] {
-    std::ifstream in(kData / "expected.json");
-    return nlohmann::json::parse(in);
-  }();
-  return json["cdr"][name]["message"];
-}
-
-std::int64_t stampOf(const nlohmann::json& header) {
-  return header["stamp"]["sec"].get<std::int64_t>() * 1000000000 + header["stamp"]["nanosec"].get<std::int64_t>();
-}
 
 // A CDR message of `type` as a recording hands it on.
 struct CdrMessage {
-  CdrMessage(const std::string& name, const std::string& type) : bytes(sample(name)) {
+  CdrMessage(const std::string& name, const std::string& type) : bytes(cdrSample(name)) {
     topic.name = "/" + name;
     topic.type = type;
     topic.encoding = MessageEncoding::kCdr;
@@ -68,7 +48,7 @@ void expectTransform(const RosPose& p, const nlohmann::json& t) {
 
 TEST(CdrMessages, Image) {
   const CdrMessage m("image", "sensor_msgs/Image");
-  const nlohmann::json& v = values("image");
+  const nlohmann::json& v = cdrValues("image");
   const RosImage image = decodeImage(m.message);
   EXPECT_EQ(image.stamp_ns, stampOf(v["header"]));
   EXPECT_EQ(image.frame_id, "cam0");
@@ -82,7 +62,7 @@ TEST(CdrMessages, Image) {
 
 TEST(CdrMessages, CompressedImage) {
   const CdrMessage m("compressed_image", "sensor_msgs/CompressedImage");
-  const nlohmann::json& v = values("compressed_image");
+  const nlohmann::json& v = cdrValues("compressed_image");
   const RosCompressedImage image = decodeCompressedImage(m.message);
   EXPECT_EQ(image.stamp_ns, stampOf(v["header"]));
   EXPECT_EQ(image.frame_id, "cam1");
@@ -92,7 +72,7 @@ TEST(CdrMessages, CompressedImage) {
 
 TEST(CdrMessages, CameraInfo) {
   const CdrMessage m("camera_info", "sensor_msgs/CameraInfo");
-  const nlohmann::json& v = values("camera_info");
+  const nlohmann::json& v = cdrValues("camera_info");
   const RosCameraInfo info = decodeCameraInfo(m.message);
   EXPECT_EQ(info.stamp_ns, stampOf(v["header"]));
   EXPECT_EQ(info.width, 4u);
@@ -107,14 +87,14 @@ TEST(CdrMessages, CameraInfo) {
 TEST(CdrMessages, OdometryPoseStampedTransformStampedAndTf) {
   {
     const CdrMessage m("odometry", "nav_msgs/Odometry");
-    const nlohmann::json& v = values("odometry");
+    const nlohmann::json& v = cdrValues("odometry");
     const std::optional<RosPose> p = decodePose(m.message);
     ASSERT_TRUE(p);
     expectPose(*p, v["header"], "cam0", v["pose"]["pose"]["position"], v["pose"]["pose"]["orientation"]);
   }
   {
     const CdrMessage m("pose_stamped", "geometry_msgs/PoseStamped");
-    const nlohmann::json& v = values("pose_stamped");
+    const nlohmann::json& v = cdrValues("pose_stamped");
     const std::optional<RosPose> p = decodePose(m.message);
     ASSERT_TRUE(p);
     expectPose(*p, v["header"], "", v["pose"]["position"], v["pose"]["orientation"]);
@@ -123,11 +103,11 @@ TEST(CdrMessages, OdometryPoseStampedTransformStampedAndTf) {
     const CdrMessage m("transform_stamped", "geometry_msgs/TransformStamped");
     const std::optional<RosPose> p = decodePose(m.message);
     ASSERT_TRUE(p);
-    expectTransform(*p, values("transform_stamped"));
+    expectTransform(*p, cdrValues("transform_stamped"));
   }
   {
     const CdrMessage m("tf_message", "tf2_msgs/TFMessage");
-    const nlohmann::json& v = values("tf_message");
+    const nlohmann::json& v = cdrValues("tf_message");
     const std::optional<RosPose> first = decodePose(m.message, "world", "imu");
     ASSERT_TRUE(first);
     expectTransform(*first, v["transforms"][0]);
@@ -196,4 +176,4 @@ TEST(CdrMessages, ThroughOpenRecordingFromMcapAndDb3) {
 }
 
 }  // namespace
-}  // namespace cenote::io
+}  // namespace cenote::io::test

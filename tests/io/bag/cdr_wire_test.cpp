@@ -5,38 +5,24 @@
 
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <nlohmann/json.hpp>
+#include "tests/io/bag/ros2_test_data.h"
 
-namespace cenote::io {
+namespace cenote::io::test {
 namespace {
 
 namespace fs = std::filesystem;
-using Bytes = std::vector<std::uint8_t>;
-
-const fs::path kData = CENOTE_ROS2_BAG_DATA;
-
-Bytes sample(const std::string& name) {
-  std::ifstream in(kData / "cdr" / (name + ".cdr"), std::ios::binary);
-  return Bytes(std::istreambuf_iterator<char>(in), {});
-}
-
-const nlohmann::json& values(const std::string& name) {
-  static const nlohmann::json json = [] {
-    std::ifstream in(kData / "expected.json");
-    return nlohmann::json::parse(in);
-  }();
-  return json["cdr"][name]["message"];
-}
-
-std::int64_t stampOf(const nlohmann::json& header) {
-  return header["stamp"]["sec"].get<std::int64_t>() * 1000000000 + header["stamp"]["nanosec"].get<std::int64_t>();
-}
 
 void expectHeader(CdrWire& w, const nlohmann::json& header) {
   std::string frame;
   EXPECT_EQ(w.headerStampNs(&frame), stampOf(header));
   EXPECT_EQ(frame, header["frame_id"]);
+}
+
+// A uint8[] field: its length, then that many bytes, the json's.
+void expectByteArray(CdrWire& w, const nlohmann::json& want) {
+  const std::uint32_t n = w.length();
+  const std::span<const std::uint8_t> data = w.bytes(n);
+  EXPECT_EQ(Bytes(data.begin(), data.end()), want.get<Bytes>());
 }
 
 void expectDoubles(CdrWire& w, const nlohmann::json& want, const char* field) {
@@ -57,8 +43,8 @@ void expectTransform(CdrWire& w, const nlohmann::json& t) {  // geometry_msgs/Tr
 }
 
 TEST(CdrWire, ImageFromTheIndependentSerialiser) {
-  const Bytes bytes = sample("image");
-  const nlohmann::json& v = values("image");
+  const Bytes bytes = cdrSample("image");
+  const nlohmann::json& v = cdrValues("image");
   CdrWire w(bytes);
   EXPECT_TRUE(w.isLittleEndian());
   expectHeader(w, v["header"]);
@@ -67,27 +53,23 @@ TEST(CdrWire, ImageFromTheIndependentSerialiser) {
   EXPECT_EQ(w.str(), v["encoding"]);
   EXPECT_EQ(w.u8(), v["is_bigendian"].get<int>());
   EXPECT_EQ(w.u32(), v["step"].get<std::uint32_t>());
-  const std::uint32_t n = w.length();
-  const std::span<const std::uint8_t> data = w.bytes(n);
-  EXPECT_EQ(Bytes(data.begin(), data.end()), v["data"].get<Bytes>());
+  expectByteArray(w, v["data"]);
   EXPECT_EQ(w.offset(), bytes.size());
 }
 
 TEST(CdrWire, CompressedImage) {
-  const Bytes bytes = sample("compressed_image");
-  const nlohmann::json& v = values("compressed_image");
+  const Bytes bytes = cdrSample("compressed_image");
+  const nlohmann::json& v = cdrValues("compressed_image");
   CdrWire w(bytes);
   expectHeader(w, v["header"]);
   EXPECT_EQ(w.str(), v["format"]);
-  const std::uint32_t n = w.length();
-  const std::span<const std::uint8_t> data = w.bytes(n);
-  EXPECT_EQ(Bytes(data.begin(), data.end()), v["data"].get<Bytes>());
+  expectByteArray(w, v["data"]);
   EXPECT_EQ(w.offset(), bytes.size());
 }
 
 TEST(CdrWire, CameraInfoDoublesAlignedAfterStrings) {
-  const Bytes bytes = sample("camera_info");
-  const nlohmann::json& v = values("camera_info");
+  const Bytes bytes = cdrSample("camera_info");
+  const nlohmann::json& v = cdrValues("camera_info");
   CdrWire w(bytes);
   expectHeader(w, v["header"]);
   EXPECT_EQ(w.u32(), 3u);
@@ -107,8 +89,8 @@ TEST(CdrWire, CameraInfoDoublesAlignedAfterStrings) {
 
 TEST(CdrWire, OdometryPoseStampedAndTransforms) {
   {
-    const Bytes bytes = sample("odometry");
-    const nlohmann::json& v = values("odometry");
+    const Bytes bytes = cdrSample("odometry");
+    const nlohmann::json& v = cdrValues("odometry");
     CdrWire w(bytes);
     expectHeader(w, v["header"]);
     EXPECT_EQ(w.str(), v["child_frame_id"]);
@@ -120,21 +102,21 @@ TEST(CdrWire, OdometryPoseStampedAndTransforms) {
     EXPECT_EQ(w.offset(), bytes.size());
   }
   {
-    const Bytes bytes = sample("pose_stamped");
+    const Bytes bytes = cdrSample("pose_stamped");
     CdrWire w(bytes);
-    expectHeader(w, values("pose_stamped")["header"]);
-    expectPose(w, values("pose_stamped")["pose"]);
+    expectHeader(w, cdrValues("pose_stamped")["header"]);
+    expectPose(w, cdrValues("pose_stamped")["pose"]);
     EXPECT_EQ(w.offset(), bytes.size());
   }
   {
-    const Bytes bytes = sample("transform_stamped");
+    const Bytes bytes = cdrSample("transform_stamped");
     CdrWire w(bytes);
-    expectTransform(w, values("transform_stamped"));
+    expectTransform(w, cdrValues("transform_stamped"));
     EXPECT_EQ(w.offset(), bytes.size());
   }
   {
-    const Bytes bytes = sample("tf_message");
-    const nlohmann::json& v = values("tf_message");
+    const Bytes bytes = cdrSample("tf_message");
+    const nlohmann::json& v = cdrValues("tf_message");
     CdrWire w(bytes);
     ASSERT_EQ(w.length(), 2u);
     expectTransform(w, v["transforms"][0]);
@@ -158,7 +140,7 @@ TEST(CdrWire, BigEndianBytesCheckedByHand) {
 }
 
 TEST(CdrWire, BytesThatRunOutAndForeignEncapsulations) {
-  Bytes bytes = sample("odometry");
+  Bytes bytes = cdrSample("odometry");
   bytes.resize(bytes.size() - 3);
   CdrWire w(bytes);
   std::string frame;
@@ -183,4 +165,4 @@ TEST(CdrWire, BytesThatRunOutAndForeignEncapsulations) {
 }
 
 }  // namespace
-}  // namespace cenote::io
+}  // namespace cenote::io::test

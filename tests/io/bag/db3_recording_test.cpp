@@ -10,40 +10,12 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "tests/io/bag/ros2_test_data.h"
 
-namespace cenote::io {
+namespace cenote::io::test {
 namespace {
 
 namespace fs = std::filesystem;
-using Bytes = std::vector<std::uint8_t>;
-
-const fs::path kData = CENOTE_ROS2_BAG_DATA;
-
-nlohmann::json expectedJson() {
-  std::ifstream in(kData / "expected.json");
-  return nlohmann::json::parse(in);
-}
-
-Bytes fromHex(const std::string& hex) {
-  Bytes out(hex.size() / 2);
-  for (std::size_t i = 0; i < out.size(); ++i)
-    out[i] = static_cast<std::uint8_t>(std::stoi(hex.substr(2 * i, 2), nullptr, 16));
-  return out;
-}
-
-void expectTopics(const Recording& rec, nlohmann::json want) {
-  std::sort(want.begin(), want.end(), [](const auto& a, const auto& b) { return a["name"] < b["name"]; });
-  const std::vector<TopicInfo>& topics = rec.topics();
-  ASSERT_EQ(topics.size(), want.size()) << "the json topic /diagnostics is not a topic";
-  for (std::size_t i = 0; i < want.size(); ++i) {
-    EXPECT_EQ(topics[i].name, want[i]["name"]);
-    EXPECT_EQ(topics[i].type, want[i]["type"]) << topics[i].name;
-    EXPECT_EQ(topics[i].encoding, MessageEncoding::kCdr) << topics[i].name;
-    EXPECT_EQ(topics[i].message_count, want[i]["count"].get<std::uint64_t>()) << topics[i].name;
-    EXPECT_EQ(topics[i].first_ns, std::stoll(want[i]["first_ns"].get<std::string>())) << topics[i].name;
-    EXPECT_EQ(topics[i].last_ns, std::stoll(want[i]["last_ns"].get<std::string>())) << topics[i].name;
-  }
-}
 
 void expectMessages(Recording& rec, const nlohmann::json& want, const std::vector<std::string>& wanted) {
   RecordedMessage m;
@@ -142,4 +114,4 @@ TEST(Db3Recording, CompressedBagIsAClearError) {
 }
 
 }  // namespace
-}  // namespace cenote::io
+}  // namespace cenote::io::test

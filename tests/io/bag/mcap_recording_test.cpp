@@ -13,29 +13,12 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "tests/io/bag/ros2_test_data.h"
 
-namespace cenote::io {
+namespace cenote::io::test {
 namespace {
 
 namespace fs = std::filesystem;
-using Bytes = std::vector<std::uint8_t>;
-
-const fs::path kData = CENOTE_ROS2_BAG_DATA;
-
-const nlohmann::json& expected() {
-  static const nlohmann::json json = [] {
-    std::ifstream in(kData / "expected.json");
-    return nlohmann::json::parse(in);
-  }();
-  return json;
-}
-
-Bytes fromHex(const std::string& hex) {
-  Bytes out(hex.size() / 2);
-  for (std::size_t i = 0; i < out.size(); ++i)
-    out[i] = static_cast<std::uint8_t>(std::stoi(hex.substr(2 * i, 2), nullptr, 16));
-  return out;
-}
 
 Bytes readFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -57,7 +40,7 @@ struct Message {
 
 std::vector<Message> expectedMessages() {
   std::vector<Message> out;
-  for (const auto& m : expected()["messages"])
+  for (const auto& m : expectedJson()["messages"])
     out.push_back({m["topic"], std::stoll(m["log_time_ns"].get<std::string>()), fromHex(m["data"])});
   return out;
 }
@@ -83,13 +66,13 @@ struct Chunk {
 };
 std::vector<Chunk> chunks(const std::string& file) {
   std::vector<Chunk> out;
-  for (const auto& c : expected()["files"][file]["chunks"])
+  for (const auto& c : expectedJson()["files"][file]["chunks"])
     out.push_back({std::stoull(c["start"].get<std::string>()), std::stoull(c["length"].get<std::string>())});
   return out;
 }
 // How many messages lie in chunks before chunk k.
 std::size_t messagesBeforeChunk(const std::string& file, std::size_t k) {
-  const auto& of = expected()["files"][file]["chunk_of_message"];
+  const auto& of = expectedJson()["files"][file]["chunk_of_message"];
   return static_cast<std::size_t>(
       std::count_if(of.begin(), of.end(), [&](const auto& c) { return c.template get<std::size_t>() < k; }));
 }
@@ -98,18 +81,7 @@ class McapFile : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(McapFile, TopicsCountsAndTimeSpansAreTheWritersOnes) {
   const std::unique_ptr<Recording> rec = openMcapRecording(kData / (GetParam() + ".mcap"));
-  const std::vector<TopicInfo>& topics = rec->topics();
-  nlohmann::json want = expected()["topics"];  // the writer's order; topics() are sorted by name
-  std::sort(want.begin(), want.end(), [](const auto& a, const auto& b) { return a["name"] < b["name"]; });
-  ASSERT_EQ(topics.size(), want.size()) << "the json channel /diagnostics is not a topic";
-  for (std::size_t i = 0; i < want.size(); ++i) {
-    EXPECT_EQ(topics[i].name, want[i]["name"]);
-    EXPECT_EQ(topics[i].type, want[i]["type"]) << topics[i].name;
-    EXPECT_EQ(topics[i].encoding, MessageEncoding::kCdr) << topics[i].name;
-    EXPECT_EQ(topics[i].message_count, want[i]["count"].get<std::uint64_t>()) << topics[i].name;
-    EXPECT_EQ(topics[i].first_ns, std::stoll(want[i]["first_ns"].get<std::string>())) << topics[i].name;
-    EXPECT_EQ(topics[i].last_ns, std::stoll(want[i]["last_ns"].get<std::string>())) << topics[i].name;
-  }
+  expectTopics(*rec, expectedJson()["topics"]);
   EXPECT_EQ(rec->truncation(), "");
 }
 
@@ -251,4 +223,4 @@ TEST(McapRecording, NotAnMcapFileAndMissingFile) {
 }
 
 }  // namespace
-}  // namespace cenote::io
+}  // namespace cenote::io::test

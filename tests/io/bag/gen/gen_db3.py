@@ -6,29 +6,19 @@ the CDR bytes Foxglove's serialiser wrote for the MCAP files (OUT_DIR/expected.j
                        rows inserted out of time order, a topic of another serialisation format
   dive_db3_cut/        the same .db3 files without metadata.yaml (a recorder that never finished)
   not_a_database.db3   text
-The tables are rosbag2's (Humble): topics(id, name, type, serialization_format, offered_qos_profiles),
-messages(id, topic_id, timestamp, data) with its timestamp index.
+The tables are rosbag2's (Humble), written by rosbag2_db3.py.
 """
 import json
 import os
 import random
 import shutil
-import sqlite3
 import sys
+
+from rosbag2_db3 import create_db3, metadata_yaml
 
 out = sys.argv[1]
 with open(os.path.join(out, "expected.json")) as f:
     expected = json.load(f)
-
-SCHEMA = """
-CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);
-CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL, metadata TEXT NOT NULL);
-CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
-                    serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
-CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL,
-                      data BLOB NOT NULL);
-CREATE INDEX timestamp_idx ON messages (timestamp ASC);
-"""
 
 bag = os.path.join(out, "dive_db3")
 shutil.rmtree(bag, ignore_errors=True)
@@ -39,9 +29,7 @@ files = ["dive_db3_0.db3", "dive_db3_1.db3"]
 rng = random.Random(15)
 for index, name in enumerate(files):
     part = messages[:split] if index == 0 else messages[split:]
-    db = sqlite3.connect(os.path.join(bag, name))
-    db.executescript(SCHEMA)
-    db.execute("INSERT INTO schema VALUES (3, 'humble')")
+    db = create_db3(os.path.join(bag, name))
     # Topic ids differ between the files (each file numbers its own topics), in another order.
     topics = expected["topics"] if index == 0 else list(reversed(expected["topics"]))
     ids = {}
@@ -59,29 +47,11 @@ for index, name in enumerate(files):
     db.commit()
     db.close()
 
-counts = "\n".join(
-    f"    - topic_metadata:\n        name: {t['name']}\n        type: {t['type'].replace('/', '/msg/', 1)}\n"
-    f"        serialization_format: cdr\n        offered_qos_profiles: \"\"\n      message_count: {t['count']}"
-    for t in expected["topics"])
+topics = [(t["name"], t["type"].replace("/", "/msg/", 1), "cdr", t["count"]) for t in expected["topics"]]
 first = min(int(m["log_time_ns"]) for m in messages)
 last = max(int(m["log_time_ns"]) for m in messages)
 with open(os.path.join(bag, "metadata.yaml"), "w") as f:
-    f.write(f"""rosbag2_bagfile_information:
-  version: 5
-  storage_identifier: sqlite3
-  duration:
-    nanoseconds: {last - first}
-  starting_time:
-    nanoseconds_since_epoch: {first}
-  message_count: {len(messages)}
-  topics_with_message_count:
-{counts}
-  compression_format: ""
-  compression_mode: ""
-  relative_file_paths:
-    - {files[0]}
-    - {files[1]}
-""")
+    f.write(metadata_yaml(topics, len(messages), files, first, last))
 
 cut = os.path.join(out, "dive_db3_cut")
 shutil.rmtree(cut, ignore_errors=True)

@@ -4,9 +4,10 @@ with compression none) rewritten as a ROS 2 sqlite3 bag: OUT_DIR/metadata.yaml a
 rosbag2's tables (Humble), written by Python's own sqlite3, the CDR message bytes unchanged. The MCAP
 records are read as the specification lays them out (mcap.dev/spec): opcode u8, length u64, fields."""
 import os
-import sqlite3
 import struct
 import sys
+
+from rosbag2_db3 import create_db3, metadata_yaml
 
 src, out = sys.argv[1:3]
 data = open(src, "rb").read()
@@ -52,35 +53,13 @@ def read(buf, start, end):
 read(data, 8, len(data))
 os.makedirs(out, exist_ok=True)
 name = os.path.basename(os.path.normpath(out)) + "_0.db3"
-db = sqlite3.connect(os.path.join(out, name))
-db.executescript("""
-CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);
-CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL, metadata TEXT NOT NULL);
-CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
-                    serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
-CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL,
-                      data BLOB NOT NULL);
-CREATE INDEX timestamp_idx ON messages (timestamp ASC);
-INSERT INTO schema VALUES (3, 'humble');
-""")
+db = create_db3(os.path.join(out, name))
 for cid, (topic, type_name, encoding) in channels.items():
     db.execute("INSERT INTO topics VALUES (?, ?, ?, ?, '')", (cid, topic, type_name, encoding))
 db.executemany("INSERT INTO messages (topic_id, timestamp, data) VALUES (?, ?, ?)", messages)
 db.commit()
 db.close()
-counts = "\n".join(
-    f"    - topic_metadata:\n        name: {topic}\n        type: {type_name}\n        serialization_format: {encoding}\n"
-    f"        offered_qos_profiles: \"\"\n      message_count: {sum(1 for m in messages if m[0] == cid)}"
-    for cid, (topic, type_name, encoding) in channels.items())
+topics = [(topic, type_name, encoding, sum(1 for m in messages if m[0] == cid))
+          for cid, (topic, type_name, encoding) in channels.items()]
 with open(os.path.join(out, "metadata.yaml"), "w") as f:
-    f.write(f"""rosbag2_bagfile_information:
-  version: 5
-  storage_identifier: sqlite3
-  message_count: {len(messages)}
-  topics_with_message_count:
-{counts}
-  compression_format: ""
-  compression_mode: ""
-  relative_file_paths:
-    - {name}
-""")
+    f.write(metadata_yaml(topics, len(messages), [name]))
