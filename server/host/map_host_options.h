@@ -17,7 +17,7 @@ struct MapHostOptions {
                                           // distance / frontier query waits); 0: after every change
   double derived_follow_s = 30.0;         // ... while such a query came in the last this many seconds;
                                           // otherwise they catch up on the next one
-  bool frame_history = true;              // keep integrated frames (map.history_*) for Ingest.CorrectPoses
+  bool frame_history = false;             // keep integrated frames (map.history_*) for Ingest.CorrectPoses
 };
 
 }  // namespace cenote::server

@@ -21,7 +21,10 @@ v1::PoseStamped poseAt(double t_s, double x_m) {
 }
 
 TEST(ServerCorrections, PosesOutOfOrderAreInvalidArgumentAndPointsWithoutPoseStay) {
-  ServerProcess server(CENOTE_SERVER_BINARY);
+  // The frame store is off by default: it is what CorrectPoses needs.
+  const std::filesystem::path dir = scratchDir("ServerCorrections", "order");
+  ServerProcess server(CENOTE_SERVER_BINARY,
+                       {.extra_args = {"--config", writeConfig(dir, "server:\n  frame_history: true\n")}});
   Stubs stubs(server.target());
   v1::BatchAck batch_ack;
   {
@@ -49,6 +52,7 @@ TEST(ServerCorrections, PosesOutOfOrderAreInvalidArgumentAndPointsWithoutPoseSta
   EXPECT_EQ(ack.frames_moved(), 0u);
   EXPECT_EQ(ack.changed_blocks(), 0u);
   EXPECT_EQ(ack.map_version(), batch_ack.map_version());  // nothing moved: the map did not change
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
