@@ -23,20 +23,54 @@ namespace {
 
 using openvdb::Coord;
 
-// Writes `temp` through write(std::ostream&) and checks the stream after flushing and closing it:
-// OpenVDB's and OctoMap's own file writers never look, so a full disk (or a file-size limit) would
-// leave a truncated file that then replaced the last good snapshot. @throws ResourceExhaustedError
-// (ENOSPC, EDQUOT, EFBIG) or IoError naming `path`.
+// A file buffer that remembers its first failed write. OpenVDB writes part of a .vdb through the
+// stream's buffer (sputn), and a buffer's failures never reach the stream's state: a write cut
+// short by a full disk or a file-size limit left the stream good and the truncated file was
+// committed. Checking the buffer catches every writer, whichever way it writes.
+class CheckedFileBuf : public std::filebuf {
+ public:
+  // errno of the first failed write; 0 when every write went through.
+  int error() const { return error_; }
+
+ protected:
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    const std::streamsize written = std::filebuf::xsputn(s, n);
+    if (written != n) noteFailure();
+    return written;
+  }
+  int_type overflow(int_type c) override {
+    const int_type result = std::filebuf::overflow(c);
+    if (traits_type::eq_int_type(result, traits_type::eof())) noteFailure();
+    return result;
+  }
+  int sync() override {
+    const int result = std::filebuf::sync();
+    if (result != 0) noteFailure();
+    return result;
+  }
+
+ private:
+  void noteFailure() {
+    if (error_ == 0) error_ = errno != 0 ? errno : EIO;
+  }
+  int error_ = 0;
+};
+
+// Writes `temp` through write(std::ostream&) and checks every write of it, flushed and closed:
+// OpenVDB's and OctoMap's own file writers never look. @throws ResourceExhaustedError (ENOSPC,
+// EDQUOT, EFBIG) or IoError naming `path`.
 template <typename Write>
 void writeCheckedStream(const std::string& path, const std::string& temp, Write&& write) {
-  std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-  if (!out) throwWriteError(path, "cannot create file", errno);
+  CheckedFileBuf buffer;
+  if (!buffer.open(temp, std::ios::out | std::ios::binary | std::ios::trunc)) {
+    throwWriteError(path, "cannot create file", errno);
+  }
+  std::ostream out(&buffer);
   const bool written = write(out);
   out.flush();
-  const int flush_errno = out ? 0 : errno;
-  out.close();
-  if (!written || flush_errno != 0 || out.fail()) {
-    const int err = flush_errno != 0 ? flush_errno : errno;
+  const bool closed = buffer.close() != nullptr;
+  const int err = buffer.error() != 0 ? buffer.error() : (closed ? 0 : errno);
+  if (!written || err != 0 || out.fail() || !closed) {
     throwWriteError(path, std::string("write failed (") + (err ? std::strerror(err) : "disk full?") + ")", err);
   }
 }

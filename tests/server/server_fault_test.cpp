@@ -133,9 +133,6 @@ grpc::Status snapshot(Stubs& stubs, const std::string& path) {
 }
 
 TEST(ServerFaults, OnAFullDiskASnapshotFailsNamingTheFileAndThePreviousOneStaysWhole) {
-  // Known regression on the merged main (issue 16 stays open for it): under a file-size limit set
-  // with prlimit the snapshot is answered OK. Passed on its own branch; to be found before re-enabling.
-  GTEST_SKIP() << "file-size-limit snapshot regression after the merge of session 7 (see issue 16)";
   const fs::path dir = scratchDir("fault", "full");
   // The server with a file-size limit of 256 KiB (RLIMIT_FSIZE) and SIGXFSZ ignored, so that a
   // write beyond it fails with EFBIG as a full disk's does with ENOSPC.

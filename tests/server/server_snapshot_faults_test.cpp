@@ -239,9 +239,6 @@ TEST(ServerSnapshotFaults, AfterEachSigkillTheRestartServesTheLastSnapshot) {
 // A snapshot that would pass the server's file size limit: RESOURCE_EXHAUSTED naming the file, the
 // previous snapshot of that name intact, no temporary file left, and the server still serving.
 TEST(ServerSnapshotFaults, FileSizeLimitFailsTheSnapshotAndKeepsThePreviousOne) {
-  // Known regression on the merged main (issue 16 stays open for it): under a file-size limit set
-  // with prlimit the snapshot is answered OK. Passed on its own branch; to be found before re-enabling.
-  GTEST_SKIP() << "file-size-limit snapshot regression after the merge of session 7 (see issue 16)";
   const fs::path dir = fs::temp_directory_path() / ("cenote-fsize-" + std::to_string(getpid())) / "snapshots";
   fs::remove_all(dir.parent_path());
   fs::create_directories(dir);
