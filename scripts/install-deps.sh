@@ -9,8 +9,8 @@ PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config git
   # pipeline: images, calibration, SIMD, threads
   libopencv-dev libeigen3-dev libhwy-dev libdeflate-dev zlib1g-dev libjpeg-dev
-  # ROS 2 recordings: MCAP chunks (zstd, lz4), rosbag2 sqlite3 storage
-  libzstd-dev liblz4-dev libsqlite3-dev
+  # ROS 2 recordings: MCAP chunks (zstd; lz4 below), rosbag2 sqlite3 storage
+  libzstd-dev libsqlite3-dev
   # command line, config, logs
   libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   # mapping: volumetric map (OpenVDB, TBB), OctoMap as peer, reference and file format
@@ -29,7 +29,8 @@ PACKAGES=(
   openssl
   # ROS 1 bags (io/bag/ros1_bag.cpp): bz2 and lz4-frame chunks; the tests' bags are written by ROS's own
   # rosbag (python3-rosbag) with the message classes of sensor_msgs, geometry_msgs, nav_msgs and tf2_msgs,
-  # their images encoded (PNG, JPEG) and rigs rectified (CameraInfo) by OpenCV's Python bindings
+  # their images encoded (PNG, JPEG) and rigs rectified (CameraInfo) by OpenCV's Python bindings, which
+  # also write the paper's dataset layout (FileStorage) in the tests
   libbz2-dev liblz4-dev python3-rosbag python3-sensor-msgs python3-geometry-msgs python3-nav-msgs python3-tf2-msgs
   python3-opencv
   # tests and benchmarks
@@ -40,8 +41,6 @@ PACKAGES=(
   python3 python3-numpy
   # the live viewer's browser test: headless Chromium (driven by npm playwright-core, web/)
   chromium
-  # the paper's dataset layout written by tests (OpenCV FileStorage); MCAP test recordings (npm ci)
-  python3-opencv nodejs
 )
 # `make fuzz` (install-deps.sh --fuzz): clang and its libFuzzer runtime; CI's `make test` needs neither.
 if [ "${1:-}" = "--fuzz" ]; then
@@ -71,8 +70,8 @@ else
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-# The browser viewer (web/) is bundled by npm packages: node and npm, from Debian unless some other
-# node (with its own npm) is installed already.
+# The browser viewer (web/) and the ROS 2 test recordings (tests/io/bag/gen) are made by npm packages:
+# node and npm, from Debian unless some other node (with its own npm) is installed already.
 if ! command -v node > /dev/null || ! command -v npm > /dev/null; then
   echo "install-deps: installing nodejs npm"
   [ "$updated" -eq 1 ] || $SUDO apt-get update -qq
