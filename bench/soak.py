@@ -30,6 +30,9 @@ import time
 import grpc
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "clients", "python"))
+from cenote_client.dive import read_dive  # noqa: E402
+
 
 def log(*args):
     print(time.strftime("%H:%M:%S"), *args, flush=True)
@@ -53,28 +56,6 @@ def rss_bytes(pid):
             if line.startswith("VmRSS:"):
                 return int(line.split()[1]) * 1024
     return 0
-
-
-def read_dive(dive):
-    """(t_s, left PNG, right PNG, position, quaternion xyzw) for every frame of the dive."""
-    poses = {}
-    with open(os.path.join(dive, "groundtruth", "cam0.tum")) as f:
-        for line in f:
-            if line.startswith("#") or not line.strip():
-                continue
-            v = line.split()
-            poses[round(float(v[0]), 6)] = ([float(x) for x in v[1:4]], [float(x) for x in v[4:8]])
-    frames = []
-    with open(os.path.join(dive, "mav0", "cam0", "data.csv")) as f:
-        for line in f:
-            if line.startswith("#") or not line.strip():
-                continue
-            stamp, name = line.strip().split(",")
-            t = int(stamp) * 1e-9
-            with open(os.path.join(dive, "mav0", "cam0", "data", name), "rb") as l, \
-                    open(os.path.join(dive, "mav0", "cam1", "data", name), "rb") as r:
-                frames.append((t, l.read(), r.read(), *poses[round(t, 6)]))
-    return frames
 
 
 class Soak:
@@ -221,7 +202,7 @@ def main():
     subprocess.run([os.path.join(args.build, "apps", "cenote"), "sim", "--scene", "cave", "--frames", str(args.frames),
                     "--width", str(args.width), "--height", str(args.height), "--quiet", "--out", dive],
                    check=True, stdout=subprocess.DEVNULL)
-    frames = read_dive(dive)
+    frames = [(t, left, right, *pose) for t, left, right, pose in read_dive(dive)]
     positions = np.array([f[3] for f in frames])
     lo, hi = positions.min(axis=0) - 2.0, positions.max(axis=0) + 2.0
 

@@ -35,16 +35,24 @@ else
   echo "(Motorcycle not unpacked: scripts/fetch-test-data.sh)"
 fi
 
-echo "== 5. serve the map over gRPC and ask it what a planner asks (cenote-server, cenote-cli)"
+echo "== 5. stream the dive into cenote-server at camera rate, watch it live, and ask it what a planner asks"
 if [ -x "$server" ] && [ -x "$cli" ]; then
   rm -f "$out/server.port"
-  "$server" --config "$here/config/default.yaml" --load "$out/run/map.vdb" --listen 127.0.0.1:0 \
-    --viewer-listen 127.0.0.1:0 --port-file "$out/server.port" --snapshot-dir "$out/snapshots" > "$out/server.log" 2>&1 &
+  "$server" --config "$here/config/default.yaml" --calibration "$out/cave" --listen 127.0.0.1:0 \
+    --viewer-listen "127.0.0.1:${CENOTE_DEMO_VIEWER_PORT:-0}" --port-file "$out/server.port" \
+    --snapshot-dir "$out/snapshots" > "$out/server.log" 2>&1 &
   server_pid=$!
   for _ in $(seq 1 600); do [ -f "$out/server.port" ] && break; sleep 0.1; done
   address="127.0.0.1:$(cat "$out/server.port")"
+  for _ in $(seq 1 100); do grep -q "viewer on http://" "$out/server.log" && break; sleep 0.1; done
+  viewer_url=$(grep -o "viewer on http://[^ ]*" "$out/server.log" | sed 's/^viewer on //' || true)
   echo "server on $address"
-  grep -o "viewer on http://[^ ]*" "$out/server.log" | sed 's/^/live /' || true
+  echo "LIVE VIEW of the dive: open $viewer_url in a browser (or Foxglove / Lichtblick: ${viewer_url/http/ws}; docs/VIEWER.md)"
+  # A person watching gets time to open the page first (CENOTE_DEMO_WAIT_S, 10 s on a terminal).
+  wait_s=${CENOTE_DEMO_WAIT_S:-$([ -t 1 ] && echo 10 || echo 0)}
+  [ "$wait_s" -gt 0 ] && echo "streaming starts in $wait_s s" && sleep "$wait_s"
+  /usr/bin/python3 "$here/clients/python/examples/stream_dive.py" --server "$address" \
+    --stubs "$build/clients/python/gen" "$out/cave"
   "$cli" --server "$address" info
   echo "-- voxel states 1 m and 2 m ahead of the start, and 0.5 m to the side (x y z state probability):"
   "$cli" --server "$address" state 1,0,0 2,0,0 0,0.5,0 0,2,0
@@ -53,6 +61,9 @@ if [ -x "$server" ] && [ -x "$cli" ]; then
   echo "-- the three nearest frontiers:"
   "$cli" --server "$address" frontiers --max 3
   "$cli" --server "$address" snapshot map.mesh.ply > /dev/null
+  # The viewer stays up for a look at the finished map (CENOTE_DEMO_VIEW_S, 30 s on a terminal).
+  view_s=${CENOTE_DEMO_VIEW_S:-$([ -t 1 ] && echo 30 || echo 0)}
+  [ "$view_s" -gt 0 ] && echo "the live view stays up for $view_s s ($viewer_url)" && sleep "$view_s"
   kill -TERM "$server_pid" && wait "$server_pid"
 else
   echo "(cenote-server or cenote-cli not built)"
@@ -67,7 +78,7 @@ echo "  run/depth/                  fused depth and confidence maps (PFM)"
 echo "  run/report.json             frames, per-stage ms (median, p95), fps, peak memory"
 echo "  report.html                 one-page report with metrics and plots"
 echo "  motorcycle.preview.png      colour-mapped disparity of a real pair"
-echo "  snapshots/                  written by cenote-server: map.mesh.ply (asked for), map.vdb (on shutdown)"
+echo "  snapshots/                  written by cenote-server from the streamed dive: map.mesh.ply (asked for), map.vdb (on shutdown)"
 echo
 echo "live view of the dive's map (browser, or Foxglove / Lichtblick at ws://127.0.0.1:8765; docs/VIEWER.md):"
 echo "  $cenote view $out/run/map.vdb   then open http://127.0.0.1:8765/"

@@ -138,7 +138,8 @@ int serve(const Options& o) {
   QueryService query(host, guard, settings.server, settings.server.frame_id);
   UpdatesService updates(host, guard, settings.server.limits.max_subscribers);
   AdminService admin(host, guard, snapshots, ingest, settings.server.limits.max_snapshot_downloads);
-  viewer::LiveFeed live(settings.server.viewer.max_cloud_points, settings.server.viewer.max_trajectory_poses);
+  viewer::LiveFeed live(settings.server.viewer.max_cloud_points, settings.server.viewer.max_trajectory_poses,
+                        settings.server.viewer.image_hz);
   const std::unique_ptr<viewer::ViewerServer> viewer = startViewer(settings, host, ingest, live,
                                                                    tokenFrom(settings.server.token_file));
 

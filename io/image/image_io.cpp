@@ -21,6 +21,20 @@
 namespace cenote::io {
 namespace {
 
+// @param what names the image in errors ("a JPEG", a path).
+std::vector<uint8_t> encodeWithOpenCv(const std::string& ext, const cv::Mat& image, const std::vector<int>& params,
+                                      const std::string& what) {
+  std::vector<uint8_t> bytes;
+  bool ok = false;
+  try {
+    ok = cv::imencode(ext, image, bytes, params);
+  } catch (const cv::Exception& e) {
+    throw Error("cannot encode " + what + ": " + e.what());
+  }
+  if (!ok) throw Error("cannot encode " + what);
+  return bytes;
+}
+
 constexpr double kMillimetresPerMetre = 1000.0;  // 16-bit depth PNGs store millimetres
 
 }  // namespace
@@ -174,6 +188,11 @@ cv::Mat decodeImageStrict(const uint8_t* data, std::size_t size, const std::stri
   return image;
 }
 
+std::string encodeJpeg(const cv::Mat& image, int quality) {
+  const std::vector<uint8_t> bytes = encodeWithOpenCv(".jpg", image, {cv::IMWRITE_JPEG_QUALITY, quality}, "a JPEG");
+  return std::string(bytes.begin(), bytes.end());
+}
+
 void writeImage(const std::string& path, const cv::Mat& image) {
   std::string ext = std::filesystem::path(path).extension().string();
   if (ext.empty()) ext = ".png";
@@ -184,13 +203,7 @@ void writeImage(const std::string& path, const cv::Mat& image) {
   if (png && isPngEncodable(image)) {
     bytes = encodePng(image);
   } else {
-    bool ok = false;
-    try {
-      ok = cv::imencode(ext, image, bytes);
-    } catch (const cv::Exception& e) {
-      throw Error("cannot encode " + path + ": " + e.what());
-    }
-    if (!ok) throw Error("cannot encode " + path);
+    bytes = encodeWithOpenCv(ext, image, {}, path);
   }
   // Per-frame output (images and depth PNGs of every frame): no fsync (common/atomic_file.h).
   writeFileAtomically(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), Durability::kFast);

@@ -43,6 +43,10 @@ cv::Mat readImage(const std::string& path, int flags);
 // @throws cenote::Error "<what>: ..." (ResourceExhaustedError beyond max_pixels).
 cv::Mat decodeImageStrict(const uint8_t* data, std::size_t size, const std::string& what, uint64_t max_pixels);
 
+// A JPEG of an 8-bit grey or BGR image at quality 1..100, in memory.
+// @throws cenote::Error when the image cannot be encoded.
+std::string encodeJpeg(const cv::Mat& image, int quality);
+
 // @throws cenote::Error when the image cannot be encoded or written.
 void writeImage(const std::string& path, const cv::Mat& image);
 

@@ -101,8 +101,9 @@ void FramePipeline::fusionStage() {
       if (!result) continue;
       out.frame.t_s = result->frame.t_s;
       out.frame.T_world_cam = result->frame.T_world_cam;
+      out.frame.K = result->frame.K;
       // The window reuses its buffers at the next push: copy the maps only when they are kept.
-      if (keep_maps_) {
+      if (keep_maps_.load(std::memory_order_relaxed)) {
         out.frame.depth = result->frame.depth.clone();
         out.frame.confidence = result->frame.confidence.clone();
         out.frame.color = result->frame.color.clone();

@@ -27,7 +27,7 @@ namespace cenote::pipeline {
 
 // What comes out for every fused reference frame (or every frame, without fusion).
 struct FusedOutput {
-  DepthFrame frame;   // t_s and T_world_cam always; depth, confidence and colour only with keep_maps
+  DepthFrame frame;   // t_s, K and T_world_cam always; depth, confidence and colour only while maps are kept
   PointBatch points;  // world frame, origin = the reference camera's centre
 };
 
@@ -42,6 +42,9 @@ class FramePipeline {
   FramePipeline(const FramePipeline&) = delete;
   FramePipeline& operator=(const FramePipeline&) = delete;
 
+  // Whether the outputs made from now on carry the fused maps (any thread; the server keeps them
+  // only while a viewer wants the camera images, host_viewer.h).
+  void setKeepMaps(bool keep) { keep_maps_.store(keep, std::memory_order_relaxed); }
   // Blocks while the stereo queue is full. @return false once the pipeline failed or was closed.
   bool push(PosedPair frame);
   // No more input: pop() drains the frames in flight, then reports the end.
@@ -70,7 +73,7 @@ class FramePipeline {
   void join();
 
   const PipelineConfig config_;
-  const bool keep_maps_;
+  std::atomic<bool> keep_maps_;
   BoundedQueue<PosedPair> rectified_;
   BoundedQueue<DepthFrame> depths_;
   BoundedQueue<FusedOutput> outputs_;

@@ -56,6 +56,7 @@ class MapHost {
   // Integrated batches are handed on to `live` (the viewer's camera and cloud); null: none. Call
   // before serving.
   void setLiveFeed(viewer::LiveFeed* live) { live_ = live; }
+  viewer::LiveFeed* liveFeed() const { return live_; }
   // Applies corrected poses of past frames (mapping/history/map_history.h) on the writer thread, in
   // steps of one moved frame's ray march each, between which other changes (ingest) run; then the
   // blocks are rebuilt and swapped in one change, which goes to the feed and the derived

@@ -1,11 +1,13 @@
 #include "server/services/ingest_service.h"
 
 #include <cmath>
+#include <iostream>
 #include <thread>
 
 #include "pipeline/runner/frame_pipeline.h"
 #include "pipeline/frame/frame_admission.h"
 #include "server/cpu/cpu_scheduling.h"
+#include "server/viewer/host_viewer.h"
 #include "server/wire/frame_decoder.h"
 #include "server/wire/wire.h"
 
@@ -59,6 +61,7 @@ class FrameStream {
       : host_(host),
         settings_(settings),
         T_raw_rect_(pipeline::rectifiedFromRaw(rectifier)),
+        baseline_m_(rectifier.geometry().baseline_m),
         admission_(rectifier, settings.pipeline.run),
         limits_{settings.server.limits.max_image_pixels, rectifier.geometry().image_size},
         poses_(poses),
@@ -108,6 +111,8 @@ class FrameStream {
       const pipeline::StereoFrame raw = decodeStereoFrame(wire, limits_);
       pipeline::PosedPair item = admission_.admit(raw, decision.T_world_raw);
       timings_.add("decode_rectify", msSince(t0));
+      // The fused maps travel with the outputs only while a viewer's camera images are due.
+      if (viewer::LiveFeed* live = host_.liveFeed()) stages_.setKeepMaps(live->imagesDue());
       if (!stages_.push(std::move(item))) return false;
       ack.set_outcome(v1::FRAME_OUTCOME_PROCESSED);
       ++counters_.frames_processed;
@@ -171,12 +176,25 @@ class FrameStream {
         integrate_error_ = std::string("integration failed: ") + e.what();
         stages_.abort();
       }
+      postImages(out->frame);
+    }
+  }
+
+  // The viewer's pictures of a frame never cost the frame: a failure to make them is logged.
+  void postImages(const pipeline::DepthFrame& frame) {
+    viewer::LiveFeed* live = host_.liveFeed();
+    if (!live) return;
+    try {
+      postCameraImages(*live, frame, baseline_m_, settings_.pipeline.stereo, settings_.server.viewer.image_max_width_px);
+    } catch (const std::exception& e) {
+      std::cerr << "viewer: no camera images of the frame at t = " << frame.t_s << " s: " << e.what() << std::endl;
     }
   }
 
   MapHost& host_;
   const ServerSettings& settings_;
   const Eigen::Isometry3d T_raw_rect_;  // the rectified camera in the raw one's frame (CorrectPoses' poses)
+  const double baseline_m_;             // of the rectified pair (the viewer's disparity preview)
   pipeline::FrameAdmission admission_;
   const FrameLimits limits_;
   PoseBuffer& poses_;

@@ -16,6 +16,11 @@ json object(const std::string& title, json properties) {
   return {{"title", title}, {"type", "object"}, {"properties", std::move(properties)}};
 }
 
+json base64Bytes() {
+  json bytes = string();
+  bytes["contentEncoding"] = "base64";
+  return bytes;
+}
 json time(const std::string& title) { return object(title, {{"sec", integer()}, {"nsec", integer()}}); }
 json vector3() { return object("foxglove.Vector3", {{"x", number()}, {"y", number()}, {"z", number()}}); }
 json quaternion() {
@@ -94,16 +99,22 @@ const std::string& pointCloudSchema() {
                                 {{"title", "foxglove.NumericType"},
                                  {"description", "1: UINT8, 7: FLOAT32 (foxglove.NumericType)"},
                                  {"type", "integer"}}}});
-    json data = string();
-    data["contentEncoding"] = "base64";
     return object("foxglove.PointCloud", {{"timestamp", time("time")},
                                           {"frame_id", string()},
                                           {"pose", pose()},
                                           {"point_stride", integer()},
                                           {"fields", arrayOf(field)},
-                                          {"data", data}})
+                                          {"data", base64Bytes()}})
         .dump();
   }();
+  return schema;
+}
+
+const std::string& compressedImageSchema() {
+  static const std::string schema =
+      object("foxglove.CompressedImage",
+             {{"timestamp", time("time")}, {"frame_id", string()}, {"data", base64Bytes()}, {"format", string()}})
+          .dump();
   return schema;
 }
 

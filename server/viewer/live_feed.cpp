@@ -1,6 +1,15 @@
 #include "server/viewer/live_feed.h"
 
+#include <chrono>
+
 namespace cenote::server::viewer {
+namespace {
+
+int64_t steadyNowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
 
 void LiveFeed::post(const PointBatch& batch, const std::optional<Eigen::Isometry3d>& T_world_cam) {
   Eigen::Isometry3d camera = Eigen::Isometry3d::Identity();
@@ -51,6 +60,24 @@ std::optional<std::pair<Eigen::Isometry3d, uint64_t>> LiveFeed::latest() const {
 uint64_t LiveFeed::version() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return version_;
+}
+
+bool LiveFeed::imagesDue() const {
+  return image_period_s_ > 0.0 && images_wanted_.load(std::memory_order_relaxed) &&
+         steadyNowNs() >= next_image_ns_.load(std::memory_order_relaxed);
+}
+
+void LiveFeed::postImages(double t_s, std::string left_jpeg, std::string disparity_jpeg) {
+  next_image_ns_.store(steadyNowNs() + static_cast<int64_t>(image_period_s_ * 1e9), std::memory_order_relaxed);
+  auto left = std::make_shared<const std::string>(std::move(left_jpeg));
+  auto disparity = std::make_shared<const std::string>(std::move(disparity_jpeg));
+  std::lock_guard<std::mutex> lock(mutex_);
+  images_ = {images_.version + 1, t_s, std::move(left), std::move(disparity)};
+}
+
+LiveFeed::Images LiveFeed::images() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return images_;
 }
 
 }  // namespace cenote::server::viewer

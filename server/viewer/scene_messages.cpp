@@ -170,6 +170,14 @@ std::string pointCloudJson(uint64_t time_ns, const std::string& frame_id, const 
       .dump();
 }
 
+std::string compressedImageJson(uint64_t time_ns, const std::string& jpeg) {
+  return json{{"timestamp", stampJson(time_ns)},
+              {"frame_id", "camera"},
+              {"format", "jpeg"},
+              {"data", base64(reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size())}}
+      .dump();
+}
+
 std::string frontierSceneJson(uint64_t time_ns, const std::string& frame_id,
                               const std::vector<mapping::FrontierCluster>& clusters) {
   json entities = json::array();

@@ -1,5 +1,6 @@
 // scene_messages.h: the viewer's channel messages as JSON text (Foxglove's JSON encoding of
-// foxglove.SceneUpdate, FrameTransform, PosesInFrame, PointCloud; foxglove_schemas.h), built by
+// foxglove.SceneUpdate, FrameTransform, PosesInFrame, PointCloud, CompressedImage;
+// foxglove_schemas.h), built by
 // hand for the map's cubes, which are most of the bytes.
 // A map block is the scene entity "block/X/Y/Z" (its block index): one cube per occupied voxel
 // (level of detail "full"), or one cube the size of the block, coloured by the mean of its voxels
@@ -68,6 +69,8 @@ std::string frameTransformJson(uint64_t time_ns, const std::string& frame_id, co
 std::string posesInFrameJson(uint64_t time_ns, const std::string& frame_id, const std::vector<Eigen::Isometry3d>& poses);
 // Points as x y z float32 and r g b uint8 (PackedElementField types 7 and 1), stride 15.
 std::string pointCloudJson(uint64_t time_ns, const std::string& frame_id, const PointBatch& batch);
+// A JPEG file seen from the frame "camera" (the child of frameTransformJson).
+std::string compressedImageJson(uint64_t time_ns, const std::string& jpeg);
 // Frontier clusters: per cluster, a translucent box (its bounds), a sphere at its centroid and an
 // arrow into the unknown; entity "frontier/<id>"; every earlier frontier entity deleted first.
 std::string frontierSceneJson(uint64_t time_ns, const std::string& frame_id,

@@ -19,6 +19,9 @@ std::vector<ConfigError> ViewerConfig::validate() const {
                "must be in [0, 1000000] (0: no point cloud channel data)");
   errors.check(max_trajectory_poses >= 1 && max_trajectory_poses <= 1000000, "max_trajectory_poses", max_trajectory_poses,
                "must be in [1, 1000000]");
+  errors.check(image_hz >= 0.0 && image_hz <= 30.0, "image_hz", image_hz, "must be in [0, 30] (0: no camera images)");
+  errors.check(image_max_width_px >= 16 && image_max_width_px <= 8192, "image_max_width_px", image_max_width_px,
+               "must be in [16, 8192]");
   errors.check(color_by == "image" || color_by == "height", "color_by", color_by, "must be image or height");
   return errors.take();
 }
@@ -32,6 +35,8 @@ void ViewerConfig::read(YamlSection& section) {
   section.read("resend_s", resend_s);
   section.read("max_cloud_points", max_cloud_points);
   section.read("max_trajectory_poses", max_trajectory_poses);
+  section.read("image_hz", image_hz);
+  section.read("image_max_width_px", image_max_width_px);
   section.read("color_by", color_by);
   section.read("web_dir", web_dir);
 }

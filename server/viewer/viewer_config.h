@@ -25,6 +25,8 @@ struct ViewerConfig {
   double resend_s = 1.0;              // a block the client has is sent again at most this often while the map changes it
   int max_cloud_points = 5000;        // the latest fused cloud, thinned to at most this many points
   int max_trajectory_poses = 1000;    // camera poses kept and sent (the oldest are dropped)
+  double image_hz = 1.0;              // the camera images (left, disparity preview) at most this often; 0: none
+  int image_max_width_px = 640;       // ... scaled down to at most this width
   std::string color_by = "image";     // cube colours: "image" (the map's colour) or "height"
   std::string web_dir;                // the browser page's files; empty: those the build made
 

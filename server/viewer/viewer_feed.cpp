@@ -33,6 +33,8 @@ const std::vector<Channel>& viewerChannels() {
       channel(kCloudChannel, "/cloud", "foxglove.PointCloud", pointCloudSchema()),
       channel(kFrontierChannel, "/frontiers", "foxglove.SceneUpdate", sceneUpdateSchema()),
       channel(kStatsChannel, "/stats", "cenote.MapStats", mapStatsSchema()),
+      channel(kImageChannel, "/camera/image", "foxglove.CompressedImage", compressedImageSchema()),
+      channel(kDisparityChannel, "/camera/disparity", "foxglove.CompressedImage", compressedImageSchema()),
   };
   return channels;
 }
@@ -70,7 +72,7 @@ struct FeedWorker::Client {
   std::optional<uint32_t> map_subscription;  // the one `sync` was started for
   std::unique_ptr<BlockSync> sync;
   double allowance_bytes = 0.0;
-  uint64_t camera_version = 0, trajectory_version = 0, cloud_version = 0;
+  uint64_t camera_version = 0, trajectory_version = 0, cloud_version = 0, image_version = 0;
   std::optional<uint32_t> frontier_subscription;
   Clock::time_point next_period{};
 };
@@ -127,7 +129,10 @@ void FeedWorker::loop() {
     }
     if (clients.empty()) {
       changes.reset();  // no subscription to the map's changes while nobody watches
-      if (sources_.live) sources_.live->setWanted(false);
+      if (sources_.live) {
+        sources_.live->setWanted(false);
+        sources_.live->setImagesWanted(false);
+      }
       continue;
     }
     // Subscribe before any client reads the whole map: a change made meanwhile is sent twice,
@@ -161,13 +166,19 @@ void FeedWorker::loop() {
         if (c->sync) c->sync->markAll(known);
     }
     if (sources_.live) {
-      sources_.live->setWanted(std::any_of(clients.begin(), clients.end(), [](const auto& c) {
-        return c->link->subscriptionOf(kCloudChannel).has_value();
-      }));
+      auto anyWants = [&](uint32_t channel) {
+        return std::any_of(clients.begin(), clients.end(),
+                           [channel](const auto& c) { return c->link->subscriptionOf(channel).has_value(); });
+      };
+      sources_.live->setWanted(anyWants(kCloudChannel));
+      sources_.live->setImagesWanted(anyWants(kImageChannel) || anyWants(kDisparityChannel));
     }
     tick(clients, dt_s);
   }
-  if (sources_.live) sources_.live->setWanted(false);
+  if (sources_.live) {
+    sources_.live->setWanted(false);
+    sources_.live->setImagesWanted(false);
+  }
 }
 
 void FeedWorker::tick(std::vector<std::shared_ptr<Client>>& clients, double dt_s) {
@@ -183,6 +194,8 @@ void FeedWorker::tick(std::vector<std::shared_ptr<Client>>& clients, double dt_s
   std::optional<mapping::MapStats> map_stats;
   std::optional<std::string> frontiers_json, trajectory_json;
   uint64_t trajectory_version = 0;
+  std::optional<LiveFeed::Images> images;
+  std::optional<std::pair<std::string, std::string>> image_json;  // left, disparity
 
   for (auto& c : clients) {
     ClientLink& link = *c->link;
@@ -262,6 +275,23 @@ void FeedWorker::tick(std::vector<std::shared_ptr<Client>>& clients, double dt_s
         if (trajectory_version != c->trajectory_version) {
           emit(kTrajectoryChannel, *trajectory_json);
           c->trajectory_version = trajectory_version;
+        }
+      }
+    }
+
+    // The newest camera images go before the map (a second's image is a few tens of kB), when
+    // the budget has room for both.
+    if (sources_.live && (link.subscriptionOf(kImageChannel) || link.subscriptionOf(kDisparityChannel))) {
+      if (!images) images = sources_.live->images();
+      if (images->version != 0 && images->version != c->image_version) {
+        if (!image_json) {
+          image_json = {compressedImageJson(time_ns, *images->left_jpeg),
+                        compressedImageJson(time_ns, *images->disparity_jpeg)};
+        }
+        if (c->allowance_bytes >= static_cast<double>(image_json->first.size() + image_json->second.size())) {
+          emit(kImageChannel, image_json->first);
+          emit(kDisparityChannel, image_json->second);
+          c->image_version = images->version;
         }
       }
     }

@@ -27,7 +27,9 @@ enum ChannelId : uint32_t {
   kTrajectoryChannel,
   kCloudChannel,
   kFrontierChannel,
-  kStatsChannel
+  kStatsChannel,
+  kImageChannel,
+  kDisparityChannel
 };
 
 // The channels every client is offered.

@@ -6,7 +6,8 @@ over gRPC with the Python client) while two clients watch its viewer port:
  - npm @foxglove/ws-protocol on Node (web/test/protocol_client.mjs): the channels and their
    schemas, messages on every channel, error statuses for bad client messages, HTTP 401 without
    the token (given as an Authorization header here), and the map it mirrors: its occupied voxels
-   at full detail equal the server's occupied count;
+   at full detail equal the server's occupied count; the camera images are a frame of the dive
+   (left) and its disparity within 2 px of the simulator's true depth (preview);
  - Debian's headless Chromium driven by npm playwright-core (web/test/browser_check.mjs) loading the
    browser viewer from the same port (token in the URL): the page reports the same voxel count and
    the frames it received; its screenshot is saved as a test artifact.
@@ -14,6 +15,7 @@ over gRPC with the Python client) while two clients watch its viewer port:
 usage: viewer_e2e_test.py CENOTE CENOTE_SERVER WEB_SOURCE_DIR WEB_DIST_DIR ARTIFACT_DIR
 """
 
+import base64
 import json
 import os
 import re
@@ -27,20 +29,13 @@ import unittest
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.abspath(os.path.join(HERE, "..", "..", "clients", "python")))
 
-from cenote_client import LocalServer, MapClient  # noqa: E402
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+from cenote_client import LocalServer, MapClient, read_dive  # noqa: E402
 
 CENOTE, SERVER, WEB, DIST, ARTIFACTS = sys.argv[1:6]
 TOKEN = "viewer-e2e-token"
 FRAMES = 16
-
-
-def read_tum(path):
-    rows = []
-    with open(path) as f:
-        for line in f:
-            if line.strip() and not line.startswith("#"):
-                rows.append([float(v) for v in line.split()])
-    return rows
 
 
 def viewer_port(server, timeout_s=30.0):
@@ -73,14 +68,11 @@ class ViewerEndToEnd(unittest.TestCase):
                                         f"ws://127.0.0.1:{cls.port}/"], cwd=WEB, env=env, stdin=subprocess.PIPE,
                                        stdout=subprocess.PIPE, text=True)
         time.sleep(1.0)
-        poses = read_tum(os.path.join(cls.dive, "groundtruth", "cam0.tum"))
-        cls.client.stream_poses([p[0] for p in poses], [p[1:4] for p in poses], [p[4:8] for p in poses])
-        names = sorted(os.listdir(os.path.join(cls.dive, "mav0", "cam0", "data")))
-        frames = []
-        for name in names:
-            with open(os.path.join(cls.dive, "mav0", "cam0", "data", name), "rb") as left, \
-                    open(os.path.join(cls.dive, "mav0", "cam1", "data", name), "rb") as right:
-                frames.append((int(name.split(".")[0]) * 1e-9, left.read(), right.read()))
+        # The poses first, then the frames without them: the server matches each frame to the
+        # streamed poses by time.
+        dive = read_dive(cls.dive)
+        cls.client.stream_poses([f[0] for f in dive], [f[3][0] for f in dive], [f[3][1] for f in dive])
+        frames = [(t_s, left, right) for t_s, left, right, _ in dive]
         cls.acks = cls.client.stream_frames(frames, timeout_s=300)
         cls.occupied = cls.client.info().occupied
         out, _ = cls.watcher.communicate(f"occupied {cls.occupied}\n", timeout=180)
@@ -102,7 +94,8 @@ class ViewerEndToEnd(unittest.TestCase):
         channels = {c["topic"]: c for c in self.report["channels"]}
         expected = {"/map": "foxglove.SceneUpdate", "/camera": "foxglove.FrameTransform",
                     "/trajectory": "foxglove.PosesInFrame", "/cloud": "foxglove.PointCloud",
-                    "/frontiers": "foxglove.SceneUpdate", "/stats": "cenote.MapStats"}
+                    "/frontiers": "foxglove.SceneUpdate", "/stats": "cenote.MapStats",
+                    "/camera/image": "foxglove.CompressedImage", "/camera/disparity": "foxglove.CompressedImage"}
         self.assertEqual({t: c["schemaName"] for t, c in channels.items()}, expected)
         for topic, channel in channels.items():
             self.assertEqual(channel["encoding"], "json", topic)
@@ -125,11 +118,53 @@ class ViewerEndToEnd(unittest.TestCase):
 
     def test_every_channel_carried_messages(self):
         messages = self.report["messages"]
-        for topic in ["/map", "/camera", "/trajectory", "/cloud", "/frontiers", "/stats"]:
+        for topic in ["/map", "/camera", "/trajectory", "/cloud", "/frontiers", "/stats", "/camera/image",
+                      "/camera/disparity"]:
             self.assertGreater(messages.get(topic, 0), 0, topic)
         self.assertEqual(self.report["trajectoryPoses"], self.report["latestStats"]["batches"])
         self.assertGreater(self.report["cloudPoints"], 100)
         self.assertLessEqual(self.report["cloudPoints"], 5000)
+
+    def image(self, topic):
+        message = self.report["images"][topic]
+        self.assertEqual(message["format"], "jpeg", topic)
+        image = cv2.imdecode(np.frombuffer(base64.b64decode(message["data"]), np.uint8), cv2.IMREAD_COLOR)
+        self.assertIsNotNone(image, topic)
+        return image
+
+    def test_the_camera_images_are_a_frame_of_the_dive_and_its_disparity(self):
+        left = self.image("/camera/image").astype(np.float32)
+        preview = self.image("/camera/disparity")
+        self.assertEqual(left.shape, (300, 400, 3))  # the dive's size, below image_max_width_px
+        self.assertEqual(preview.shape, left.shape)
+        # The left image is one of the dive's (already rectified: the simulated rig has no
+        # distortion), up to JPEG's error (its colours are subsampled) and rectification's
+        # resampling: find which; the neighbouring frames, 1/15 s apart, differ by twice as much.
+        names = sorted(os.listdir(os.path.join(self.dive, "mav0", "cam0", "data")))
+        errors = [np.abs(cv2.imread(os.path.join(self.dive, "mav0", "cam0", "data", n)).astype(np.float32) - left).mean()
+                  for n in names]
+        best = int(np.argmin(errors))
+        self.assertLess(errors[best], 6.0, errors)
+        self.assertLess(errors[best], 0.6 * min(e for i, e in enumerate(errors) if i != best), errors)
+        # Its disparity preview, read back through the turbo colour map over the default search range
+        # [0, 112) px, against fx * baseline / true depth of that frame.
+        calibration = cv2.FileStorage(os.path.join(self.dive, "groundtruth", "calibration.yaml"), cv2.FILE_STORAGE_READ)
+        fx_b = calibration.getNode("K1").mat()[0, 0] * abs(calibration.getNode("T").mat()[0, 0])
+        depth = cv2.imread(os.path.join(self.dive, "groundtruth", "depth", names[best].replace(".png", ".pfm")),
+                           cv2.IMREAD_UNCHANGED)
+        lut = cv2.applyColorMap(np.arange(256, dtype=np.uint8).reshape(256, 1), cv2.COLORMAP_TURBO).reshape(256, 3)
+        shown = preview.reshape(-1, 3).astype(np.float32)[::4]  # every fourth pixel
+        valid = shown.sum(axis=1) > 60  # black: no depth (turbo's darkest colour sums to 125)
+        self.assertGreater(valid.mean(), 0.3)
+        lut = lut.astype(np.float32)
+        distances = (shown[valid] ** 2).sum(axis=1)[:, None] - 2.0 * shown[valid] @ lut.T + (lut ** 2).sum(axis=1)[None, :]
+        nearest = np.argmin(distances, axis=1)
+        truth = (fx_b / depth.reshape(-1)[::4])[valid]
+        known = np.isfinite(truth)
+        error_px = np.abs(nearest[known] * 112.0 / 255.0 - truth[known])
+        self.assertLess(np.median(error_px), 2.0)
+        print(f"camera images: frame {best} (mean error {errors[best]:.2f} grey levels), disparity preview "
+              f"{valid.mean():.0%} valid, median error {np.median(error_px):.2f} px")
 
     def test_bad_client_messages_get_error_statuses_and_no_token_gets_401(self):
         errors = [s["message"] for s in self.report["statuses"] if s["level"] == 2]
@@ -153,6 +188,8 @@ class ViewerEndToEnd(unittest.TestCase):
         self.assertGreater(page["framesReceived"], 0)
         self.assertGreater(page["messages"]["/map"], 0)
         self.assertEqual(page["stats"]["occupied"], self.occupied)
+        self.assertEqual(page["images"]["camera-image"], {"width": 400, "height": 300})
+        self.assertEqual(page["images"]["disparity-image"], {"width": 400, "height": 300})
         self.assertEqual(page["errors"], [])
         # The click in the middle of the fitted view hits a voxel: the panel gives its state and
         # probability (occupied: above 0.5).

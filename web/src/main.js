@@ -1,7 +1,8 @@
 // main.js: cenote's browser viewer. Connects to the server that served the page (or ?ws=URL),
 // with its token (?token=), over the Foxglove WebSocket protocol, and draws what it receives:
 // voxels (/map), the latest fused points (/cloud), the trajectory and camera (/trajectory,
-// /camera), frontier clusters (/frontiers), statistics (/stats). What the page has received is on
+// /camera), frontier clusters (/frontiers), statistics (/stats), the latest left image and
+// disparity preview (/camera/image, /camera/disparity). What the page has received is on
 // window.cenoteViewer (the browser test reads it there).
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
@@ -73,6 +74,7 @@ const state = {
   cloudPoints: 0,
   trajectoryPoses: 0,
   frontierClusters: 0,
+  images: {}, // per image element: its size once shown
 };
 window.cenoteViewer = state;
 
@@ -82,6 +84,17 @@ function decodeBase64(text) {
   const bytes = new Uint8Array(binary.length);
   for (let i = 0; i < binary.length; i++) bytes[i] = binary.charCodeAt(i);
   return bytes;
+}
+
+// A foxglove.CompressedImage into the <img> of that id.
+function showImage(id, message) {
+  const img = document.getElementById(id);
+  const url = URL.createObjectURL(new Blob([decodeBase64(message.data)], { type: `image/${message.format}` }));
+  img.onload = () => {
+    URL.revokeObjectURL(url);
+    state.images[id] = { width: img.naturalWidth, height: img.naturalHeight };
+  };
+  img.src = url;
 }
 
 function showCloud(message) {
@@ -173,7 +186,7 @@ function showStats() {
 
 const connection = new FoxgloveConnection(
   wsUrl,
-  ["/map", "/camera", "/trajectory", "/cloud", "/frontiers", "/stats"],
+  ["/map", "/camera", "/trajectory", "/cloud", "/frontiers", "/stats", "/camera/image", "/camera/disparity"],
   {
     onOpen() {
       state.connected = true;
@@ -195,6 +208,8 @@ const connection = new FoxgloveConnection(
       else if (topic === "/camera") showCamera(message);
       else if (topic === "/frontiers") showFrontiers(message);
       else if (topic === "/stats") state.stats = message;
+      else if (topic === "/camera/image") showImage("camera-image", message);
+      else if (topic === "/camera/disparity") showImage("disparity-image", message);
     },
   },
 );
@@ -208,6 +223,7 @@ toggle("show-trajectory", (on) => {
   cameraMarker.visible = on;
 });
 toggle("show-frontiers", (on) => (frontiers.visible = on));
+toggle("show-images", (on) => (document.getElementById("images").hidden = !on));
 for (const radio of document.querySelectorAll("input[name=color]")) {
   radio.addEventListener("change", (e) => voxels.setColorBy(e.target.value));
 }

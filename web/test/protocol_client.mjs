@@ -1,7 +1,8 @@
 // protocol_client.mjs URL: an independent Foxglove WebSocket client (npm @foxglove/ws-protocol
 // over npm ws) of cenote-server's viewer, for tests/viewer/viewer_e2e_test.py.
 // Subscribes to every advertised channel, mirrors /map (entities by id, deletions applied), counts
-// messages per topic, and checks the server's answers to bad client messages. Reads one line
+// messages per topic, keeps the latest camera images, and checks the server's answers to bad
+// client messages. Reads one line
 // "occupied N" from stdin (the server's occupied voxel count, once ingest is done), then waits
 // until its mirror holds N voxels at full detail and no coarse block, and prints a JSON report.
 // Exits 1 (with the report) when that does not happen within TIMEOUT_S (default 120).
@@ -29,6 +30,7 @@ const report = {
   trajectoryPoses: 0,
   frontierEntities: 0,
   cameraTransforms: 0,
+  images: {}, // per image topic: the latest {format, data (base64)}
   malformedMessages: 0,
 };
 const blocks = new Map();
@@ -94,6 +96,9 @@ client.on("message", ({ subscriptionId, data }) => {
     report.frontierEntities = message.entities.length;
   } else if (topic === "/camera") {
     report.cameraTransforms += 1;
+  } else if (topic === "/camera/image" || topic === "/camera/disparity") {
+    if (message.frame_id !== "camera") report.malformedMessages += 1;
+    report.images[topic] = { format: message.format, data: message.data };
   }
 });
 
@@ -112,8 +117,8 @@ function tally() {
 
 function finish(code) {
   tally();
-  process.stdout.write(JSON.stringify(report) + "\n");
-  process.exit(code);
+  // Exit once the report is written: a pipe takes a large one (it holds the images) in parts.
+  process.stdout.write(JSON.stringify(report) + "\n", () => process.exit(code));
 }
 
 createInterface({ input: process.stdin }).on("line", (line) => {

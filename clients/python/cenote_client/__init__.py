@@ -10,11 +10,12 @@ The gRPC stubs are generated at build time (target cenote_python_stubs); set CEN
 
 from ._stubs import StubsNotFound, use_stubs
 from .client import SNAPSHOT_FORMATS, MapClient
+from .dive import paced, read_dive
 from .errors import CenoteError
 from .local_server import LocalServer
 from .types import (Ack, Block, BoxCounts, Change, Collisions, Extract, Frontier, IntegrateResult, MapInfo, MapUpdate,
                     MethodStats, SnapshotResult, StageTiming, Stats, VoxelState)
 
-__all__ = ["MapClient", "CenoteError", "LocalServer", "VoxelState", "use_stubs", "StubsNotFound", "SNAPSHOT_FORMATS", "Ack",
+__all__ = ["MapClient", "read_dive", "paced", "CenoteError", "LocalServer", "VoxelState", "use_stubs", "StubsNotFound", "SNAPSHOT_FORMATS", "Ack",
            "Block", "BoxCounts", "Change", "Collisions", "Extract", "Frontier", "IntegrateResult", "MapInfo",
            "MapUpdate", "MethodStats", "SnapshotResult", "StageTiming", "Stats"]
