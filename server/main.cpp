@@ -53,6 +53,12 @@ ServerSettings settingsFrom(const Options& o) {
   ServerSettings s = ServerSettings::load(o.config);
   if (!o.listen.empty()) s.server.listen = o.listen;
   if (!o.viewer_listen.empty()) s.server.viewer.listen = o.viewer_listen;
+  // The viewer's port is as private as the gRPC one: TLS with the server's certificate unless
+  // server.viewer names its own.
+  if (s.server.viewer.tls_cert_file.empty() && !o.tls.cert.empty()) {
+    s.server.viewer.tls_cert_file = o.tls.cert;
+    s.server.viewer.tls_key_file = o.tls.key;
+  }
   if (!o.token_file.empty()) s.server.token_file = o.token_file;
   if (!o.read_token_file.empty()) s.server.read_token_file = o.read_token_file;
   if (!o.calibration.empty()) s.server.calibration = o.calibration;
@@ -177,8 +183,7 @@ int serve(const Options& o) {
             << "; " << cpus.describe() << std::endl;
   if (viewer) {
     const std::string viewer_host = settings.server.viewer.listen.substr(0, settings.server.viewer.listen.rfind(':'));
-    std::cout << "cenote-server viewer on http://" << viewer_host << ":" << viewer->port() << "/ (Foxglove: ws://"
-              << viewer_host << ":" << viewer->port() << ")" << std::endl;
+    std::cout << "cenote-server viewer on " << viewer->urls(viewer_host) << std::endl;
   }
   if (!o.port_file.empty()) {
     // Appears whole: a test polling for it never reads half.

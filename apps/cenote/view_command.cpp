@@ -19,7 +19,7 @@ namespace cenote::apps {
 namespace {
 
 struct ViewOptions {
-  std::string map, listen = "127.0.0.1:8765", token_file, web_dir;
+  std::string map, listen = "127.0.0.1:8765", token_file, web_dir, tls_cert, tls_key;
   double budget_bytes_per_s = 0.0;
 };
 
@@ -38,6 +38,8 @@ int runView(const ViewOptions& o) {
   server::viewer::ViewerConfig config;
   config.listen = o.listen;
   config.web_dir = o.web_dir;
+  config.tls_cert_file = o.tls_cert;
+  config.tls_key_file = o.tls_key;
   if (o.budget_bytes_per_s > 0.0) config.budget_bytes_per_s = o.budget_bytes_per_s;
   throwIfInvalid(config.validate(), "view");
   server::viewer::ViewerSources sources;
@@ -48,8 +50,8 @@ int runView(const ViewOptions& o) {
   server::viewer::ViewerServer viewer(config, std::move(sources));
   const mapping::MapStats stats = map->stats();
   const std::string host = o.listen.substr(0, o.listen.rfind(':'));
-  std::cout << "cenote view: " << o.map << " (" << stats.occupied << " occupied voxels) on http://" << host << ":"
-            << viewer.port() << "/ (Foxglove: ws://" << host << ":" << viewer.port() << "); Ctrl-C ends" << std::endl;
+  std::cout << "cenote view: " << o.map << " (" << stats.occupied << " occupied voxels) on " << viewer.urls(host)
+            << "; Ctrl-C ends" << std::endl;
   int signal = 0;
   sigwait(&signals, &signal);
   viewer.stop();
@@ -64,6 +66,8 @@ void registerViewCommand(CLI::App& app) {
   cmd->add_option("map", o->map, "the map: .vdb, .bt or .ot")->required();
   cmd->add_option("--listen", o->listen, "HOST:PORT to serve on (default 127.0.0.1:8765; port 0 picks a free one)");
   cmd->add_option("--token-file", o->token_file, "bearer token viewers must send (first line of the file)");
+  cmd->add_option("--tls-cert", o->tls_cert, "PEM certificate: serve https:// and wss:// only");
+  cmd->add_option("--tls-key", o->tls_key, "PEM private key of --tls-cert");
   cmd->add_option("--web-dir", o->web_dir, "the browser page's files (default: those the build made)");
   cmd->add_option("--budget", o->budget_bytes_per_s, "bytes per second per client (default 1e6)");
   cmd->callback([o] { runView(*o); });

@@ -23,6 +23,8 @@ std::vector<ConfigError> ViewerConfig::validate() const {
   errors.check(image_max_width_px >= 16 && image_max_width_px <= 8192, "image_max_width_px", image_max_width_px,
                "must be in [16, 8192]");
   errors.check(color_by == "image" || color_by == "height", "color_by", color_by, "must be image or height");
+  errors.check(tls_cert_file.empty() == tls_key_file.empty(), "tls_key_file", tls_key_file,
+               "must be given with tls_cert_file (both or neither)");
   return errors.take();
 }
 
@@ -39,6 +41,8 @@ void ViewerConfig::read(YamlSection& section) {
   section.read("image_max_width_px", image_max_width_px);
   section.read("color_by", color_by);
   section.read("web_dir", web_dir);
+  section.read("tls_cert_file", tls_cert_file);
+  section.read("tls_key_file", tls_key_file);
 }
 
 }  // namespace cenote::server::viewer

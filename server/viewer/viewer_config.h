@@ -29,6 +29,9 @@ struct ViewerConfig {
   int image_max_width_px = 640;       // ... scaled down to at most this width
   std::string color_by = "image";     // cube colours: "image" (the map's colour) or "height"
   std::string web_dir;                // the browser page's files; empty: those the build made
+  std::string tls_cert_file;          // PEM certificate chain: the port serves https:// and wss:// only;
+  std::string tls_key_file;           // ... its PEM private key. Both empty: plain TCP (cenote-server
+                                      // then takes its own --tls-cert / --tls-key)
 
   std::vector<ConfigError> validate() const;  // keys named server.viewer.*
   // Reads the keys of a `viewer:` section; unknown keys are errors.

@@ -7,8 +7,11 @@
 
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
+#include <boost/asio/ssl.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
+#include <boost/beast/websocket/ssl.hpp>
 #include <chrono>
 #include <deque>
 #include <filesystem>
@@ -111,18 +114,29 @@ const char* contentType(const fs::path& file) {
   return "application/octet-stream";
 }
 
-class WsSession final : public ClientLink, public std::enable_shared_from_this<WsSession> {
- public:
-  explicit WsSession(tcp::socket&& socket) : ws_(std::move(socket)) {}
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
 
-  void start(http::request<http::string_body> request, std::function<void(std::shared_ptr<WsSession>)> on_open) {
+// A viewer client's WebSocket, over plain TCP or over TLS.
+class Session : public ClientLink {
+ public:
+  // On the network thread.
+  virtual void close() = 0;
+};
+
+// Stream: beast::tcp_stream or TlsStream, the connection the upgrade request came on.
+template <class Stream>
+class WsSession final : public Session, public std::enable_shared_from_this<WsSession<Stream>> {
+ public:
+  explicit WsSession(Stream&& stream) : ws_(std::move(stream)) {}
+
+  void start(http::request<http::string_body> request, std::function<void(std::shared_ptr<Session>)> on_open) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.set_option(websocket::stream_base::decorator([](websocket::response_type& response) {
       response.set(http::field::sec_websocket_protocol, kSubprotocol);
       response.set(http::field::server, "cenote-viewer");
     }));
     ws_.read_message_max(kMaxClientMessageBytes);
-    ws_.async_accept(request, [self = shared_from_this(), on_open = std::move(on_open)](beast::error_code ec) {
+    ws_.async_accept(request, [self = this->shared_from_this(), on_open = std::move(on_open)](beast::error_code ec) {
       if (ec) return;
       self->open_ = true;
       on_open(self);
@@ -137,13 +151,12 @@ class WsSession final : public ClientLink, public std::enable_shared_from_this<W
       std::lock_guard<std::mutex> lock(mutex_);
       queue_.push_back({std::move(message), binary});
     }
-    net::post(ws_.get_executor(), [self = shared_from_this()] { self->write(); });
+    net::post(ws_.get_executor(), [self = this->shared_from_this()] { self->write(); });
   }
   size_t unsentBytes() const override { return unsent_.load(); }
   bool isOpen() const override { return open_.load(); }
 
-  // On the network thread.
-  void close() {
+  void close() override {
     open_ = false;
     beast::error_code ignored;
     beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
@@ -157,7 +170,7 @@ class WsSession final : public ClientLink, public std::enable_shared_from_this<W
   };
 
   void read() {
-    ws_.async_read(buffer_, [self = shared_from_this()](beast::error_code ec, size_t) {
+    ws_.async_read(buffer_, [self = this->shared_from_this()](beast::error_code ec, size_t) {
       if (ec) {
         self->open_ = false;
         return;
@@ -182,7 +195,7 @@ class WsSession final : public ClientLink, public std::enable_shared_from_this<W
     }
     writing_ = true;
     ws_.binary(current_.binary);
-    ws_.async_write(net::buffer(current_.data), [self = shared_from_this()](beast::error_code ec, size_t) {
+    ws_.async_write(net::buffer(current_.data), [self = this->shared_from_this()](beast::error_code ec, size_t) {
       self->writing_ = false;
       self->unsent_ -= self->current_.data.size();
       self->current_.data = std::string();
@@ -197,7 +210,7 @@ class WsSession final : public ClientLink, public std::enable_shared_from_this<W
     });
   }
 
-  websocket::stream<beast::tcp_stream> ws_;
+  websocket::stream<Stream> ws_;
   beast::flat_buffer buffer_;
   std::mutex mutex_;
   std::deque<Outgoing> queue_;
@@ -219,7 +232,9 @@ struct ViewerServer::Impl {
         worker(config, sources) {}
 
   void accept();
-  void serveHttp(std::shared_ptr<beast::tcp_stream> stream, std::shared_ptr<beast::flat_buffer> buffer);
+  // HTTP requests on one connection until it closes or upgrades to the WebSocket.
+  template <class Stream>
+  void serveHttp(std::shared_ptr<Stream> stream, std::shared_ptr<beast::flat_buffer> buffer);
   http::response<http::string_body> fileResponse(const http::request<http::string_body>& request) const;
 
   ViewerConfig config;
@@ -228,9 +243,10 @@ struct ViewerServer::Impl {
   std::string session_id;
   net::io_context io{1};
   tcp::acceptor acceptor;
+  std::unique_ptr<net::ssl::context> tls;  // null: plain TCP
   FeedWorker worker;
   std::mutex sessions_mutex;
-  std::vector<std::weak_ptr<WsSession>> sessions;
+  std::vector<std::weak_ptr<Session>> sessions;
   std::thread io_thread;
   bool stopped = false;
 };
@@ -289,18 +305,25 @@ void ViewerServer::Impl::accept() {
   acceptor.async_accept(net::make_strand(io), [this](beast::error_code ec, tcp::socket socket) {
     if (ec) {
       if (!acceptor.is_open()) return;
-    } else {
+    } else if (!tls) {
       serveHttp(std::make_shared<beast::tcp_stream>(std::move(socket)), std::make_shared<beast::flat_buffer>());
+    } else {
+      auto stream = std::make_shared<TlsStream>(std::move(socket), *tls);
+      beast::get_lowest_layer(*stream).expires_after(std::chrono::seconds(30));
+      stream->async_handshake(net::ssl::stream_base::server, [this, stream](beast::error_code ec) {
+        if (!ec) serveHttp(stream, std::make_shared<beast::flat_buffer>());  // else: not TLS, or refused
+      });
     }
     accept();
   });
 }
 
-void ViewerServer::Impl::serveHttp(std::shared_ptr<beast::tcp_stream> stream, std::shared_ptr<beast::flat_buffer> buffer) {
+template <class Stream>
+void ViewerServer::Impl::serveHttp(std::shared_ptr<Stream> stream, std::shared_ptr<beast::flat_buffer> buffer) {
   auto parser = std::make_shared<http::request_parser<http::string_body>>();
   parser->header_limit(kMaxRequestHeaderBytes);
   parser->body_limit(kMaxClientMessageBytes);
-  stream->expires_after(std::chrono::seconds(30));
+  beast::get_lowest_layer(*stream).expires_after(std::chrono::seconds(30));
   http::async_read(*stream, *buffer, *parser, [this, stream, buffer, parser](beast::error_code ec, size_t) {
     if (ec) return;  // the connection closes
     http::request<http::string_body> request = parser->release();
@@ -309,7 +332,7 @@ void ViewerServer::Impl::serveHttp(std::shared_ptr<beast::tcp_stream> stream, st
       http::async_write(*stream, *kept, [this, stream, buffer, kept](beast::error_code ec, size_t) {
         if (ec || !kept->keep_alive()) {
           beast::error_code ignored;
-          stream->socket().shutdown(tcp::socket::shutdown_send, ignored);
+          beast::get_lowest_layer(*stream).socket().shutdown(tcp::socket::shutdown_send, ignored);
           return;
         }
         serveHttp(stream, buffer);
@@ -333,20 +356,37 @@ void ViewerServer::Impl::serveHttp(std::shared_ptr<beast::tcp_stream> stream, st
                          std::string("WebSocket subprotocol ") + kSubprotocol + " required (Sec-WebSocket-Protocol)"));
       return;
     }
-    stream->expires_never();
-    auto session = std::make_shared<WsSession>(stream->release_socket());
+    beast::get_lowest_layer(*stream).expires_never();
+    auto session = std::make_shared<WsSession<Stream>>(std::move(*stream));
     {
       std::lock_guard<std::mutex> lock(sessions_mutex);
       sessions.erase(std::remove_if(sessions.begin(), sessions.end(), [](const auto& w) { return w.expired(); }),
                      sessions.end());
       sessions.push_back(session);
     }
-    session->start(std::move(request), [this](std::shared_ptr<WsSession> open) {
+    session->start(std::move(request), [this](std::shared_ptr<Session> open) {
       open->greet(sources.server_name, session_id);
       worker.add(std::move(open));
     });
   });
 }
+
+namespace {
+
+// The server's side of TLS from PEM files. @throws cenote::Error naming the key and the file.
+std::unique_ptr<net::ssl::context> tlsContext(const ViewerConfig& config) {
+  auto context = std::make_unique<net::ssl::context>(net::ssl::context::tls_server);
+  context->set_options(net::ssl::context::default_workarounds | net::ssl::context::no_sslv2 | net::ssl::context::no_sslv3 |
+                       net::ssl::context::no_tlsv1 | net::ssl::context::no_tlsv1_1);
+  beast::error_code ec;
+  context->use_certificate_chain_file(config.tls_cert_file, ec);
+  if (ec) throw Error("server.viewer.tls_cert_file = " + config.tls_cert_file + ": " + ec.message());
+  context->use_private_key_file(config.tls_key_file, net::ssl::context::pem, ec);
+  if (ec) throw Error("server.viewer.tls_key_file = " + config.tls_key_file + ": " + ec.message());
+  return context;
+}
+
+}  // namespace
 
 ViewerServer::ViewerServer(const ViewerConfig& config, ViewerSources sources)
     : impl_(std::make_unique<Impl>(config, std::move(sources))) {
@@ -361,6 +401,7 @@ ViewerServer::ViewerServer(const ViewerConfig& config, ViewerSources sources)
   if (ec || endpoints.empty()) {
     throw Error("server.viewer.listen = " + config.listen + ": cannot resolve '" + host + "': " + ec.message());
   }
+  if (!config.tls_cert_file.empty()) impl_->tls = tlsContext(config);
   const tcp::endpoint endpoint = endpoints.begin()->endpoint();
   tcp::acceptor& a = impl_->acceptor;
   a.open(endpoint.protocol(), ec);
@@ -373,6 +414,13 @@ ViewerServer::ViewerServer(const ViewerConfig& config, ViewerSources sources)
 }
 
 ViewerServer::~ViewerServer() { stop(); }
+
+bool ViewerServer::usesTls() const { return impl_->tls != nullptr; }
+
+std::string ViewerServer::urls(const std::string& host) const {
+  const std::string secure = usesTls() ? "s" : "", address = host + ":" + std::to_string(port());
+  return "http" + secure + "://" + address + "/ (Foxglove: ws" + secure + "://" + address + ")";
+}
 
 int ViewerServer::port() const { return impl_->acceptor.is_open() ? impl_->acceptor.local_endpoint().port() : 0; }
 

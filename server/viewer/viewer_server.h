@@ -4,10 +4,11 @@
 // Channels (ids fixed): 1 /map (foxglove.SceneUpdate, block_sync.h), 2 /camera
 // (foxglove.FrameTransform world -> camera), 3 /trajectory (foxglove.PosesInFrame), 4 /cloud
 // (foxglove.PointCloud, the latest fused batch), 5 /frontiers (foxglove.SceneUpdate), 6 /stats
-// (cenote.MapStats). Each client is sent at most budget_bytes_per_s (a token bucket holding one
+// (cenote.MapStats), 7 /camera/image and 8 /camera/disparity (foxglove.CompressedImage). Each client is sent at most budget_bytes_per_s (a token bucket holding one
 // second), and while its socket has more than a second's worth unsent nothing new is made for it:
 // the map waits as a set of dirty blocks, the other channels as their newest value.
-// Security: the WebSocket needs the server's token when it has one (header `Authorization: Bearer
+// Security: with a certificate (ViewerConfig::tls_cert_file) every connection is TLS (https://,
+// wss://; TLS 1.2 or later) and one that is not is dropped at the handshake. The WebSocket needs the server's token when it has one (header `Authorization: Bearer
 // <token>` or `?token=<token>` in the URL: browsers cannot set headers), else HTTP 401; the page's
 // files are public (they hold no map data). Client messages the protocol does not allow get an
 // error status message, never a closed connection.
@@ -68,6 +69,9 @@ class ViewerServer {
   ViewerServer& operator=(const ViewerServer&) = delete;
 
   int port() const;
+  bool usesTls() const;
+  // How to reach it at `host`: "http://HOST:PORT/ (Foxglove: ws://HOST:PORT)", https and wss with TLS.
+  std::string urls(const std::string& host) const;
   // Closes every connection and stops both threads (idempotent).
   void stop();
   uint64_t bytesSent() const;  // WebSocket payload bytes written to all clients so far

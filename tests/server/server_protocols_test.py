@@ -6,7 +6,8 @@
 - server reflection lists cenote's services (what grpcurl uses);
 - TLS: a client trusting the server's CA gets in, a plain-text client does not; with a client CA
   (mutual TLS) a client without a certificate is refused, one with a signed certificate gets in;
-  the bearer token is still checked over TLS;
+  the bearer token is still checked over TLS; the live viewer's port takes the server's certificate:
+  its page and its WebSocket (token checked) over TLS from Python's ssl, a plain connection dropped;
 - keepalive: a subscriber whose process stops answering (SIGSTOP: its TCP connection stays open, a
   half-open tether link) is dropped by the server's keepalive pings, and its subscription ends;
 - the token is checked before the request is parsed: a body that is not a protobuf message, or one
@@ -15,9 +16,13 @@
 Calls are made with raw bytes (grpcio's generic calls), so no generated stubs are needed.
 Usage: server_protocols_test.py <cenote-server binary>
 """
+import json
 import os
+import re
 import shutil
 import signal
+import socket
+import ssl
 import subprocess
 import sys
 import tempfile
@@ -153,6 +158,61 @@ class Tls(unittest.TestCase):
                                               certificate_chain=read(f"{self.dir}/client.pem"))
         with grpc.secure_channel(server.target, signed) as channel:
             unary(channel, MAP_INFO)
+        self.assertEqual(server.stop(), 0)
+
+    def test_the_viewer_port_serves_only_tls_with_the_servers_certificate(self):
+        with open(f"{self.dir}/token", "w") as f:
+            f.write("s3cret\n")
+        server = Server(self.dir, "--tls-cert", f"{self.dir}/server.pem", "--tls-key", f"{self.dir}/server.key",
+                        "--token-file", f"{self.dir}/token", "--viewer-listen", "127.0.0.1:0")
+        match = re.search(r"viewer on https://127\.0\.0\.1:(\d+)/ \(Foxglove: wss://127\.0\.0\.1:\1\)",
+                          read(server.log.name).decode())
+        self.assertIsNotNone(match, read(server.log.name))
+        port = int(match.group(1))
+        trusted = ssl.create_default_context(cafile=f"{self.dir}/ca.pem")
+
+        def exchange(request, context=trusted):
+            """What the viewer answers to `request` over TLS: the bytes until it closes or 2 s pass."""
+            with socket.create_connection(("127.0.0.1", port), timeout=10) as raw:
+                with context.wrap_socket(raw, server_hostname="localhost") as tls:
+                    tls.sendall(request)
+                    tls.settimeout(2.0)
+                    reply = b""
+                    try:
+                        while chunk := tls.recv(65536):
+                            reply += chunk
+                    except (socket.timeout, ssl.SSLError):
+                        pass
+                    return reply
+
+        upgrade = ("GET /{} HTTP/1.1\r\nHost: localhost\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                   "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
+                   "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n\r\n")
+        page = exchange(b"GET /no-such-file HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\n\r\n")
+        self.assertTrue(page.startswith(b"HTTP/1.1 404 "), page[:200])
+        self.assertIn(b"no such file: /no-such-file", page)
+        self.assertTrue(exchange(upgrade.format("").encode()).startswith(b"HTTP/1.1 401 "))
+        accepted = exchange(upgrade.format("?token=s3cret").encode())
+        head, _, frames = accepted.partition(b"\r\n\r\n")
+        self.assertTrue(head.startswith(b"HTTP/1.1 101 "), head)
+        self.assertIn(b"Sec-WebSocket-Protocol: foxglove.websocket.v1", head)
+        # The first WebSocket frame: text (0x81), the server's serverInfo.
+        self.assertEqual(frames[0], 0x81)
+        length, offset = frames[1] & 0x7F, 2
+        if length == 126:
+            length, offset = int.from_bytes(frames[2:4], "big"), 4
+        self.assertEqual(json.loads(frames[offset:offset + length])["op"], "serverInfo")
+        # A client that does not trust the certificate, and one that does not speak TLS, get nothing.
+        with self.assertRaises(ssl.SSLCertVerificationError):
+            exchange(upgrade.format("?token=s3cret").encode(), ssl.create_default_context())
+        with socket.create_connection(("127.0.0.1", port), timeout=10) as plain:
+            plain.sendall(b"GET / HTTP/1.1\r\nHost: localhost\r\n\r\n")
+            plain.settimeout(10.0)
+            try:
+                answer = plain.recv(65536)
+            except ConnectionResetError:
+                answer = b""
+            self.assertFalse(answer.startswith(b"HTTP/"), answer[:200])
         self.assertEqual(server.stop(), 0)
 
 
