@@ -3,12 +3,14 @@
 // the same files; and every kind of bad ingest input rejected with its status code, the map
 // unchanged.
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <thread>
 
 #include "common/text_file.h"
@@ -222,7 +224,7 @@ TEST_F(SimulatedDive, BadFramesAreRejectedWithTheirStatusAndTheMapIsUnchanged) {
 std::unique_ptr<mapping::OccupancyMap> streamAndDownload(Stubs& stubs, const std::string& dir,
                                                          const std::vector<v1::StereoFrame>& frames,
                                                          const std::vector<v1::FrameOutcome>& outcomes,
-                                                         std::vector<std::string>* messages) {
+                                                         std::vector<v1::FrameAck>* acks) {
   auto reset_context = contextWithDeadline();
   v1::ChangeReply reset;
   EXPECT_TRUE(stubs.admin->Reset(reset_context.get(), v1::ResetRequest(), &reset).ok());
@@ -233,7 +235,7 @@ std::unique_ptr<mapping::OccupancyMap> streamAndDownload(Stubs& stubs, const std
     v1::FrameAck ack;
     EXPECT_TRUE(stream->Read(&ack));
     EXPECT_EQ(ack.outcome(), outcomes[i]) << "frame " << i << ": " << ack.message();
-    if (messages) messages->push_back(ack.message());
+    if (acks) acks->push_back(ack);
   }
   stream->WritesDone();
   const grpc::Status status = stream->Finish();
@@ -241,15 +243,22 @@ std::unique_ptr<mapping::OccupancyMap> streamAndDownload(Stubs& stubs, const std
   return downloadMap(*stubs.admin, dir);
 }
 
-TEST_F(SimulatedDive, BadFrameBetweenGoodOnesIsRejectedAloneAndTheGoodOnesAreMapped) {
-  // Stereo points of each frame straight into the map (no fusion window), so that two frames map.
-  std::string yaml = readFileBytes(config_, "config");
+// A server on the dive's calibration and `config` without its fusion window: the stereo points of
+// each frame go straight into the map, so that two frames map.
+// @throws std::runtime_error when `config` has no "fuse: true" to turn off.
+ServerProcess serverWithoutFusion(const std::string& config, const std::string& dir) {
+  std::string yaml = readFileBytes(config, "config");
   const size_t fuse = yaml.find("  fuse: true");
-  ASSERT_NE(fuse, std::string::npos);
+  if (fuse == std::string::npos) throw std::runtime_error(config + " has no \"  fuse: true\" to turn off");
   yaml.replace(fuse, 12, "  fuse: false");
-  const std::string config = dir_ + "/no_fusion.yaml";
-  std::ofstream(config) << yaml;
-  ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", config, "--calibration", dir_ + "/dive"}});
+  const std::string path = dir + "/no_fusion.yaml";
+  std::ofstream(path) << yaml;
+  return ServerProcess(CENOTE_SERVER_BINARY,
+                       ServerProcessOptions{.extra_args = {"--config", path, "--calibration", dir + "/dive"}});
+}
+
+TEST_F(SimulatedDive, BadFrameBetweenGoodOnesIsRejectedAloneAndTheGoodOnesAreMapped) {
+  const ServerProcess server = serverWithoutFusion(config_, dir_);
   Stubs stubs(server.target());
   const auto dataset = pipeline::openDataset(dir_ + "/dive");
   const v1::StereoFrame first = diveFrame(dir_, *dataset, 0, true), third = diveFrame(dir_, *dataset, 2, true);
@@ -261,12 +270,12 @@ TEST_F(SimulatedDive, BadFrameBetweenGoodOnesIsRejectedAloneAndTheGoodOnesAreMap
   second.mutable_left()->set_encoded(std::string(jpg.begin(), jpg.begin() + static_cast<long>(jpg.size() / 2)));
 
   using O = v1::FrameOutcome;
-  std::vector<std::string> messages;
+  std::vector<v1::FrameAck> acks;
   const auto mixed = streamAndDownload(stubs, dir_, {first, second, third},
                                        {O::FRAME_OUTCOME_PROCESSED, O::FRAME_OUTCOME_REJECTED, O::FRAME_OUTCOME_PROCESSED},
-                                       &messages);
-  ASSERT_EQ(messages.size(), 3u);
-  EXPECT_EQ(messages[1], "left: JPEG cannot be decoded: Premature end of JPEG file");
+                                       &acks);
+  ASSERT_EQ(acks.size(), 3u);
+  EXPECT_EQ(acks[1].message(), "left: JPEG cannot be decoded: Premature end of JPEG file");
   const auto good = streamAndDownload(stubs, dir_, {first, third}, {O::FRAME_OUTCOME_PROCESSED, O::FRAME_OUTCOME_PROCESSED},
                                       nullptr);
   const auto alone = streamAndDownload(stubs, dir_, {first}, {O::FRAME_OUTCOME_PROCESSED}, nullptr);
@@ -394,6 +403,82 @@ TEST(ServerPointIngest, OversizedAndBrokenBatchesAreRefusedAndTheMapIsUnchanged)
   EXPECT_GT(info.map_version(), 0u);
   EXPECT_GT(info.occupied(), 0u);
   fs::remove(config);
+}
+
+// `png` with byte `offset` of the body of its chunk at `chunk` set to `value` and the chunk's CRC
+// recomputed: a well-formed chunk that says something else.
+std::string withChunkByte(std::string png, size_t chunk, size_t offset, uint8_t value) {
+  const auto* bytes = reinterpret_cast<const uint8_t*>(png.data());
+  const uint32_t length = (uint32_t{bytes[chunk]} << 24) | (bytes[chunk + 1] << 16) | (bytes[chunk + 2] << 8) |
+                          bytes[chunk + 3];
+  png[chunk + 8 + offset] = static_cast<char>(value);
+  const uint32_t crc = static_cast<uint32_t>(crc32(0, bytes + chunk + 4, length + 4));
+  for (int i = 0; i < 4; ++i) png[chunk + 8 + length + i] = static_cast<char>(crc >> (24 - 8 * i));
+  return png;
+}
+
+std::string encoded(const std::string& ext, const cv::Mat& image) {
+  std::vector<uint8_t> bytes;
+  EXPECT_TRUE(cv::imencode(ext, image, bytes)) << ext;
+  return std::string(bytes.begin(), bytes.end());
+}
+
+TEST_F(SimulatedDive, EveryKindOfBadFrameBetweenGoodOnesIsRejectedAloneWithItsStatus) {
+  const ServerProcess server = serverWithoutFusion(config_, dir_);
+  Stubs stubs(server.target());
+  const auto dataset = pipeline::openDataset(dir_ + "/dive");
+  const v1::StereoFrame first = diveFrame(dir_, *dataset, 0, true), second = diveFrame(dir_, *dataset, 1, true),
+                        third = diveFrame(dir_, *dataset, 2, true);
+  const std::string& left_png = second.left().encoded();
+  const cv::Mat left = cv::imdecode(std::vector<uint8_t>(left_png.begin(), left_png.end()), cv::IMREAD_UNCHANGED);
+  // OpenCV's PNG writer puts IDAT right after IHDR (the signature's 8 bytes and IHDR's 25).
+  const std::string png = encoded(".png", left);
+  ASSERT_EQ(png.substr(33 + 4, 4), "IDAT");
+  std::string early_end = encoded(".jpg", left);
+  early_end[early_end.size() / 2] = static_cast<char>(0xFF);  // an end-of-image marker inside the scan
+  early_end[early_end.size() / 2 + 1] = static_cast<char>(0xD9);
+  cv::Mat wide, small;
+  left.convertTo(wide, CV_16U, 256.0);
+  cv::resize(left, small, cv::Size(left.cols / 2, left.rows / 2));
+  const auto withLeft = [&](const std::string& bytes) {
+    v1::StereoFrame frame = second;
+    frame.mutable_left()->set_encoded(bytes);
+    return frame;
+  };
+  v1::StereoFrame odd_channels = second;  // BGR8 announced, one byte per pixel sent
+  v1::RawImage* raw = odd_channels.mutable_right()->mutable_raw();
+  raw->set_width(left.cols);
+  raw->set_height(left.rows);
+  raw->set_encoding(v1::IMAGE_ENCODING_BGR8);
+  raw->set_data(std::string(left.total(), '\0'));
+
+  const std::vector<std::pair<v1::StereoFrame, std::string>> kinds = {
+      // Past every header check, failing inside the decoders (libpng through OpenCV, libjpeg).
+      {withLeft(withChunkByte(png, 33, 0, 0x00)), "left: PNG cannot be decoded: its compressed image data is damaged"},
+      {withLeft(early_end), "left: JPEG cannot be decoded: Corrupt JPEG data: premature end of data segment"},
+      // Refused from the header or the raw image's description, before decoding.
+      {withLeft(encoded(".png", wide)), "left: PNG has 16-bit samples; frames must be 8-bit"},
+      {withLeft(withChunkByte(png, 8, 9, 4)), "left: PNG is grey with alpha (2 channels); frames are grey, BGR or BGRA"},
+      {withLeft(encoded(".png", small)), "left image is 200x150 but the calibration is for 400x300"},
+      {odd_channels, "right: raw image has 120000 bytes, expected 360000 for 400x300x3"},
+  };
+  using O = v1::FrameOutcome;
+  const auto good = streamAndDownload(stubs, dir_, {first, third}, {O::FRAME_OUTCOME_PROCESSED, O::FRAME_OUTCOME_PROCESSED},
+                                      nullptr);
+  for (const auto& [bad, message] : kinds) {
+    std::vector<v1::FrameAck> acks;
+    const auto mixed = streamAndDownload(
+        stubs, dir_, {first, bad, third},
+        {O::FRAME_OUTCOME_PROCESSED, O::FRAME_OUTCOME_REJECTED, O::FRAME_OUTCOME_PROCESSED}, &acks);
+    ASSERT_EQ(acks.size(), 3u) << message;
+    EXPECT_EQ(acks[1].status_code(), grpc::StatusCode::INVALID_ARGUMENT) << message;
+    EXPECT_EQ(acks[1].message(), message);
+    EXPECT_EQ(acks[2].sequence(), 2u) << message;
+    const MapDifference diff = compareMaps(*mixed, *good);
+    EXPECT_GT(diff.known, 1000u) << message;
+    EXPECT_EQ(diff.different_state, 0u) << message;
+    EXPECT_EQ(diff.different_log_odds, 0u) << message;
+  }
 }
 
 }  // namespace

@@ -2,7 +2,8 @@
 // subscriptions) instead of waiting for them, then writes its snapshot and exits 0. Idle update
 // subscribers cost no thread and never lock planners out; beyond server.limits.max_subscribers
 // they are refused. A subscriber beyond its byte budget is resynced. Snapshot downloads are
-// capped.
+// capped. A connection older than server.transport.max_connection_age_s, or without calls for
+// max_connection_idle_s, is closed, and its client reconnects on its next call.
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -275,6 +276,88 @@ TEST(ServerSnapshots, ADownloadBeyondTheLimitIsRefusedNamingIt) {
   EXPECT_EQ(received, total);
   const auto map = downloadMap(*stubs.admin, dir.string());
   EXPECT_GT(map->stats().occupied, 0u);
+  fs::remove_all(dir.parent_path());
+}
+
+// A server started with `yaml` as its --config (written into `dir`).
+ServerProcess serverWithConfig(const fs::path& dir, const std::string& yaml) {
+  return ServerProcess(CENOTE_SERVER_BINARY, ServerProcessOptions{.extra_args = {"--config", writeConfig(dir, yaml)}});
+}
+
+// Reads a stream to its end. @return how the server ended it.
+template <typename Message, typename Stream>
+grpc::Status endOf(Stream& stream) {
+  Message message;
+  while (stream.Read(&message)) {
+  }
+  return stream.Finish();
+}
+
+TEST(ServerConnections, StreamsOlderThanTheMaximumAgeEndUnavailableAndTheChannelReconnects) {
+  const fs::path dir = scratchDir("transport", "max-age");
+  const ServerProcess server = serverWithConfig(
+      dir, "server:\n  transport:\n    max_connection_age_s: 1\n    max_connection_age_grace_s: 1\n");
+  Stubs stubs(server.target());
+  // Both kinds of stream, on one connection: an update subscription (gRPC's callback API) and a
+  // pose stream (a thread of the sync server). The server sends GOAWAY after about 1 s (gRPC adds
+  // +-10 % jitter) and closes the connection 1 s later; the deadlines only end a test whose server
+  // never does.
+  auto poses_context = contextWithDeadline(30.0);
+  auto poses = stubs.ingest->StreamPoses(poses_context.get());
+  v1::PoseStamped pose;  // t = 0, at the origin
+  pose.mutable_pose()->mutable_orientation()->set_w(1.0);
+  v1::PoseAck pose_ack;
+  ASSERT_TRUE(poses->Write(pose) && poses->Read(&pose_ack));
+  EXPECT_EQ(pose_ack.status_code(), 0) << pose_ack.message();
+  auto updates = v1::Updates::NewStub(stubs.channel);
+  auto subscribe_context = contextWithDeadline(30.0);
+  auto subscription = updates->Subscribe(subscribe_context.get(), v1::SubscribeRequest());
+  v1::MapUpdate update;
+  ASSERT_TRUE(subscription->Read(&update));
+  EXPECT_TRUE(update.snapshot_complete());
+
+  const grpc::Status subscribe_status = endOf<v1::MapUpdate>(*subscription);
+  EXPECT_EQ(subscribe_status.error_code(), grpc::StatusCode::UNAVAILABLE) << subscribe_status.error_message();
+  const grpc::Status poses_status = endOf<v1::PoseAck>(*poses);
+  EXPECT_EQ(poses_status.error_code(), grpc::StatusCode::UNAVAILABLE) << poses_status.error_message();
+
+  // The next call on the same channel opens a new connection, and a new stream is served.
+  v1::BatchAck ack;
+  integrate(stubs, wallBatch(2.0, 0.5, 0.05, 1.0), &ack);
+  EXPECT_GT(ack.map_version(), 0u);
+  EXPECT_EQ(mapInfo(stubs).map_version(), ack.map_version());
+  Subscribers again(stubs.channel, 1);
+  EXPECT_EQ(again.subscribed, 1);
+  fs::remove_all(dir.parent_path());
+}
+
+TEST(ServerConnections, AConnectionWithoutCallsIsClosedAfterTheIdleTimeAndTheNextCallReconnects) {
+  const fs::path dir = scratchDir("transport", "max-idle");
+  const ServerProcess server = serverWithConfig(dir, "server:\n  transport:\n    max_connection_idle_s: 1\n");
+  Stubs stubs(server.target());
+  mapInfo(stubs);
+  ASSERT_EQ(stubs.channel->GetState(false), GRPC_CHANNEL_READY);
+  {
+    // An open subscription is a call: its connection is not idle, however quiet. Three idle times
+    // pass, and the subscriber still gets the next change over the same connection.
+    Subscribers planner(stubs.channel, 1);
+    ASSERT_EQ(planner.subscribed, 1);
+    EXPECT_FALSE(
+        stubs.channel->WaitForStateChange(GRPC_CHANNEL_READY, std::chrono::system_clock::now() + std::chrono::seconds(3)));
+    v1::BatchAck ack;
+    integrate(stubs, wallBatch(2.0, 0.5, 0.05, 1.0), &ack);
+    v1::MapUpdate update;
+    ASSERT_TRUE(planner.readers[0]->Read(&update));
+    EXPECT_EQ(update.sequence(), ack.map_version());
+  }
+  // Without calls, the server closes the connection (GOAWAY) after 1 s and the channel goes from
+  // READY to IDLE; the deadline only ends a test whose server never closes it.
+  EXPECT_TRUE(
+      stubs.channel->WaitForStateChange(GRPC_CHANNEL_READY, std::chrono::system_clock::now() + std::chrono::seconds(30)));
+  EXPECT_EQ(stubs.channel->GetState(false), GRPC_CHANNEL_IDLE);
+  // A planner's next call reconnects.
+  EXPECT_GT(mapInfo(stubs).map_version(), 0u);
+  EXPECT_EQ(stubs.channel->GetState(false), GRPC_CHANNEL_READY);
   fs::remove_all(dir.parent_path());
 }
 
