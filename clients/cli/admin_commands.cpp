@@ -171,8 +171,8 @@ void registerSphereEdit(CLI::App& app, Connection& connection, const char* name,
   cmd->add_option("centre", sphere->centre, "X,Y,Z")->required();
   cmd->add_option("radius", sphere->radius_m, "Metres")->required();
   cmd->callback([sphere, &connection, name, edit] {
-    const Eigen::Vector3d centre_m = parsePoint(sphere->centre, std::string(name) + " CENTRE");
-    printChange(name, (connection.client().*edit)(centre_m, sphere->radius_m));
+    client::MapClient& map_client = connection.client();  // first: a bad --token-file is reported before a bad CENTRE
+    printChange(name, (map_client.*edit)(parsePoint(sphere->centre, std::string(name) + " CENTRE"), sphere->radius_m));
   });
 }
 
