@@ -129,9 +129,7 @@ void ServerConfig::read(YamlSection& section) {
   t.read("max_connection_age_grace_s", transport.max_connection_age_grace_s);
   t.read("shutdown_grace_s", transport.shutdown_grace_s);
   t.finish();
-  YamlSection v = section.section("viewer");
-  viewer.read(v);
-  v.finish();
+  section.readSection("viewer", viewer);
 }
 
 ServerSettings ServerSettings::load(const std::string& path) {

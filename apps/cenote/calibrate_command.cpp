@@ -2,10 +2,10 @@
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
-#include <memory>
 #include <regex>
 
 #include "apps/cenote/commands.h"
+#include "apps/cenote/subcommand.h"
 #include "common/error.h"
 #include "pipeline/calibration/chessboard_calibration.h"
 
@@ -63,15 +63,14 @@ void run(const CalibrateOptions& o) {
 }  // namespace
 
 void registerCalibrateCommand(CLI::App& app) {
-  auto o = std::make_shared<CalibrateOptions>();
-  CLI::App* cmd = app.add_subcommand("calibrate", "Stereo calibration from chessboard image pairs (calibrate in water)");
+  const auto [cmd, o] = addSubcommand<CalibrateOptions>(
+      app, "calibrate", "Stereo calibration from chessboard image pairs (calibrate in water)", run);
   cmd->add_option("--images", o->images, "Folder with left*/right* image pairs")->required();
   cmd->add_option("--left-prefix", o->left_prefix, "File name prefix of left images")->capture_default_str();
   cmd->add_option("--right-prefix", o->right_prefix, "File name prefix of right images")->capture_default_str();
   cmd->add_option("--board", o->board, "Inner corners COLSxROWS")->capture_default_str();
   cmd->add_option("--square", o->square_m, "Square side in metres")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--out", o->out, "Calibration YAML to write")->required();
-  cmd->callback([o] { run(*o); });
 }
 
 }  // namespace cenote::apps

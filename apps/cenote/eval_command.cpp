@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "apps/cenote/commands.h"
+#include "apps/cenote/subcommand.h"
 #include "common/error.h"
 #include "common/size_format.h"
 #include "eval/cloud/cloud_io.h"
@@ -275,14 +276,19 @@ struct ReportOptions {
   eval::HtmlReportOptions html;
 };
 
+void runReport(const ReportOptions& o) {
+  const std::string path = eval::writeHtmlReport(o.dir, o.out, o.html);
+  std::cout << "report: " << path << " (" << formatBytes(static_cast<double>(fs::file_size(path))) << ")\n";
+}
+
 }  // namespace
 
 void registerEvalCommand(CLI::App& app) {
   CLI::App* eval_cmd = app.add_subcommand("eval", "Evaluate depth maps, point clouds and trajectories; HTML report");
   eval_cmd->require_subcommand(1);
 
-  auto d = std::make_shared<DepthOptions>();
-  CLI::App* depth = eval_cmd->add_subcommand("depth", "Depth maps against a reference (MAE, MoM, coverage)");
+  const auto [depth, d] = addSubcommand<DepthOptions>(*eval_cmd, "depth",
+                                                      "Depth maps against a reference (MAE, MoM, coverage)", runDepth);
   depth->add_option("--estimate", d->estimate, "Folder of estimated depth maps (PFM, 16-bit PNG mm, COLMAP .bin)")
       ->required();
   depth->add_option("--reference", d->reference, "Folder of reference depth maps, or a COLMAP workspace")->required();
@@ -299,10 +305,9 @@ void registerEvalCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   addOutputOptions(depth, d->out);
-  depth->callback([d] { runDepth(*d); });
 
-  auto c = std::make_shared<CloudOptions>();
-  CLI::App* cloud = eval_cmd->add_subcommand("cloud", "Point clouds: accuracy, completeness, precision, recall");
+  const auto [cloud, c] = addSubcommand<CloudOptions>(*eval_cmd, "cloud",
+                                                      "Point clouds: accuracy, completeness, precision, recall", runCloud);
   cloud->add_option("--source", c->source, "Estimated cloud (PLY or PCD)")->required();
   cloud->add_option("--target", c->target, "Reference cloud (PLY or PCD), or a dataset folder with colmap.ply")->required();
   cloud->add_option("--threshold", c->metrics.threshold_m, "Precision/recall distance, metres")->capture_default_str();
@@ -311,10 +316,9 @@ void registerEvalCommand(CLI::App& app) {
   cloud->add_option("--curve-max", c->metrics.curve_max_m, "Curves up to this threshold, metres (0 = 5 x threshold)");
   cloud->add_option("--curve-steps", c->metrics.curve_steps, "Thresholds on the curves")->capture_default_str();
   addOutputOptions(cloud, c->out);
-  cloud->callback([c] { runCloud(*c); });
 
-  auto t = std::make_shared<TrajOptions>();
-  CLI::App* traj = eval_cmd->add_subcommand("traj", "Trajectories: ATE after Umeyama alignment");
+  const auto [traj, t] = addSubcommand<TrajOptions>(*eval_cmd, "traj", "Trajectories: ATE after Umeyama alignment",
+                                                    runTraj);
   traj->add_option("--estimate", t->estimate, "Estimated trajectory")->required();
   traj->add_option("--reference", t->reference, "Reference trajectory")->required();
   traj->add_option("--align", t->align, "Alignment")->capture_default_str()->check(CLI::IsMember({"sim3", "se3", "none"}));
@@ -328,22 +332,17 @@ void registerEvalCommand(CLI::App& app) {
   traj->add_option("--tolerance", t->tolerance_s, "Largest time difference of an associated pair, s")
       ->capture_default_str();
   addOutputOptions(traj, t->out);
-  traj->callback([t] { runTraj(*t); });
 
   registerEvalMapCommand(*eval_cmd);
 
-  auto r = std::make_shared<ReportOptions>();
-  CLI::App* report = eval_cmd->add_subcommand("report", "One self-contained HTML page for a run folder");
+  const auto [report, r] = addSubcommand<ReportOptions>(*eval_cmd, "report",
+                                                        "One self-contained HTML page for a run folder", runReport);
   report->add_option("dir", r->dir, "Run folder (report.json, *.json metrics, plots/, depth maps)")->required();
   report->add_option("--out", r->out, "HTML file (default DIR/report.html)");
   report->add_option("--title", r->html.title, "Page title")->capture_default_str();
   report->add_option("--samples", r->html.max_samples, "Frames shown as samples")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  report->callback([r] {
-    const std::string path = eval::writeHtmlReport(r->dir, r->out, r->html);
-    std::cout << "report: " << path << " (" << formatBytes(static_cast<double>(fs::file_size(path))) << ")\n";
-  });
 }
 
 }  // namespace cenote::apps

@@ -3,9 +3,9 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <memory>
 
 #include "apps/cenote/commands.h"
+#include "apps/cenote/subcommand.h"
 #include "eval/map/map_comparison.h"
 #include "eval/report/metrics_json.h"
 
@@ -52,12 +52,11 @@ void runMap(const MapOptions& o) {
 }  // namespace
 
 void registerEvalMapCommand(CLI::App& eval_cmd) {
-  auto o = std::make_shared<MapOptions>();
-  CLI::App* cmd = eval_cmd.add_subcommand("map", "Occupancy agreement of two maps (.vdb, OctoMap .bt / .ot)");
+  const auto [cmd, o] = addSubcommand<MapOptions>(eval_cmd, "map",
+                                                  "Occupancy agreement of two maps (.vdb, OctoMap .bt / .ot)", runMap);
   cmd->add_option("--estimate", o->estimate, "Map to judge (.vdb, .bt or .ot)")->required();
   cmd->add_option("--reference", o->reference, "Reference map, same voxel size (.vdb, .bt or .ot)")->required();
   cmd->add_option("--json", o->json, "Write the numbers as JSON to this file");
-  cmd->callback([o] { runMap(*o); });
 }
 
 }  // namespace cenote::apps

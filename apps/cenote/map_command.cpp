@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "apps/cenote/commands.h"
+#include "apps/cenote/subcommand.h"
 #include "common/error.h"
 #include "common/size_format.h"
 #include "common/text_parse.h"
@@ -255,8 +256,8 @@ void registerMapCommand(CLI::App& app) {
   CLI::App* map = app.add_subcommand("map", "Build, inspect, convert and query occupancy maps");
   map->require_subcommand(1);
 
-  auto integrate = std::make_shared<IntegrateOptions>();
-  CLI::App* in = map->add_subcommand("integrate", "Integrate OctoMap scan graphs or a point cloud (as graph2tree)");
+  const auto [in, integrate] = addSubcommand<IntegrateOptions>(
+      *map, "integrate", "Integrate OctoMap scan graphs or a point cloud (as graph2tree)", runIntegrate);
   in->add_option("--graph", integrate->graph, "OctoMap ScanGraph (.graph): scans with poses");
   in->add_option("--cloud", integrate->cloud, "one point cloud in world coordinates (binary PLY, x y z r g b)");
   in->add_option("--origin", integrate->origin, "sensor position X,Y,Z of --cloud");
@@ -268,15 +269,13 @@ void registerMapCommand(CLI::App& app) {
   in->add_option("--config", integrate->config, "YAML file with a map: section (defaults: config/default.yaml's values)");
   in->add_option("--frame-id", integrate->frame_id, "frame name stored in .vdb metadata");
   in->add_option("--out,-o", integrate->out, "output map: .bt, .ot or .vdb")->required();
-  in->callback([integrate] { runIntegrate(*integrate); });
 
-  auto info_path = std::make_shared<std::string>();
-  CLI::App* info = map->add_subcommand("info", "Resolution, bounds, voxel counts and memory of a map");
+  const auto [info, info_path] = addSubcommand<std::string>(
+      *map, "info", "Resolution, bounds, voxel counts and memory of a map", printInfo);
   info->add_option("map", *info_path, "map file (.vdb, .bt, .ot)")->required();
-  info->callback([info_path] { printInfo(*info_path); });
 
-  auto ex = std::make_shared<ExportOptions>();
-  CLI::App* exp = map->add_subcommand("export", "Convert a map: mesh or voxel PLY, voxel PCD, .bt, .ot, .vdb");
+  const auto [exp, ex] = addSubcommand<ExportOptions>(
+      *map, "export", "Convert a map: mesh or voxel PLY, voxel PCD, .bt, .ot, .vdb", runExport);
   exp->add_option("map", ex->map, "map file (.vdb, .bt, .ot)")->required();
   exp->add_option("--mesh", ex->mesh, "triangle mesh of occupied space, PLY with vertex colours (.ply, .mesh.ply)");
   exp->add_option("--points", ex->points,
@@ -284,10 +283,9 @@ void registerMapCommand(CLI::App& app) {
   exp->add_option("--bt", ex->bt, "OctoMap binary tree (.bt)");
   exp->add_option("--ot", ex->ot, "OctoMap colour tree (.ot)");
   exp->add_option("--vdb", ex->vdb, "OpenVDB file (.vdb)");
-  exp->callback([ex] { runExport(*ex); });
 
-  auto q = std::make_shared<QueryOptions>();
-  CLI::App* query = map->add_subcommand("query", "Voxel states, segment collisions, distances and frontiers");
+  const auto [query, q] = addSubcommand<QueryOptions>(
+      *map, "query", "Voxel states, segment collisions, distances and frontiers", runQuery);
   query->add_option("map", q->map, "map file (.vdb, .bt, .ot)")->required();
   query->add_option("--state", q->states, "X,Y,Z: state and probability of the voxel (repeatable)");
   query->add_option("--segment", q->segments, "X,Y,Z,X,Y,Z[,RADIUS]: first occupied voxel (repeatable)");
@@ -300,7 +298,6 @@ void registerMapCommand(CLI::App& app) {
   query->add_option("--position", q->position, "X,Y,Z: position the frontiers are sorted by (default 0,0,0)");
   query->add_option("--frontier-min-voxels", q->frontier_min_voxels, "smaller frontier clusters are dropped");
   query->add_option("--frontier-max-extent", q->frontier_max_extent_m, "larger frontier clusters are split (metres)");
-  query->callback([q] { runQuery(*q); });
 }
 
 }  // namespace cenote::apps

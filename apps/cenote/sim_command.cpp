@@ -8,11 +8,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <memory>
 #include <optional>
 
 #include "apps/cenote/commands.h"
 #include "apps/cenote/progress_bar.h"
+#include "apps/cenote/subcommand.h"
 #include "common/error.h"
 #include "common/yaml_section.h"
 #include "sim/sim_dataset.h"
@@ -86,8 +86,8 @@ void run(const SimOptions& o) {
 }  // namespace
 
 void registerSimCommand(CLI::App& app) {
-  auto o = std::make_shared<SimOptions>();
-  CLI::App* cmd = app.add_subcommand("sim", "Simulate an underwater stereo sequence with ground truth (EuRoC layout)");
+  const auto [cmd, o] = addSubcommand<SimOptions>(
+      app, "sim", "Simulate an underwater stereo sequence with ground truth (EuRoC layout)", run);
   cmd->add_option("--scene", o->scene, "cave (tunnel, rig light), reef (lawnmower survey) or wreck (circling a hull)");
   cmd->add_option("--frames", o->frames, "Number of stereo pairs (sim.num_frames, default 100)");
   cmd->add_option("--out", o->out, "Output folder (EuRoC layout plus groundtruth/)")->required();
@@ -107,7 +107,6 @@ void registerSimCommand(CLI::App& app) {
   cmd->add_flag("--drift", o->drift,
                 "Also write vio_trajectory.tum (a drifting VIO's live poses) and loop_closures/ (sim.drift)");
   cmd->add_flag("--quiet", o->quiet, "No progress output");
-  cmd->callback([o] { run(*o); });
 }
 
 }  // namespace cenote::apps

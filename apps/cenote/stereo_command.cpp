@@ -2,10 +2,10 @@
 #include <algorithm>
 #include <chrono>
 #include <iostream>
-#include <memory>
 #include <vector>
 
 #include "apps/cenote/commands.h"
+#include "apps/cenote/subcommand.h"
 #include "common/error.h"
 #include "common/median.h"
 #include "common/yaml_section.h"
@@ -93,8 +93,8 @@ void run(const StereoOptions& o) {
 }  // namespace
 
 void registerStereoCommand(CLI::App& app) {
-  auto options = std::make_shared<StereoOptions>();
-  CLI::App* cmd = app.add_subcommand("stereo", "Disparity, confidence and depth of one stereo pair");
+  const auto [cmd, options] = addSubcommand<StereoOptions>(app, "stereo",
+                                                           "Disparity, confidence and depth of one stereo pair", run);
   cmd->add_option("--left", options->left, "Left image")->required();
   cmd->add_option("--right", options->right, "Right image")->required();
   cmd->add_option(
@@ -118,7 +118,6 @@ void registerStereoCommand(CLI::App& app) {
   cmd->add_option("--out-preview", options->out_preview, "Colour-mapped disparity PNG");
   cmd->add_option("--repeat", options->repeat, "Match N more times and print stereo_ms_median")
       ->check(CLI::NonNegativeNumber);
-  cmd->callback([options] { run(*options); });
 }
 
 }  // namespace cenote::apps

@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "apps/cenote/commands.h"
+#include "apps/cenote/subcommand.h"
 #include "common/error.h"
 #include "common/text_file.h"
 #include "mapping/frontier/frontier_map.h"
@@ -61,8 +62,8 @@ int runView(const ViewOptions& o) {
 }  // namespace
 
 void registerViewCommand(CLI::App& app) {
-  auto o = std::make_shared<ViewOptions>();
-  CLI::App* cmd = app.add_subcommand("view", "Show a saved map in the browser viewer / Foxglove (docs/VIEWER.md)");
+  const auto [cmd, o] = addSubcommand<ViewOptions>(
+      app, "view", "Show a saved map in the browser viewer / Foxglove (docs/VIEWER.md)", runView);
   cmd->add_option("map", o->map, "the map: .vdb, .bt or .ot")->required();
   cmd->add_option("--listen", o->listen, "HOST:PORT to serve on (default 127.0.0.1:8765; port 0 picks a free one)");
   cmd->add_option("--token-file", o->token_file, "bearer token viewers must send (first line of the file)");
@@ -70,7 +71,6 @@ void registerViewCommand(CLI::App& app) {
   cmd->add_option("--tls-key", o->tls_key, "PEM private key of --tls-cert");
   cmd->add_option("--web-dir", o->web_dir, "the browser page's files (default: those the build made)");
   cmd->add_option("--budget", o->budget_bytes_per_s, "bytes per second per client (default 1e6)");
-  cmd->callback([o] { runView(*o); });
 }
 
 }  // namespace cenote::apps

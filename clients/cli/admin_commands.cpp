@@ -157,6 +157,25 @@ void registerIntegrate(CLI::App& app, Connection& connection) {
   });
 }
 
+// What clear-sphere and crop do with their sphere (MapClient::clearSphere, MapClient::crop).
+using SphereEdit = client::ChangeResult (client::MapClient::*)(const Eigen::Vector3d& centre_m, double radius_m);
+
+// A command taking a sphere, CENTRE RADIUS, that it hands to `edit`.
+void registerSphereEdit(CLI::App& app, Connection& connection, const char* name, const char* description, SphereEdit edit) {
+  struct Sphere {
+    std::string centre;
+    double radius_m = 0.0;
+  };
+  auto sphere = std::make_shared<Sphere>();
+  CLI::App* cmd = app.add_subcommand(name, description);
+  cmd->add_option("centre", sphere->centre, "X,Y,Z")->required();
+  cmd->add_option("radius", sphere->radius_m, "Metres")->required();
+  cmd->callback([sphere, &connection, name, edit] {
+    client::MapClient& map_client = connection.client();  // first: a bad --token-file is reported before a bad CENTRE
+    printChange(name, (map_client.*edit)(parsePoint(sphere->centre, std::string(name) + " CENTRE"), sphere->radius_m));
+  });
+}
+
 void registerEdits(CLI::App& app, Connection& connection) {
   auto box = std::make_shared<std::array<std::string, 2>>();
   CLI::App* clear_box = app.add_subcommand("clear-box", "Forget (make unknown) the voxels in a box");
@@ -167,26 +186,8 @@ void registerEdits(CLI::App& app, Connection& connection) {
                                  {parsePoint((*box)[0], "clear-box MIN"), parsePoint((*box)[1], "clear-box MAX")}));
   });
 
-  struct Sphere {
-    std::string centre;
-    double radius_m = 0.0;
-  };
-  auto sphere = std::make_shared<Sphere>();
-  CLI::App* clear_sphere = app.add_subcommand("clear-sphere", "Forget the voxels in a sphere");
-  clear_sphere->add_option("centre", sphere->centre, "X,Y,Z")->required();
-  clear_sphere->add_option("radius", sphere->radius_m, "Metres")->required();
-  clear_sphere->callback([sphere, &connection] {
-    printChange("clear-sphere",
-                connection.client().clearSphere(parsePoint(sphere->centre, "clear-sphere CENTRE"), sphere->radius_m));
-  });
-
-  auto keep = std::make_shared<Sphere>();
-  CLI::App* crop = app.add_subcommand("crop", "Forget everything outside a sphere");
-  crop->add_option("centre", keep->centre, "X,Y,Z")->required();
-  crop->add_option("radius", keep->radius_m, "Metres")->required();
-  crop->callback([keep, &connection] {
-    printChange("crop", connection.client().crop(parsePoint(keep->centre, "crop CENTRE"), keep->radius_m));
-  });
+  registerSphereEdit(app, connection, "clear-sphere", "Forget the voxels in a sphere", &client::MapClient::clearSphere);
+  registerSphereEdit(app, connection, "crop", "Forget everything outside a sphere", &client::MapClient::crop);
 
   CLI::App* reset = app.add_subcommand("reset", "Forget the whole map");
   reset->callback([&connection] { printChange("reset", connection.client().reset()); });

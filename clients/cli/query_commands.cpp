@@ -7,6 +7,7 @@
 //   frontiers [--from X,Y,Z] [--max N] [--region MIN MAX]
 //   info                                         resolution, frame, bounds, counts, sensor model
 #include <cstdio>
+#include <functional>
 
 #include "clients/cli/cli_input.h"
 #include "clients/cli/commands.h"
@@ -46,23 +47,31 @@ void printCollision(const client::Collision& c) {
   std::printf("\n");
 }
 
-void registerState(CLI::App& app, Connection& connection) {
+// A command about points (state, distance): X,Y,Z arguments and the points of --points-file F, in that
+// order (gatherPoints), handed to `answer`.
+void registerPointsCommand(CLI::App& app, const char* name, const std::string& description, const char* points_help,
+                           std::function<void(const std::vector<Eigen::Vector3d>&)> answer) {
   struct Options {
     std::vector<std::string> points;
     std::string points_file;
   };
   auto o = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("state", "State and occupancy probability of the voxel at each point");
-  cmd->add_option("points", o->points, "X,Y,Z points (metres, world frame)");
+  CLI::App* cmd = app.add_subcommand(name, description);
+  cmd->add_option("points", o->points, points_help);
   cmd->add_option("--points-file", o->points_file, "File of points, one 'x y z' a line");
-  cmd->callback([o, &connection] {
-    const auto points = gatherPoints(o->points, o->points_file, "state");
+  cmd->callback([o, name, answer] { answer(gatherPoints(o->points, o->points_file, name)); });
+}
+
+void registerState(CLI::App& app, Connection& connection) {
+  const auto print_states = [&connection](const std::vector<Eigen::Vector3d>& points) {
     const auto results = connection.client().voxels(points);
     for (size_t i = 0; i < points.size(); ++i) {
       std::printf("%s %s %.4f\n", formatPointSpaced(points[i]).c_str(), client::toString(results[i].state),
                   results[i].probability);
     }
-  });
+  };
+  registerPointsCommand(app, "state", "State and occupancy probability of the voxel at each point",
+                        "X,Y,Z points (metres, world frame)", print_states);
 }
 
 void registerBox(CLI::App& app, Connection& connection) {
@@ -117,24 +126,17 @@ void registerRaycast(CLI::App& app, Connection& connection) {
 }
 
 void registerDistance(CLI::App& app, Connection& connection) {
-  struct Options {
-    std::vector<std::string> points;
-    std::string points_file;
-  };
-  auto o = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand(
-      "distance", "Distance to the nearest occupied voxel and its gradient: 'x y z distance gx gy gz' per point");
-  cmd->add_option("points", o->points, "X,Y,Z points");
-  cmd->add_option("--points-file", o->points_file, "File of points, one 'x y z' a line");
-  cmd->callback([o, &connection] {
-    const auto points = gatherPoints(o->points, o->points_file, "distance");
+  const auto print_distances = [&connection](const std::vector<Eigen::Vector3d>& points) {
     const auto results = connection.client().distances(points);
     for (size_t i = 0; i < points.size(); ++i) {
       const auto& r = results[i];
       std::printf("%s %.4f %.4f %.4f %.4f%s\n", formatPointSpaced(points[i]).c_str(), r.distance_m, r.gradient.x(),
                   r.gradient.y(), r.gradient.z(), r.within_max ? "" : " beyond-max");
     }
-  });
+  };
+  registerPointsCommand(app, "distance",
+                        "Distance to the nearest occupied voxel and its gradient: 'x y z distance gx gy gz' per point",
+                        "X,Y,Z points", print_distances);
 }
 
 void registerFrontiers(CLI::App& app, Connection& connection) {
