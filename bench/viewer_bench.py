@@ -23,7 +23,7 @@ import time
 CENOTE, SERVER, SOURCE = (os.path.abspath(a) for a in sys.argv[1:4])
 FRAMES = int(sys.argv[4]) if len(sys.argv) > 4 else 60
 sys.path.insert(0, os.path.join(SOURCE, "clients", "python"))
-from cenote_client import LocalServer, MapClient  # noqa: E402
+from cenote_client import LocalServer, MapClient, paced, read_dive  # noqa: E402
 
 WEB = os.path.join(SOURCE, "web")
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
@@ -35,31 +35,12 @@ def cpu_s(pid):
     return (int(fields[11]) + int(fields[12])) / CLOCK_TICKS  # utime, stime
 
 
-def read_tum(path):
-    with open(path) as f:
-        return [[float(v) for v in line.split()] for line in f if line.strip() and not line.startswith("#")]
-
-
 def stream(server, dive):
+    """Poses first, then the stereo frames at 15 Hz, as the camera records; (processed, occupied)."""
     client = MapClient(server.target, timeout_s=600)
-    poses = read_tum(os.path.join(dive, "groundtruth", "cam0.tum"))
-    client.stream_poses([p[0] for p in poses], [p[1:4] for p in poses], [p[4:8] for p in poses])
-    names = sorted(os.listdir(os.path.join(dive, "mav0", "cam0", "data")))
-    images = []
-    for name in names:
-        with open(os.path.join(dive, "mav0", "cam0", "data", name), "rb") as a, \
-                open(os.path.join(dive, "mav0", "cam1", "data", name), "rb") as b:
-            images.append((int(name.split(".")[0]) * 1e-9, a.read(), b.read()))
-
-    def paced():  # 15 Hz, as the camera records
-        start = time.monotonic()
-        for i, frame in enumerate(images):
-            delay = start + i / 15.0 - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-            yield frame
-
-    acks = client.stream_frames(paced())
+    frames = read_dive(dive)
+    client.stream_poses([f[0] for f in frames], [f[3][0] for f in frames], [f[3][1] for f in frames])
+    acks = client.stream_frames(paced([f[:3] for f in frames], 15.0))
     occupied = client.info().occupied
     client.close()
     return sum(a.outcome == "PROCESSED" for a in acks), occupied

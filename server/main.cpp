@@ -146,8 +146,11 @@ int serve(const Options& o) {
   AdminService admin(host, guard, snapshots, ingest, settings.server.limits.max_snapshot_downloads);
   viewer::LiveFeed live(settings.server.viewer.max_cloud_points, settings.server.viewer.max_trajectory_poses,
                         settings.server.viewer.image_hz);
-  const std::unique_ptr<viewer::ViewerServer> viewer = startViewer(settings, host, ingest, live,
-                                                                   tokenFrom(settings.server.token_file));
+  // Viewing is reading: the read-only token lets a viewer in as the operator's does.
+  std::vector<std::string> viewer_tokens;
+  for (const std::string& file : {settings.server.token_file, settings.server.read_token_file})
+    if (!file.empty()) viewer_tokens.push_back(tokenFrom(file));
+  const std::unique_ptr<viewer::ViewerServer> viewer = startViewer(settings, host, ingest, live, viewer_tokens);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();

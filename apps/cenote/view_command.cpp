@@ -46,7 +46,7 @@ int runView(const ViewOptions& o) {
   server::viewer::ViewerSources sources;
   sources.map = map.get();
   sources.frontiers = [&frontiers](const Eigen::Vector3d& from_m) { return frontiers.clusters(from_m); };
-  sources.token = o.token_file.empty() ? "" : readTokenFile(o.token_file, "token file");
+  if (!o.token_file.empty()) sources.tokens.push_back(readTokenFile(o.token_file, "token file"));
   sources.server_name = "cenote view " + std::filesystem::path(o.map).filename().string();
   server::viewer::ViewerServer viewer(config, std::move(sources));
   const mapping::MapStats stats = map->stats();

@@ -57,7 +57,7 @@ class FeedSource final : public viewer::ChangeSource {
 }  // namespace
 
 std::unique_ptr<viewer::ViewerServer> startViewer(const ServerSettings& settings, MapHost& host, IngestService& ingest,
-                                                  viewer::LiveFeed& live, const std::string& token) {
+                                                  viewer::LiveFeed& live, std::vector<std::string> tokens) {
   if (!settings.server.viewer.enabled()) return nullptr;
   viewer::ViewerSources sources;
   sources.map = &host.map();
@@ -75,7 +75,7 @@ std::unique_ptr<viewer::ViewerServer> startViewer(const ServerSettings& settings
   };
   sources.batches = [&host] { return host.batchesIntegrated(); };
   sources.frame_id = settings.server.frame_id;
-  sources.token = token;
+  sources.tokens = std::move(tokens);
   sources.server_name = "cenote-server";
   host.setLiveFeed(&live);
   return std::make_unique<viewer::ViewerServer>(settings.server.viewer, std::move(sources));

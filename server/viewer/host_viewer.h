@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "pipeline/frame/frames.h"
 #include "pipeline/stereo/stereo_config.h"
@@ -15,9 +16,10 @@
 namespace cenote::server {
 
 // Starts the viewer on settings.server.viewer.listen (null when that is empty) and hands the
-// host's integrated batches to `live`. @throws cenote::Error when it cannot listen.
+// host's integrated batches to `live`. tokens: those that let a viewer in (the server's operator
+// and read-only tokens; none: no authentication). @throws cenote::Error when it cannot listen.
 std::unique_ptr<viewer::ViewerServer> startViewer(const ServerSettings& settings, MapHost& host, IngestService& ingest,
-                                                  viewer::LiveFeed& live, const std::string& token);
+                                                  viewer::LiveFeed& live, std::vector<std::string> tokens);
 
 // One fused frame's camera images for the viewer, when `live` wants them now (imagesDue): its
 // rectified left image and its depth as a disparity preview (fx * baseline / depth, coloured as

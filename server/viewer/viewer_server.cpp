@@ -80,16 +80,24 @@ std::string targetOf(const http::request<http::string_body>& request) {
   return std::string(request.target().data(), request.target().size());
 }
 
-bool authorized(const http::request<http::string_body>& request, const std::string& token) {
-  if (token.empty()) return true;
+// The token the request carries: `Authorization: Bearer <token>`, else `?token=<token>`.
+std::optional<std::string> tokenOf(const http::request<http::string_body>& request) {
   const auto header = request.find(http::field::authorization);
   if (header != request.end()) {
     const std::string value(header->value());
     static const std::string kPrefix = "Bearer ";
-    if (value.rfind(kPrefix, 0) == 0 && equalConstantTime(value.substr(kPrefix.size()), token)) return true;
+    if (value.rfind(kPrefix, 0) == 0) return value.substr(kPrefix.size());
   }
-  const std::optional<std::string> given = queryParameter(targetOf(request), "token");
-  return given && equalConstantTime(*given, token);
+  return queryParameter(targetOf(request), "token");
+}
+
+bool authorized(const http::request<http::string_body>& request, const std::vector<std::string>& tokens) {
+  if (tokens.empty()) return true;
+  const std::optional<std::string> given = tokenOf(request);
+  if (!given) return false;
+  bool match = false;  // every token compared, in constant time
+  for (const std::string& token : tokens) match |= equalConstantTime(*given, token);
+  return match;
 }
 
 bool offersSubprotocol(const http::request<http::string_body>& request) {
@@ -342,12 +350,12 @@ void ViewerServer::Impl::serveHttp(std::shared_ptr<Stream> stream, std::shared_p
       reply(fileResponse(request));
       return;
     }
-    if (!authorized(request, sources.token)) {
+    if (!authorized(request, sources.tokens)) {
       request.keep_alive(false);
       reply(textResponse(request, http::status::unauthorized,
-                         sources.token.empty() ? ""
-                                               : "missing or wrong token: send 'Authorization: Bearer <token>' or "
-                                                 "?token=<token>"));
+                         sources.tokens.empty() ? ""
+                                                : "missing or wrong token: send 'Authorization: Bearer <token>' or "
+                                                  "?token=<token>"));
       return;
     }
     if (!offersSubprotocol(request)) {

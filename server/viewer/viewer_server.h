@@ -8,7 +8,7 @@
 // second), and while its socket has more than a second's worth unsent nothing new is made for it:
 // the map waits as a set of dirty blocks, the other channels as their newest value.
 // Security: with a certificate (ViewerConfig::tls_cert_file) every connection is TLS (https://,
-// wss://; TLS 1.2 or later) and one that is not is dropped at the handshake. The WebSocket needs the server's token when it has one (header `Authorization: Bearer
+// wss://; TLS 1.2 or later) and one that is not is dropped at the handshake. The WebSocket needs one of the server's tokens when it has any (header `Authorization: Bearer
 // <token>` or `?token=<token>` in the URL: browsers cannot set headers), else HTTP 401; the page's
 // files are public (they hold no map data). Client messages the protocol does not allow get an
 // error status message, never a closed connection.
@@ -55,7 +55,9 @@ struct ViewerSources {
   std::function<std::vector<StageRate>()> stages;  // per-stage timings; empty: none
   std::function<uint64_t()> batches;               // batches integrated; empty: none
   std::string frame_id = "world";
-  std::string token;  // empty: no authentication
+  // Tokens that let a client in, any one of them (cenote-server's operator and read-only tokens:
+  // viewing is reading); none: no authentication.
+  std::vector<std::string> tokens;
   std::string server_name = "cenote";
 };
 

@@ -58,7 +58,7 @@ class ViewerServerHttp : public ::testing::Test {
     config.web_dir = web_.string();
     ViewerSources sources;
     sources.map = &map_;
-    sources.token = "s3cret";
+    sources.tokens = {"s3cret", "r3ader"};  // cenote-server's operator and read-only tokens
     server_ = std::make_unique<ViewerServer>(config, std::move(sources));
   }
   std::filesystem::path web_;
@@ -75,9 +75,10 @@ TEST_F(ViewerServerHttp, UpgradeWithoutTheTokenIs401) {
             0u);
 }
 
-TEST_F(ViewerServerHttp, UpgradeWithTheTokenInHeaderOrQuerySwitchesToTheFoxgloveSubprotocol) {
+TEST_F(ViewerServerHttp, UpgradeWithEitherTokenInHeaderOrQuerySwitchesToTheFoxgloveSubprotocol) {
   for (const std::string& request :
        {upgrade("/?token=s3cret", "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n"),
+        upgrade("/?token=r3ader", "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n"),
         upgrade("/", "Authorization: Bearer s3cret\r\nSec-WebSocket-Protocol: other, foxglove.websocket.v1\r\n")}) {
     const std::string reply = exchange(server_->port(), request);
     EXPECT_EQ(reply.rfind("HTTP/1.1 101", 0), 0u) << reply;
