@@ -230,7 +230,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     }
 
     VU16 mins_along = sentinel_v, mins_vertical = sentinel_v, mins_back = sentinel_v, mins_fwd = sentinel_v;
-    VU16 best = hn::Set(d, kNoCost), best_index = hn::Zero(d), second_best = best;
+    LaneWinners winners = noWinners();
     VU16 along_new[kVectors], vertical_new[kVectors];
     for (int j = 0; j < kVectors; ++j) {
       const int k = j * kN;
@@ -295,9 +295,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
       hn::Store(sum, d, sums_out + k);
       if constexpr (kVectors > 1) {  // one vector: flushWinnerBatch() takes them from the sums
-        second_best = hn::Min(second_best, hn::Max(best, sum));
-        best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
-        best = hn::Min(best, sum);
+        winners.add(sum, hn::Load(d, iota + k));
       }
     }
     for (int j = 0; j < kVectors; ++j) {
@@ -307,14 +305,9 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     along_min = minLaneBroadcast(d, mins_along);
     storePathMinima(min_row_vertical, min_row_fwd, min_row_back_out, x, mins_vertical, mins_fwd, mins_back);
     if (output == RowOutput::kWinner) {
-      const int N = kN;
-      if constexpr (kVectors > 1) {
-        hn::Store(best, d, b.batch_best + slot * N);
-        hn::Store(best_index, d, b.batch_index + slot * N);
-        hn::Store(second_best, d, b.batch_second + slot * N);
-      }
+      if constexpr (kVectors > 1) winners.store(b, slot);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
-        flushWinnerBatch(p, b, i, slot, dx, N, band_first, kB, kB, disparity, confidence);
+        flushWinnerBatch(p, b, i, slot, dx, kN, band_first, kB, kB, disparity, confidence);
       }
     }
   }
