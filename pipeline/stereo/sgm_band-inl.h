@@ -266,16 +266,12 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       } else {
         const uint16_t* a = along_buffer + shift_along + k;
         along_same = hn::LoadU(d, a);
-        along_neighbours = hn::Min(hn::LoadU(d, a - 1), hn::LoadU(d, a + 1));
+        along_neighbours = neighbourMin(a);
       }
       const VU16 l0 = step(along_same, along_neighbours, jump_along, along_min);
-      const VU16 l1 = step(hn::LoadU(d, vertical_in + k),
-                           hn::Min(hn::LoadU(d, vertical_in + k - 1), hn::LoadU(d, vertical_in + k + 1)), jump_vertical,
-                           min_vertical_v);
-      const VU16 l2 = step(hn::LoadU(d, back + k), hn::Min(hn::LoadU(d, back + k - 1), hn::LoadU(d, back + k + 1)),
-                           jump_back, min_back_v);
-      const VU16 l3 = step(hn::LoadU(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)), jump_fwd,
-                           min_fwd_v);
+      const VU16 l1 = step(hn::LoadU(d, vertical_in + k), neighbourMin(vertical_in + k), jump_vertical, min_vertical_v);
+      const VU16 l2 = step(hn::LoadU(d, back + k), neighbourMin(back + k), jump_back, min_back_v);
+      const VU16 l3 = step(hn::LoadU(d, fwd + k), neighbourMin(fwd + k), jump_fwd, min_fwd_v);
       along_new[j] = l0;
       vertical_new[j] = l1;  // stored after every vector has read the old values
       hn::Store(l2, d, back_out + k);
@@ -291,9 +287,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         mins_back = hn::Min(mins_back, l2);
         mins_fwd = hn::Min(mins_fwd, l3);
       }
-      VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
-      if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
-      hn::Store(sum, d, sums_out + k);
+      const VU16 sum = storePathSum(l0, l1, l2, l3, sums_in, sums_out, k);
       if constexpr (kVectors > 1) {  // one vector: flushWinnerBatch() takes them from the sums
         winners.add(sum, hn::Load(d, iota + k));
       }

@@ -616,6 +616,23 @@ enum class RowOutput { kNone, kStoreSums, kWinner };
 // After pixel x: the minima of its three stored paths (vertical, forward and backward diagonal),
 // which the next row's pixels read for their P2 term, into rows b.path_min[0], [2] and [3]
 // (passed as pointers: the band kernel keeps them in locals, see aggregateRowBand).
+// The smaller of a path pixel's costs at disparities d - 1 and d + 1, for the d of each lane at
+// `at` (sentinel lanes pad both ends of the pixel).
+HWY_INLINE VU16 neighbourMin(const uint16_t* at) {
+  const DU16 d;
+  return hn::Min(hn::LoadU(d, at - 1), hn::LoadU(d, at + 1));
+}
+
+// The sum over the four paths of the pixel's vector k of disparities, plus the first pass's sums
+// (`sums_in`: 8 paths, second pass; null otherwise); stored in `sums_out`.
+HWY_INLINE VU16 storePathSum(VU16 l0, VU16 l1, VU16 l2, VU16 l3, const uint16_t* sums_in, uint16_t* sums_out, int k) {
+  const DU16 d;
+  VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
+  if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
+  hn::Store(sum, d, sums_out + k);
+  return sum;
+}
+
 HWY_INLINE void storePathMinima(uint16_t* min_vertical, uint16_t* min_fwd, uint16_t* min_back, int x, VU16 mins_vertical,
                                 VU16 mins_fwd, VU16 mins_back) {
   const DU16 d;
@@ -759,13 +776,9 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       const VU16 l0 = step(along_here,
                            hn::Min(shiftInPrevious(along_before, along_here), shiftInNext(along_here, along_after)),
                            jump_along, min_along_v);
-      const VU16 l1 = step(hn::Load(d, vertical + k),
-                           hn::Min(hn::LoadU(d, vertical + k - 1), hn::LoadU(d, vertical + k + 1)), jump_vertical,
-                           min_vertical_v);
-      const VU16 l2 = step(hn::Load(d, back + k), hn::Min(hn::LoadU(d, back + k - 1), hn::LoadU(d, back + k + 1)),
-                           jump_back, min_back_v);
-      const VU16 l3 = step(hn::Load(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)), jump_fwd,
-                           min_fwd_v);
+      const VU16 l1 = step(hn::Load(d, vertical + k), neighbourMin(vertical + k), jump_vertical, min_vertical_v);
+      const VU16 l2 = step(hn::Load(d, back + k), neighbourMin(back + k), jump_back, min_back_v);
+      const VU16 l3 = step(hn::Load(d, fwd + k), neighbourMin(fwd + k), jump_fwd, min_fwd_v);
       hn::Store(l0, d, along_out + k);
       // Direction 1 overwrites the pixel it reads: vector k's neighbour loads still need vector
       // k - 1's old last lane, so each vector is stored one step late.
@@ -777,10 +790,7 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       mins_vertical = hn::Min(mins_vertical, l1);
       mins_back = hn::Min(mins_back, l2);
       mins_fwd = hn::Min(mins_fwd, l3);
-      VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
-      if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
-      hn::Store(sum, d, sums_out + k);
-      winners.add(sum, hn::Load(d, iota + k));
+      winners.add(storePathSum(l0, l1, l2, l3, sums_in, sums_out, k), hn::Load(d, iota + k));
       along_before = along_here;
       along_here = along_after;
     };
