@@ -49,6 +49,21 @@ struct RayWalk {
 inline uint64_t* freeWord(BlockMasks* masks, int lx) { return masks->free.data() + lx; }
 inline uint64_t voxelBit(int ly, int lz) { return 1ull << ((ly << 3) | lz); }
 
+// One step of a walk across the next face on one axis: the in-block coordinate `l` and the face
+// index `b` move by `step` (+-1), `t` becomes that of the axis' next face (`never` once `n`, the
+// steps left on the axis, runs out), and a coordinate that wraps moves `block_coord` to the
+// neighbouring block. Returns whether it did.
+inline bool stepAcrossFace(int& l, double& b, double& t, long& n, int step, double a, double c, double never,
+                           int& block_coord) {
+  l += step;
+  b += step;
+  t = --n > 0 ? b * a - c : never;
+  if ((l & ~7) == 0) return false;
+  block_coord += step;
+  l &= 7;
+  return true;
+}
+
 // The voxels of the ray from origin_m to end_m, from the origin's voxel up to the end's, exclusive
 // (OctoMap's free-space rule; nothing when both share a voxel): visit(word, bit) on each, in order;
 // false stops the walk. Returns false when the visitor stopped it.
@@ -77,32 +92,11 @@ bool marchFromOrigin(const Eigen::Vector3d& origin_m, const Eigen::Vector3d& end
   for (long n = 1; n < steps; ++n) {
     bool crossed;
     if (tx < ty && tx < tz) {
-      lx += sx;
-      bx += sx;
-      tx = --nx > 0 ? bx * ax - cx : kNever;
-      crossed = (lx & ~7) != 0;
-      if (crossed) {
-        block.x() += sx;
-        lx &= 7;
-      }
+      crossed = stepAcrossFace(lx, bx, tx, nx, sx, ax, cx, kNever, block.x());
     } else if (ty < tz) {
-      ly += sy;
-      by += sy;
-      ty = --ny > 0 ? by * ay - cy : kNever;
-      crossed = (ly & ~7) != 0;
-      if (crossed) {
-        block.y() += sy;
-        ly &= 7;
-      }
+      crossed = stepAcrossFace(ly, by, ty, ny, sy, ay, cy, kNever, block.y());
     } else {
-      lz += sz;
-      bz += sz;
-      tz = --nz > 0 ? bz * az - cz : kNever;
-      crossed = (lz & ~7) != 0;
-      if (crossed) {
-        block.z() += sz;
-        lz &= 7;
-      }
+      crossed = stepAcrossFace(lz, bz, tz, nz, sz, az, cz, kNever, block.z());
     }
     if (crossed) masks = writer.masksOf(block);
     if (!visit(freeWord(masks, lx), voxelBit(ly, lz))) return false;
@@ -133,34 +127,15 @@ bool marchFromEnd(const Eigen::Vector3d& origin_m, const Eigen::Vector3d& end_m,
   bool crossed = true;  // the end voxel's block is looked up only if a voxel of it is visited
   for (long n = 1; n <= steps; ++n) {
     // The latest crossing first; ties to the lowest axis (the reverse of marchFromOrigin's order).
+    bool wrapped;
     if (tx >= ty && tx >= tz) {
-      lx -= sx;
-      bx -= sx;
-      tx = --nx > 0 ? bx * ax - cx : kNever;
-      if ((lx & ~7) != 0) {
-        block.x() -= sx;
-        lx &= 7;
-        crossed = true;
-      }
+      wrapped = stepAcrossFace(lx, bx, tx, nx, -sx, ax, cx, kNever, block.x());
     } else if (ty >= tz) {
-      ly -= sy;
-      by -= sy;
-      ty = --ny > 0 ? by * ay - cy : kNever;
-      if ((ly & ~7) != 0) {
-        block.y() -= sy;
-        ly &= 7;
-        crossed = true;
-      }
+      wrapped = stepAcrossFace(ly, by, ty, ny, -sy, ay, cy, kNever, block.y());
     } else {
-      lz -= sz;
-      bz -= sz;
-      tz = --nz > 0 ? bz * az - cz : kNever;
-      if ((lz & ~7) != 0) {
-        block.z() -= sz;
-        lz &= 7;
-        crossed = true;
-      }
+      wrapped = stepAcrossFace(lz, bz, tz, nz, -sz, az, cz, kNever, block.z());
     }
+    crossed = crossed || wrapped;
     if (crossed) {
       masks = writer.masksOf(block);
       crossed = false;

@@ -16,6 +16,7 @@
 #include "common/error.h"
 #include "io/cloud/ply_io.h"
 #include "mapping/detail/map_impl.h"
+#include "mapping/detail/mask_bits.h"
 #include "mapping/io/octree_file_scan.h"
 
 namespace cenote::mapping {
@@ -141,14 +142,7 @@ void forEachKnown(const OccupancyMap& map, Visit&& visit) {
   BlockView view;
   for (const BlockIndex& block : acc.knownBlocks()) {
     if (!acc.readBlock(block, view)) continue;
-    for (int w = 0; w < 8; ++w) {
-      uint64_t bits = view.known[w];
-      while (bits != 0) {
-        const int o = w * 64 + __builtin_ctzll(bits);
-        bits &= bits - 1;
-        visit(voxelOfOffset(block, o), view.log_odds[o], acc);
-      }
-    }
+    detail::forEachSetBit(view.known, [&](int o) { visit(voxelOfOffset(block, o), view.log_odds[o], acc); });
   }
 }
 

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "common/error.h"
+#include "mapping/detail/mask_bits.h"
 #include "mapping/integration/voxel_ray.h"
 
 namespace cenote::mapping {
@@ -246,20 +247,15 @@ std::vector<BoxCounts> queryBoxes(const OccupancyMap& map, const std::vector<Aab
         for (int bz = blo.z(); bz <= bhi.z(); ++bz) {
           const BlockIndex block(bx, by, bz);
           if (!acc.readBlock(block, view)) continue;
-          for (int w = 0; w < 8; ++w) {
-            uint64_t bits = view.known[w];
-            while (bits != 0) {
-              const int o = w * 64 + __builtin_ctzll(bits);
-              bits &= bits - 1;
-              const VoxelIndex ijk = voxelOfOffset(block, o);
-              if ((ijk.array() < lo.array()).any() || (ijk.array() > hi.array()).any()) continue;
-              if (map.model().isOccupied(view.log_odds[o])) {
-                ++c.occupied;
-              } else {
-                ++c.free;
-              }
+          detail::forEachSetBit(view.known, [&](int o) {
+            const VoxelIndex ijk = voxelOfOffset(block, o);
+            if ((ijk.array() < lo.array()).any() || (ijk.array() > hi.array()).any()) return;
+            if (map.model().isOccupied(view.log_odds[o])) {
+              ++c.occupied;
+            } else {
+              ++c.free;
             }
-          }
+          });
         }
       }
     }

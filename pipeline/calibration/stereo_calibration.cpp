@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include "common/atomic_file.h"
 #include "common/error.h"
@@ -55,6 +56,33 @@ StereoGeometry geometryFromProjections(const cv::Matx34d& P_left, const cv::Matx
   return g;
 }
 
+// Opens a FileStorage calibration file and reads its image size, the first keys of both layouts.
+// `what` names the file's kind in errors ("calibration", "intrinsics").
+cv::Size openWithImageSize(cv::FileStorage& fs, const std::string& path, const std::string& what) {
+  requireFile(path);
+  try {
+    fs.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw Error(path + ": not a readable " + what + " file: " + e.what());
+  }
+  if (!fs.isOpened()) throw Error(path + ": not a readable " + what + " file");
+  int width = 0, height = 0;
+  fs["image_width"] >> width;
+  fs["image_height"] >> height;
+  if (width <= 0 || height <= 0) throw Error(path + ": missing image_width / image_height");
+  return cv::Size(width, height);
+}
+
+// `c`, validated; a failed rule names `path`, the file (or files) it was read from.
+StereoCalibration validated(StereoCalibration c, const std::string& path) {
+  try {
+    c.validate();
+  } catch (const Error& e) {
+    throw Error(path + ": " + e.what());
+  }
+  return c;
+}
+
 }  // namespace
 
 void StereoCalibration::validate() const {
@@ -84,20 +112,9 @@ void StereoCalibration::validate() const {
 }
 
 StereoCalibration readStereoCalibration(const std::string& path) {
-  requireFile(path);
   cv::FileStorage fs;
-  try {
-    fs.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw Error(path + ": not a readable calibration file: " + e.what());
-  }
-  if (!fs.isOpened()) throw Error(path + ": not a readable calibration file");
   StereoCalibration c;
-  int width = 0, height = 0;
-  fs["image_width"] >> width;
-  fs["image_height"] >> height;
-  if (width <= 0 || height <= 0) throw Error(path + ": missing image_width / image_height");
-  c.image_size = cv::Size(width, height);
+  c.image_size = openWithImageSize(fs, path, "calibration");
   const cv::Mat P1 = readMatrix(fs, path, {"P1"}, 3, 4, false);
   const cv::Mat K1 = readMatrix(fs, path, {"K1", "M1"}, 3, 3, false);
   if (K1.empty() && !P1.empty()) {
@@ -114,12 +131,7 @@ StereoCalibration readStereoCalibration(const std::string& path) {
     const cv::Mat T = readMatrix(fs, path, {"T"}, 3, 1, true);
     c.T = cv::Vec3d(T.at<double>(0), T.at<double>(1), T.at<double>(2));
   }
-  try {
-    c.validate();
-  } catch (const Error& e) {
-    throw Error(path + ": " + e.what());
-  }
-  return c;
+  return validated(std::move(c), path);
 }
 
 void writeStereoCalibration(const std::string& path, const StereoCalibration& c) {
@@ -136,20 +148,9 @@ void writeStereoCalibration(const std::string& path, const StereoCalibration& c)
 }
 
 StereoCalibration readPaperIntrinsics(const std::string& path) {
-  requireFile(path);
   cv::FileStorage fs;
-  try {
-    fs.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw Error(path + ": not a readable intrinsics file: " + e.what());
-  }
-  if (!fs.isOpened()) throw Error(path + ": not a readable intrinsics file");
   StereoCalibration c;
-  int width = 0, height = 0;
-  fs["image_width"] >> width;
-  fs["image_height"] >> height;
-  if (width <= 0 || height <= 0) throw Error(path + ": missing image_width / image_height");
-  c.image_size = cv::Size(width, height);
+  c.image_size = openWithImageSize(fs, path, "intrinsics");
   c.left.K = cv::Matx33d(readMatrix(fs, path, {"K1", "K_left"}, 3, 3, true));
   c.right.K = cv::Matx33d(readMatrix(fs, path, {"K2", "K_right"}, 3, 3, true));
   c.left.distortion = toVector(readMatrix(fs, path, {"D1", "D_left"}, 0, 0, false));
@@ -177,12 +178,7 @@ StereoCalibration readPaperIntrinsics(const std::string& path) {
                   ", which matches baseline = " + std::to_string(baseline_mm) + " mm neither in millimetres nor in metres");
     }
   }
-  try {
-    c.validate();
-  } catch (const Error& e) {
-    throw Error(path + ": " + e.what());
-  }
-  return c;
+  return validated(std::move(c), path);
 }
 
 namespace {
@@ -259,12 +255,7 @@ StereoCalibration readEurocSensorPair(const std::string& left_path, const std::s
   const cv::Matx44d T_right_left = T_body_cam[1].inv() * T_body_cam[0];
   c.R = T_right_left.get_minor<3, 3>(0, 0);
   c.T = cv::Vec3d(T_right_left(0, 3), T_right_left(1, 3), T_right_left(2, 3));
-  try {
-    c.validate();
-  } catch (const Error& e) {
-    throw Error(left_path + " + " + right_path + ": " + e.what());
-  }
-  return c;
+  return validated(std::move(c), left_path + " + " + right_path);
 }
 
 StereoCalibration readKittiCalibration(const std::string& path, const cv::Size& image_size, const std::string& left,

@@ -230,7 +230,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     }
 
     VU16 mins_along = sentinel_v, mins_vertical = sentinel_v, mins_back = sentinel_v, mins_fwd = sentinel_v;
-    VU16 best = hn::Set(d, kNoCost), best_index = hn::Zero(d), second_best = best;
+    LaneWinners winners = noWinners();
     VU16 along_new[kVectors], vertical_new[kVectors];
     for (int j = 0; j < kVectors; ++j) {
       const int k = j * kN;
@@ -266,16 +266,12 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       } else {
         const uint16_t* a = along_buffer + shift_along + k;
         along_same = hn::LoadU(d, a);
-        along_neighbours = hn::Min(hn::LoadU(d, a - 1), hn::LoadU(d, a + 1));
+        along_neighbours = neighbourMin(a);
       }
       const VU16 l0 = step(along_same, along_neighbours, jump_along, along_min);
-      const VU16 l1 = step(hn::LoadU(d, vertical_in + k),
-                           hn::Min(hn::LoadU(d, vertical_in + k - 1), hn::LoadU(d, vertical_in + k + 1)), jump_vertical,
-                           min_vertical_v);
-      const VU16 l2 = step(hn::LoadU(d, back + k), hn::Min(hn::LoadU(d, back + k - 1), hn::LoadU(d, back + k + 1)),
-                           jump_back, min_back_v);
-      const VU16 l3 = step(hn::LoadU(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)), jump_fwd,
-                           min_fwd_v);
+      const VU16 l1 = step(hn::LoadU(d, vertical_in + k), neighbourMin(vertical_in + k), jump_vertical, min_vertical_v);
+      const VU16 l2 = step(hn::LoadU(d, back + k), neighbourMin(back + k), jump_back, min_back_v);
+      const VU16 l3 = step(hn::LoadU(d, fwd + k), neighbourMin(fwd + k), jump_fwd, min_fwd_v);
       along_new[j] = l0;
       vertical_new[j] = l1;  // stored after every vector has read the old values
       hn::Store(l2, d, back_out + k);
@@ -291,13 +287,9 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         mins_back = hn::Min(mins_back, l2);
         mins_fwd = hn::Min(mins_fwd, l3);
       }
-      VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
-      if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
-      hn::Store(sum, d, sums_out + k);
+      const VU16 sum = storePathSum(l0, l1, l2, l3, sums_in, sums_out, k);
       if constexpr (kVectors > 1) {  // one vector: flushWinnerBatch() takes them from the sums
-        second_best = hn::Min(second_best, hn::Max(best, sum));
-        best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
-        best = hn::Min(best, sum);
+        winners.add(sum, hn::Load(d, iota + k));
       }
     }
     for (int j = 0; j < kVectors; ++j) {
@@ -307,14 +299,9 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     along_min = minLaneBroadcast(d, mins_along);
     storePathMinima(min_row_vertical, min_row_fwd, min_row_back_out, x, mins_vertical, mins_fwd, mins_back);
     if (output == RowOutput::kWinner) {
-      const int N = kN;
-      if constexpr (kVectors > 1) {
-        hn::Store(best, d, b.batch_best + slot * N);
-        hn::Store(best_index, d, b.batch_index + slot * N);
-        hn::Store(second_best, d, b.batch_second + slot * N);
-      }
+      if constexpr (kVectors > 1) winners.store(b, slot);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
-        flushWinnerBatch(p, b, i, slot, dx, N, band_first, kB, kB, disparity, confidence);
+        flushWinnerBatch(p, b, i, slot, dx, kN, band_first, kB, kB, disparity, confidence);
       }
     }
   }

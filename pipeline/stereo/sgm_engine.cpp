@@ -17,6 +17,7 @@
 #include <hwy/highway.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -72,58 +73,51 @@ HWY_INLINE hn::Vec<D> minLaneBroadcast(D d, hn::Vec<D> v) {
   return hn::Set(d, minLane(d, v));
 }
 
+// The lanes of the concatenation [lo, hi] from lane kOffset on (0 <= kOffset <= lanes): one vector
+// out of two adjacent ones, in registers.
+template <int kOffset, class V>
+HWY_INLINE V lanesFrom(V lo, V hi) {
+  constexpr int kLanes = sizeof(V) / sizeof(uint16_t);
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+  if constexpr (kLanes == 32) {
+    alignas(64) static constexpr std::array<uint16_t, 32> kIndex = [] {
+      std::array<uint16_t, 32> index{};
+      for (int i = 0; i < 32; ++i) index[i] = static_cast<uint16_t>(kOffset + i);  // >= 32: from hi
+      return index;
+    }();
+    return V{_mm512_permutex2var_epi16(lo.raw, _mm512_load_si512(kIndex.data()), hi.raw)};
+  }
+#endif
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
+  if constexpr (kLanes == 16) {
+    // alignr shifts within each 128-bit half: pair every half with the one that follows it.
+    const __m256i middle = _mm256_permute2x128_si256(lo.raw, hi.raw, 0x21);  // [upper half of lo, lower of hi]
+    if constexpr (kOffset < 8) return V{_mm256_alignr_epi8(middle, lo.raw, 2 * kOffset)};
+    return V{_mm256_alignr_epi8(hi.raw, middle, 2 * (kOffset - 8))};
+  }
+#endif
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSSE3
+  if constexpr (kLanes == 8) return V{_mm_alignr_epi8(hi.raw, lo.raw, 2 * kOffset)};
+#endif
+  const DU16 d;
+  HWY_ALIGN uint16_t lanes[2 * kLanes];
+  hn::Store(lo, d, lanes);
+  hn::Store(hi, d, lanes + hn::Lanes(d));
+  return hn::LoadU(d, lanes + kOffset);
+}
+
 // Lane shifts across a whole vector: [prev[N-1], cur[0..N-2]] (the d-1 neighbours of `cur`) and
 // [cur[1..N-1], next[0]] (the d+1 neighbours). The along-row path needs them in registers: the
 // previous pixel's path costs were stored just before, and an unaligned reload of them would miss
 // store-to-load forwarding on every vector (it dominated the profile).
 template <class V>
 HWY_INLINE V shiftInPrevious(V prev, V cur) {
-  constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
-  if constexpr (kLanes == 32) {
-    alignas(64) static constexpr uint16_t kIndex[32] = {63, 0,  1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11, 12, 13, 14,
-                                                        15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30};
-    return V{_mm512_permutex2var_epi16(cur.raw, _mm512_load_si512(kIndex), prev.raw)};
-  }
-#endif
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
-  if constexpr (kLanes == 16) {
-    return V{_mm256_alignr_epi8(cur.raw, _mm256_permute2x128_si256(prev.raw, cur.raw, 0x21), 14)};
-  }
-#endif
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSSE3
-  if constexpr (kLanes == 8) return V{_mm_alignr_epi8(cur.raw, prev.raw, 14)};
-#endif
-  const DU16 d;
-  HWY_ALIGN uint16_t lanes[2 * kLanes];
-  hn::Store(prev, d, lanes);
-  hn::Store(cur, d, lanes + hn::Lanes(d));
-  return hn::LoadU(d, lanes + hn::Lanes(d) - 1);
+  return lanesFrom<sizeof(V) / sizeof(uint16_t) - 1>(prev, cur);
 }
 
 template <class V>
 HWY_INLINE V shiftInNext(V cur, V next) {
-  constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
-  if constexpr (kLanes == 32) {
-    alignas(64) static constexpr uint16_t kIndex[32] = {1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11, 12, 13, 14, 15, 16,
-                                                        17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32};
-    return V{_mm512_permutex2var_epi16(cur.raw, _mm512_load_si512(kIndex), next.raw)};
-  }
-#endif
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
-  if constexpr (kLanes == 16) {
-    return V{_mm256_alignr_epi8(_mm256_permute2x128_si256(cur.raw, next.raw, 0x21), cur.raw, 2)};
-  }
-#endif
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSSE3
-  if constexpr (kLanes == 8) return V{_mm_alignr_epi8(next.raw, cur.raw, 2)};
-#endif
-  const DU16 d;
-  HWY_ALIGN uint16_t lanes[2 * kLanes];
-  hn::Store(cur, d, lanes);
-  hn::Store(next, d, lanes + hn::Lanes(d));
-  return hn::LoadU(d, lanes + 1);
+  return lanesFrom<1>(cur, next);
 }
 
 // Winners are taken for this many pixels at a time, after their paths: the pixels are
@@ -438,12 +432,39 @@ struct WinnerBatch {
   HWY_ALIGN int32_t above[kWinnerBatch];
 };
 
-// Winner and second minimum of one pixel's path sums `s` (lane-wise minimum `best`, its first
-// disparity `best_index`, lane-wise second smallest `second_best`), into slot j of the batch.
-// The sums are those of disparities [first, first + D) (the band, or the whole range with
-// first = 0), padded to Dp; indices and `best_index` count from `first`.
-HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, VU16 best, VU16 best_index,
-                           VU16 second_best, WinnerBatch& out, int j, int first, int D, int Dp) {
+// The winner search of one pixel, lane by lane, as its vectors of path sums come: each lane's
+// smallest sum, the first disparity that has it and its second smallest sum. pickWinner() takes
+// the winner from them; the kernels keep them in batch slots until then.
+struct LaneWinners {
+  VU16 best, best_index, second_best;
+
+  // The sums of one vector of disparities (`disparities`: the index of each lane's).
+  HWY_INLINE void add(VU16 sum, VU16 disparities) {
+    second_best = hn::Min(second_best, hn::Max(best, sum));
+    best_index = hn::IfThenElse(hn::Lt(sum, best), disparities, best_index);
+    best = hn::Min(best, sum);
+  }
+  // Into batch slot `slot`, where flushWinnerBatch() reads them.
+  HWY_INLINE void store(const StripBuffers& b, int slot) const {
+    const DU16 d;
+    const std::ptrdiff_t at = slot * static_cast<std::ptrdiff_t>(hn::Lanes(d));  // b.lanes
+    hn::Store(best, d, b.batch_best + at);
+    hn::Store(best_index, d, b.batch_index + at);
+    hn::Store(second_best, d, b.batch_second + at);
+  }
+};
+
+// Before the first vector of sums.
+HWY_INLINE LaneWinners noWinners() {
+  const DU16 d;
+  return {hn::Set(d, kNoCost), hn::Zero(d), hn::Set(d, kNoCost)};
+}
+
+// Winner and second minimum of one pixel's path sums `s` (searched lane by lane in `lanes`), into
+// slot j of the batch. The sums are those of disparities [first, first + D) (the band, or the
+// whole range with first = 0), padded to Dp; indices and `lanes.best_index` count from `first`.
+HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uint16_t* s, LaneWinners lanes,
+                           WinnerBatch& out, int j, int first, int D, int Dp) {
   const DU16 d;
   const int N = b.lanes;
   // Disparities k with a right pixel: k <= x - min_d.
@@ -457,15 +478,11 @@ HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uin
   // without a right pixel need masking.
   if (valid < D) {
     std::fill(s + valid, s + Dp, kNoCost);
-    best = hn::Set(d, kNoCost);
-    second_best = best;
-    for (int k = 0; k < Dp; k += N) {
-      const VU16 sum = hn::Load(d, s + k);
-      second_best = hn::Min(second_best, hn::Max(best, sum));
-      best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, b.iota + k), best_index);
-      best = hn::Min(best, sum);
-    }
+    lanes.best = hn::Set(d, kNoCost);
+    lanes.second_best = lanes.best;
+    for (int k = 0; k < Dp; k += N) lanes.add(hn::Load(d, s + k), hn::Load(d, b.iota + k));
   }
+  const VU16 best = lanes.best, best_index = lanes.best_index;
   // Smallest sum, and the smallest disparity that has it: each lane already holds its own
   // minimum and first index (branch-free; searching the vectors for the winner mispredicts).
   const uint16_t c1 = minLane(d, best);
@@ -484,7 +501,7 @@ HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uin
   const auto best_is_near = hn::Lt(hn::Sub(best_index, first_near), span);
   out.winner[j] = first + winner;
   out.c1[j] = c1;
-  out.c2[j] = minLane(d, hn::IfThenElse(best_is_near, second_best, best));
+  out.c2[j] = minLane(d, hn::IfThenElse(best_is_near, lanes.second_best, best));
   const bool subpixel = p.subpixel && winner > 0 && winner + 1 < valid;
   out.below[j] = subpixel ? s[winner - 1] : c1;
   out.above[j] = subpixel ? s[winner + 1] : c1;
@@ -573,10 +590,10 @@ HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int 
     // The right image's minimum first: pickWinner() masks lanes of the sums.
     if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx, first_j, Dp);
     const bool one_vector = Dp == N;
-    const VU16 best = hn::Load(d, one_vector ? sums : b.batch_best + j * N);
-    const VU16 best_index = hn::Load(d, one_vector ? b.iota : b.batch_index + j * N);
-    const VU16 second_best = one_vector ? hn::Set(d, kNoCost) : hn::Load(d, b.batch_second + j * N);
-    pickWinner(p, b, xj, sums, best, best_index, second_best, batch, j, first_j, D, Dp);
+    const LaneWinners lanes{hn::Load(d, one_vector ? sums : b.batch_best + j * N),
+                            hn::Load(d, one_vector ? b.iota : b.batch_index + j * N),
+                            one_vector ? hn::Set(d, kNoCost) : hn::Load(d, b.batch_second + j * N)};
+    pickWinner(p, b, xj, sums, lanes, batch, j, first_j, D, Dp);
   }
   finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
 }
@@ -599,6 +616,23 @@ enum class RowOutput { kNone, kStoreSums, kWinner };
 // After pixel x: the minima of its three stored paths (vertical, forward and backward diagonal),
 // which the next row's pixels read for their P2 term, into rows b.path_min[0], [2] and [3]
 // (passed as pointers: the band kernel keeps them in locals, see aggregateRowBand).
+// The smaller of a path pixel's costs at disparities d - 1 and d + 1, for the d of each lane at
+// `at` (sentinel lanes pad both ends of the pixel).
+HWY_INLINE VU16 neighbourMin(const uint16_t* at) {
+  const DU16 d;
+  return hn::Min(hn::LoadU(d, at - 1), hn::LoadU(d, at + 1));
+}
+
+// The sum over the four paths of the pixel's vector k of disparities, plus the first pass's sums
+// (`sums_in`: 8 paths, second pass; null otherwise); stored in `sums_out`.
+HWY_INLINE VU16 storePathSum(VU16 l0, VU16 l1, VU16 l2, VU16 l3, const uint16_t* sums_in, uint16_t* sums_out, int k) {
+  const DU16 d;
+  VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
+  if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
+  hn::Store(sum, d, sums_out + k);
+  return sum;
+}
+
 HWY_INLINE void storePathMinima(uint16_t* min_vertical, uint16_t* min_fwd, uint16_t* min_back, int x, VU16 mins_vertical,
                                 VU16 mins_fwd, VU16 mins_back) {
   const DU16 d;
@@ -693,7 +727,7 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     const int sad_shift = p.sad_shift;
 
     VU16 mins_along = sentinel_v, mins_vertical = sentinel_v, mins_back = sentinel_v, mins_fwd = sentinel_v;
-    VU16 best = hn::Set(d, kNoCost), best_index = hn::Zero(d), second_best = best;
+    LaneWinners winners = noWinners();
     // Along-row predecessor, rolled through registers: vectors k - 1, k and k + 1 (the pads
     // before and after the Dp values hold sentinels).
     VU16 along_before = hn::Load(d, along_prev - N);
@@ -742,13 +776,9 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       const VU16 l0 = step(along_here,
                            hn::Min(shiftInPrevious(along_before, along_here), shiftInNext(along_here, along_after)),
                            jump_along, min_along_v);
-      const VU16 l1 = step(hn::Load(d, vertical + k),
-                           hn::Min(hn::LoadU(d, vertical + k - 1), hn::LoadU(d, vertical + k + 1)), jump_vertical,
-                           min_vertical_v);
-      const VU16 l2 = step(hn::Load(d, back + k), hn::Min(hn::LoadU(d, back + k - 1), hn::LoadU(d, back + k + 1)),
-                           jump_back, min_back_v);
-      const VU16 l3 = step(hn::Load(d, fwd + k), hn::Min(hn::LoadU(d, fwd + k - 1), hn::LoadU(d, fwd + k + 1)), jump_fwd,
-                           min_fwd_v);
+      const VU16 l1 = step(hn::Load(d, vertical + k), neighbourMin(vertical + k), jump_vertical, min_vertical_v);
+      const VU16 l2 = step(hn::Load(d, back + k), neighbourMin(back + k), jump_back, min_back_v);
+      const VU16 l3 = step(hn::Load(d, fwd + k), neighbourMin(fwd + k), jump_fwd, min_fwd_v);
       hn::Store(l0, d, along_out + k);
       // Direction 1 overwrites the pixel it reads: vector k's neighbour loads still need vector
       // k - 1's old last lane, so each vector is stored one step late.
@@ -760,12 +790,7 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       mins_vertical = hn::Min(mins_vertical, l1);
       mins_back = hn::Min(mins_back, l2);
       mins_fwd = hn::Min(mins_fwd, l3);
-      VU16 sum = hn::Add(hn::Add(l0, l1), hn::Add(l2, l3));
-      if (sums_in) sum = hn::Add(sum, hn::Load(d, sums_in + k));
-      hn::Store(sum, d, sums_out + k);
-      second_best = hn::Min(second_best, hn::Max(best, sum));
-      best_index = hn::IfThenElse(hn::Lt(sum, best), hn::Load(d, iota + k), best_index);
-      best = hn::Min(best, sum);
+      winners.add(storePathSum(l0, l1, l2, l3, sums_in, sums_out, k), hn::Load(d, iota + k));
       along_before = along_here;
       along_here = along_after;
     };
@@ -785,9 +810,7 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     storePathMinima(b.path_min[0], b.path_min[2], b.path_min[3], x, mins_vertical, mins_fwd, mins_back);
     along_cur = 1 - along_cur;
     if (output == RowOutput::kWinner) {
-      hn::Store(best, d, b.batch_best + slot * N);
-      hn::Store(best_index, d, b.batch_index + slot * N);
-      hn::Store(second_best, d, b.batch_second + slot * N);
+      winners.store(b, slot);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
         flushWinnerBatch(p, b, i, slot, dx, N, nullptr, D, Dp, disparity, confidence);
       }

@@ -53,6 +53,26 @@ void reject(Ack& ack, const StatusError& e) {
   ack.set_message(e.what());
 }
 
+// A pose or point stream: holds one of the `max` slots of such streams (server.limits.max_ingest_streams)
+// for the call and acknowledges each item. An item for which handle(item, ack) throws (StatusError,
+// cenote::Error) is rejected in its ack, and the stream goes on.
+template <typename Ack, typename Item, typename Handle>
+grpc::Status acknowledgeIngest(std::atomic<int>& active, int max, grpc::ServerReaderWriter<Ack, Item>* stream,
+                               Handle&& handle) {
+  StreamSlot slot(active, max, "pose and point streams", "server.limits.max_ingest_streams");
+  acknowledgeEach(stream, [&](const Item& item, Ack& ack) {
+    try {
+      handle(item, ack);
+    } catch (const StatusError& e) {
+      reject(ack, e);
+    } catch (const Error& e) {
+      reject(ack, toStatusError(e));
+    }
+    return true;
+  });
+  return grpc::Status::OK;
+}
+
 // One StreamFrames call: its pipeline, the thread that integrates what comes out, its keyframes.
 class FrameStream {
  public:
@@ -240,19 +260,12 @@ grpc::Status IngestService::StreamFrames(grpc::ServerContext* context,
 grpc::Status IngestService::StreamPoses(grpc::ServerContext* context,
                                         grpc::ServerReaderWriter<v1::PoseAck, v1::PoseStamped>* stream) {
   return guard_.runStream(context, "Ingest/StreamPoses", [&] {
-    StreamSlot slot(ingest_streams_, settings_.server.limits.max_ingest_streams, "pose and point streams",
-                    "server.limits.max_ingest_streams");
-    acknowledgeEach(stream, [&](const v1::PoseStamped& wire, v1::PoseAck& ack) {
-      ack.set_timestamp_s(wire.timestamp_s());
-      try {
-        if (!std::isfinite(wire.timestamp_s())) throw invalidArgument("timestamp_s is not finite");
-        poses_.add({wire.timestamp_s(), finitePose(wire.pose(), "pose")});
-      } catch (const StatusError& e) {
-        reject(ack, e);
-      }
-      return true;
-    });
-    return grpc::Status::OK;
+    return acknowledgeIngest(ingest_streams_, settings_.server.limits.max_ingest_streams, stream,
+                             [&](const v1::PoseStamped& wire, v1::PoseAck& ack) {
+                               ack.set_timestamp_s(wire.timestamp_s());
+                               if (!std::isfinite(wire.timestamp_s())) throw invalidArgument("timestamp_s is not finite");
+                               poses_.add({wire.timestamp_s(), finitePose(wire.pose(), "pose")});
+                             });
   });
 }
 
@@ -287,19 +300,8 @@ void IngestService::integrateBatch(const v1::PointBatch& wire, v1::BatchAck& ack
 grpc::Status IngestService::StreamPoints(grpc::ServerContext* context,
                                          grpc::ServerReaderWriter<v1::BatchAck, v1::PointBatch>* stream) {
   return guard_.runStream(context, "Ingest/StreamPoints", [&] {
-    StreamSlot slot(ingest_streams_, settings_.server.limits.max_ingest_streams, "pose and point streams",
-                    "server.limits.max_ingest_streams");
-    acknowledgeEach(stream, [&](const v1::PointBatch& wire, v1::BatchAck& ack) {
-      try {
-        integrateBatch(wire, ack);
-      } catch (const StatusError& e) {
-        reject(ack, e);
-      } catch (const Error& e) {
-        reject(ack, toStatusError(e));
-      }
-      return true;
-    });
-    return grpc::Status::OK;
+    return acknowledgeIngest(ingest_streams_, settings_.server.limits.max_ingest_streams, stream,
+                             [&](const v1::PointBatch& wire, v1::BatchAck& ack) { integrateBatch(wire, ack); });
   });
 }
 
