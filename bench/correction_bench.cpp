@@ -22,6 +22,7 @@
 #include "mapping/history/map_history.h"
 #include "mapping/occupancy_map.h"
 #include "tests/mapping/support/analytic_scene.h"
+#include "tests/mapping/support/known_blocks.h"
 
 namespace {
 
@@ -85,12 +86,7 @@ PointBatch frameAt(const Dive& d, int i, const Eigen::Isometry3d& T) {
 double stateAgreement(const OccupancyMap& a, const OccupancyMap& b) {
   auto acc_a = a.constAccessor();
   auto acc_b = b.constAccessor();
-  std::vector<BlockIndex> blocks = acc_a.knownBlocks();
-  for (const BlockIndex& block : acc_b.knownBlocks()) blocks.push_back(block);
-  std::sort(blocks.begin(), blocks.end(), [](const BlockIndex& x, const BlockIndex& y) {
-    return std::lexicographical_compare(x.data(), x.data() + 3, y.data(), y.data() + 3);
-  });
-  blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+  const std::vector<BlockIndex> blocks = test::blocksKnownInEither(acc_a, acc_b);
   uint64_t known = 0, same = 0;
   for (const BlockIndex& block : blocks) {
     std::array<uint64_t, 8> ka, oa, kb, ob;

@@ -6,13 +6,10 @@ set -u
 cenote=$1
 source_dir=$2
 source "$(dirname "${BASH_SOURCE[0]}")/../support/cli_test_lib.sh"
-json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2], {}, {'d': d}))" "$@"; }
 
 # Small frames keep the test short; the memory claim does not depend on the image size.
-"$cenote" sim --scene reef --frames 300 --width 320 --height 240 --quiet --out "$work/long" >/dev/null 2>&1 ||
-  fail "cenote sim (300 frames) failed"
-"$cenote" sim --scene reef --frames 60 --width 320 --height 240 --quiet --out "$work/short" >/dev/null 2>&1 ||
-  fail "cenote sim (60 frames) failed"
+simulate_reef 300 "$work/long"
+simulate_reef 60 "$work/short"
 
 for run in short long; do
   if ! "$cenote" run --dataset "$work/$run" --config "$source_dir/config/default.yaml" --out "$work/$run-out" \

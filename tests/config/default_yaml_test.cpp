@@ -20,30 +20,25 @@ namespace {
 
 const std::string kDefaultYaml = std::string(CENOTE_SOURCE_DIR) + "/config/default.yaml";
 
+// Reads the section `key` into a default-constructed Config; `top` records each key's value.
+template <typename Config>
+void recordSection(YamlSection& top, const std::string& key) {
+  Config config;
+  top.readSection(key, config);
+}
+
 // Every key read by each section's read() into a default-constructed config, with its value.
 YamlDefaults codeDefaults() {
   YamlDefaults defaults;
   YamlSection top(YAML::Node(), "", "code defaults");
   top.recordDefaults(&defaults);
-  pipeline::PipelineConfig pipeline;
-  YamlSection stereo = top.section("stereo");
-  pipeline.stereo.read(stereo);
-  YamlSection fusion = top.section("fusion");
-  pipeline.fusion.read(fusion);
-  YamlSection run = top.section("run");
-  pipeline.run.read(run);
-  pipeline::RecordingConfig bag;
-  YamlSection bag_section = top.section("bag");
-  bag.read(bag_section);
-  mapping::MapConfig map;
-  YamlSection map_section = top.section("map");
-  map.read(map_section);
-  sim::SimConfig sim;
-  YamlSection sim_section = top.section("sim");
-  sim.read(sim_section);
-  server::ServerConfig server;
-  YamlSection server_section = top.section("server");
-  server.read(server_section);
+  recordSection<pipeline::StereoConfig>(top, "stereo");
+  recordSection<pipeline::FusionConfig>(top, "fusion");
+  recordSection<pipeline::RunConfig>(top, "run");
+  recordSection<pipeline::RecordingConfig>(top, "bag");
+  recordSection<mapping::MapConfig>(top, "map");
+  recordSection<sim::SimConfig>(top, "sim");
+  recordSection<server::ServerConfig>(top, "server");
   return defaults;
 }
 

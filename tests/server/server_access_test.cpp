@@ -10,6 +10,7 @@
 
 #include "cenote/v1/updates.grpc.pb.h"
 #include "tests/clients/cpp/server_process.h"
+#include "tests/server/refused_start.h"
 #include "tests/server/server_test_util.h"
 
 namespace cenote::server::test {
@@ -88,21 +89,14 @@ TEST(ServerAccess, EachTokenGetsItsCodeAndAPlannerCannotReset) {
 TEST(ServerAccess, ListeningBeyondLoopbackWithoutTokenOrTlsIsRefusedAtStartUp) {
   const fs::path dir = scratchDir("access", "exposure");
   std::ofstream(dir / "token") << "operator-secret\n";
-  auto [status, text] = runServerToExit(dir, "--listen 0.0.0.0:0 --snapshot-dir " + (dir / "snapshots").string());
-  EXPECT_EQ(status, 1);
-  EXPECT_NE(text.find("cenote-server: error: refusing to start: listening on 0.0.0.0:0 (beyond loopback) without a "
-                      "token: anyone who reaches the port may feed, reset or download the map."),
-            std::string::npos)
-      << text;
-  std::tie(status, text) = runServerToExit(dir, "--listen 0.0.0.0:0 --token-file " + (dir / "token").string());
-  EXPECT_EQ(status, 1);
-  EXPECT_NE(text.find("cenote-server: error: refusing to start: listening on 0.0.0.0:0 (beyond loopback) with a "
-                      "token but without TLS: the token crosses the network in clear text."),
-            std::string::npos)
-      << text;
-  std::tie(status, text) = runServerToExit(dir, "--listen 127.0.0.1:0 --read-token-file " + (dir / "token").string());
-  EXPECT_EQ(status, 1);
-  EXPECT_NE(text.find("server.read_token_file"), std::string::npos) << text;
+  expectRefusedToStart(dir, "--listen 0.0.0.0:0 --snapshot-dir " + (dir / "snapshots").string(),
+                       {"cenote-server: error: refusing to start: listening on 0.0.0.0:0 (beyond loopback) without a "
+                        "token: anyone who reaches the port may feed, reset or download the map."});
+  expectRefusedToStart(dir, "--listen 0.0.0.0:0 --token-file " + (dir / "token").string(),
+                       {"cenote-server: error: refusing to start: listening on 0.0.0.0:0 (beyond loopback) with a "
+                        "token but without TLS: the token crosses the network in clear text."});
+  expectRefusedToStart(dir, "--listen 127.0.0.1:0 --read-token-file " + (dir / "token").string(),
+                       {"server.read_token_file"});
 
   // Said explicitly, it runs, and says what it risks.
   ServerProcess server(CENOTE_SERVER_BINARY,

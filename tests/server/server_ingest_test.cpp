@@ -140,6 +140,16 @@ TEST_F(SimulatedDive, StreamedFramesAndPosesGiveTheSameMapAsCenoteRun) {
   EXPECT_EQ(diff.different_log_odds, 0u);
 }
 
+// `frame` with a raw mono8 right image of width x height whose data is `bytes` zeros.
+v1::StereoFrame withRawRight(v1::StereoFrame frame, int width, int height, size_t bytes) {
+  v1::RawImage* raw = frame.mutable_right()->mutable_raw();
+  raw->set_width(width);
+  raw->set_height(height);
+  raw->set_encoding(v1::IMAGE_ENCODING_MONO8);
+  raw->set_data(std::string(bytes, '\0'));
+  return frame;
+}
+
 TEST_F(SimulatedDive, BadFramesAreRejectedWithTheirStatusAndTheMapIsUnchanged) {
   ServerProcess server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", config_, "--calibration", dir_ + "/dive"}});
   Stubs stubs(server.target());
@@ -156,18 +166,8 @@ TEST_F(SimulatedDive, BadFramesAreRejectedWithTheirStatusAndTheMapIsUnchanged) {
   v1::StereoFrame bad_rotation = good;
   bad_rotation.mutable_pose()->mutable_orientation()->set_w(2.0);
   cases.push_back({"not a unit quaternion", bad_rotation});
-  v1::StereoFrame raw_short = good;
-  raw_short.mutable_right()->mutable_raw()->set_width(400);
-  raw_short.mutable_right()->mutable_raw()->set_height(300);
-  raw_short.mutable_right()->mutable_raw()->set_encoding(v1::IMAGE_ENCODING_MONO8);
-  raw_short.mutable_right()->mutable_raw()->set_data(std::string(1000, '\0'));
-  cases.push_back({"expected 120000", raw_short});
-  v1::StereoFrame small = good;
-  small.mutable_right()->mutable_raw()->set_width(20);
-  small.mutable_right()->mutable_raw()->set_height(10);
-  small.mutable_right()->mutable_raw()->set_encoding(v1::IMAGE_ENCODING_MONO8);
-  small.mutable_right()->mutable_raw()->set_data(std::string(200, '\0'));
-  cases.push_back({"right image is 20x10 but the calibration is for 400x300", small});
+  cases.push_back({"expected 120000", withRawRight(good, 400, 300, 1000)});  // 1000 bytes of 400x300
+  cases.push_back({"right image is 20x10 but the calibration is for 400x300", withRawRight(good, 20, 10, 200)});
   v1::StereoFrame no_image = good;
   no_image.clear_right();
   cases.push_back({"right: no image data", no_image});

@@ -11,6 +11,7 @@
 
 #include "mapping/io/map_io.h"
 #include "tests/clients/cpp/server_process.h"
+#include "tests/server/refused_start.h"
 #include "tests/server/server_test_util.h"
 
 namespace cenote::server::test {
@@ -25,6 +26,17 @@ void integrate(Stubs& stubs, const v1::PointBatch& batch) {
   v1::BatchAck ack;
   const grpc::Status status = stubs.ingest->IntegratePoints(context.get(), batch, &ack);
   ASSERT_TRUE(status.ok()) << status.error_message();
+}
+
+// A server started with --load <dir>/map.vdb serves `before`, voxel for voxel (more than min_known
+// voxels known: the premise that there is a map to compare).
+void expectLoadedSnapshotServes(const mapping::OccupancyMap& before, const fs::path& dir, uint64_t min_known) {
+  ServerProcess restarted(CENOTE_SERVER_BINARY, {.extra_args = {"--load", (dir / "map.vdb").string()}});
+  Stubs stubs(restarted.target());
+  const MapDifference diff = compareMaps(before, *downloadMap(*stubs.admin, dir.string()));
+  EXPECT_GT(diff.known, min_known);
+  EXPECT_EQ(diff.different_state, 0u);
+  EXPECT_EQ(diff.different_log_odds, 0u);
 }
 
 TEST(ServerLifecycle, SigtermWritesASnapshotThatRestoresTheSameMap) {
@@ -42,13 +54,7 @@ TEST(ServerLifecycle, SigtermWritesASnapshotThatRestoresTheSameMap) {
     ASSERT_TRUE(fs::exists(snapshot)) << server.log();
     fs::copy_file(snapshot, dir / "map.vdb");
   }
-  ServerProcess restarted(CENOTE_SERVER_BINARY, {.extra_args = {"--load", (dir / "map.vdb").string()}});
-  Stubs stubs(restarted.target());
-  const auto after = downloadMap(*stubs.admin, dir.string());
-  const MapDifference diff = compareMaps(*before, *after);
-  EXPECT_GT(diff.known, 50000u);
-  EXPECT_EQ(diff.different_state, 0u);
-  EXPECT_EQ(diff.different_log_odds, 0u);
+  expectLoadedSnapshotServes(*before, dir, 50000u);
   fs::remove_all(dir.parent_path());
 }
 
@@ -74,38 +80,22 @@ TEST(ServerLifecycle, AfterKillNineTheLastPeriodicSnapshotLoads) {
     EXPECT_EQ(server.stop(), 128 + SIGKILL);
     fs::copy_file(server.snapshotDirectory() + "/map.vdb", dir / "map.vdb");
   }
-  ServerProcess restarted(CENOTE_SERVER_BINARY, {.extra_args = {"--load", (dir / "map.vdb").string()}});
-  Stubs stubs(restarted.target());
-  const MapDifference diff = compareMaps(*before, *downloadMap(*stubs.admin, dir.string()));
-  EXPECT_GT(diff.known, 20000u);
-  EXPECT_EQ(diff.different_state, 0u);
-  EXPECT_EQ(diff.different_log_odds, 0u);
+  expectLoadedSnapshotServes(*before, dir, 20000u);
   fs::remove_all(dir.parent_path());
 }
 
 TEST(ServerLifecycle, BadStartupInputIsRefusedWithAMessageNamingIt) {
   const fs::path dir = scratchDir("lifecycle", "config");
   std::ofstream(dir / "typo.yaml") << "server:\n  listne: 127.0.0.1:1\n";
-  auto [status, text] = runServerToExit(dir, "--config " + (dir / "typo.yaml").string());
-  EXPECT_EQ(status, 1);
-  EXPECT_NE(text.find("server.listne"), std::string::npos) << text;
+  expectRefusedToStart(dir, "--config " + (dir / "typo.yaml").string(), {"server.listne"});
 
   std::ofstream(dir / "range.yaml")
       << "map:\n  voxel_size_m: -1\nserver:\n  max_frame_streams: 0\n  time_slice_ms: 0.05\n  query_cpus: -1\n";
-  std::tie(status, text) = runServerToExit(dir, "--config " + (dir / "range.yaml").string());
-  EXPECT_EQ(status, 1);
-  EXPECT_NE(text.find("map.voxel_size_m"), std::string::npos) << text;
-  EXPECT_NE(text.find("server.max_frame_streams"), std::string::npos) << text;
-  EXPECT_NE(text.find("server.time_slice_ms"), std::string::npos) << text;
-  EXPECT_NE(text.find("server.query_cpus"), std::string::npos) << text;
-
-  std::tie(status, text) = runServerToExit(dir, "--listen 127.0.0.1:0 --load " + (dir / "missing.vdb").string());
-  EXPECT_EQ(status, 1);
-  EXPECT_NE(text.find("missing.vdb: no such file"), std::string::npos) << text;
-
-  std::tie(status, text) = runServerToExit(dir, "--listen 127.0.0.1:0 --token-file " + (dir / "no-token").string());
-  EXPECT_EQ(status, 1);
-  EXPECT_NE(text.find("no-token cannot be read"), std::string::npos) << text;
+  expectRefusedToStart(dir, "--config " + (dir / "range.yaml").string(),
+                       {"map.voxel_size_m", "server.max_frame_streams", "server.time_slice_ms", "server.query_cpus"});
+  expectRefusedToStart(dir, "--listen 127.0.0.1:0 --load " + (dir / "missing.vdb").string(), {"missing.vdb: no such file"});
+  expectRefusedToStart(dir, "--listen 127.0.0.1:0 --token-file " + (dir / "no-token").string(),
+                       {"no-token cannot be read"});
   fs::remove_all(dir.parent_path());
 }
 

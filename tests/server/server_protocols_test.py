@@ -100,12 +100,17 @@ def read(path):
         return f.read()
 
 
-class StandardServices(unittest.TestCase):
-    def setUp(self):
-        self.dir = tempfile.mkdtemp(prefix="cenote-protocols-")
+class ScratchDirTest(unittest.TestCase):
+    """Each test gets a fresh folder of its own, self.dir (named after `prefix`), removed after it."""
+    prefix = "cenote-"
 
-    def tearDown(self):
-        shutil.rmtree(self.dir)
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix=self.prefix)
+        self.addCleanup(shutil.rmtree, self.dir)
+
+
+class StandardServices(ScratchDirTest):
+    prefix = "cenote-protocols-"
 
     def test_health_reports_serving_and_reflection_lists_the_services(self):
         server = Server(self.dir)
@@ -259,12 +264,8 @@ def varint_field(message, number):
     return found
 
 
-class Keepalive(unittest.TestCase):
-    def setUp(self):
-        self.dir = tempfile.mkdtemp(prefix="cenote-keepalive-")
-
-    def tearDown(self):
-        shutil.rmtree(self.dir)
+class Keepalive(ScratchDirTest):
+    prefix = "cenote-keepalive-"
 
     def test_a_subscriber_that_stops_answering_is_dropped(self):
         with open(f"{self.dir}/config.yaml", "w") as f:
@@ -289,15 +290,14 @@ class Keepalive(unittest.TestCase):
         self.assertEqual(server.stop(), 0)
 
 
-class TokenBeforeParsing(unittest.TestCase):
+class TokenBeforeParsing(ScratchDirTest):
+    prefix = "cenote-token-"
+
     def setUp(self):
-        self.dir = tempfile.mkdtemp(prefix="cenote-token-")
+        super().setUp()
         for name, token in (("operator", "op-secret"), ("planner", "planner-secret")):
             with open(f"{self.dir}/{name}", "w") as f:
                 f.write(token + "\n")
-
-    def tearDown(self):
-        shutil.rmtree(self.dir)
 
     def code(self, channel, method, body, token=None):
         metadata = [("authorization", f"Bearer {token}")] if token else None

@@ -37,6 +37,12 @@ v1::SegmentsRequest segments(int n, const Eigen::Vector3d& a, const Eigen::Vecto
   return request;
 }
 
+// The server refused the call as beyond a limit, saying `message`.
+void expectResourceExhausted(const grpc::Status& status, const std::string& message) {
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(status.error_message(), message);
+}
+
 // The calls and errors the server has recorded for `method` (Admin.GetStats).
 v1::MethodStats methodStats(Stubs& stubs, const std::string& method) {
   auto context = contextWithDeadline();
@@ -73,10 +79,9 @@ TEST(ServerQueryLimits, BatchBeyondTheVoxelBudgetIsResourceExhaustedNamingTheKey
   {
     auto context = contextWithDeadline();
     v1::CollisionsReply reply;
-    const grpc::Status status = stubs.query->CheckSegments(context.get(), segments(1001, a, b), &reply);
-    EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-    EXPECT_EQ(status.error_message(), "map query: 1001 segments may visit up to 1001000 voxels, more than the budget "
-                                      "server.limits.max_query_voxels = 1000000");
+    expectResourceExhausted(stubs.query->CheckSegments(context.get(), segments(1001, a, b), &reply),
+                            "map query: 1001 segments may visit up to 1001000 voxels, more than the budget "
+                            "server.limits.max_query_voxels = 1000000");
   }
   {
     v1::BoxesRequest request;  // 100^3 voxels each
@@ -86,10 +91,9 @@ TEST(ServerQueryLimits, BatchBeyondTheVoxelBudgetIsResourceExhaustedNamingTheKey
     }
     auto context = contextWithDeadline();
     v1::BoxesReply reply;
-    const grpc::Status status = stubs.query->GetBoxes(context.get(), request, &reply);
-    EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-    EXPECT_EQ(status.error_message(), "map query: 2 boxes may visit up to 2000000 voxels, more than the budget "
-                                      "server.limits.max_query_voxels = 1000000");
+    expectResourceExhausted(stubs.query->GetBoxes(context.get(), request, &reply),
+                            "map query: 2 boxes may visit up to 2000000 voxels, more than the budget "
+                            "server.limits.max_query_voxels = 1000000");
   }
   {
     v1::RaycastRequest request;  // to the edge of the map's range: 2^20 - 8 voxels
@@ -98,10 +102,9 @@ TEST(ServerQueryLimits, BatchBeyondTheVoxelBudgetIsResourceExhaustedNamingTheKey
     request.set_max_range_m(1e9);
     auto context = contextWithDeadline();
     v1::CollisionsReply reply;
-    const grpc::Status status = stubs.query->Raycast(context.get(), request, &reply);
-    EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-    EXPECT_EQ(status.error_message(), "map query: 1 rays may visit up to 1048568 voxels, more than the budget "
-                                      "server.limits.max_query_voxels = 1000000");
+    expectResourceExhausted(stubs.query->Raycast(context.get(), request, &reply),
+                            "map query: 1 rays may visit up to 1048568 voxels, more than the budget "
+                            "server.limits.max_query_voxels = 1000000");
   }
   {
     v1::ExtractRequest request;  // 200 x 100 x 100 voxels
@@ -109,10 +112,8 @@ TEST(ServerQueryLimits, BatchBeyondTheVoxelBudgetIsResourceExhaustedNamingTheKey
     setVec(request.mutable_box()->mutable_max(), 200 * kVoxel, 100 * kVoxel, 100 * kVoxel);
     auto context = contextWithDeadline();
     v1::ExtractReply reply;
-    const grpc::Status status = stubs.query->ExtractVoxels(context.get(), request, &reply);
-    EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-    EXPECT_EQ(status.error_message(),
-              "box voxels: 2000000 items, more than the limit server.limits.max_query_voxels = 1000000");
+    expectResourceExhausted(stubs.query->ExtractVoxels(context.get(), request, &reply),
+                            "box voxels: 2000000 items, more than the limit server.limits.max_query_voxels = 1000000");
   }
   fs::remove(config);
 }

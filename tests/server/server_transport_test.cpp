@@ -171,46 +171,48 @@ TEST(ServerSubscribers, EightHundredIdleSubscribersHoldNoThreadsAndLockNoPlanner
   EXPECT_EQ(stats.subscribers(), 800u);
 }
 
+// A server started with `yaml` as its configuration, in a scratch folder of its own
+// (scratchDir("transport", name)) that goes when the test ends.
+struct ConfiguredServer {
+  ConfiguredServer(const std::string& name, const std::string& yaml)
+      : dir(scratchDir("transport", name)),
+        server(CENOTE_SERVER_BINARY, {.extra_args = {"--config", writeConfig(dir, yaml)}}),
+        stubs(server.target()) {}
+  ~ConfiguredServer() { fs::remove_all(dir.parent_path()); }
+  const fs::path dir;
+  ServerProcess server;
+  Stubs stubs;
+};
+
 TEST(ServerSubscribers, BeyondTheLimitASubscriberIsRefusedNamingIt) {
-  const fs::path dir = scratchDir("transport", "max-subscribers");
-  ServerProcess server(CENOTE_SERVER_BINARY,
-                       {.extra_args = {"--config", writeConfig(dir, "server:\n  limits:\n    max_subscribers: 3\n")}});
-  Stubs stubs(server.target());
-  Subscribers three(stubs.channel, 3);
+  ConfiguredServer s("max-subscribers", "server:\n  limits:\n    max_subscribers: 3\n");
+  Subscribers three(s.stubs.channel, 3);
   ASSERT_EQ(three.subscribed, 3);
-  Subscribers fourth(stubs.channel, 1);
+  Subscribers fourth(s.stubs.channel, 1);
   EXPECT_EQ(fourth.subscribed, 0);
   const grpc::Status status = fourth.readers[0]->Finish();
   fourth.readers.clear();
   fourth.contexts.clear();
   EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   EXPECT_EQ(status.error_message(), "already 3 update subscribers: the limit server.limits.max_subscribers");
-  fs::remove_all(dir.parent_path());
 }
 
 TEST(ServerSubscribers, AChangeBeyondTheByteBudgetIsSentAsAResync) {
-  const fs::path dir = scratchDir("transport", "subscriber-bytes");
-  ServerProcess server(CENOTE_SERVER_BINARY,
-                       {.extra_args = {"--config", writeConfig(dir, "server:\n  max_subscriber_bytes: 4096\n")}});
-  Stubs stubs(server.target());
-  Subscribers one(stubs.channel, 1);
+  ConfiguredServer s("subscriber-bytes", "server:\n  max_subscriber_bytes: 4096\n");
+  Subscribers one(s.stubs.channel, 1);
   ASSERT_EQ(one.subscribed, 1);
   v1::BatchAck ack;
-  integrate(stubs, wallBatch(5.0, 3.0, 0.03, 1.0), &ack);
+  integrate(s.stubs, wallBatch(5.0, 3.0, 0.03, 1.0), &ack);
   ASSERT_GT(ack.changed_blocks() * 12, 4096u);  // the change's block indices exceed the budget
   v1::MapUpdate update;
   ASSERT_TRUE(one.readers[0]->Read(&update));
   EXPECT_TRUE(update.resync());
   EXPECT_TRUE(update.snapshot());
   EXPECT_EQ(update.sequence(), ack.map_version());
-  fs::remove_all(dir.parent_path());
 }
 
 TEST(ServerStreams, BeyondTheLimitAPoseStreamIsRefusedAndPlannersKeepTheirThreads) {
-  const fs::path dir = scratchDir("transport", "ingest-streams");
-  ServerProcess server(CENOTE_SERVER_BINARY,
-                       {.extra_args = {"--config", writeConfig(dir, "server:\n  limits:\n    max_ingest_streams: 3\n")}});
-  Stubs stubs(server.target());
+  ConfiguredServer s("ingest-streams", "server:\n  limits:\n    max_ingest_streams: 3\n");
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
   std::vector<std::unique_ptr<grpc::ClientReaderWriter<v1::PoseStamped, v1::PoseAck>>> streams;
   v1::PoseStamped pose;
@@ -218,7 +220,7 @@ TEST(ServerStreams, BeyondTheLimitAPoseStreamIsRefusedAndPlannersKeepTheirThread
   v1::PoseAck ack;
   for (int i = 0; i < 4; ++i) {
     contexts.push_back(contextWithDeadline());
-    streams.push_back(stubs.ingest->StreamPoses(contexts.back().get()));
+    streams.push_back(s.stubs.ingest->StreamPoses(contexts.back().get()));
     pose.set_timestamp_s(i);
     streams.back()->Write(pose);
     EXPECT_EQ(streams.back()->Read(&ack), i < 3) << "stream " << i;
@@ -229,12 +231,11 @@ TEST(ServerStreams, BeyondTheLimitAPoseStreamIsRefusedAndPlannersKeepTheirThread
             "already 3 pose and point streams running: the limit server.limits.max_ingest_streams");
   auto context = contextWithDeadline();
   v1::MapInfo info;
-  EXPECT_TRUE(stubs.query->GetMapInfo(context.get(), v1::MapInfoRequest(), &info).ok());
+  EXPECT_TRUE(s.stubs.query->GetMapInfo(context.get(), v1::MapInfoRequest(), &info).ok());
   for (size_t i = 0; i + 1 < streams.size(); ++i) {
     streams[i]->WritesDone();
     EXPECT_TRUE(streams[i]->Finish().ok()) << "stream " << i;
   }
-  fs::remove_all(dir.parent_path());
 }
 
 TEST(ServerSnapshots, ADownloadBeyondTheLimitIsRefusedNamingIt) {

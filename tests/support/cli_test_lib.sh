@@ -9,6 +9,15 @@ fail() {
   exit 1
 }
 
+# json FILE EXPR: EXPR evaluated on the JSON document in FILE, bound to d (e.g. "d['frames_processed']").
+json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2], {}, {'d': d}))" "$@"; }
+
+# simulate_reef FRAMES OUT: a simulated reef dive of FRAMES small (320 x 240) frames, written to OUT.
+simulate_reef() {
+  "$cenote" sim --scene reef --frames "$1" --width 320 --height 240 --quiet --out "$2" >/dev/null 2>&1 ||
+    fail "cenote sim ($1 frames) failed"
+}
+
 # expect_error CODE PATTERN ARGS...: `cenote ARGS` must exit CODE and print PATTERN on stderr.
 expect_error() {
   local want=$1 pattern=$2

@@ -376,43 +376,34 @@ TEST_F(MapClientQueryTest, MissingOrWrongTokenIsUnauthenticatedAndChangesNothing
   EXPECT_EQ(fingerprint(), before);
 }
 
+// `call` is refused with RESOURCE_EXHAUSTED, the message naming the limit's key; `asked` says what
+// the call asked for.
+template <typename Call>
+void expectBeyondLimit(Call&& call, const std::string& limit_key, const std::string& asked) {
+  try {
+    call();
+    ADD_FAILURE() << asked << " succeeded";
+  } catch (const RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << e.what();
+    EXPECT_NE(e.message().find(limit_key), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(MapClientQueryTest, OversizedRequestsAreResourceExhaustedNamingTheLimit) {
   const auto before = fingerprint();
   ClientOptions unsplit = authorized();
   unsplit.max_batch_items = 0;  // send it whole: the server decides
   MapClient map = client(unsplit);
   const std::vector<Eigen::Vector3d> too_many(100001, centre(1, 1, 1));
-  try {
-    map.voxels(too_many);
-    ADD_FAILURE() << "100001 points in one query succeeded";
-  } catch (const RpcError& e) {
-    EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << e.what();
-    EXPECT_NE(e.message().find("max_batch"), std::string::npos) << e.what();
-  }
-  try {
-    map.boxes({{{-10, -10, -10}, {10, 10, 10}}});  // 400^3 voxels > max_box_voxels
-    ADD_FAILURE() << "a 20 m box succeeded";
-  } catch (const RpcError& e) {
-    EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << e.what();
-    EXPECT_NE(e.message().find("max_box_voxels"), std::string::npos) << e.what();
-  }
-  try {
-    map.segments({{kOrigin_m, centre(5, 0, 0), 20.0}});  // a 20 m capsule: about 800^3 voxels
-    ADD_FAILURE() << "a 20 m capsule succeeded";
-  } catch (const RpcError& e) {
-    EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << e.what();
-    EXPECT_NE(e.message().find("max_box_voxels"), std::string::npos) << e.what();
-  }
+  expectBeyondLimit([&] { map.voxels(too_many); }, "max_batch", "100001 points in one query");
+  // 400^3 voxels > max_box_voxels
+  expectBeyondLimit([&] { map.boxes({{{-10, -10, -10}, {10, 10, 10}}}); }, "max_box_voxels", "a 20 m box");
+  // A 20 m capsule: about 800^3 voxels.
+  expectBeyondLimit([&] { map.segments({{kOrigin_m, centre(5, 0, 0), 20.0}}); }, "max_box_voxels", "a 20 m capsule");
   PointBatch huge;
   huge.origin_m = kOrigin_m;
   huge.points_m.assign(1000001, centre(30, 0, 0));
-  try {
-    map.integratePoints(huge);
-    ADD_FAILURE() << "a 1000001-point batch was integrated";
-  } catch (const RpcError& e) {
-    EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << e.what();
-    EXPECT_NE(e.message().find("max_points_per_batch"), std::string::npos) << e.what();
-  }
+  expectBeyondLimit([&] { map.integratePoints(huge); }, "max_points_per_batch", "a 1000001-point batch");
   EXPECT_EQ(fingerprint(), before);
 }
 

@@ -16,9 +16,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A CDR message of `type` as a recording hands it on.
+// A CDR message of `type` as a recording hands it on, and its values in expected.json.
 struct CdrMessage {
-  CdrMessage(const std::string& name, const std::string& type) : bytes(cdrSample(name)) {
+  CdrMessage(const std::string& name, const std::string& type) : bytes(cdrSample(name)), v(cdrValues(name)) {
     topic.name = "/" + name;
     topic.type = type;
     topic.encoding = MessageEncoding::kCdr;
@@ -27,6 +27,7 @@ struct CdrMessage {
     message.file_offset = 4242;
   }
   Bytes bytes;
+  const nlohmann::json& v;
   TopicInfo topic;
   RecordedMessage message;
 };
@@ -48,72 +49,66 @@ void expectTransform(const RosPose& p, const nlohmann::json& t) {
 
 TEST(CdrMessages, Image) {
   const CdrMessage m("image", "sensor_msgs/Image");
-  const nlohmann::json& v = cdrValues("image");
   const RosImage image = decodeImage(m.message);
-  EXPECT_EQ(image.stamp_ns, stampOf(v["header"]));
+  EXPECT_EQ(image.stamp_ns, stampOf(m.v["header"]));
   EXPECT_EQ(image.frame_id, "cam0");
   EXPECT_EQ(image.width, 4u);
   EXPECT_EQ(image.height, 3u);
   EXPECT_EQ(image.encoding, "mono8");
   EXPECT_EQ(image.is_bigendian, 0);
   EXPECT_EQ(image.step, 4u);
-  EXPECT_EQ(Bytes(image.data.begin(), image.data.end()), v["data"].get<Bytes>());
+  EXPECT_EQ(Bytes(image.data.begin(), image.data.end()), m.v["data"].get<Bytes>());
 }
 
 TEST(CdrMessages, CompressedImage) {
   const CdrMessage m("compressed_image", "sensor_msgs/CompressedImage");
-  const nlohmann::json& v = cdrValues("compressed_image");
   const RosCompressedImage image = decodeCompressedImage(m.message);
-  EXPECT_EQ(image.stamp_ns, stampOf(v["header"]));
+  EXPECT_EQ(image.stamp_ns, stampOf(m.v["header"]));
   EXPECT_EQ(image.frame_id, "cam1");
   EXPECT_EQ(image.format, "jpeg");
-  EXPECT_EQ(Bytes(image.data.begin(), image.data.end()), v["data"].get<Bytes>());
+  EXPECT_EQ(Bytes(image.data.begin(), image.data.end()), m.v["data"].get<Bytes>());
 }
 
 TEST(CdrMessages, CameraInfo) {
   const CdrMessage m("camera_info", "sensor_msgs/CameraInfo");
-  const nlohmann::json& v = cdrValues("camera_info");
   const RosCameraInfo info = decodeCameraInfo(m.message);
-  EXPECT_EQ(info.stamp_ns, stampOf(v["header"]));
+  EXPECT_EQ(info.stamp_ns, stampOf(m.v["header"]));
   EXPECT_EQ(info.width, 4u);
   EXPECT_EQ(info.height, 3u);
   EXPECT_EQ(info.distortion_model, "plumb_bob");
-  EXPECT_EQ(info.D, v["d"].get<std::vector<double>>());
-  EXPECT_EQ(std::vector<double>(info.K.begin(), info.K.end()), v["k"].get<std::vector<double>>());
-  EXPECT_EQ(std::vector<double>(info.R.begin(), info.R.end()), v["r"].get<std::vector<double>>());
-  EXPECT_EQ(std::vector<double>(info.P.begin(), info.P.end()), v["p"].get<std::vector<double>>());
+  EXPECT_EQ(info.D, m.v["d"].get<std::vector<double>>());
+  EXPECT_EQ(std::vector<double>(info.K.begin(), info.K.end()), m.v["k"].get<std::vector<double>>());
+  EXPECT_EQ(std::vector<double>(info.R.begin(), info.R.end()), m.v["r"].get<std::vector<double>>());
+  EXPECT_EQ(std::vector<double>(info.P.begin(), info.P.end()), m.v["p"].get<std::vector<double>>());
 }
 
 TEST(CdrMessages, OdometryPoseStampedTransformStampedAndTf) {
   {
     const CdrMessage m("odometry", "nav_msgs/Odometry");
-    const nlohmann::json& v = cdrValues("odometry");
     const std::optional<RosPose> p = decodePose(m.message);
     ASSERT_TRUE(p);
-    expectPose(*p, v["header"], "cam0", v["pose"]["pose"]["position"], v["pose"]["pose"]["orientation"]);
+    expectPose(*p, m.v["header"], "cam0", m.v["pose"]["pose"]["position"], m.v["pose"]["pose"]["orientation"]);
   }
   {
     const CdrMessage m("pose_stamped", "geometry_msgs/PoseStamped");
-    const nlohmann::json& v = cdrValues("pose_stamped");
     const std::optional<RosPose> p = decodePose(m.message);
     ASSERT_TRUE(p);
-    expectPose(*p, v["header"], "", v["pose"]["position"], v["pose"]["orientation"]);
+    expectPose(*p, m.v["header"], "", m.v["pose"]["position"], m.v["pose"]["orientation"]);
   }
   {
     const CdrMessage m("transform_stamped", "geometry_msgs/TransformStamped");
     const std::optional<RosPose> p = decodePose(m.message);
     ASSERT_TRUE(p);
-    expectTransform(*p, cdrValues("transform_stamped"));
+    expectTransform(*p, m.v);
   }
   {
     const CdrMessage m("tf_message", "tf2_msgs/TFMessage");
-    const nlohmann::json& v = cdrValues("tf_message");
     const std::optional<RosPose> first = decodePose(m.message, "world", "imu");
     ASSERT_TRUE(first);
-    expectTransform(*first, v["transforms"][0]);
+    expectTransform(*first, m.v["transforms"][0]);
     const std::optional<RosPose> second = decodePose(m.message, "/imu", "cam0");
     ASSERT_TRUE(second);
-    expectTransform(*second, v["transforms"][1]);
+    expectTransform(*second, m.v["transforms"][1]);
     EXPECT_FALSE(decodePose(m.message, "world", "cam0")) << "no such pair in the message";
   }
 }

@@ -42,86 +42,82 @@ void expectTransform(CdrWire& w, const nlohmann::json& t) {  // geometry_msgs/Tr
   for (const char* k : {"x", "y", "z", "w"}) EXPECT_EQ(w.f64(), t["transform"]["rotation"][k].get<double>()) << k;
 }
 
+// One sample message: its bytes, its values in expected.json, and a CdrWire at its start.
+struct CdrSample {
+  explicit CdrSample(const std::string& name) : bytes(cdrSample(name)), v(cdrValues(name)), w(bytes) {}
+  const Bytes bytes;
+  const nlohmann::json& v;
+  CdrWire w;
+};
+
 TEST(CdrWire, ImageFromTheIndependentSerialiser) {
-  const Bytes bytes = cdrSample("image");
-  const nlohmann::json& v = cdrValues("image");
-  CdrWire w(bytes);
-  EXPECT_TRUE(w.isLittleEndian());
-  expectHeader(w, v["header"]);
-  EXPECT_EQ(w.u32(), v["height"].get<std::uint32_t>());
-  EXPECT_EQ(w.u32(), v["width"].get<std::uint32_t>());
-  EXPECT_EQ(w.str(), v["encoding"]);
-  EXPECT_EQ(w.u8(), v["is_bigendian"].get<int>());
-  EXPECT_EQ(w.u32(), v["step"].get<std::uint32_t>());
-  expectByteArray(w, v["data"]);
-  EXPECT_EQ(w.offset(), bytes.size());
+  CdrSample s("image");
+  EXPECT_TRUE(s.w.isLittleEndian());
+  expectHeader(s.w, s.v["header"]);
+  EXPECT_EQ(s.w.u32(), s.v["height"].get<std::uint32_t>());
+  EXPECT_EQ(s.w.u32(), s.v["width"].get<std::uint32_t>());
+  EXPECT_EQ(s.w.str(), s.v["encoding"]);
+  EXPECT_EQ(s.w.u8(), s.v["is_bigendian"].get<int>());
+  EXPECT_EQ(s.w.u32(), s.v["step"].get<std::uint32_t>());
+  expectByteArray(s.w, s.v["data"]);
+  EXPECT_EQ(s.w.offset(), s.bytes.size());
 }
 
 TEST(CdrWire, CompressedImage) {
-  const Bytes bytes = cdrSample("compressed_image");
-  const nlohmann::json& v = cdrValues("compressed_image");
-  CdrWire w(bytes);
-  expectHeader(w, v["header"]);
-  EXPECT_EQ(w.str(), v["format"]);
-  expectByteArray(w, v["data"]);
-  EXPECT_EQ(w.offset(), bytes.size());
+  CdrSample s("compressed_image");
+  expectHeader(s.w, s.v["header"]);
+  EXPECT_EQ(s.w.str(), s.v["format"]);
+  expectByteArray(s.w, s.v["data"]);
+  EXPECT_EQ(s.w.offset(), s.bytes.size());
 }
 
 TEST(CdrWire, CameraInfoDoublesAlignedAfterStrings) {
-  const Bytes bytes = cdrSample("camera_info");
-  const nlohmann::json& v = cdrValues("camera_info");
-  CdrWire w(bytes);
-  expectHeader(w, v["header"]);
-  EXPECT_EQ(w.u32(), 3u);
-  EXPECT_EQ(w.u32(), 4u);
-  EXPECT_EQ(w.str(), "plumb_bob");
-  ASSERT_EQ(w.length(), 5u);
-  expectDoubles(w, v["d"], "d");
-  expectDoubles(w, v["k"], "k");
-  expectDoubles(w, v["r"], "r");
-  expectDoubles(w, v["p"], "p");
-  EXPECT_EQ(w.u32(), 0u);  // binning
-  EXPECT_EQ(w.u32(), 0u);
-  for (int i = 0; i < 4; ++i) EXPECT_EQ(w.u32(), 0u);  // roi
-  EXPECT_EQ(w.u8(), 0);                                // roi.do_rectify
-  EXPECT_EQ(w.offset(), bytes.size());
+  CdrSample s("camera_info");
+  expectHeader(s.w, s.v["header"]);
+  EXPECT_EQ(s.w.u32(), 3u);
+  EXPECT_EQ(s.w.u32(), 4u);
+  EXPECT_EQ(s.w.str(), "plumb_bob");
+  ASSERT_EQ(s.w.length(), 5u);
+  expectDoubles(s.w, s.v["d"], "d");
+  expectDoubles(s.w, s.v["k"], "k");
+  expectDoubles(s.w, s.v["r"], "r");
+  expectDoubles(s.w, s.v["p"], "p");
+  EXPECT_EQ(s.w.u32(), 0u);  // binning
+  EXPECT_EQ(s.w.u32(), 0u);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(s.w.u32(), 0u);  // roi
+  EXPECT_EQ(s.w.u8(), 0);                                // roi.do_rectify
+  EXPECT_EQ(s.w.offset(), s.bytes.size());
 }
 
 TEST(CdrWire, OdometryPoseStampedAndTransforms) {
   {
-    const Bytes bytes = cdrSample("odometry");
-    const nlohmann::json& v = cdrValues("odometry");
-    CdrWire w(bytes);
-    expectHeader(w, v["header"]);
-    EXPECT_EQ(w.str(), v["child_frame_id"]);
-    expectPose(w, v["pose"]["pose"]);
-    expectDoubles(w, v["pose"]["covariance"], "pose.covariance");
+    CdrSample s("odometry");
+    expectHeader(s.w, s.v["header"]);
+    EXPECT_EQ(s.w.str(), s.v["child_frame_id"]);
+    expectPose(s.w, s.v["pose"]["pose"]);
+    expectDoubles(s.w, s.v["pose"]["covariance"], "pose.covariance");
     for (const char* part : {"linear", "angular"})
-      for (const char* k : {"x", "y", "z"}) EXPECT_EQ(w.f64(), v["twist"]["twist"][part][k].get<double>());
-    expectDoubles(w, v["twist"]["covariance"], "twist.covariance");
-    EXPECT_EQ(w.offset(), bytes.size());
+      for (const char* k : {"x", "y", "z"}) EXPECT_EQ(s.w.f64(), s.v["twist"]["twist"][part][k].get<double>());
+    expectDoubles(s.w, s.v["twist"]["covariance"], "twist.covariance");
+    EXPECT_EQ(s.w.offset(), s.bytes.size());
   }
   {
-    const Bytes bytes = cdrSample("pose_stamped");
-    CdrWire w(bytes);
-    expectHeader(w, cdrValues("pose_stamped")["header"]);
-    expectPose(w, cdrValues("pose_stamped")["pose"]);
-    EXPECT_EQ(w.offset(), bytes.size());
+    CdrSample s("pose_stamped");
+    expectHeader(s.w, s.v["header"]);
+    expectPose(s.w, s.v["pose"]);
+    EXPECT_EQ(s.w.offset(), s.bytes.size());
   }
   {
-    const Bytes bytes = cdrSample("transform_stamped");
-    CdrWire w(bytes);
-    expectTransform(w, cdrValues("transform_stamped"));
-    EXPECT_EQ(w.offset(), bytes.size());
+    CdrSample s("transform_stamped");
+    expectTransform(s.w, s.v);
+    EXPECT_EQ(s.w.offset(), s.bytes.size());
   }
   {
-    const Bytes bytes = cdrSample("tf_message");
-    const nlohmann::json& v = cdrValues("tf_message");
-    CdrWire w(bytes);
-    ASSERT_EQ(w.length(), 2u);
-    expectTransform(w, v["transforms"][0]);
-    expectTransform(w, v["transforms"][1]);
-    EXPECT_EQ(w.offset(), bytes.size());
+    CdrSample s("tf_message");
+    ASSERT_EQ(s.w.length(), 2u);
+    expectTransform(s.w, s.v["transforms"][0]);
+    expectTransform(s.w, s.v["transforms"][1]);
+    EXPECT_EQ(s.w.offset(), s.bytes.size());
   }
 }
 

@@ -14,10 +14,7 @@ set -u
 cenote=$1
 source_dir=$2
 source "$(dirname "${BASH_SOURCE[0]}")/../../support/cli_test_lib.sh"
-json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2], {}, {'d': d}))" "$@"; }
-
-"$cenote" sim --scene reef --frames 20 --width 320 --height 240 --quiet --out "$work/dive" >/dev/null 2>&1 ||
-  fail "cenote sim failed"
+simulate_reef 20 "$work/dive"
 /usr/bin/python3 "$(dirname "${BASH_SOURCE[0]}")/write_vio_outputs.py" "$work/dive" "$work/vio" ||
   fail "write_vio_outputs.py failed"
 config="$source_dir/config/default.yaml"

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "common/error.h"
+#include "tests/support/error_message.h"
 
 namespace cenote::io {
 namespace {
@@ -44,20 +45,11 @@ TEST(OkvisCsv, WithoutHeaderInOkvisOrder) {
 
 TEST(OkvisCsv, ErrorsNameFileLineAndColumn) {
   const std::string no_column = writeFile("okvis_no_column.csv", "timestamp, p_WS_W_x, p_WS_W_y, p_WS_W_z, q_WS_x\n");
-  try {
-    readOkvisCsv(no_column);
-    FAIL() << "expected an Error";
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), no_column + ":1: the header has no column q_WS_y (OKVIS / SVIn2: timestamp, p_WS_W_x, "
-                                                 "p_WS_W_y, p_WS_W_z, q_WS_x, q_WS_y, q_WS_z, q_WS_w, ...)");
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { readOkvisCsv(no_column); }),
+            no_column + ":1: the header has no column q_WS_y (OKVIS / SVIn2: timestamp, p_WS_W_x, "
+                        "p_WS_W_y, p_WS_W_z, q_WS_x, q_WS_y, q_WS_z, q_WS_w, ...)");
   const std::string short_row = writeFile("okvis_short.csv", "1000000000, 1, 2, 3, 0, 0, 0\n");
-  try {
-    readOkvisCsv(short_row);
-    FAIL() << "expected an Error";
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), short_row + ":1: has 7 values, no q_WS_w");
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { readOkvisCsv(short_row); }), short_row + ":1: has 7 values, no q_WS_w");
   const std::string not_unit = writeFile("okvis_norm.csv", "1000000000, 1, 2, 3, 0, 0, 0, 2\n");
   EXPECT_THROW(readOkvisCsv(not_unit), Error);
 }
@@ -81,12 +73,8 @@ TEST(VioFormats, NamesAndBodyFrames) {
   EXPECT_TRUE(describesBody(TrajectoryFormat::kOpenVins));
   EXPECT_TRUE(describesBody(TrajectoryFormat::kEuroc));
   EXPECT_FALSE(describesBody(TrajectoryFormat::kTum));
-  try {
-    parseTrajectoryFormat("orb");
-    FAIL() << "expected an Error";
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), "trajectory format 'orb': must be tum, euroc, kitti, okvis, svin2 or openvins");
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { parseTrajectoryFormat("orb"); }),
+            "trajectory format 'orb': must be tum, euroc, kitti, okvis, svin2 or openvins");
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "mapping/detail/block_table.h"
 #include "mapping/history/frame_codec.h"
 #include "tests/mapping/support/drifted_frames.h"
+#include "tests/mapping/support/known_blocks.h"
 
 namespace cenote::mapping {
 namespace {
@@ -26,15 +27,21 @@ MapConfig historyConfig() {
   return config;
 }
 
-test::PinholeCamera smallCamera() {
-  test::PinholeCamera camera;
-  camera.width = 96;
-  camera.height = 72;
-  camera.fx = camera.fy = 70.0;
-  camera.cx = 47.5;
-  camera.cy = 35.5;
-  return camera;
-}
+test::PinholeCamera smallCamera() { return {.width = 96, .height = 72, .fx = 70.0, .fy = 70.0, .cx = 47.5, .cy = 35.5}; }
+
+// The map under test with its history, and a reference map with a frame store of its own to compare
+// it with block by block.
+struct MapAndReference {
+  explicit MapAndReference(const MapConfig& config) : map(config), reference(referenceConfig(config)) {}
+  static MapConfig referenceConfig(MapConfig config) {
+    config.history_dir += "-reference";
+    return config;
+  }
+  OccupancyMap map;
+  MapHistory history{map};
+  OccupancyMap reference;
+  MapHistory reference_history{reference};
+};
 
 std::vector<CorrectedPose> truePoses(const std::vector<test::DriftedFrame>& frames) {
   std::vector<CorrectedPose> poses;
@@ -53,12 +60,7 @@ struct MapDifference {
 MapDifference compare(const OccupancyMap& a, const OccupancyMap& b) {
   auto acc_a = a.constAccessor();
   auto acc_b = b.constAccessor();
-  std::vector<BlockIndex> blocks = acc_a.knownBlocks();
-  for (const BlockIndex& block : acc_b.knownBlocks()) blocks.push_back(block);
-  std::sort(blocks.begin(), blocks.end(), [](const BlockIndex& x, const BlockIndex& y) {
-    return std::lexicographical_compare(x.data(), x.data() + 3, y.data(), y.data() + 3);
-  });
-  blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+  const std::vector<BlockIndex> blocks = test::blocksKnownInEither(acc_a, acc_b);
   MapDifference d;
   for (const BlockIndex& block : blocks) {
     BlockView va, vb;
@@ -134,20 +136,15 @@ TEST(FrameCodec, DamagedBytesAreAnIoErrorNamingTheFrame) {
 TEST(MapHistory, CorrectedMapEqualsTheMapBuiltFromScratchWithTheCorrectedPoses) {
   const MapConfig config = historyConfig();
   const auto frames = test::driftedRoomSweep(24, smallCamera(), 0.25, 3.0, config.history_quantum_m);
-  OccupancyMap drifted(config), truth(config);
-  MapHistory history(drifted);
-  MapConfig truth_config = config;
-  truth_config.history_dir += "-truth";
-  OccupancyMap truth_map(truth_config);
-  MapHistory truth_history(truth_map);
+  MapAndReference m(config);  // the reference: the map built with the true poses
   for (const auto& f : frames) {
-    history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
-    truth_history.integrate(f.batchAt(f.T_true), f.T_true);
+    m.history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+    m.reference_history.integrate(f.batchAt(f.T_true), f.T_true);
   }
-  const MapDifference before = compare(drifted, truth_map);
+  const MapDifference before = compare(m.map, m.reference);
   const auto poses = truePoses(frames);
-  const CorrectionSummary summary = history.correct(poses);
-  const MapDifference after = compare(drifted, truth_map);
+  const CorrectionSummary summary = m.history.correct(poses);
+  const MapDifference after = compare(m.map, m.reference);
   std::printf("uncorrected: %zu blocks differ, state agreement %.4f; corrected: %zu blocks, %.4f (%zu moved, %zu "
               "replayed, %zu blocks rebuilt)\n",
               before.blocks, before.agreement(), after.blocks, after.agreement(), summary.frames_moved,
@@ -161,7 +158,7 @@ TEST(MapHistory, CorrectedMapEqualsTheMapBuiltFromScratchWithTheCorrectedPoses) 
   EXPECT_FALSE(summary.delta.isEmpty());
 
   // A second, identical correction moves nothing.
-  const CorrectionSummary again = history.correct(poses);
+  const CorrectionSummary again = m.history.correct(poses);
   EXPECT_EQ(again.frames_moved, 0u);
   EXPECT_TRUE(again.delta.isEmpty());
 }
@@ -169,62 +166,52 @@ TEST(MapHistory, CorrectedMapEqualsTheMapBuiltFromScratchWithTheCorrectedPoses) 
 TEST(MapHistory, FramesIntegratedBetweenTheStepsOfACorrectionAreReplayedToo) {
   const MapConfig config = historyConfig();
   const auto frames = test::driftedRoomSweep(24, smallCamera(), 0.25, 3.0, config.history_quantum_m);
-  OccupancyMap map(config);
-  MapHistory history(map);
-  MapConfig reference_config = config;
-  reference_config.history_dir += "-reference";
-  OccupancyMap reference(reference_config);
-  MapHistory reference_history(reference);
+  MapAndReference m(config);
   std::vector<CorrectedPose> poses;
   for (size_t i = 0; i < 18; ++i) {
-    history.integrate(frames[i].batchAt(frames[i].T_drifted), frames[i].T_drifted);
+    m.history.integrate(frames[i].batchAt(frames[i].T_drifted), frames[i].T_drifted);
     poses.push_back({frames[i].t_s, frames[i].T_true});
   }
-  for (const auto& f : frames) reference_history.integrate(f.batchAt(f.T_true), f.T_true);
+  for (const auto& f : frames) m.reference_history.integrate(f.batchAt(f.T_true), f.T_true);
   // The last 6 frames arrive (with their true poses) while the correction of the first 18 runs.
-  CorrectionPlan plan = history.planCorrection(poses);
+  CorrectionPlan plan = m.history.planCorrection(poses);
   ASSERT_EQ(plan.moved.size(), 17u);
   size_t next = 0;
   for (size_t i = 0; i < plan.moved.size(); ++i) {
-    history.moveFrame(plan, i);
+    m.history.moveFrame(plan, i);
     if (i % 3 == 0 && next < 6) {
       const auto& f = frames[18 + next++];
-      history.integrate(f.batchAt(f.T_true), f.T_true);
+      m.history.integrate(f.batchAt(f.T_true), f.T_true);
     }
   }
   ASSERT_EQ(next, 6u);
-  const CorrectionSummary summary = history.finishCorrection(plan);
+  const CorrectionSummary summary = m.history.finishCorrection(plan);
   EXPECT_EQ(summary.frames_moved, 17u);
-  EXPECT_EQ(compare(map, reference).blocks, 0u);
+  EXPECT_EQ(compare(m.map, m.reference).blocks, 0u);
 }
 
 TEST(MapHistory, PartialCorrectionMovesOnlyTheFramesItCoversAndFramesWithoutPoseStay) {
   const MapConfig config = historyConfig();
   const auto frames = test::driftedRoomSweep(16, smallCamera(), 0.2, 2.0, config.history_quantum_m);
-  OccupancyMap map(config);
-  MapHistory history(map);
-  MapConfig reference_config = config;
-  reference_config.history_dir += "-reference";
-  OccupancyMap reference(reference_config);
-  MapHistory reference_history(reference);
+  MapAndReference m(config);
   // Frames 10-15 corrected; frame 3 integrated without a pose (as streamed points are).
   for (size_t i = 0; i < frames.size(); ++i) {
     const auto& f = frames[i];
     if (i == 3) {
-      history.integrate(f.batchAt(f.T_drifted));
-      reference_history.integrate(f.batchAt(f.T_drifted));
+      m.history.integrate(f.batchAt(f.T_drifted));
+      m.reference_history.integrate(f.batchAt(f.T_drifted));
       continue;
     }
-    history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+    m.history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
     const Eigen::Isometry3d& T = i >= 10 ? f.T_true : f.T_drifted;
-    reference_history.integrate(f.batchAt(T), T);
+    m.reference_history.integrate(f.batchAt(T), T);
   }
   std::vector<CorrectedPose> poses;
   for (size_t i = 10; i < frames.size(); ++i) poses.push_back({frames[i].t_s, frames[i].T_true});
-  const CorrectionSummary summary = history.correct(poses);
+  const CorrectionSummary summary = m.history.correct(poses);
   EXPECT_EQ(summary.frames_moved, 6u);
   EXPECT_GT(summary.frames_replayed, 6u);  // earlier frames share blocks with the moved ones
-  EXPECT_EQ(compare(map, reference).blocks, 0u);
+  EXPECT_EQ(compare(m.map, m.reference).blocks, 0u);
 }
 
 TEST(MapHistory, InterpolatesBetweenCorrectedPosesWithinTheGap) {

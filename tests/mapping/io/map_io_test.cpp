@@ -56,6 +56,12 @@ void expectSameStates(const OccupancyMap& a, const OccupancyMap& b) {
   EXPECT_EQ(differ, 0u);
 }
 
+// Saves `map` to `path` and loads it back: the same states.
+void expectRoundTripKeepsStates(const OccupancyMap& map, const std::string& path) {
+  saveMap(map, path);
+  expectSameStates(map, *loadMap(path));
+}
+
 TEST(MapIo, VdbRoundTripKeepsStatesProbabilitiesColoursAndModel) {
   TempDir dir;
   MapConfig c;
@@ -85,9 +91,7 @@ TEST(MapIo, VdbRoundTripKeepsStatesProbabilitiesColoursAndModel) {
 TEST(MapIo, BtRoundTripKeepsStatesAndOctomapReadsIt) {
   TempDir dir;
   const auto map = sceneMap();
-  saveMap(*map, dir.file("map.bt"));
-  const auto loaded = loadMap(dir.file("map.bt"));
-  expectSameStates(*map, *loaded);
+  expectRoundTripKeepsStates(*map, dir.file("map.bt"));
   octomap::OcTree tree(0.1);
   ASSERT_TRUE(tree.readBinary(dir.file("map.bt")));
   EXPECT_DOUBLE_EQ(tree.getResolution(), 0.05);
@@ -100,10 +104,7 @@ TEST(MapIo, BtRoundTripKeepsStatesAndOctomapReadsIt) {
 
 TEST(MapIo, OtRoundTripKeepsStates) {
   TempDir dir;
-  const auto map = sceneMap();
-  saveMap(*map, dir.file("map.ot"));
-  const auto loaded = loadMap(dir.file("map.ot"));
-  expectSameStates(*map, *loaded);
+  expectRoundTripKeepsStates(*sceneMap(), dir.file("map.ot"));
 }
 
 TEST(MapIo, MeshAndPointsPlyHaveHeaderAndCounts) {

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
+#include "tests/support/error_message.h"
 #include "pipeline/calibration/rectifier.h"
 #include "pipeline/calibration/stereo_calibration.h"
 
@@ -169,13 +170,9 @@ TEST(CalibrationFile, EurocCam0SensorYamlIsReadWithItsCam1Sibling) {
                    "-0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949, 0.0, 0.0, 0.0, 1.0",
                    "458.654, 457.296, 367.215, 248.375", "-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05");
   const std::string cam0 = mav0 + "/cam0/sensor.yaml", cam1 = mav0 + "/cam1/sensor.yaml";
-  try {
-    readCalibrationFile(cam0);
-    FAIL() << "one camera's sensor.yaml was read as a stereo rig";
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()),
-              cam0 + ": the right camera's " + cam1 + " is missing (an EuRoC / Kalibr sensor.yaml describes one camera)");
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { readCalibrationFile(cam0); }),
+            cam0 + ": the right camera's " + cam1 + " is missing (an EuRoC / Kalibr sensor.yaml describes one camera)")
+      << "one camera's sensor.yaml was read as a stereo rig";
   writeEurocSensor(cam1,
                    "0.0125552670891, -0.999755099723, 0.0182237714554, -0.0198435579556, "
                    "0.999598781151, 0.0130119051815, 0.0251588363115, 0.0453689425024, "
@@ -185,26 +182,20 @@ TEST(CalibrationFile, EurocCam0SensorYamlIsReadWithItsCam1Sibling) {
   EXPECT_EQ(c.image_size, cv::Size(752, 480));
   EXPECT_DOUBLE_EQ(c.right.K(1, 2), 255.238);
   EXPECT_NEAR(cv::norm(c.T), 0.1101, 5e-4);  // MH_01's published baseline
-  try {
-    readCalibrationFile(cam1);
-    FAIL() << "the right camera's file was taken as the left";
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), cam1 + ": an EuRoC / Kalibr sensor.yaml describes one camera; give the left "
-                                            "camera's, <mav0>/cam0/sensor.yaml, with cam1/sensor.yaml beside it");
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { readCalibrationFile(cam1); }),
+            cam1 + ": an EuRoC / Kalibr sensor.yaml describes one camera; give the left camera's, "
+                   "<mav0>/cam0/sensor.yaml, with cam1/sensor.yaml beside it")
+      << "the right camera's file was taken as the left";
 }
 
 TEST(CalibrationFile, KittiCalibTxtTakesTheColourRowsAndImageSizeOfItsSequence) {
   const std::string seq = freshDir("calib_kitti/00");
   std::ofstream(seq + "/calib.txt") << kKittiCalib00;
   // Alone: no image size of its own.
-  try {
-    readCalibrationFile(seq + "/calib.txt");
-    FAIL() << "a KITTI calib.txt without an image size was read";
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), seq + "/calib.txt: a KITTI calib.txt has no image size, and there is no " + seq +
-                                         "/image_0/000000.png beside it to take it from");
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { readCalibrationFile(seq + "/calib.txt"); }),
+            seq + "/calib.txt: a KITTI calib.txt has no image size, and there is no " + seq +
+                "/image_0/000000.png beside it to take it from")
+      << "a KITTI calib.txt without an image size was read";
   // Alone with the size of the images: the grey pair P0 / P1, baseline 386.1448 / 718.856 m.
   const StereoCalibration grey = readCalibrationFile(seq + "/calib.txt", cv::Size(1241, 376));
   EXPECT_TRUE(grey.rectified);
@@ -230,12 +221,8 @@ TEST(CalibrationFile, UnrecognisedFileSaysWhichLayoutsAreRead) {
               std::string::npos)
         << e.what();
   }
-  try {
-    readCalibrationFile(temp("absent.yaml"));
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), "calibration file not found: " + temp("absent.yaml"));
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { readCalibrationFile(temp("absent.yaml")); }),
+            "calibration file not found: " + temp("absent.yaml"));
 }
 
 // Draws a small bright blob at a sub-pixel position.
@@ -283,12 +270,8 @@ TEST(Rectifier, RejectsImagesOfAnotherSize) {
   StereoFrame frame;
   frame.left = cv::Mat(480, 640, CV_8UC1, cv::Scalar(0));
   frame.right = cv::Mat(479, 640, CV_8UC1, cv::Scalar(0));
-  try {
-    rectifier.rectify(frame);
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "rectifier: right image is 640x479 but the calibration is for 640x480");
-  }
+  EXPECT_EQ(cenote::test::errorMessage([&] { rectifier.rectify(frame); }),
+            "rectifier: right image is 640x479 but the calibration is for 640x480");
 }
 
 TEST(Rectifier, RectifiedCalibrationPassesImagesThrough) {

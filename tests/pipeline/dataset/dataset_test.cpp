@@ -24,10 +24,15 @@ std::string freshDir(const std::string& name) {
   return dir;
 }
 
+// freshDir(name) holding the EuRoC plane sequence (tests/support/plane_sequence.h).
+std::string freshEurocSequence(const std::string& name) {
+  const std::string dir = freshDir(name);
+  test::writeEurocPlaneSequence(dir, test::PlaneSequence{});
+  return dir;
+}
+
 TEST(EurocDataset, ReadsFramesTimestampsCalibrationAndExtrinsics) {
-  const std::string dir = freshDir("euroc_fixture");
-  test::PlaneSequence s;
-  test::writeEurocPlaneSequence(dir, s);
+  const std::string dir = freshEurocSequence("euroc_fixture");
   const auto dataset = openDataset(dir);
   ASSERT_EQ(dataset->size(), 9u);
   EXPECT_NEAR(dataset->timestamp(0), 100.0, 1e-9);
@@ -42,9 +47,7 @@ TEST(EurocDataset, ReadsFramesTimestampsCalibrationAndExtrinsics) {
 }
 
 TEST(EurocDataset, CameraTrajectoryComposesBodyPosesWithTheExtrinsics) {
-  const std::string dir = freshDir("euroc_traj");
-  test::PlaneSequence s;
-  test::writeEurocPlaneSequence(dir, s);
+  const std::string dir = freshEurocSequence("euroc_traj");
   const auto dataset = openDataset(dir);
   const io::Trajectory camera = cameraTrajectory(*dataset, "", "", PoseFrame::kAuto);
   // Frame 4 at t = 100 + 4/15 s: the camera is at 0.15 m/s * 4/15 s = 0.04 m.
@@ -57,9 +60,7 @@ TEST(EurocDataset, CameraTrajectoryComposesBodyPosesWithTheExtrinsics) {
 }
 
 TEST(EurocDataset, UnpairedImagesAreLeftOutAndCounted) {
-  const std::string dir = freshDir("euroc_unpaired");
-  test::PlaneSequence s;
-  test::writeEurocPlaneSequence(dir, s);
+  const std::string dir = freshEurocSequence("euroc_unpaired");
   // Drop frame 5 from the right camera's list.
   const fs::path csv = fs::path(dir) / "mav0" / "cam1" / "data.csv";
   std::ifstream in(csv);
@@ -74,9 +75,7 @@ TEST(EurocDataset, UnpairedImagesAreLeftOutAndCounted) {
 }
 
 TEST(EurocDataset, MalformedCsvAndMissingImagesAreClearErrors) {
-  const std::string dir = freshDir("euroc_bad");
-  test::PlaneSequence s;
-  test::writeEurocPlaneSequence(dir, s);
+  const std::string dir = freshEurocSequence("euroc_bad");
   std::ofstream(fs::path(dir) / "mav0" / "cam0" / "data.csv", std::ios::app) << "12x,abc.png\n";
   try {
     EurocDataset dataset(dir);
@@ -84,8 +83,7 @@ TEST(EurocDataset, MalformedCsvAndMissingImagesAreClearErrors) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("cam0/data.csv:11: '12x' is not a timestamp"), std::string::npos) << e.what();
   }
-  const std::string dir2 = freshDir("euroc_missing_image");
-  test::writeEurocPlaneSequence(dir2, s);
+  const std::string dir2 = freshEurocSequence("euroc_missing_image");
   EurocDataset dataset(dir2);
   fs::remove(fs::path(dir2) / "mav0" / "cam0" / "data" /
              (std::to_string(std::llround(dataset.timestamp(1) * 1e9)) + ".png"));
@@ -224,9 +222,7 @@ TEST(KittiDataset, TimesFileGivenForKittiPosesReplacesTheSequences) {
 }
 
 TEST(CameraTrajectory, KittiPosesWithoutTimesAreAnErrorOutsideAKittiSequence) {
-  const std::string dir = freshDir("euroc_kitti_poses");
-  test::PlaneSequence s;
-  test::writeEurocPlaneSequence(dir, s);
+  const std::string dir = freshEurocSequence("euroc_kitti_poses");
   const std::string poses = dir + "/poses.txt";
   std::ofstream(poses) << "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0.1 0 1 0 0 0 0 1 0\n";
   const auto dataset = openDataset(dir);
@@ -250,9 +246,7 @@ TEST(CameraTrajectory, KittiPosesWithoutTimesAreAnErrorOutsideAKittiSequence) {
 }
 
 TEST(CameraTrajectory, TumPosesOnADatasetWithExtrinsicsSayWhichFrameWasAssumed) {
-  const std::string dir = freshDir("euroc_tum");
-  test::PlaneSequence s;
-  test::writeEurocPlaneSequence(dir, s);
+  const std::string dir = freshEurocSequence("euroc_tum");
   const std::string tum = dir + "/vio.tum";
   std::ofstream(tum) << "100 0 0 0 0 0 0 1\n101 0.15 0 0 0 0 0 1\n";
   const auto dataset = openDataset(dir);

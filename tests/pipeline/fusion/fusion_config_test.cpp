@@ -39,11 +39,8 @@ TEST(FusionConfig, RejectsEvenOrTooFewOrTooManyViews) {
 }
 
 TEST(FusionConfig, RejectsRelativeEpsOutsideZeroOne) {
-  FusionConfig c;
-  c.eps = 1.5;
-  EXPECT_EQ(onlyError(c), "fusion.eps = 1.5: relative support radius must be in (0, 1) (a fraction of depth)");
-  c.eps = 0.0;
-  EXPECT_EQ(c.validate().size(), 1u);
+  EXPECT_EQ(onlyError({.eps = 1.5}), "fusion.eps = 1.5: relative support radius must be in (0, 1) (a fraction of depth)");
+  EXPECT_EQ(FusionConfig{.eps = 0.0}.validate().size(), 1u);
 }
 
 TEST(FusionConfig, AcceptsAbsoluteEpsInMetresAboveOne) {
@@ -56,31 +53,20 @@ TEST(FusionConfig, AcceptsAbsoluteEpsInMetresAboveOne) {
 }
 
 TEST(FusionConfig, RejectsNonPositiveFusedThreshold) {
-  FusionConfig c;
-  c.min_fused_confidence = 0.0;
-  EXPECT_EQ(onlyError(c), "fusion.min_fused_confidence = 0: must be > 0 and finite");
+  EXPECT_EQ(onlyError({.min_fused_confidence = 0.0}), "fusion.min_fused_confidence = 0: must be > 0 and finite");
 }
 
 TEST(FusionConfig, RejectsNegativeInputFloor) {
-  FusionConfig c;
-  c.min_input_confidence = -1.0;
-  EXPECT_EQ(onlyError(c), "fusion.min_input_confidence = -1: must be >= 0 and finite");
+  EXPECT_EQ(onlyError({.min_input_confidence = -1.0}), "fusion.min_input_confidence = -1: must be >= 0 and finite");
 }
 
 TEST(FusionConfig, RejectsNonPositiveMaxDepth) {
-  FusionConfig c;
-  c.max_depth_m = 0.0;
-  EXPECT_EQ(onlyError(c), "fusion.max_depth_m = 0: must be > 0 (.inf for no limit)");
-  c.max_depth_m = NAN;
-  EXPECT_EQ(c.validate().size(), 1u);
+  EXPECT_EQ(onlyError({.max_depth_m = 0.0}), "fusion.max_depth_m = 0: must be > 0 (.inf for no limit)");
+  EXPECT_EQ(FusionConfig{.max_depth_m = NAN}.validate().size(), 1u);
 }
 
 TEST(FusionConfig, ReportsEveryFailedRule) {
-  FusionConfig c;
-  c.num_views = 2;
-  c.eps = 2.0;
-  c.min_fused_confidence = -1.0;
-  c.max_depth_m = -3.0;
+  const FusionConfig c{.num_views = 2, .eps = 2.0, .min_fused_confidence = -1.0, .max_depth_m = -3.0};
   EXPECT_EQ(c.validate().size(), 4u);
 }
 

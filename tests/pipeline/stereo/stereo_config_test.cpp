@@ -13,53 +13,31 @@ std::string errorsOf(const StereoConfig& config) { return formatConfigErrors(con
 
 TEST(StereoConfig, DefaultsAreValid) {
   EXPECT_EQ(errorsOf(StereoConfig{}), "");
-  StereoConfig census;
-  census.cost = MatchingCost::kCensus;
-  census.window_px = 5;
-  EXPECT_EQ(errorsOf(census), "");
-  StereoConfig eight;
-  eight.num_paths = 8;
-  EXPECT_EQ(errorsOf(eight), "");
+  EXPECT_EQ(errorsOf({.cost = MatchingCost::kCensus, .window_px = 5}), "");
+  EXPECT_EQ(errorsOf({.num_paths = 8}), "");
 }
 
 TEST(StereoConfig, RejectsDisparitiesNotMultipleOf16) {
-  StereoConfig c;
-  c.num_disparities = 100;
-  EXPECT_EQ(errorsOf(c), "stereo.num_disparities = 100: must be a multiple of 16 in [16, 512]");
+  EXPECT_EQ(errorsOf({.num_disparities = 100}), "stereo.num_disparities = 100: must be a multiple of 16 in [16, 512]");
 }
 
 TEST(StereoConfig, RejectsEvenSadWindowAndCensusWindowOtherThanThreeOrFive) {
-  StereoConfig sad;
-  sad.window_px = 4;
-  EXPECT_EQ(errorsOf(sad), "stereo.window_px = 4: SAD window must be odd in [1, 9]");
-  StereoConfig census;
-  census.cost = MatchingCost::kCensus;
-  census.window_px = 7;
-  EXPECT_EQ(errorsOf(census), "stereo.window_px = 7: census window must be 3 or 5");
+  EXPECT_EQ(errorsOf({.window_px = 4}), "stereo.window_px = 4: SAD window must be odd in [1, 9]");
+  EXPECT_EQ(errorsOf({.cost = MatchingCost::kCensus, .window_px = 7}),
+            "stereo.window_px = 7: census window must be 3 or 5");
 }
 
 TEST(StereoConfig, ReportsEveryFailedRuleNotJustTheFirst) {
-  StereoConfig c;
-  c.num_paths = 6;
-  c.min_disparity_px = -3;
-  c.num_strips = 0;
+  const StereoConfig c{.min_disparity_px = -3, .num_paths = 6, .num_strips = 0};
   EXPECT_EQ(c.validate().size(), 3u) << errorsOf(c);
 }
 
 TEST(StereoConfig, RejectsPenaltiesThatWouldOverflowSixteenBitSums) {
-  StereoConfig c;
-  c.num_paths = 8;
-  c.p1 = 100;
-  c.p2 = 9000;
+  const StereoConfig c{.num_paths = 8, .p1 = 100, .p2 = 9000};
   EXPECT_NE(errorsOf(c).find("stereo.p2 = 9000: num_paths * (max cost"), std::string::npos) << errorsOf(c);
 }
 
-TEST(StereoConfig, RejectsP2BelowP1) {
-  StereoConfig c;
-  c.p1 = 50;
-  c.p2 = 20;
-  EXPECT_EQ(errorsOf(c), "stereo.p2 = 20: must be >= p1 (50)");
-}
+TEST(StereoConfig, RejectsP2BelowP1) { EXPECT_EQ(errorsOf({.p1 = 50, .p2 = 20}), "stereo.p2 = 20: must be >= p1 (50)"); }
 
 TEST(StereoConfig, SadCostRangeFollowsWindowAndPrefilter) {
   StereoConfig c;

@@ -58,17 +58,34 @@ struct Mirror {
   }
 };
 
-// Runs steps until settled; @return the number of steps.
-int settle(BlockSync& sync, const mapping::OccupancyMap& map, Mirror& mirror, double budget_bytes) {
-  int steps = 0;
-  while (!sync.settled() && steps < 10000) {
-    const auto access = map.constAccessor();
-    const SyncStep step = sync.next(access, Eigen::Vector3d::Zero(), budget_bytes, 1);
-    if (!step.message.empty()) mirror.apply(step.message);
-    ++steps;
+// A map holding a wall of points, and a BlockSync that has marked every block of it to send to a
+// client whose view is `mirror`.
+struct WallSync {
+  mapping::OccupancyMap map{mapping::MapConfig{}};
+  BlockSync sync;
+  Mirror mirror;
+
+  WallSync(double half_m, ColorBy color_by, double refresh_s = 5.0) : sync("world", color_by, refresh_s) {
+    map.integrate(wall(half_m, 0.04));
+    markAllKnown();
   }
-  return steps;
-}
+  // Marks every block the map knows, as for a new client or after a dropped change feed.
+  void markAllKnown() {
+    const auto access = map.constAccessor();
+    sync.markAll(access.knownBlocks());
+  }
+  // Runs steps until settled; @return the number of steps.
+  int settle(double budget_bytes) {
+    int steps = 0;
+    while (!sync.settled() && steps < 10000) {
+      const auto access = map.constAccessor();
+      const SyncStep step = sync.next(access, Eigen::Vector3d::Zero(), budget_bytes, 1);
+      if (!step.message.empty()) mirror.apply(step.message);
+      ++steps;
+    }
+    return steps;
+  }
+};
 
 TEST(BlockSync, EmptyMapSendsNothingAndIsSettled) {
   mapping::OccupancyMap map{mapping::MapConfig{}};
@@ -80,122 +97,82 @@ TEST(BlockSync, EmptyMapSendsNothingAndIsSettled) {
 }
 
 TEST(BlockSync, AmpleBudgetSendsEveryOccupiedVoxelAtFullDetailInOneStep) {
-  mapping::OccupancyMap map{mapping::MapConfig{}};
-  map.integrate(wall(1.0, 0.04));
-  BlockSync sync("world", ColorBy::kImage);
-  Mirror mirror;
-  {
-    const auto access = map.constAccessor();
-    sync.markAll(access.knownBlocks());
-  }
-  EXPECT_EQ(settle(sync, map, mirror, 1e9), 1);
-  EXPECT_EQ(mirror.coarse(), 0u);
-  EXPECT_GT(map.stats().occupied, 1000u);
-  EXPECT_EQ(mirror.fullVoxels(), map.stats().occupied);
+  WallSync w(1.0, ColorBy::kImage);
+  EXPECT_EQ(w.settle(1e9), 1);
+  EXPECT_EQ(w.mirror.coarse(), 0u);
+  EXPECT_GT(w.map.stats().occupied, 1000u);
+  EXPECT_EQ(w.mirror.fullVoxels(), w.map.stats().occupied);
 }
 
 TEST(BlockSync, ShortBudgetSendsCoarseBlocksFirstThenRefinesThemWithinTheBudget) {
-  mapping::OccupancyMap map{mapping::MapConfig{}};
-  map.integrate(wall(1.0, 0.04));
-  BlockSync sync("world", ColorBy::kHeight);
-  Mirror mirror;
-  {
-    const auto access = map.constAccessor();
-    sync.markAll(access.knownBlocks());
-  }
+  WallSync w(1.0, ColorBy::kHeight);
   const double budget = 20000.0;
   size_t largest = 0;
   bool saw_coarse = false;
   int steps = 0;
-  while (!sync.settled() && steps < 10000) {
-    const auto access = map.constAccessor();
-    const SyncStep step = sync.next(access, Eigen::Vector3d::Zero(), budget, 1);
+  while (!w.sync.settled() && steps < 10000) {
+    const auto access = w.map.constAccessor();
+    const SyncStep step = w.sync.next(access, Eigen::Vector3d::Zero(), budget, 1);
     largest = std::max(largest, step.message.size());
     saw_coarse = saw_coarse || step.coarse_blocks > 0;
-    mirror.apply(step.message);
+    w.mirror.apply(step.message);
     ++steps;
   }
   EXPECT_TRUE(saw_coarse);
   EXPECT_GT(steps, 5);
   // Every message within the budget, but for one block bigger than it (sent alone).
   EXPECT_LE(largest, static_cast<size_t>(budget) + SceneUpdateWriter::entityBytes(mapping::kBlockVoxels));
-  EXPECT_EQ(mirror.coarse(), 0u);
-  EXPECT_EQ(mirror.fullVoxels(), map.stats().occupied);
+  EXPECT_EQ(w.mirror.coarse(), 0u);
+  EXPECT_EQ(w.mirror.fullVoxels(), w.map.stats().occupied);
 }
 
 TEST(BlockSync, ClearedBlocksAreDeletedAndTheMirrorFollowsTheMap) {
-  mapping::OccupancyMap map{mapping::MapConfig{}};
-  map.integrate(wall(1.0, 0.04));
-  BlockSync sync("world", ColorBy::kImage);
-  Mirror mirror;
-  {
-    const auto access = map.constAccessor();
-    sync.markAll(access.knownBlocks());
-  }
-  settle(sync, map, mirror, 1e9);
-  const size_t before = mirror.entities.size();
+  WallSync w(1.0, ColorBy::kImage);
+  w.settle(1e9);
+  const size_t before = w.mirror.entities.size();
   mapping::Aabb box;
   box.min_m = Eigen::Vector3d(1.5, -2.0, 0.0);
   box.max_m = Eigen::Vector3d(2.5, 2.0, 2.0);
-  const mapping::MapDelta delta = map.clearBox(box);
-  sync.markChanged(delta.changed_blocks);
-  settle(sync, map, mirror, 1e9);
-  EXPECT_GT(mirror.deletions, 0u);
-  EXPECT_LT(mirror.entities.size(), before);
-  EXPECT_EQ(mirror.fullVoxels(), map.stats().occupied);
+  const mapping::MapDelta delta = w.map.clearBox(box);
+  w.sync.markChanged(delta.changed_blocks);
+  w.settle(1e9);
+  EXPECT_GT(w.mirror.deletions, 0u);
+  EXPECT_LT(w.mirror.entities.size(), before);
+  EXPECT_EQ(w.mirror.fullVoxels(), w.map.stats().occupied);
 }
 
 TEST(BlockSync, AResyncAfterChangesConvergesToTheMapAsItIsNow) {
-  mapping::OccupancyMap map{mapping::MapConfig{}};
-  map.integrate(wall(0.5, 0.04));
-  BlockSync sync("world", ColorBy::kImage);
-  Mirror mirror;
-  {
-    const auto access = map.constAccessor();
-    sync.markAll(access.knownBlocks());
-  }
-  settle(sync, map, mirror, 1e9);
-  map.reset();
+  WallSync w(0.5, ColorBy::kImage);
+  w.settle(1e9);
+  w.map.reset();
   PointBatch moved = wall(0.5, 0.04);
   for (auto& p : moved.points) p.y() += 3.0f;
-  map.integrate(moved);
-  {
-    const auto access = map.constAccessor();
-    sync.markAll(access.knownBlocks());  // as after a dropped change feed
-  }
-  settle(sync, map, mirror, 1e9);
-  EXPECT_EQ(mirror.fullVoxels(), map.stats().occupied);
-  for (const auto& [id, e] : mirror.entities) EXPECT_EQ(e.cubes, e.voxels) << id;
+  w.map.integrate(moved);
+  w.markAllKnown();  // as after a dropped change feed
+  w.settle(1e9);
+  EXPECT_EQ(w.mirror.fullVoxels(), w.map.stats().occupied);
+  for (const auto& [id, e] : w.mirror.entities) EXPECT_EQ(e.cubes, e.voxels) << id;
 }
 
-}  // namespace
-}  // namespace cenote::server::viewer
-
-namespace cenote::server::viewer {
-namespace {
-
 TEST(BlockSync, ABlockWithTheSameOccupiedVoxelsIsOnlyRefreshedAfterRefreshS) {
-  mapping::OccupancyMap map{mapping::MapConfig{}};
-  map.integrate(wall(0.5, 0.04));
-  BlockSync sync("world", ColorBy::kImage, 5.0);
+  WallSync w(0.5, ColorBy::kImage, 5.0);
   {
-    const auto access = map.constAccessor();
-    sync.markAll(access.knownBlocks());
-    const SyncStep first = sync.next(access, Eigen::Vector3d::Zero(), 1e9, 1000000000ull);
+    const auto access = w.map.constAccessor();
+    const SyncStep first = w.sync.next(access, Eigen::Vector3d::Zero(), 1e9, 1000000000ull);
     ASSERT_GT(first.full_blocks, 0u);
   }
-  const mapping::MapDelta again = map.integrate(wall(0.5, 0.04));  // the same hits: probabilities rise
+  const mapping::MapDelta again = w.map.integrate(wall(0.5, 0.04));  // the same hits: probabilities rise
   ASSERT_FALSE(again.isEmpty());
-  sync.markChanged(again.changed_blocks);
-  const auto access = map.constAccessor();
-  const SyncStep soon = sync.next(access, Eigen::Vector3d::Zero(), 1e9, 2000000000ull);
+  w.sync.markChanged(again.changed_blocks);
+  const auto access = w.map.constAccessor();
+  const SyncStep soon = w.sync.next(access, Eigen::Vector3d::Zero(), 1e9, 2000000000ull);
   EXPECT_TRUE(soon.message.empty());
-  EXPECT_TRUE(sync.settled());
-  const size_t stale = sync.staleBlocks();
+  EXPECT_TRUE(w.sync.settled());
+  const size_t stale = w.sync.staleBlocks();
   EXPECT_GT(stale, 0u);
-  const SyncStep later = sync.next(access, Eigen::Vector3d::Zero(), 1e9, 6000000001ull);
+  const SyncStep later = w.sync.next(access, Eigen::Vector3d::Zero(), 1e9, 6000000001ull);
   EXPECT_EQ(later.full_blocks, stale);
-  EXPECT_EQ(sync.staleBlocks(), 0u);
+  EXPECT_EQ(w.sync.staleBlocks(), 0u);
 }
 
 }  // namespace
