@@ -25,8 +25,8 @@ PACKAGES=(
   # stubs generated at build time
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc python3-grpcio python3-grpc-tools
   python3-protobuf
-  # server TLS tests make their certificates
-  openssl
+  # TLS on the viewer port (Asio's OpenSSL layer); the server TLS tests make their certificates
+  libssl-dev openssl
   # ROS 1 bags (io/bag/ros1_bag.cpp): bz2 and lz4-frame chunks; the tests' bags are written by ROS's own
   # rosbag (python3-rosbag) with the message classes of sensor_msgs, geometry_msgs, nav_msgs and tf2_msgs,
   # their images encoded (PNG, JPEG) and rigs rectified (CameraInfo) by OpenCV's Python bindings, which
