@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "common/thread_name.h"
 #include "server/viewer/block_sync.h"
 #include "server/viewer/foxglove_schemas.h"
 #include "server/viewer/scene_messages.h"
@@ -78,7 +79,10 @@ struct FeedWorker::Client {
 };
 
 FeedWorker::FeedWorker(const ViewerConfig& config, const ViewerSources& sources)
-    : config_(config), sources_(sources), thread_([this] { loop(); }) {}
+    : config_(config), sources_(sources), thread_([this] {
+        nameThisThread("viewer-feed");
+        loop();
+      }) {}
 
 FeedWorker::~FeedWorker() { stop(); }
 

@@ -20,6 +20,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "common/thread_name.h"
 #include "server/viewer/viewer_feed.h"
 
 #ifndef CENOTE_WEB_DIR
@@ -418,7 +419,10 @@ ViewerServer::ViewerServer(const ViewerConfig& config, ViewerSources sources)
   if (!ec) a.listen(net::socket_base::max_listen_connections, ec);
   if (ec) throw Error("server.viewer.listen = " + config.listen + ": cannot listen: " + ec.message());
   impl_->accept();
-  impl_->io_thread = std::thread([this] { impl_->io.run(); });
+  impl_->io_thread = std::thread([this] {
+    nameThisThread("viewer-net");
+    impl_->io.run();
+  });
 }
 
 ViewerServer::~ViewerServer() { stop(); }

@@ -12,7 +12,8 @@
 // <token>` or `?token=<token>` in the URL: browsers cannot set headers), else HTTP 401; the page's
 // files are public (they hold no map data). Client messages the protocol does not allow get an
 // error status message, never a closed connection.
-// Threads: one network thread (Boost.Asio) and one thread that makes every client's messages,
+// Threads: one network thread (Boost.Asio, named viewer-net) and one thread that makes every
+// client's messages (viewer-feed),
 // both started by the constructor, stopped by stop() or the destructor. With no client connected
 // the feed holds no change subscription and the worker sleeps: ingest pays nothing for it.
 #pragma once

@@ -195,7 +195,11 @@ class ViewerEndToEnd(unittest.TestCase):
         # probability (occupied: above 0.5).
         self.assertRegex(page["picked"], r"occupied, p = (0\.(5[1-9]|[6-9]\d)|1\.00)")
         self.assertTrue(os.path.getsize(screenshot) > 1000)
-        print(f"browser: {page['voxels']} voxels, {page['framesReceived']} frames; screenshot {screenshot}")
+        # W held for a second flew the camera forward, no faster than 1 m/s.
+        self.assertGreater(page["flownMetres"], 0.05)
+        self.assertLessEqual(page["flownMetres"], 1.3)
+        print(f"browser: {page['voxels']} voxels, {page['framesReceived']} frames, flew {page['flownMetres']:.2f} m; "
+              f"screenshot {screenshot}")
 
     def test_cenote_view_serves_a_saved_map_the_same_way(self):
         saved = self.client.download_snapshot(os.path.join(self.tmp.name, "saved.vdb"))

@@ -75,6 +75,7 @@ const state = {
   trajectoryPoses: 0,
   frontierClusters: 0,
   images: {}, // per image element: its size once shown
+  flownMetres: 0, // how far the fly keys moved the camera
 };
 window.cenoteViewer = state;
 
@@ -289,10 +290,42 @@ renderer.domElement.addEventListener("click", (event) => {
       : `voxel at (${c.x.toFixed(3)}, ${c.y.toFixed(3)}, ${c.z.toFixed(3)}) m\noccupied, p = ${c.p?.toFixed(2) ?? "?"}`;
 });
 
+// Fly: W / S forward and back along the view, A / D sideways, Q / E down and up (world z), Shift
+// four times faster; the orbit's centre travels with the camera, so orbiting goes on from there.
+const FLY_SPEED_M_S = 1.0;
+const FLY_KEYS = { KeyW: [1, 0, 0], KeyS: [-1, 0, 0], KeyD: [0, 1, 0], KeyA: [0, -1, 0], KeyE: [0, 0, 1], KeyQ: [0, 0, -1] };
+const flying = new Set();
+let flyFast = false;
+window.addEventListener("keydown", (e) => {
+  if (e.target instanceof HTMLInputElement || !(e.code in FLY_KEYS)) return;
+  flying.add(e.code);
+  flyFast = e.shiftKey;
+});
+window.addEventListener("keyup", (e) => flying.delete(e.code));
+window.addEventListener("blur", () => flying.clear());
+function fly(dt_s) {
+  if (flying.size === 0) return;
+  const forward = camera.getWorldDirection(new THREE.Vector3());
+  const side = new THREE.Vector3().crossVectors(forward, camera.up).normalize();
+  const step = new THREE.Vector3();
+  for (const code of flying) {
+    const [f, s, u] = FLY_KEYS[code];
+    step.addScaledVector(forward, f).addScaledVector(side, s).addScaledVector(camera.up, u);
+  }
+  if (step.lengthSq() === 0) return;
+  step.normalize().multiplyScalar((flyFast ? 4 : 1) * FLY_SPEED_M_S * dt_s);
+  camera.position.add(step);
+  controls.target.add(step);
+  state.flownMetres += step.length();
+}
+
 // --- loop -------------------------------------------------------------------------------------
 let lastRebuild = 0;
+let lastFrame = null;
 function frame(time) {
   requestAnimationFrame(frame);
+  fly(lastFrame === null ? 0 : Math.min((time - lastFrame) / 1000, 0.1));
+  lastFrame = time;
   if (time - lastRebuild > 250) {
     lastRebuild = time;
     voxels.rebuild();

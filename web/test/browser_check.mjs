@@ -1,7 +1,7 @@
 // browser_check.mjs URL OCCUPIED SCREENSHOT: loads cenote's browser viewer in Debian's headless
 // Chromium (npm playwright-core driving /usr/bin/chromium, or $CHROMIUM), waits until the page
-// reports OCCUPIED voxels at full detail (window.cenoteViewer), clicks a voxel, saves a screenshot
-// and prints what the page reports as JSON. Exits 1 (with the report) after TIMEOUT_S (default 120).
+// reports OCCUPIED voxels at full detail (window.cenoteViewer), clicks a voxel, saves a screenshot,
+// flies forward with the W key and prints what the page reports as JSON. Exits 1 (with the report) after TIMEOUT_S (default 120).
 import { chromium } from "playwright-core";
 
 const [url, occupiedText, screenshot] = process.argv.slice(2);
@@ -41,6 +41,13 @@ report = await page.evaluate(() => ({
   connection: document.getElementById("connection").textContent,
 }));
 await page.screenshot({ path: screenshot });
+// Then fly: W held for a second moves the camera forward (1 m/s; fewer frames, less distance).
+if (code === 0) {
+  await page.keyboard.down("KeyW");
+  await page.waitForTimeout(1000);
+  await page.keyboard.up("KeyW");
+  report.flownMetres = await page.evaluate(() => window.cenoteViewer.flownMetres);
+}
 await browser.close();
 process.stdout.write(JSON.stringify({ ...report, errors }) + "\n");
 process.exit(code);
