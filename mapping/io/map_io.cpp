@@ -14,6 +14,7 @@
 
 #include "common/atomic_file.h"
 #include "common/error.h"
+#include "common/size_format.h"
 #include "io/cloud/ply_io.h"
 #include "mapping/detail/map_impl.h"
 #include "mapping/detail/mask_bits.h"
@@ -312,16 +313,30 @@ std::unique_ptr<OccupancyMap> loadOctomap(const std::string& path, const MapConf
                   std::to_string(summary.leaf_voxels) + " voxels, more than the " + std::to_string(max_voxels) +
                   " a map may load");
   }
-  if (binary) {
-    octomap::OcTree tree(0.1);
-    if (!tree.readBinary(path)) throw Error("cannot read " + path + ": not an OctoMap binary tree (.bt)");
-    return fromOctree(tree, defaults);
+  // The voxels may also be few but scattered, one per grid leaf: the memory is what is bounded.
+  if (summary.gridBytes() > max_voxels * kLoadBytesPerVoxel) {
+    throw IoError(path + ": the tree's " + std::to_string(summary.leaf_voxels) + " voxels are spread over " +
+                  std::to_string(summary.grid_leaves) + " blocks of 8^3 and would take " +
+                  formatBytes(static_cast<double>(summary.gridBytes())) + " of grid, more than the " +
+                  formatBytes(static_cast<double>(max_voxels * kLoadBytesPerVoxel)) + " a map may load");
   }
-  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(path));
-  if (!tree) throw Error("cannot read " + path + ": not an OctoMap tree file (.ot)");
-  if (auto* color = dynamic_cast<octomap::ColorOcTree*>(tree.get())) return fromOctree(*color, defaults);
-  if (auto* plain = dynamic_cast<octomap::OcTree*>(tree.get())) return fromOctree(*plain, defaults);
-  throw Error(path + ": holds an OctoMap " + tree->getTreeType() + ", expected OcTree or ColorOcTree");
+  // OctoMap reads the nodes the scan checked, from where the scan found them, into a tree made
+  // from the header as the scan read it: its own header parser, which may read a malformed header
+  // otherwise, never runs.
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(summary.data_offset));
+  if (!in) throw IoError("cannot read " + path + ": " + std::strerror(errno));
+  auto read = [&](auto& tree) {
+    if (summary.header_size > 0) binary ? tree.readBinaryData(in) : tree.readData(in);
+    if (!in) throw IoError(path + ": OctoMap could not read the tree's nodes");
+    return fromOctree(tree, defaults);
+  };
+  if (binary || summary.id == "OcTree") {
+    octomap::OcTree tree(summary.resolution_m);
+    return read(tree);
+  }
+  octomap::ColorOcTree tree(summary.resolution_m);
+  return read(tree);
 }
 
 struct PlyVertex {

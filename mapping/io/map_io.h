@@ -36,12 +36,16 @@ void saveMap(const OccupancyMap& map, const std::string& path, const std::string
 // The most voxels loadMap() expands a file to (about 1.2 GB of grid): a pruned OctoMap leaf or an
 // OpenVDB tile stands for many voxels, so a file of 100 bytes can claim 10^14 of them.
 inline constexpr uint64_t kMaxLoadVoxels = uint64_t{1} << 28;
+// ... and the grid's bytes per voxel allowed: a dense map's (8^3 floats a leaf), so that voxels
+// scattered one per leaf, with a node of 33 kB each above them, are held to the same memory.
+inline constexpr uint64_t kLoadBytesPerVoxel = 5;
 
 // Loads .vdb, .bt or .ot. The sensor model comes from the file (.vdb) or from `defaults` (OctoMap
 // files keep only the resolution). OctoMap files are checked node by node before OctoMap reads
 // them (octree_file_scan.h).
 // @throws Error for a missing (NotFoundError), unreadable or foreign file; IoError naming the file
-//   and the field for a file cut short, a damaged tree, or more than max_voxels voxels.
+//   and the field for a file cut short, a damaged tree, or more than max_voxels voxels (or a
+//   grid of more than max_voxels * kLoadBytesPerVoxel bytes).
 // @param max_voxels the most voxels the file may expand to (tests and fuzzing pass less).
 std::unique_ptr<OccupancyMap> loadMap(const std::string& path, const MapConfig& defaults = MapConfig{},
                                       uint64_t max_voxels = kMaxLoadVoxels);

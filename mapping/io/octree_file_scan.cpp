@@ -50,6 +50,40 @@ OctreeFileSummary readHeader(std::istream& in, const std::string& path, bool bin
 
 uint64_t voxelsAtDepth(int depth) { return uint64_t{1} << (3 * (kOctreeDepth - depth)); }
 
+// The OpenVDB nodes of the map's log-odds tree (Tree4<float, 4, 3, 3>, mapping/detail/map_impl.h)
+// the leaves of a depth-first walk fill. A grid node of
+// side 2^k voxels is one octree node at depth 16 - k: a leaf at or above that depth fills 8^(that
+// depth - its depth) of them, leaves below it share their ancestor's, counted once.
+class GridNodeCount {
+ public:
+  // A node at `depth` is entered (depth-first order: everything below it comes before the next).
+  void enter(int depth) {
+    for (Level& l : levels_)
+      if (depth == l.depth) l.counted = false;
+  }
+  // A leaf at `depth`, below a node entered last at the levels above it.
+  void leaf(int depth, OctreeFileSummary& s) {
+    for (Level& l : levels_) {
+      if (depth <= l.depth) {
+        s.*l.count += uint64_t{1} << (3 * (l.depth - depth));
+      } else if (!l.counted) {
+        ++(s.*l.count);
+        l.counted = true;
+      }
+    }
+  }
+
+ private:
+  struct Level {
+    int depth;  // of the octree nodes that are one grid node of this level
+    uint64_t OctreeFileSummary::*count;
+    bool counted = false;  // the current ancestor at this depth has been counted
+  };
+  Level levels_[3] = {{kOctreeDepth - 3, &OctreeFileSummary::grid_leaves},
+                      {kOctreeDepth - 6, &OctreeFileSummary::grid_inner1},
+                      {kOctreeDepth - 10, &OctreeFileSummary::grid_inner2}};
+};
+
 // Reads the nodes depth-first with an explicit stack (depth is at most 16 by the checks).
 class NodeWalk {
  public:
@@ -80,12 +114,20 @@ class NodeWalk {
 
 void scanBinaryNodes(NodeWalk& walk, OctreeFileSummary& s) {
   std::vector<int> pending = {0};  // depths of the inner nodes still to read, last first
+  GridNodeCount grid;
   while (!pending.empty()) {
     const int depth = pending.back();
     pending.pop_back();
+    grid.enter(depth);
     const uint64_t node = s.nodes++;
     uint8_t bits[2];
     walk.read(bits, 2, node);
+    if (bits[0] == 0 && bits[1] == 0) {
+      // No child at all: OctoMap keeps the node as a leaf of its depth (the root: every voxel).
+      s.leaf_voxels += voxelsAtDepth(depth);
+      grid.leaf(depth, s);
+      continue;
+    }
     int inner[8], inner_count = 0;
     for (int child = 0; child < 8; ++child) {
       const int pair = (bits[child / 4] >> (2 * (child % 4))) & 3;
@@ -96,6 +138,7 @@ void scanBinaryNodes(NodeWalk& walk, OctreeFileSummary& s) {
         inner[inner_count++] = depth + 1;
       } else {
         s.leaf_voxels += voxelsAtDepth(depth + 1);
+        grid.leaf(depth + 1, s);
       }
     }
     // OctoMap reads the inner children in child order: push them so the first comes off first.
@@ -105,9 +148,11 @@ void scanBinaryNodes(NodeWalk& walk, OctreeFileSummary& s) {
 
 void scanFullNodes(NodeWalk& walk, OctreeFileSummary& s, bool colour) {
   std::vector<int> pending = {0};
+  GridNodeCount grid;
   while (!pending.empty()) {
     const int depth = pending.back();
     pending.pop_back();
+    grid.enter(depth);
     const uint64_t node = s.nodes++;
     uint8_t value[7];
     walk.read(value, colour ? 7 : 4, node);
@@ -118,6 +163,7 @@ void scanFullNodes(NodeWalk& walk, OctreeFileSummary& s, bool colour) {
     walk.read(&children, 1, node);
     if (children == 0) {
       s.leaf_voxels += voxelsAtDepth(depth);
+      grid.leaf(depth, s);
       continue;
     }
     if (depth == kOctreeDepth) walk.tooDeep(node);
@@ -129,6 +175,13 @@ void scanFullNodes(NodeWalk& walk, OctreeFileSummary& s, bool colour) {
 
 }  // namespace
 
+uint64_t OctreeFileSummary::gridBytes() const {
+  // Values and masks of each node: 8^3 floats; 8^3 and 16^3 child pointers or tiles of 8 bytes.
+  constexpr uint64_t kLeafBytes = 512 * 4 + 64 + 32, kInner1Bytes = 512 * 8 + 2 * 64 + 32,
+                     kInner2Bytes = 4096 * 8 + 2 * 512 + 32;
+  return grid_leaves * kLeafBytes + grid_inner1 * kInner1Bytes + grid_inner2 * kInner2Bytes;
+}
+
 OctreeFileSummary scanOctreeFile(const std::string& path, bool binary) {
   if (!std::filesystem::exists(path)) throw NotFoundError("cannot read " + path + ": no such file");
   std::ifstream in(path, std::ios::binary);
@@ -138,8 +191,8 @@ OctreeFileSummary scanOctreeFile(const std::string& path, bool binary) {
   if (!binary && s.id != "OcTree" && s.id != "ColorOcTree") {
     throw IoError(path + ": holds an OctoMap " + s.id + ", expected OcTree or ColorOcTree");
   }
-  const auto header_bytes = static_cast<uint64_t>(in.tellg());
-  NodeWalk walk(in, path, file_bytes - header_bytes);
+  s.data_offset = static_cast<uint64_t>(in.tellg());
+  NodeWalk walk(in, path, file_bytes - s.data_offset);
   if (s.header_size == 0) return s;  // OctoMap reads no nodes then
   if (binary) {
     scanBinaryNodes(walk, s);

@@ -4,7 +4,9 @@
 // read on from uninitialised bytes, and a pruned leaf near the root stands for up to 2^48 voxels
 // that loading expands one by one (100 bytes of .bt: 10^14 voxels). This scan walks the same
 // node structure, checks every node lies within the file and within OctoMap's 16 levels, and
-// counts the voxels the leaves cover, so that a loader can refuse the file first.
+// counts the voxels the leaves cover and the grid nodes they fill, so that a loader can refuse
+// the file first. An OctoMap key maps to the voxel (key - 2^15), so an octree node at depth 13, 10
+// or 6 is exactly one leaf, lower or upper inner node of the map's OpenVDB tree.
 // Formats (OctoMap 1.9, AbstractOcTree.cpp and OcTreeBaseImpl.hxx):
 //   header  "# Octomap OcTree binary file" (.bt) or "# Octomap OcTree file" (.ot), then lines
 //           "id <type>", "size <nodes>", "res <metres>", "data".
@@ -26,8 +28,15 @@ struct OctreeFileSummary {
   std::string id;             // "OcTree", "ColorOcTree"
   double resolution_m = 0.0;  // the header's res
   uint64_t header_size = 0;   // the header's size (OctoMap reads no nodes when 0)
+  uint64_t data_offset = 0;   // the byte where the nodes begin, after the header's "data" line
   uint64_t nodes = 0;         // nodes in the data
   uint64_t leaf_voxels = 0;   // voxels the leaves cover: 8^(16 - depth) each
+  // The OpenVDB nodes those voxels fill once loaded (leaves of 8^3 voxels, inner nodes of 64^3
+  // and 1024^3): voxels scattered one per leaf cost far more memory than their count says.
+  uint64_t grid_leaves = 0, grid_inner1 = 0, grid_inner2 = 0;
+
+  // Bytes of the loaded log-odds grid's nodes (OpenVDB 10, float values), within a few %.
+  uint64_t gridBytes() const;
 };
 
 // @param binary true for .bt, false for .ot.

@@ -4,6 +4,7 @@
 // before anything is expanded. Real files written by OctoMap and OpenVDB still load.
 #include <gtest/gtest.h>
 #include <openvdb/io/File.h>
+#include <octomap/OcTree.h>
 #include <openvdb/openvdb.h>
 
 #include <cmath>
@@ -48,6 +49,13 @@ TEST(MapFileLimits, BtOfEightPrunedLeavesUnderTheRootClaims2e14VoxelsAndIsRefuse
   // Root with 8 occupied leaf children (bits 01 each): 8 x (2^15)^3 = 2^48 voxels in 2 bytes.
   const std::string path = writeFile("pruned.bt", kBtHeader + "\xAA\xAA");
   ASSERT_LT(fs::file_size(path), 100u);
+  EXPECT_EQ(loadError(path), path + ": the tree's 1 nodes have leaves covering 281474976710656 voxels, more than the "
+                                    "268435456 a map may load");
+}
+
+TEST(MapFileLimits, BtWhoseRootHasNoChildIsOneLeafOfEveryVoxelAndIsRefused) {
+  // Bits 00 00: OctoMap keeps the root as a leaf, 2^48 voxels to expand (the fuzzer's find).
+  const std::string path = writeFile("bare-root.bt", kBtHeader + std::string(2, '\0'));
   EXPECT_EQ(loadError(path), path + ": the tree's 1 nodes have leaves covering 281474976710656 voxels, more than the "
                                     "268435456 a map may load");
 }
@@ -102,8 +110,37 @@ TEST(MapFileLimits, RealOctomapFilesPassTheScanWithTheirVoxelCounts) {
     EXPECT_DOUBLE_EQ(summary.resolution_m, 0.1);
     // cenote writes unpruned trees: one depth-16 leaf per known voxel.
     EXPECT_EQ(summary.leaf_voxels, stats.occupied + stats.free) << path;
-    EXPECT_EQ(loadMap(path)->stats().occupied, stats.occupied) << path;
+    const auto loaded = loadMap(path);
+    EXPECT_EQ(loaded->stats().occupied, stats.occupied) << path;
+    // The grid leaves the scan counts are the loaded grid's blocks.
+    EXPECT_EQ(summary.grid_leaves, loaded->constAccessor().knownBlocks().size()) << path;
+    EXPECT_EQ(summary.grid_inner2, 1u) << path;  // all within 1024 voxels
   }
+}
+
+TEST(MapFileLimits, FewVoxelsScatteredOnePerGridNodeAreRefusedByTheMemoryTheyWouldTake) {
+  // Written by OctoMap itself: 40 occupied voxels 60 m (1200 voxels) apart, each in a grid leaf and
+  // upper inner node of its own: 40 x about 40 kB of grid for 40 voxels (the fuzzer's find).
+  octomap::OcTree tree(0.05);
+  for (int i = 0; i < 40; ++i) tree.updateNode(octomap::point3d(60.0f * static_cast<float>(i - 20), 0.5f, 0.5f), true);
+  const std::string path = scratch("scattered.bt");
+  ASSERT_TRUE(tree.writeBinary(path));
+  const OctreeFileSummary summary = scanOctreeFile(path, true);
+  EXPECT_EQ(summary.leaf_voxels, 40u);
+  EXPECT_EQ(summary.grid_leaves, 40u);
+  EXPECT_EQ(summary.grid_inner1, 40u);
+  EXPECT_EQ(summary.grid_inner2, 40u);
+  try {
+    loadMap(path, MapConfig{}, uint64_t{1} << 16);  // 320 kB of grid at most
+    FAIL() << "loaded";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kIoFailure);
+    EXPECT_NE(std::string(e.what()).find(path + ": the tree's 40 voxels are spread over 40 blocks of 8^3 and would take "),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find(" a map may load"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(loadMap(path)->stats().occupied, 40u);  // within the default budget
 }
 
 TEST(MapFileLimits, VdbWithAnActiveTileBeyondTheLimitIsRefusedBeforeVoxelizing) {
