@@ -112,48 +112,50 @@ class NodeWalk {
   uint64_t remaining_;
 };
 
-void scanBinaryNodes(NodeWalk& walk, OctreeFileSummary& s) {
+// Reads the nodes depth-first, as OctoMap does. readNode(depth, node, leaf, inner) reads one node,
+// calls leaf(depth) for each leaf it holds or is, and appends its inner children's depths to
+// `inner` in child order (OctoMap reads them in that order).
+template <typename ReadNode>
+void walkNodes(OctreeFileSummary& s, ReadNode readNode) {
   std::vector<int> pending = {0};  // depths of the inner nodes still to read, last first
+  std::vector<int> inner;
   GridNodeCount grid;
+  auto leaf = [&](int depth) {
+    s.leaf_voxels += voxelsAtDepth(depth);
+    grid.leaf(depth, s);
+  };
   while (!pending.empty()) {
     const int depth = pending.back();
     pending.pop_back();
     grid.enter(depth);
-    const uint64_t node = s.nodes++;
+    inner.clear();
+    readNode(depth, s.nodes++, leaf, inner);
+    pending.insert(pending.end(), inner.rbegin(), inner.rend());
+  }
+}
+
+void scanBinaryNodes(NodeWalk& walk, OctreeFileSummary& s) {
+  walkNodes(s, [&](int depth, uint64_t node, auto& leaf, std::vector<int>& inner) {
     uint8_t bits[2];
     walk.read(bits, 2, node);
-    if (bits[0] == 0 && bits[1] == 0) {
-      // No child at all: OctoMap keeps the node as a leaf of its depth (the root: every voxel).
-      s.leaf_voxels += voxelsAtDepth(depth);
-      grid.leaf(depth, s);
-      continue;
-    }
-    int inner[8], inner_count = 0;
+    // No child at all: OctoMap keeps the node as a leaf of its depth (the root: every voxel).
+    if (bits[0] == 0 && bits[1] == 0) return leaf(depth);
     for (int child = 0; child < 8; ++child) {
       const int pair = (bits[child / 4] >> (2 * (child % 4))) & 3;
       if (pair == 0) continue;
       if (depth + 1 > kOctreeDepth) walk.tooDeep(node);
       if (pair == 3) {
         if (depth + 1 == kOctreeDepth) walk.tooDeep(node);
-        inner[inner_count++] = depth + 1;
+        inner.push_back(depth + 1);
       } else {
-        s.leaf_voxels += voxelsAtDepth(depth + 1);
-        grid.leaf(depth + 1, s);
+        leaf(depth + 1);
       }
     }
-    // OctoMap reads the inner children in child order: push them so the first comes off first.
-    for (int i = inner_count - 1; i >= 0; --i) pending.push_back(inner[i]);
-  }
+  });
 }
 
 void scanFullNodes(NodeWalk& walk, OctreeFileSummary& s, bool colour) {
-  std::vector<int> pending = {0};
-  GridNodeCount grid;
-  while (!pending.empty()) {
-    const int depth = pending.back();
-    pending.pop_back();
-    grid.enter(depth);
-    const uint64_t node = s.nodes++;
+  walkNodes(s, [&](int depth, uint64_t node, auto& leaf, std::vector<int>& inner) {
     uint8_t value[7];
     walk.read(value, colour ? 7 : 4, node);
     float log_odds = 0.0f;
@@ -161,16 +163,12 @@ void scanFullNodes(NodeWalk& walk, OctreeFileSummary& s, bool colour) {
     if (!std::isfinite(log_odds)) walk.fail(node, "has a log-odds that is not finite");
     uint8_t children = 0;
     walk.read(&children, 1, node);
-    if (children == 0) {
-      s.leaf_voxels += voxelsAtDepth(depth);
-      grid.leaf(depth, s);
-      continue;
-    }
+    if (children == 0) return leaf(depth);
     if (depth == kOctreeDepth) walk.tooDeep(node);
-    for (int child = 7; child >= 0; --child) {
-      if ((children >> child) & 1) pending.push_back(depth + 1);
+    for (int child = 0; child < 8; ++child) {
+      if ((children >> child) & 1) inner.push_back(depth + 1);
     }
-  }
+  });
 }
 
 }  // namespace
