@@ -23,6 +23,11 @@ void YamlSection::finish() const {
   if (!node_ || node_.IsNull()) return;
   std::string unknown;
   for (const auto& entry : node_) {
+    // A YAML key may itself be a list or a mapping (`? [a, b]`): never one of ours.
+    if (!entry.first.IsScalar()) {
+      throw Error(file_ + ": " + (path_.empty() ? std::string("the top level") : path_) +
+                  " has a key that is not a name: " + YAML::Dump(entry.first));
+    }
     const std::string key = entry.first.as<std::string>();
     if (seen_.count(key) == 0) {
       if (!unknown.empty()) unknown += ", ";

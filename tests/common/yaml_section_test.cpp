@@ -33,6 +33,18 @@ TEST(YamlSection, UnknownKeyIsAnErrorNamingFileAndDottedKey) {
   }
 }
 
+TEST(YamlSection, AKeyThatIsNotANameIsAnErrorNotACrash) {
+  // The config fuzzer's find: a complex key (a mapping) in a section.
+  YamlSection root(YAML::Load("server:\n  ? batch: 5\n  : 1\n"), "", "c.yaml");
+  YamlSection server = root.section("server");
+  try {
+    server.finish();
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "c.yaml: server has a key that is not a name: batch: 5");
+  }
+}
+
 TEST(YamlSection, WrongTypeIsAnErrorNamingKeyAndExpectedType) {
   YamlSection root(YAML::Load("window_px: three"), "stereo", "c.yaml");
   int window = 3;
