@@ -4,25 +4,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "io/image/image_io.h"
+#include "pipeline/stereo/stereo_matcher.h"
 
 namespace cenote::server {
 namespace {
 
-// The host's change feed, read without waiting.
 constexpr int kJpegQuality = 80;  // a few tens of kB for a 640x480 view
-
-// The disparity each depth stands for (NaN without depth: colorizeMap paints it black).
-cv::Mat disparityOf(const cv::Mat& depth_m, double fx_times_baseline) {
-  cv::Mat disparity(depth_m.size(), CV_32FC1);
-  for (int v = 0; v < depth_m.rows; ++v) {
-    const float* z = depth_m.ptr<float>(v);
-    float* d = disparity.ptr<float>(v);
-    for (int u = 0; u < depth_m.cols; ++u) {
-      d[u] = std::isfinite(z[u]) && z[u] > 0.0f ? static_cast<float>(fx_times_baseline / z[u]) : NAN;
-    }
-  }
-  return disparity;
-}
 
 cv::Mat scaledTo(const cv::Mat& image, int max_width_px, int interpolation) {
   if (image.cols <= max_width_px) return image;
@@ -33,6 +20,7 @@ cv::Mat scaledTo(const cv::Mat& image, int max_width_px, int interpolation) {
   return scaled;
 }
 
+// The host's change feed, read without waiting.
 class FeedSource final : public viewer::ChangeSource {
  public:
   explicit FeedSource(ChangeFeed& feed) : feed_(feed), subscription_(feed.subscribe()) {}
@@ -84,8 +72,11 @@ std::unique_ptr<viewer::ViewerServer> startViewer(const ServerSettings& settings
 void postCameraImages(viewer::LiveFeed& live, const pipeline::DepthFrame& frame, double baseline_m,
                       const pipeline::StereoConfig& stereo, int max_width_px) {
   if (!live.imagesDue() || frame.color.empty() || frame.depth.empty()) return;
-  const cv::Mat disparity = disparityOf(frame.depth, frame.K(0, 0) * std::abs(baseline_m));
-  const cv::Mat preview = io::colorizeMap(scaledTo(disparity, max_width_px, cv::INTER_NEAREST), stereo.min_disparity_px,
+  // Depth and disparity are each other's fx * baseline / x: the stereo stage's conversion makes
+  // one from the other (no depth: +inf, painted black), on the scaled-down map.
+  const cv::Mat disparity = pipeline::disparityToDepth(scaledTo(frame.depth, max_width_px, cv::INTER_NEAREST),
+                                                       frame.K(0, 0), std::abs(baseline_m));
+  const cv::Mat preview = io::colorizeMap(disparity, stereo.min_disparity_px,
                                           stereo.min_disparity_px + stereo.num_disparities);
   live.postImages(frame.t_s, io::encodeJpeg(scaledTo(frame.color, max_width_px, cv::INTER_AREA), kJpegQuality),
                   io::encodeJpeg(preview, kJpegQuality));

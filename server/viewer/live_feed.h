@@ -33,7 +33,11 @@ class LiveFeed {
   // After `batch` was integrated; T_world_cam when the frame's orientation is known (frames),
   // otherwise the camera is placed at batch.origin, unrotated (point batches).
   void post(const PointBatch& batch, const std::optional<Eigen::Isometry3d>& T_world_cam);
-  void setWanted(bool wanted) { wanted_.store(wanted, std::memory_order_relaxed); }
+  // Whether some viewer client wants the cloud, the camera images (the feed's worker says so each tick).
+  void setWanted(bool cloud, bool images) {
+    wanted_.store(cloud, std::memory_order_relaxed);
+    images_wanted_.store(images, std::memory_order_relaxed);
+  }
 
   struct Poses {
     uint64_t version = 0;                       // counts posts; 0: none yet
@@ -52,7 +56,6 @@ class LiveFeed {
     double t_s = 0.0;      // the frame's time
     std::shared_ptr<const std::string> left_jpeg, disparity_jpeg;
   };
-  void setImagesWanted(bool wanted) { images_wanted_.store(wanted, std::memory_order_relaxed); }
   // A viewer wants images, images are on (image_hz > 0) and the last were posted at least
   // 1 / image_hz ago: the poster may make the next pair.
   bool imagesDue() const;

@@ -133,10 +133,7 @@ void FeedWorker::loop() {
     }
     if (clients.empty()) {
       changes.reset();  // no subscription to the map's changes while nobody watches
-      if (sources_.live) {
-        sources_.live->setWanted(false);
-        sources_.live->setImagesWanted(false);
-      }
+      if (sources_.live) sources_.live->setWanted(false, false);
       continue;
     }
     // Subscribe before any client reads the whole map: a change made meanwhile is sent twice,
@@ -174,15 +171,11 @@ void FeedWorker::loop() {
         return std::any_of(clients.begin(), clients.end(),
                            [channel](const auto& c) { return c->link->subscriptionOf(channel).has_value(); });
       };
-      sources_.live->setWanted(anyWants(kCloudChannel));
-      sources_.live->setImagesWanted(anyWants(kImageChannel) || anyWants(kDisparityChannel));
+      sources_.live->setWanted(anyWants(kCloudChannel), anyWants(kImageChannel) || anyWants(kDisparityChannel));
     }
     tick(clients, dt_s);
   }
-  if (sources_.live) {
-    sources_.live->setWanted(false);
-    sources_.live->setImagesWanted(false);
-  }
+  if (sources_.live) sources_.live->setWanted(false, false);
 }
 
 void FeedWorker::tick(std::vector<std::shared_ptr<Client>>& clients, double dt_s) {

@@ -354,9 +354,7 @@ void ViewerServer::Impl::serveHttp(std::shared_ptr<Stream> stream, std::shared_p
     if (!authorized(request, sources.tokens)) {
       request.keep_alive(false);
       reply(textResponse(request, http::status::unauthorized,
-                         sources.tokens.empty() ? ""
-                                                : "missing or wrong token: send 'Authorization: Bearer <token>' or "
-                                                  "?token=<token>"));
+                         "missing or wrong token: send 'Authorization: Bearer <token>' or ?token=<token>"));
       return;
     }
     if (!offersSubprotocol(request)) {

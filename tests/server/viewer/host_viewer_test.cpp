@@ -29,7 +29,7 @@ cv::Mat decoded(const std::string& jpeg) {
 
 TEST(CameraImages, AreTheLeftImageAndItsDisparityScaledToTheWidth) {
   viewer::LiveFeed live(100, 10, 1.0);
-  live.setImagesWanted(true);
+  live.setWanted(false, true);
   pipeline::StereoConfig stereo;
   stereo.min_disparity_px = 0;
   stereo.num_disparities = 128;
@@ -59,7 +59,7 @@ TEST(CameraImages, AreNotMadeWhenNotDueOrWithoutMaps) {
   viewer::LiveFeed live(100, 10, 1.0);
   postCameraImages(live, rampFrame(), 0.1, stereo, 640);  // nobody wants them
   EXPECT_EQ(live.images().version, 0u);
-  live.setImagesWanted(true);
+  live.setWanted(false, true);
   pipeline::DepthFrame without_maps;  // an output whose maps were not kept
   postCameraImages(live, without_maps, 0.1, stereo, 640);
   EXPECT_EQ(live.images().version, 0u);

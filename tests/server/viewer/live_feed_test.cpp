@@ -10,19 +10,19 @@ namespace {
 TEST(LiveFeedImages, AreDueOnlyWhileWantedAndImagesAreOn) {
   LiveFeed feed(100, 10, 2.0);
   EXPECT_FALSE(feed.imagesDue());  // nobody wants them
-  feed.setImagesWanted(true);
+  feed.setWanted(false, true);
   EXPECT_TRUE(feed.imagesDue());
-  feed.setImagesWanted(false);
+  feed.setWanted(false, false);
   EXPECT_FALSE(feed.imagesDue());
 
   LiveFeed off(100, 10, 0.0);
-  off.setImagesWanted(true);
+  off.setWanted(false, true);
   EXPECT_FALSE(off.imagesDue());
 }
 
 TEST(LiveFeedImages, APostHoldsTheNewestPairAndWaitsOnePeriod) {
   LiveFeed feed(100, 10, 1.0e-3);  // one pair per 1000 s
-  feed.setImagesWanted(true);
+  feed.setWanted(false, true);
   EXPECT_EQ(feed.images().version, 0u);
   EXPECT_EQ(feed.images().left_jpeg, nullptr);
   feed.postImages(1.5, "left", "disparity");
