@@ -195,9 +195,10 @@ class ViewerEndToEnd(unittest.TestCase):
         # probability (occupied: above 0.5).
         self.assertRegex(page["picked"], r"occupied, p = (0\.(5[1-9]|[6-9]\d)|1\.00)")
         self.assertTrue(os.path.getsize(screenshot) > 1000)
-        # W held for a second flew the camera forward, no faster than 1 m/s.
+        # W flew the camera forward, no faster than 1 m/s over the time it was held (plus the one
+        # frame the page may count after the key is released: at most 0.1 s).
         self.assertGreater(page["flownMetres"], 0.05)
-        self.assertLessEqual(page["flownMetres"], 1.3)
+        self.assertLessEqual(page["flownMetres"], 1.0 * (page["flyHeldSeconds"] + 0.1) + 1e-6)
         print(f"browser: {page['voxels']} voxels, {page['framesReceived']} frames, flew {page['flownMetres']:.2f} m; "
               f"screenshot {screenshot}")
 

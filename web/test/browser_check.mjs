@@ -1,7 +1,7 @@
 // browser_check.mjs URL OCCUPIED SCREENSHOT: loads cenote's browser viewer in Debian's headless
 // Chromium (npm playwright-core driving /usr/bin/chromium, or $CHROMIUM), waits until the page
 // reports OCCUPIED voxels at full detail (window.cenoteViewer), clicks a voxel, saves a screenshot,
-// flies forward with the W key and prints what the page reports as JSON. Exits 1 (with the report) after TIMEOUT_S (default 120).
+// flies forward with the W key until the camera has moved, and prints what the page reports as JSON. Exits 1 (with the report) after TIMEOUT_S (default 120).
 import { chromium } from "playwright-core";
 
 const [url, occupiedText, screenshot] = process.argv.slice(2);
@@ -41,12 +41,20 @@ report = await page.evaluate(() => ({
   connection: document.getElementById("connection").textContent,
 }));
 await page.screenshot({ path: screenshot });
-// Then fly: W held for a second moves the camera forward (1 m/s; fewer frames, less distance).
+// Then fly: W held until the camera has moved (however slowly this machine draws frames),
+// and how long it was held, page clock, for the speed bound.
 if (code === 0) {
-  await page.keyboard.down("KeyW");
-  await page.waitForTimeout(1000);
-  await page.keyboard.up("KeyW");
-  report.flownMetres = await page.evaluate(() => window.cenoteViewer.flownMetres);
+  try {
+    const start = await page.evaluate(() => performance.now());
+    await page.keyboard.down("KeyW");
+    await page.waitForFunction(() => window.cenoteViewer.flownMetres > 0.05, null, { timeout: timeoutS * 1000 });
+    await page.keyboard.up("KeyW");
+    report.flyHeldSeconds = ((await page.evaluate(() => performance.now())) - start) / 1000;
+    report.flownMetres = await page.evaluate(() => window.cenoteViewer.flownMetres);
+  } catch (e) {
+    errors.push(String(e));
+    code = 1;
+  }
 }
 await browser.close();
 process.stdout.write(JSON.stringify({ ...report, errors }) + "\n");
