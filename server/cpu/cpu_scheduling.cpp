@@ -4,6 +4,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -42,7 +43,10 @@ bool setThreadSlice(pid_t tid, uint64_t slice_ns) {
 }  // namespace
 
 void setThreadNice(int nice) {
-  if (nice != 0) setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), nice);
+  if (nice == 0) return;
+  // getpriority(PRIO_PROCESS, pid) reads the main thread's nice value (its tid is the pid).
+  const int base = getpriority(PRIO_PROCESS, static_cast<id_t>(getpid()));
+  setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), std::min(base + nice, 19));
 }
 
 bool setProcessTimeSlice(double slice_ms) {

@@ -13,7 +13,10 @@
 
 namespace cenote::server {
 
-// Lowers the calling thread's CPU priority (Linux nice values are per thread; 0 leaves it).
+// Lowers the calling thread's CPU priority by `nice` steps below the process's own (its main
+// thread's) nice value, at most to 19: a server started under `nice -n 10` keeps its background
+// threads below its query handlers instead of raising them to an absolute value. Linux nice
+// values are per thread; 0 leaves the thread as it is.
 void setThreadNice(int nice);
 
 // Sets the time slice of every thread of the process and of those it creates later

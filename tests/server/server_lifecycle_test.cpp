@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -66,13 +67,17 @@ TEST(ServerLifecycle, AfterKillNineTheLastPeriodicSnapshotLoads) {
     Stubs stubs(server.target());
     integrate(stubs, wallBatch(2.0, 1.0, 0.02, 1.0));
     before = downloadMap(*stubs.admin, dir.string());
-    // Wait for a periodic snapshot of this version.
+    const auto downloaded = std::chrono::steady_clock::now();
+    // Wait for a periodic snapshot of this version: one taken after the download (a snapshot
+    // taken before the batch was integrated, on a slow start, would hold an older map).
     bool saved = false;
     for (int i = 0; i < 200 && !saved; ++i) {
+      const double since_download =  // before the call, so that a snapshot younger than it is later
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - downloaded).count();
       auto context = contextWithDeadline();
       v1::Stats stats;
       ASSERT_TRUE(stubs.admin->GetStats(context.get(), v1::StatsRequest(), &stats).ok());
-      saved = stats.last_snapshot_age_s() >= 0.0;
+      saved = stats.last_snapshot_age_s() >= 0.0 && stats.last_snapshot_age_s() < since_download;
       if (!saved) std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
     ASSERT_TRUE(saved) << server.log();
