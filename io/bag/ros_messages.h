@@ -157,6 +157,14 @@ class FieldReader {
   void doubles(const char* field, std::array<double, N>& out) {
     read(field, [&] { readDoubles(out); });
   }
+  // The std_msgs/Header, then the image size (uint32 height, uint32 width) that sensor_msgs/Image
+  // and sensor_msgs/CameraInfo both begin with.
+  template <class Message>
+  void stampedSize(Message& m) {
+    m.stamp_ns = header(&m.frame_id);
+    m.height = u32("height");
+    m.width = u32("width");
+  }
   // geometry_msgs/Pose or geometry_msgs/Transform: a translation and a quaternion x y z w.
   void pose(const char* field, RosPose& p) {
     read(field, [&] {
@@ -175,15 +183,26 @@ class FieldReader {
   const char* type_;
 };
 
+// The messages that carry one stamped pose: a header, a child frame id when `has_child`, then the
+// pose or transform named `pose_field` (nav_msgs/Odometry, geometry_msgs/PoseStamped and
+// geometry_msgs/TransformStamped begin alike).
+template <class Wire>
+RosPose parseStampedPose(Wire& w, const char* type, bool has_child, const char* pose_field) {
+  FieldReader<Wire> r(w, type);
+  RosPose p;
+  p.stamp_ns = r.header(&p.frame_id);
+  if (has_child) p.child_frame_id = r.str("child_frame_id");
+  r.pose(pose_field, p);
+  return p;
+}
+
 }  // namespace detail
 
 template <class Wire>
 RosImage parseImage(Wire& w) {
   detail::FieldReader<Wire> r(w, "sensor_msgs/Image");
   RosImage m;
-  m.stamp_ns = r.header(&m.frame_id);
-  m.height = r.u32("height");
-  m.width = r.u32("width");
+  r.stampedSize(m);
   m.encoding = r.str("encoding");
   m.is_bigendian = r.u8("is_bigendian");
   m.step = r.u32("step");
@@ -205,9 +224,7 @@ template <class Wire>
 RosCameraInfo parseCameraInfo(Wire& w) {
   detail::FieldReader<Wire> r(w, "sensor_msgs/CameraInfo");
   RosCameraInfo m;
-  m.stamp_ns = r.header(&m.frame_id);
-  m.height = r.u32("height");
-  m.width = r.u32("width");
+  r.stampedSize(m);
   m.distortion_model = r.str("distortion_model");
   m.D = r.doubles("D");
   r.doubles("K", m.K);
@@ -218,31 +235,17 @@ RosCameraInfo parseCameraInfo(Wire& w) {
 
 template <class Wire>
 RosPose parseOdometry(Wire& w) {
-  detail::FieldReader<Wire> r(w, "nav_msgs/Odometry");
-  RosPose p;
-  p.stamp_ns = r.header(&p.frame_id);
-  p.child_frame_id = r.str("child_frame_id");
-  r.pose("pose", p);
-  return p;  // the covariance and the twist follow
+  return detail::parseStampedPose(w, "nav_msgs/Odometry", true, "pose");  // the covariance and the twist follow
 }
 
 template <class Wire>
 RosPose parsePoseStamped(Wire& w) {
-  detail::FieldReader<Wire> r(w, "geometry_msgs/PoseStamped");
-  RosPose p;
-  p.stamp_ns = r.header(&p.frame_id);
-  r.pose("pose", p);
-  return p;
+  return detail::parseStampedPose(w, "geometry_msgs/PoseStamped", false, "pose");
 }
 
 template <class Wire>
 RosPose parseTransformStamped(Wire& w) {
-  detail::FieldReader<Wire> r(w, "geometry_msgs/TransformStamped");
-  RosPose p;
-  p.stamp_ns = r.header(&p.frame_id);
-  p.child_frame_id = r.str("child_frame_id");
-  r.pose("transform", p);
-  return p;
+  return detail::parseStampedPose(w, "geometry_msgs/TransformStamped", true, "transform");
 }
 
 template <class Wire>
