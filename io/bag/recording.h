@@ -48,6 +48,11 @@ class Recording {
   /// Empty for a whole file; otherwise where and why reading stopped short ("cut at byte 123456: no
   /// index; 812 complete messages read"), as `rosbag reindex` would report it.
   virtual std::string truncation() const = 0;
+
+  /// The damage reading stepped over so far, one line each, naming the file, the byte offset and
+  /// what was lost ("bag dive.bag, byte 1234 (chunk): bz2 data are corrupt (...); skipped with its
+  /// 24 messages: 12 on /left, 12 on /right"). A damaged chunk loses its messages, not the rest.
+  virtual std::vector<std::string> skipped() const { return {}; }
 };
 
 /// Sorts `topics` by name, as `rosbag info` lists them. @return where each topic went: the new index

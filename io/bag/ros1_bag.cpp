@@ -287,23 +287,18 @@ void Ros1Bag::countMessage(std::size_t topic, std::int64_t ns, std::uint64_t n) 
   scanned_messages_ += n;
 }
 
-bool Ros1Bag::countFromIndex(const Record& chunk) {
+std::vector<Ros1Bag::IndexEntries> Ros1Bag::indexAfter(const Record& chunk) {
   // The index records rosbag writes after each chunk it closes: each connection's message times.
-  struct Entries {
-    std::size_t topic;
-    std::int64_t first, last;
-    std::uint64_t n;
-  };
-  std::vector<Entries> entries;
+  std::vector<IndexEntries> entries;
   std::vector<std::uint8_t> data;
   for (std::uint64_t pos = chunk.data_pos + chunk.data_len; pos < file_size_;) {
     Record r;
     if (!readFileRecord(pos, r, true) || r.op != kOpIndex || r.data_pos + r.data_len > file_size_) break;
     const auto c = connections_.find(field<std::uint32_t>(r.fields, "conn", where(pos)));
-    if (c == connections_.end()) return false;  // a connection first defined inside this chunk
+    if (c == connections_.end()) return {};  // a connection first defined inside this chunk
     data.resize(r.data_len);
     readAt(r.data_pos, data.data(), data.size());
-    Entries e{c->second.topic, 0, 0, 0};
+    IndexEntries e{c->second.topic, 0, 0, 0};
     for (std::size_t i = 0; i + 12 <= data.size(); i += 12, ++e.n) {
       const std::int64_t ns = timeNs(loadLe<std::uint64_t>(data.data() + i));
       e.first = e.n == 0 ? ns : std::min(e.first, ns);
@@ -312,8 +307,13 @@ bool Ros1Bag::countFromIndex(const Record& chunk) {
     if (e.n > 0) entries.push_back(e);
     pos = r.data_pos + r.data_len;
   }
+  return entries;
+}
+
+bool Ros1Bag::countFromIndex(const Record& chunk) {
+  const std::vector<IndexEntries> entries = indexAfter(chunk);
   if (entries.empty()) return false;
-  for (const Entries& e : entries) {
+  for (const IndexEntries& e : entries) {
     countMessage(e.topic, e.first, 0);
     countMessage(e.topic, e.last, e.n);
   }
@@ -321,6 +321,30 @@ bool Ros1Bag::countFromIndex(const Record& chunk) {
   chunk_stored_ += chunk.data_len;
   chunk_uncompressed_ += field<std::uint32_t>(chunk.fields, "size", where(chunk.pos));
   return true;
+}
+
+void Ros1Bag::skipChunk(const Record& chunk, const std::string& damage, const std::string& lost) {
+  if (skipped_.count(chunk.pos) != 0) return;
+  std::string what = damage + "; skipped " + lost;
+  const std::vector<IndexEntries> entries = indexAfter(chunk);
+  std::uint64_t total = 0;
+  for (const IndexEntries& e : entries) total += e.n;
+  if (entries.empty()) {
+    what += " (its messages unknown: no index records follow it)";
+  } else {
+    what += " (of its " + std::to_string(total) + " messages:";
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+      what += (i == 0 ? " " : ", ") + std::to_string(entries[i].n) + " on " + topics_[entries[i].topic].name;
+    }
+    what += ")";
+  }
+  skipped_[chunk.pos] = what;
+}
+
+std::vector<std::string> Ros1Bag::skipped() const {
+  std::vector<std::string> out;
+  for (const auto& [pos, what] : skipped_) out.push_back(what);
+  return out;
 }
 
 void Ros1Bag::scan() {
@@ -401,33 +425,40 @@ bool Ros1Bag::next(const std::vector<std::string>& wanted, RecordedMessage& out)
         }
         continue;
       }
-      const std::string what = where(chunk_file_pos_) + " (chunk), record at byte " + std::to_string(chunk_off_) +
-                               " of its " + std::to_string(chunk_.size());
-      std::uint32_t header_len = left >= 4 ? loadLe<std::uint32_t>(p) : 0;
-      if (left < 8 || header_len > left - 8 || loadLe<std::uint32_t>(p + 4 + header_len) > left - 8 - header_len) {
-        if (!chunk_cut_) throw IoError(what + ": record runs past the end of the chunk");
-        stop_ = "cut at byte " + std::to_string(file_size_) + ", inside the chunk at byte " +
-                std::to_string(chunk_file_pos_) + ": ";
-        break;
-      }
-      const std::map<std::string, std::string> fields = parseFields(p + 4, header_len, what);
-      const std::uint32_t data_len = loadLe<std::uint32_t>(p + 4 + header_len);
-      const std::uint8_t* data = p + 8 + header_len;
-      chunk_off_ += 8 + header_len + data_len;
-      const std::uint8_t op = field<std::uint8_t>(fields, "op", what);
-      if (op == kOpConnection) {
-        addConnection(field<std::uint32_t>(fields, "conn", what), textField(fields, "topic", what),
-                      parseFields(data, data_len, what), chunk_file_pos_);
-        if (wanted_topics_.size() != topics_.size()) wanted_topics_.resize(topics_.size(), wanted_.empty() ? 1 : 0);
-      } else if (op == kOpMessage) {
-        const auto c = connections_.find(field<std::uint32_t>(fields, "conn", what));
-        if (c == connections_.end()) throw IoError(what + ": message of a connection the bag never defines");
-        if (!wanted_topics_[c->second.topic]) continue;
-        out.topic = &topics_[c->second.topic];
-        out.log_time_ns = timeNs(field<std::uint64_t>(fields, "time", what));
-        out.data = std::span<const std::uint8_t>(data, data_len);
-        out.file_offset = chunk_file_pos_;
-        return true;
+      try {
+        const std::string what = where(chunk_file_pos_) + " (chunk), record at byte " + std::to_string(chunk_off_) +
+                                 " of its " + std::to_string(chunk_.size());
+        std::uint32_t header_len = left >= 4 ? loadLe<std::uint32_t>(p) : 0;
+        if (left < 8 || header_len > left - 8 || loadLe<std::uint32_t>(p + 4 + header_len) > left - 8 - header_len) {
+          if (!chunk_cut_) throw IoError(what + ": record runs past the end of the chunk");
+          stop_ = "cut at byte " + std::to_string(file_size_) + ", inside the chunk at byte " +
+                  std::to_string(chunk_file_pos_) + ": ";
+          break;
+        }
+        const std::map<std::string, std::string> fields = parseFields(p + 4, header_len, what);
+        const std::uint32_t data_len = loadLe<std::uint32_t>(p + 4 + header_len);
+        const std::uint8_t* data = p + 8 + header_len;
+        chunk_off_ += 8 + header_len + data_len;
+        const std::uint8_t op = field<std::uint8_t>(fields, "op", what);
+        if (op == kOpConnection) {
+          addConnection(field<std::uint32_t>(fields, "conn", what), textField(fields, "topic", what),
+                        parseFields(data, data_len, what), chunk_file_pos_);
+          if (wanted_topics_.size() != topics_.size()) wanted_topics_.resize(topics_.size(), wanted_.empty() ? 1 : 0);
+        } else if (op == kOpMessage) {
+          const auto c = connections_.find(field<std::uint32_t>(fields, "conn", what));
+          if (c == connections_.end()) throw IoError(what + ": message of a connection the bag never defines");
+          if (!wanted_topics_[c->second.topic]) continue;
+          out.topic = &topics_[c->second.topic];
+          out.log_time_ns = timeNs(field<std::uint64_t>(fields, "time", what));
+          out.data = std::span<const std::uint8_t>(data, data_len);
+          out.file_offset = chunk_file_pos_;
+          return true;
+        }
+      } catch (const IoError& damage) {
+        // Malformed records in a whole chunk: its other messages are lost, the bag's are not.
+        if (chunk_cut_) throw;
+        skipChunk(chunk_record_, damage.what(), "the rest of the chunk");
+        in_chunk_ = false;
       }
       continue;
     }
@@ -447,7 +478,17 @@ bool Ros1Bag::next(const std::vector<std::string>& wanted, RecordedMessage& out)
         pos_ = r.data_pos + r.data_len;
         continue;
       }
-      chunk_cut_ = !loadChunk(r);
+      // An unknown compression is the whole bag's problem, not one chunk's: it stays an error.
+      const auto compression = r.fields.find("compression");
+      if (compression != r.fields.end()) checkCompression(compression->second, where(r.pos) + " (chunk)");
+      try {
+        chunk_cut_ = !loadChunk(r);
+      } catch (const IoError& damage) {
+        skipChunk(r, damage.what(), "the chunk");
+        pos_ = r.data_pos + r.data_len;
+        continue;
+      }
+      chunk_record_ = r;
       chunk_file_pos_ = r.pos;
       chunk_off_ = 0;
       in_chunk_ = true;

@@ -8,8 +8,10 @@
 // A bag cut short (the recorder killed: index_pos 0 or past the end, the last chunk partial) is
 // scanned when opened (for its topics: the index records after each closed chunk, and the chunks
 // that define connections or were cut) and read up to the last complete message;
-// truncation() says where it stopped. A complete chunk whose data do not decompress, an unknown
-// compression or a malformed record is an IoError naming the file and the byte offset.
+// truncation() says where it stopped. A complete chunk whose data do not decompress, or whose
+// records are malformed, is stepped over: skipped() names it, its offset and the messages it held
+// (from the index records after it), and reading goes on with the next chunk. An unknown
+// compression or a malformed record outside chunks is an IoError naming the file and the byte offset.
 // Threads: one user at a time.
 #pragma once
 
@@ -36,6 +38,7 @@ class Ros1Bag final : public Recording {
   const std::vector<TopicInfo>& topics() const override { return topics_; }
   bool next(const std::vector<std::string>& wanted, RecordedMessage& out) override;
   std::string truncation() const override { return truncation_; }
+  std::vector<std::string> skipped() const override;
 
   /// Chunks by compression ("none", "bz2", "lz4"), from the index or the scan.
   const std::map<std::string, std::uint64_t>& chunkCompressions() const { return compressions_; }
@@ -60,7 +63,18 @@ class Ros1Bag final : public Recording {
   bool readFileRecord(std::uint64_t pos, Record& record, bool allow_partial);
   void readIndex(std::uint64_t index_pos);
   void scan();
+  // The index records after `chunk`: each connection's message count and first and last times.
+  // Empty when there are none or one names a connection defined inside the chunk.
+  struct IndexEntries {
+    std::size_t topic;
+    std::int64_t first, last;
+    std::uint64_t n;
+  };
+  std::vector<IndexEntries> indexAfter(const Record& chunk);
   bool countFromIndex(const Record& chunk);
+  // Records the damaged `chunk` (once, whichever pass finds it): `damage`, what was `lost` ("the
+  // chunk", "the rest of the chunk") and the messages the index says it held.
+  void skipChunk(const Record& chunk, const std::string& damage, const std::string& lost);
   void countMessage(std::size_t topic, std::int64_t ns, std::uint64_t n);
   // Reads and decompresses the chunk of `record` into chunk_; false when its data are cut short
   // (chunk_ holds what could be recovered).
@@ -79,7 +93,9 @@ class Ros1Bag final : public Recording {
   std::map<std::string, std::uint64_t> compressions_;
   std::uint64_t chunk_stored_ = 0, chunk_uncompressed_ = 0;
   std::string truncation_;
-  std::string stop_;  // where the scan stopped, the start of truncation_
+  std::map<std::uint64_t, std::string> skipped_;  // damaged chunks stepped over, by offset
+  Record chunk_record_;                           // of the current chunk
+  std::string stop_;                              // where the scan stopped, the start of truncation_
   bool scanning_ = false;
   std::uint64_t scanned_messages_ = 0;
 

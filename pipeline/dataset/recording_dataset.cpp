@@ -117,9 +117,12 @@ class RecordingCursor final : public FrameCursor {
     return frame;
   }
   std::map<std::string, std::uint64_t> counts() const override {
-    return {{"unpaired_images", pairer_.unpaired()}, {"out_of_order_images", pairer_.outOfOrder()}};
+    return {{"unpaired_images", pairer_.unpaired()},
+            {"out_of_order_images", pairer_.outOfOrder()},
+            {"damaged_chunks_skipped", rec_->skipped().size()}};
   }
   std::string truncation() const override { return rec_->truncation(); }
+  std::vector<std::string> skipped() const override { return rec_->skipped(); }
 
  private:
   std::unique_ptr<io::Recording> rec_;

@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "pipeline/calibration/stereo_calibration.h"
 #include "pipeline/frame/frames.h"
@@ -48,6 +49,8 @@ class FrameCursor {
   virtual std::map<std::string, std::uint64_t> counts() const { return {}; }
   // Where reading stopped short (a recording cut short), empty otherwise.
   virtual std::string truncation() const { return ""; }
+  // The damage the source stepped over (a recording's corrupt chunks), one line each.
+  virtual std::vector<std::string> skipped() const { return {}; }
 };
 
 class StereoDataset {

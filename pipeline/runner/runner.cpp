@@ -166,6 +166,7 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   if (!interrupted) report.frames_in = frames_read;
   report.source_counts = cursor->counts();
   report.source_truncation = cursor->truncation();
+  report.source_skipped = cursor->skipped();
   report.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   report.frames_processed = stages.framesProcessed();
   report.frames_fused = stages.framesFused();
@@ -198,6 +199,7 @@ std::string RunReport::toJson() const {
     nlohmann::ordered_json source = nlohmann::ordered_json::object();
     for (const auto& [name, count] : source_counts) source[name] = count;
     if (!source_truncation.empty()) source["truncation"] = source_truncation;
+    if (!source_skipped.empty()) source["skipped"] = source_skipped;
     j["source"] = source;
   }
   j["points_written"] = points_written;
@@ -237,6 +239,7 @@ std::string RunReport::toTable() const {
     t << "\n";
   }
   if (!source_truncation.empty()) t << "source cut short: " << source_truncation << "\n";
+  for (const std::string& damage : source_skipped) t << "source damaged: " << damage << "\n";
   t << "stage           median ms    p95 ms   frames\n";
   for (const char* name : {"read_rectify", "stereo", "fusion", "output", "map"}) {
     const auto it = stages.find(name);

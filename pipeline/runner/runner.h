@@ -20,6 +20,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "common/point_batch.h"
 #include "pipeline/dataset/stereo_dataset.h"
@@ -44,6 +45,7 @@ struct RunReport {
   // recording cut short, where it stopped (FrameCursor::truncation()); in report.json as "source".
   std::map<std::string, std::uint64_t> source_counts;
   std::string source_truncation;
+  std::vector<std::string> source_skipped;  // the damage it stepped over (FrameCursor::skipped())
   // What the trajectory's poses were taken to describe ("camera" or "body"; empty: not set) and
   // whether that was assumed (CameraTrajectory::frame_assumed), with the hint printed for it.
   std::string pose_frame;

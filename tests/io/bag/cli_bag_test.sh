@@ -93,6 +93,41 @@ processed=$(json "$work/cut-out/report.json" 'd["frames_processed"]')
 "$cenote" bag info "$work/cut.bag" >"$work/cut-info.txt" 2>&1 || fail "bag info on the cut bag failed"
 grep -qF "cut short:   $truncation" "$work/cut-info.txt" || fail "bag info does not say where the bag was cut"
 
+# A damaged chunk (bytes overwritten inside one holding images): stepped over, named with its
+# offset in the report, the frames of the other chunks mapped. rosbag's own index says which
+# images the chunk held: the pairs it broke are not in the run, their survivors are unpaired.
+read -r chunk lost unpaired < <($py - "$work/raw-bz2.bag" "$work/damaged.bag" <<'PY'
+import sys, rosbag
+src, out = sys.argv[1], sys.argv[2]
+with rosbag.Bag(src) as bag:
+    headers = bag._chunk_headers
+    def stamps(chunk_pos):
+        held = {"/left/image_raw": set(), "/right/image_raw": set()}
+        for conn, entries in bag._connection_indexes.items():
+            topic = bag._connections[conn].topic
+            if topic in held:
+                held[topic] |= {e.time.to_nsec() for e in entries if e.chunk_pos == chunk_pos}
+        return held
+    chunk = next(c for c in bag._chunks[1:] if all(stamps(c.pos).values()))
+    held = stamps(chunk.pos)
+    data_pos = headers[chunk.pos].data_pos
+raw = bytearray(open(src, "rb").read())
+raw[data_pos + 40:data_pos + 56] = b"junk" * 4
+open(out, "wb").write(raw)
+lost = held["/left/image_raw"] | held["/right/image_raw"]
+print(chunk.pos, len(lost), len(lost) - len(held["/left/image_raw"] & held["/right/image_raw"]))
+PY
+) || fail "damaging a chunk failed"
+bag_run damaged "$work/damaged.bag" --calibration "$calib"
+[ "$(json "$work/damaged-out/report.json" 'd["source"]["damaged_chunks_skipped"]')" = 1 ] || fail "damaged: not one chunk skipped"
+[ "$(json "$work/damaged-out/report.json" 'd["frames_in"]')" = $((frames - lost)) ] || fail "damaged: frames_in not $((frames - lost))"
+[ "$(json "$work/damaged-out/report.json" 'd["source"]["unpaired_images"]')" = "$unpaired" ] || fail "damaged: unpaired not $unpaired"
+[ "$(json "$work/damaged-out/report.json" 'd["source"]["skipped"][0].startswith("bag '"$work"'/damaged.bag, byte '"$chunk"' (chunk): bz2 data are corrupt")')" = True ] ||
+  fail "damaged: report does not name the chunk: $(json "$work/damaged-out/report.json" 'd["source"]')"
+grep -q "source damaged: bag $work/damaged.bag, byte $chunk (chunk): bz2 data are corrupt" "$work/damaged.txt" ||
+  fail "damaged: the run does not say which chunk it skipped"
+echo "damaged chunk at byte $chunk: $lost frames lost, $unpaired images unpaired, $((frames - lost)) frames in"
+
 # Bounded memory: a bag five times as long peaks within 10 % of the short one.
 "$cenote" sim --scene reef --frames $((5 * frames)) --width 320 --height 240 --quiet --out "$work/long" >/dev/null 2>&1 ||
   fail "cenote sim (long) failed"

@@ -135,6 +135,16 @@ for compression in ("none", "bz2", "lz4"):
                     data_len = struct.unpack_from("<I", raw, at + 4 + header_len)[0]
                     if at + 8 + header_len + data_len <= cut:
                         complete += 1
+        # What the middle chunk holds, by topic: what a reader that steps over it loses.
+        held = {}
+        for conn, entries in bag._connection_indexes.items():
+            topic = bag._connections[conn].topic
+            n = sum(1 for e in entries if e.chunk_pos == cut_chunk.pos)
+            if n:
+                held[topic] = n
+        total = sum(len(entries) for entries in bag._connection_indexes.values())
+    expected["seq_%s.bag" % compression] = {"middle_chunk_pos": cut_chunk.pos, "middle_chunk_data_pos": h.data_pos,
+                                            "middle_chunk_held": held, "messages": total}
     cut_path = os.path.join(out, "cut_%s.bag" % compression)
     with open(cut_path, "wb") as f:
         f.write(raw[:cut])
