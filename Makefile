@@ -8,7 +8,7 @@ DEMO_DIR ?= out/demo
 CCACHE = $(shell command -v ccache 2>/dev/null)
 CMAKE_FLAGS = -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(if $(CCACHE),-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
 
-.PHONY: all deps configure build test demo bench soak test-data asan-test fuzz format format-check clean
+.PHONY: all deps configure build test demo bench soak test-data asan-test tsan-test fuzz format format-check clean
 
 all: build
 
@@ -47,6 +47,17 @@ asan-test: deps test-data
 	cmake --build --preset asan -j$(JOBS)
 	ctest --preset asan -j$(JOBS)
 
+# ThreadSanitizer build of the concurrency tests only (readers during ingest and during a pose
+# correction: each block old or new, never a mix), in build-tsan; not part of `make test`.
+# tests/tsan.supp: reports inside uninstrumented Debian libraries only, each with its reason.
+TSAN_DIR ?= build-tsan
+tsan-test: deps
+	cmake -S . -B $(TSAN_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCENOTE_TSAN=ON -DCENOTE_BUILD_BENCH=OFF \
+	  $(if $(CCACHE),-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+	cmake --build $(TSAN_DIR) -j$(JOBS) --target mapping_concurrency_test
+	TSAN_OPTIONS="suppressions=$(CURDIR)/tests/tsan.supp halt_on_error=1 second_deadlock_stack=1" \
+	  $(TSAN_DIR)/tests/mapping_concurrency_test
+
 # libFuzzer on every harness of tests/fuzz/ (a clang build of its own in build-fuzz): FUZZ_RUNS inputs
 # each from the committed seed corpus; new inputs go to build-fuzz/corpus/, crashes to
 # build-fuzz/crashes/ (copy one into tests/fuzz/corpus/<harness>/ and ctest replays it from then on).
@@ -73,4 +84,4 @@ format-check:
 	bash scripts/check-format.sh
 
 clean:
-	rm -rf $(BUILD_DIR) build-asan
+	rm -rf $(BUILD_DIR) build-asan $(TSAN_DIR)

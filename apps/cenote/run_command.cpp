@@ -1,6 +1,6 @@
 // `cenote run`: a recorded stereo sequence with poses in; fused points, depth maps and a timing
 // report out, at camera rate. With --map, the fused points are integrated into an occupancy map;
-// with --corrections DIR too (pipeline/runner/correction_events.h), the map keeps its frames in a
+// with --corrections DIR or SVIn2 FILE too (pipeline/runner/correction_events.h), the map keeps its frames in a
 // frame store (mapping/history/map_history.h) and each loop-closure correction is applied when
 // the run's fused frames pass its time (the rest at the end of the run).
 #include <atomic>
@@ -270,8 +270,9 @@ void registerRunCommand(CLI::App& app) {
   cmd->add_option("--trajectory-format", o->trajectory_format, "Trajectory format (default: detected)")
       ->check(CLI::IsMember({"tum", "euroc", "kitti", "okvis", "svin2", "openvins"}));
   cmd->add_option("--corrections", o->corrections,
-                  "Folder of loop-closure corrections (<time s>.tum: corrected poses of past frames, in the "
-                  "trajectory's frame), each applied to the map when the run reaches its time");
+                  "Loop-closure corrections: a folder (<time s>.tum: corrected poses of past frames, in the "
+                  "trajectory's frame, each applied to the map when the run reaches its time) or SVIn2's "
+                  "pose-graph file (svin_<date>.txt: IMU poses of its keyframes, applied at its last one)");
   cmd->add_option("--trajectory-times", o->trajectory_times,
                   "Times of KITTI poses (one a line, seconds); default: the KITTI sequence's times.txt");
   cmd->add_option("--pose-frame", o->pose_frame, "What the poses describe (default: the format's convention)")

@@ -8,10 +8,22 @@
 
 namespace cenote::pipeline {
 
+CorrectionEvent readSvinLoopPath(const std::string& path, const Eigen::Isometry3d& T_body_cam) {
+  // SVIn2's rows are TUM's layout; its poses are the IMU's whatever the run's --pose-frame says.
+  const io::Trajectory poses = io::Trajectory::read(path, io::TrajectoryFormat::kTum);
+  if (poses.empty()) throw Error("corrections " + path + ": no keyframe in SVIn2's pose-graph file");
+  CorrectionEvent event;
+  event.t_s = poses.poses().back().t_s;
+  event.path = path;
+  event.poses = poses.transformedBy(T_body_cam);
+  return event;
+}
+
 std::vector<CorrectionEvent> readCorrectionEvents(const std::string& dir, bool file_describes_body,
                                                   const Eigen::Isometry3d& T_body_cam) {
   namespace fs = std::filesystem;
-  if (!fs::is_directory(dir)) throw NotFoundError("corrections " + dir + ": no such folder");
+  if (fs::is_regular_file(dir)) return {readSvinLoopPath(dir, T_body_cam)};
+  if (!fs::is_directory(dir)) throw NotFoundError("corrections " + dir + ": no such folder or file");
   std::vector<CorrectionEvent> events;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (!entry.is_regular_file() || entry.path().extension() != ".tum") continue;

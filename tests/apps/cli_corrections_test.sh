@@ -48,7 +48,25 @@ echo "agreement with the map from the true poses: drifted $drifted, corrected $c
 python3 -c 'import sys; d, c = map(float, sys.argv[1:]); sys.exit(0 if c >= 0.99 and d < c else 1)' "$drifted" \
   "$corrected" || fail "corrected agreement $corrected (must be >= 0.99), drifted $drifted (must be lower)"
 
-expect_error 1 "corrections $work/nowhere: no such folder" run --dataset "$dive" --out "$work/bad" --map "$work/bad.vdb" \
+# SVIn2's pose-graph file (tests/support/write_svin_loop_path.py writes it from the last event, the IMU's
+# poses): one event at its last keyframe, the same corrected poses as the folder's last event, which
+# gives every frame its pose: the same map as the folder's two events.
+python3 "$(dirname "${BASH_SOURCE[0]}")/../support/write_svin_loop_path.py" "$dive/loop_closures/1700000003.000000.tum" \
+  "$dive" "$work/svin_loop.txt" || fail "write_svin_loop_path.py"
+run --out "$work/svin" --trajectory "$dive/vio_trajectory.tum" --pose-frame camera \
+  --corrections "$work/svin_loop.txt" --map "$work/svin.vdb"
+grep -q "corrections: 1 of 1 events applied" "$work/run.out" || fail "SVIn2 corrections line: $(cat "$work/run.out")"
+"$cenote" eval map --estimate "$work/svin.vdb" --reference "$work/corrected.vdb" --json "$work/svin.json" >/dev/null \
+  || fail "eval map svin"
+svin=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["agreement"])' "$work/svin.json")
+echo "agreement of the SVIn2-corrected map with the folder-corrected map: $svin"
+python3 -c 'import sys; sys.exit(0 if float(sys.argv[1]) == 1.0 else 1)' "$svin" \
+  || fail "SVIn2-corrected map agrees with the folder-corrected one in $svin (must be 1: the same map)"
+: >"$work/empty_svin.txt"
+expect_error 1 "corrections $work/empty_svin.txt: no keyframe in SVIn2's pose-graph file" run --dataset "$dive" --out "$work/bad" \
+  --map "$work/bad.vdb" --corrections "$work/empty_svin.txt"
+
+expect_error 1 "corrections $work/nowhere: no such folder or file" run --dataset "$dive" --out "$work/bad" --map "$work/bad.vdb" \
   --corrections "$work/nowhere"
 expect_error 1 "--corrections $dive/loop_closures needs --map" run --dataset "$dive" --out "$work/bad" \
   --corrections "$dive/loop_closures"
