@@ -69,19 +69,23 @@ struct StereoConfig {
   // True when matching uses the coarse-to-fine band (kBand and a range wider than the band).
   bool usesBand() const;
   // kBand: the settings of the coarse match. Disparities divided by coarse_scale (the range rounded
-  // outwards), the same penalties, integer winners only and none of the checks that would leave a
-  // pixel without a band; full search. Its range need not be a multiple of 16: not for validate().
+  // outwards), the same penalties, 8 paths (unless their sum would overflow 16 bits), integer
+  // winners only and none of the checks that would leave a pixel without a band; full search. Its
+  // range need not be a multiple of 16: not for validate().
   StereoConfig coarseConfig() const;
-  // kBand: the first disparity index (from min_disparity_px) of the band of full-size column x
-  // whose coarse pixel has disparity coarse_disparity_px (+inf: none, the band starts at 0).
+  // kBand: the first disparity index (from min_disparity_px) of a band of full-size column x
+  // around coarse disparity coarse_disparity_px (+inf: none, the band starts at 0). The matcher
+  // centres a pixel's band on its 3x3 coarse neighbourhood where that fits (bandStartAround()).
   // The band is centred on coarse_scale * coarse_disparity_px, kept inside the range and, where
   // the image border cuts the range, on the disparities that have a right pixel.
   int bandStart(float coarse_disparity_px, int x) const {  // inline: called per pixel
+    return bandStartAround(
+        std::isfinite(coarse_disparity_px) ? coarse_scale * static_cast<int>(coarse_disparity_px) : min_disparity_px, x);
+  }
+  // The band of column x centred on disparity centre_px (full-size pixels), placed as bandStart().
+  int bandStartAround(int centre_px, int x) const {
     const int width = kBandDisparities;
-    const int centre = std::isfinite(coarse_disparity_px)
-                           ? coarse_scale * static_cast<int>(coarse_disparity_px) - min_disparity_px
-                           : 0;
-    const int lo = std::clamp(centre - width / 2, 0, num_disparities - width);
+    const int lo = std::clamp(centre_px - min_disparity_px - width / 2, 0, num_disparities - width);
     return std::min(lo, std::max(0, x - min_disparity_px + 1 - width));
   }
   // Right shift applied to SAD window sums so that maxCost() <= 4095.

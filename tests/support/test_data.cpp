@@ -105,6 +105,21 @@ std::optional<StereoPairWithTruth> loadMotorcycle() {
   return p;
 }
 
+std::optional<StereoPairWithTruth> loadAloe() {
+  const std::string dir = fetchedDataDir() + "/aloe/";
+  if (!allExist({dir + "aloeL.jpg", dir + "aloeR.jpg", dir + "aloeGT.png"})) return std::nullopt;
+  StereoPairWithTruth p;
+  p.name = "Aloe";
+  p.left = cv::imread(dir + "aloeL.jpg", cv::IMREAD_COLOR);
+  p.right = cv::imread(dir + "aloeR.jpg", cv::IMREAD_COLOR);
+  // OpenCV's copy of Middlebury 2006 Aloe: full size, ground truth in pixels (0 = unknown).
+  p.truth = truthFromPng(dir + "aloeGT.png", 1.0f);
+  p.mask = maskFromTruth(p.truth);
+  // Largest true disparity is 211 px.
+  p.num_disparities = 224;
+  return p;
+}
+
 BadPixelStats badPixels(const cv::Mat& disparity, const StereoPairWithTruth& pair) {
   BadPixelStats s;
   int bad1 = 0, bad2 = 0, dense = 0;
