@@ -25,8 +25,9 @@ enum class Prefilter { kNone, kSobelX };
 
 // Which disparities each pixel searches. kFull: all num_disparities. kBand: coarse to fine (as
 // tSGM): full SGM on the pair shrunk by coarse_scale, then at full size each pixel searches
-// kBandDisparities around coarse_scale times its coarse disparity (path costs outside a pixel's
-// band count as infinite). Ranges of at most kBandDisparities are always searched in full.
+// kBandDisparities around coarse_scale times the coarse disparities of its 3x3 coarse
+// neighbourhood, or its own where those do not fit (path costs outside a pixel's band count as
+// infinite). Ranges of at most kBandDisparities are always searched in full.
 enum class SearchMode { kFull, kBand };
 inline constexpr int kBandDisparities = 32;
 
@@ -39,7 +40,7 @@ struct StereoConfig {
   int prefilter_cap = 63;                    // derivative clipped to +-cap grey levels, in [1, 127]; 63 keeps the
                                              // sub-pixel error of a slanted plane at 0.13 px (31: 0.15)
   int num_paths = 4;                         // SGM: 4 = one top-down pass (rSGM), 8 = two passes
-  SearchMode search = SearchMode::kBand;     // band around a coarse match (about 1.7x faster), or full
+  SearchMode search = SearchMode::kBand;     // band around a coarse match (about 2.3x faster), or full
   int coarse_scale = 4;                      // kBand: the coarse match runs on the pair shrunk by 2 or 4 (2x2 or
                                              // 4x4 means); 4 costs a sixteenth of the full size instead of a
                                              // quarter, for nearly the same accuracy (middlebury_test.cpp)
