@@ -25,8 +25,9 @@ enum class Prefilter { kNone, kSobelX };
 
 // Which disparities each pixel searches. kFull: all num_disparities. kBand: coarse to fine (as
 // tSGM): full SGM on the pair shrunk by coarse_scale, then at full size each pixel searches
-// kBandDisparities around coarse_scale times its coarse disparity (path costs outside a pixel's
-// band count as infinite). Ranges of at most kBandDisparities are always searched in full.
+// kBandDisparities around coarse_scale times the coarse disparities of its 3x3 coarse
+// neighbourhood, or its own where those do not fit (path costs outside a pixel's band count as
+// infinite). Ranges of at most kBandDisparities are always searched in full.
 enum class SearchMode { kFull, kBand };
 inline constexpr int kBandDisparities = 32;
 
@@ -39,7 +40,7 @@ struct StereoConfig {
   int prefilter_cap = 63;                    // derivative clipped to +-cap grey levels, in [1, 127]; 63 keeps the
                                              // sub-pixel error of a slanted plane at 0.13 px (31: 0.15)
   int num_paths = 4;                         // SGM: 4 = one top-down pass (rSGM), 8 = two passes
-  SearchMode search = SearchMode::kBand;     // band around a coarse match (about 1.7x faster), or full
+  SearchMode search = SearchMode::kBand;     // band around a coarse match (about 2.3x faster), or full
   int coarse_scale = 4;                      // kBand: the coarse match runs on the pair shrunk by 2 or 4 (2x2 or
                                              // 4x4 means); 4 costs a sixteenth of the full size instead of a
                                              // quarter, for nearly the same accuracy (middlebury_test.cpp)
@@ -69,19 +70,23 @@ struct StereoConfig {
   // True when matching uses the coarse-to-fine band (kBand and a range wider than the band).
   bool usesBand() const;
   // kBand: the settings of the coarse match. Disparities divided by coarse_scale (the range rounded
-  // outwards), the same penalties, integer winners only and none of the checks that would leave a
-  // pixel without a band; full search. Its range need not be a multiple of 16: not for validate().
+  // outwards), the same penalties, 8 paths (unless their sum would overflow 16 bits), integer
+  // winners only and none of the checks that would leave a pixel without a band; full search. Its
+  // range need not be a multiple of 16: not for validate().
   StereoConfig coarseConfig() const;
-  // kBand: the first disparity index (from min_disparity_px) of the band of full-size column x
-  // whose coarse pixel has disparity coarse_disparity_px (+inf: none, the band starts at 0).
+  // kBand: the first disparity index (from min_disparity_px) of a band of full-size column x
+  // around coarse disparity coarse_disparity_px (+inf: none, the band starts at 0). The matcher
+  // centres a pixel's band on its 3x3 coarse neighbourhood where that fits (bandStartAround()).
   // The band is centred on coarse_scale * coarse_disparity_px, kept inside the range and, where
   // the image border cuts the range, on the disparities that have a right pixel.
   int bandStart(float coarse_disparity_px, int x) const {  // inline: called per pixel
+    return bandStartAround(
+        std::isfinite(coarse_disparity_px) ? coarse_scale * static_cast<int>(coarse_disparity_px) : min_disparity_px, x);
+  }
+  // The band of column x centred on disparity centre_px (full-size pixels), placed as bandStart().
+  int bandStartAround(int centre_px, int x) const {
     const int width = kBandDisparities;
-    const int centre = std::isfinite(coarse_disparity_px)
-                           ? coarse_scale * static_cast<int>(coarse_disparity_px) - min_disparity_px
-                           : 0;
-    const int lo = std::clamp(centre - width / 2, 0, num_disparities - width);
+    const int lo = std::clamp(centre_px - min_disparity_px - width / 2, 0, num_disparities - width);
     return std::min(lo, std::max(0, x - min_disparity_px + 1 - width));
   }
   // Right shift applied to SAD window sums so that maxCost() <= 4095.

@@ -54,6 +54,22 @@ cv::Mat maskFromTruth(const cv::Mat& truth) {
   return mask;
 }
 
+// A pair whose 8-bit ground truth is disparity * truth_scale (0 = unknown), evaluated wherever it
+// is known and matchable.
+std::optional<StereoPairWithTruth> loadPairWithPngTruth(const std::string& dir, const std::string& name,
+                                                        const std::string& left, const std::string& right,
+                                                        const std::string& truth, float truth_scale, int num_disparities) {
+  if (!allExist({dir + left, dir + right, dir + truth})) return std::nullopt;
+  StereoPairWithTruth p;
+  p.name = name;
+  p.left = cv::imread(dir + left, cv::IMREAD_COLOR);
+  p.right = cv::imread(dir + right, cv::IMREAD_COLOR);
+  p.truth = truthFromPng(dir + truth, truth_scale);
+  p.mask = maskFromTruth(p.truth);
+  p.num_disparities = num_disparities;
+  return p;
+}
+
 }  // namespace
 
 std::optional<StereoPairWithTruth> loadCones() {
@@ -71,16 +87,8 @@ std::optional<StereoPairWithTruth> loadCones() {
 }
 
 std::optional<StereoPairWithTruth> loadCloth3() {
-  const std::string dir = sharedDataDir() + "/middlebury/Cloth3/";
-  if (!allExist({dir + "view1.png", dir + "view5.png", dir + "disp1.png"})) return std::nullopt;
-  StereoPairWithTruth p;
-  p.name = "Cloth3";
-  p.left = cv::imread(dir + "view1.png", cv::IMREAD_COLOR);
-  p.right = cv::imread(dir + "view5.png", cv::IMREAD_COLOR);
-  p.truth = truthFromPng(dir + "disp1.png", 2.0f);
-  p.mask = maskFromTruth(p.truth);
-  p.num_disparities = 128;
-  return p;
+  return loadPairWithPngTruth(sharedDataDir() + "/middlebury/Cloth3/", "Cloth3", "view1.png", "view5.png", "disp1.png",
+                              2.0f, 128);
 }
 
 std::optional<StereoPairWithTruth> loadMotorcycle() {
@@ -103,6 +111,11 @@ std::optional<StereoPairWithTruth> loadMotorcycle() {
   // Largest true disparity of the quarter-size pair is 60 px.
   p.num_disparities = 64;
   return p;
+}
+
+// OpenCV's copy of Middlebury 2006 Aloe: full size, ground truth in pixels; the largest is 211.
+std::optional<StereoPairWithTruth> loadAloe() {
+  return loadPairWithPngTruth(fetchedDataDir() + "/aloe/", "Aloe", "aloeL.jpg", "aloeR.jpg", "aloeGT.png", 1.0f, 224);
 }
 
 BadPixelStats badPixels(const cv::Mat& disparity, const StereoPairWithTruth& pair) {

@@ -27,6 +27,7 @@ struct StereoPairWithTruth {
 std::optional<StereoPairWithTruth> loadCones();
 std::optional<StereoPairWithTruth> loadCloth3();
 std::optional<StereoPairWithTruth> loadMotorcycle();
+std::optional<StereoPairWithTruth> loadAloe();
 
 struct BadPixelStats {
   double bad1 = 0.0;  // % of evaluated pixels with |error| > 1 (invalid counts as bad)

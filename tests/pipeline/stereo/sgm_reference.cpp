@@ -127,9 +127,26 @@ Bands bandsFromCoarseMatch(const cv::Mat& L, const cv::Mat& R, const StereoConfi
   pipeline::shrinkImage(R, c.coarse_scale, coarse_right);
   const cv::Mat coarse_disparity = match(coarse_left, coarse_right, coarse, Bands{{}, coarse.num_disparities}).disparity;
   Bands bands{cv::Mat(L.size(), CV_32S), pipeline::kBandDisparities};
+  const int s = c.coarse_scale;
   for (int y = 0; y < L.rows; ++y) {
     for (int x = 0; x < L.cols; ++x) {
-      bands.start.at<int>(y, x) = c.bandStart(coarse_disparity.at<float>(y / c.coarse_scale, x / c.coarse_scale), x);
+      // The band covers the 3x3 coarse neighbourhood's disparities when they fit with 2 px to
+      // spare on each side, else it is centred on the pixel's own coarse disparity.
+      std::vector<int> near;
+      for (int cy = y / s - 1; cy <= y / s + 1; ++cy) {
+        for (int cx = x / s - 1; cx <= x / s + 1; ++cx) {
+          const float d = coarse_disparity.at<float>(std::clamp(cy, 0, coarse_disparity.rows - 1),
+                                                     std::clamp(cx, 0, coarse_disparity.cols - 1));
+          if (std::isfinite(d)) near.push_back(static_cast<int>(d));
+        }
+      }
+      const float own = coarse_disparity.at<float>(y / s, x / s);
+      int& start = bands.start.at<int>(y, x);
+      start = c.bandStart(own, x);
+      if (!near.empty()) {
+        const auto [lo, hi] = std::minmax_element(near.begin(), near.end());
+        if (s * (*hi - *lo) + 4 <= pipeline::kBandDisparities) start = c.bandStartAround(s * (*lo + *hi) / 2, x);
+      }
     }
   }
   return bands;

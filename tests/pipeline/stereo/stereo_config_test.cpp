@@ -93,10 +93,18 @@ TEST(StereoConfig, CoarseScaleIsTwoOrFourAndShrinksTheRangeOutwards) {
   EXPECT_EQ(coarse.min_disparity_px, 2);
   EXPECT_EQ(coarse.num_disparities, 29);
   EXPECT_EQ(coarse.search, SearchMode::kFull);
+  ASSERT_EQ(c.maxCost(), 1134);    // 9 * 126: SAD 3x3 of the clipped derivative
+  EXPECT_EQ(coarse.num_paths, 8);  // 8 * (1134 + 90 + 720) fits 16 bits
+  c.p2 = 8000;                     // 4 * (1134 + 90 + 8000) fits, 8 * does not: the configured 4 paths
+  EXPECT_TRUE(c.validate().empty());
+  EXPECT_EQ(c.coarseConfig().num_paths, 4);
+  c.p2 = -1;
   // Band centred on 4 * 20 = 80, i.e. index 71: starts 16 lower; none: 0; cut by the border.
   EXPECT_EQ(c.bandStart(20.0f, 400), 55);
   EXPECT_EQ(c.bandStart(INFINITY, 400), 0);
   EXPECT_EQ(c.bandStart(20.0f, 50), 50 - 9 + 1 - kBandDisparities);
+  EXPECT_EQ(c.bandStartAround(82, 400), 82 - 9 - kBandDisparities / 2);
+  EXPECT_EQ(c.bandStartAround(0, 400), 0);
 }
 
 TEST(StereoConfig, ConstructingAMatcherWithAnInvalidConfigThrowsWithEveryRule) {
