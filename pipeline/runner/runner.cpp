@@ -204,10 +204,10 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   const double frames = static_cast<double>(std::max<size_t>(report.frames_processed, 1));
   const double total_cpu_ms = processCpuMs() - process_cpu0_ms;
   const std::array<std::pair<const char*, double>, 5> cpu = {{{"read_rectify", read_cpu_ms},
-                                                             {"stereo", stages.stereoCpuMs()},
-                                                             {"fusion", stages.fusionCpuMs()},
-                                                             {"output", output_cpu_ms},
-                                                             {"map", sink_cpu_ms}}};
+                                                              {"stereo", stages.stereoCpuMs()},
+                                                              {"fusion", stages.fusionCpuMs()},
+                                                              {"output", output_cpu_ms},
+                                                              {"map", sink_cpu_ms}}};
   double staged_ms = 0.0;
   for (const auto& [name, ms] : cpu) {
     if (report.stages.count(name)) report.cpu_ms_per_frame[name] = ms / frames;
