@@ -51,7 +51,7 @@ int writeCloud(const char* path, const Cloud& cloud, int encoding) {
 extern "C" {
 
 __attribute__((visibility("default"))) int cenote_pcd_read(const char* path, bool header_only, PcdCloud* cloud,
-                                                            std::string* error) {
+                                                           std::string* error) {
   try {
     pcl::PCDReader reader;
     pcl::PCLPointCloud2 read;
@@ -74,7 +74,7 @@ __attribute__((visibility("default"))) int cenote_pcd_read(const char* path, boo
 }
 
 __attribute__((visibility("default"))) int cenote_pcd_write(const char* path, const float* xyz, const uint8_t* rgb,
-                                                             std::size_t n, int encoding, std::string* error) {
+                                                            std::size_t n, int encoding, std::string* error) {
   try {
     if (!rgb) {
       pcl::PointCloud<pcl::PointXYZ> cloud;

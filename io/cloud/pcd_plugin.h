@@ -13,7 +13,16 @@
 namespace cenote::io::detail {
 
 // PCL's PCLPointField datatypes (pcl/PCLPointField.h), the same numbers.
-enum PcdDatatype : uint8_t { kPcdInt8 = 1, kPcdUint8, kPcdInt16, kPcdUint16, kPcdInt32, kPcdUint32, kPcdFloat32, kPcdFloat64 };
+enum PcdDatatype : uint8_t {
+  kPcdInt8 = 1,
+  kPcdUint8,
+  kPcdInt16,
+  kPcdUint16,
+  kPcdInt32,
+  kPcdUint32,
+  kPcdFloat32,
+  kPcdFloat64
+};
 
 struct PcdField {
   std::string name;

@@ -15,8 +15,8 @@ extern "C" {
 // The indices of the n points (xyz: 3 floats each) that pcl::StatisticalOutlierRemoval keeps with
 // `neighbours` and `stddev_mul`, into *kept; false with *error set when PCL throws.
 __attribute__((visibility("default"))) bool cenote_statistical_inliers(const float* xyz, std::size_t n, int neighbours,
-                                                                        double stddev_mul, std::vector<int>* kept,
-                                                                        std::string* error) {
+                                                                       double stddev_mul, std::vector<int>* kept,
+                                                                       std::string* error) {
   try {
     auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
     cloud->reserve(n);

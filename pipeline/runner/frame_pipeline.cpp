@@ -115,7 +115,7 @@ void FramePipeline::fusionStage() {
         out.frame.confidence = result->frame.confidence.clone();
         out.frame.color = result->frame.color.clone();
       }
-      out.points = result->points;
+      window->takePoints(out.points);  // 270k points: a swap, not a copy
     } else {
       backProject(*frame, out.points);
       out.frame = std::move(*frame);
