@@ -4,12 +4,11 @@
 
 #include <unistd.h>
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <optional>
 #include <utility>
 
 #include "common/error.h"
@@ -39,35 +38,24 @@ int readWithPcl(const std::string& path, bool header_only, PcdCloud& cloud) {
   return status;
 }
 
-// One scalar of a PCD field as a double; false for a type we do not read.
-bool decodePclScalar(const uint8_t* src, uint8_t datatype, double& value) {
+// The scalar type of a PCD datatype; nullopt for one we do not read.
+std::optional<ScalarType> scalarTypeOf(uint8_t datatype) {
   constexpr std::pair<uint8_t, ScalarType> kTypes[] = {
-      {detail::kPcdInt8, ScalarType::kInt8},       {detail::kPcdUint8, ScalarType::kUint8},
-      {detail::kPcdInt16, ScalarType::kInt16},     {detail::kPcdUint16, ScalarType::kUint16},
-      {detail::kPcdInt32, ScalarType::kInt32},     {detail::kPcdUint32, ScalarType::kUint32},
-      {detail::kPcdFloat32, ScalarType::kFloat32}, {detail::kPcdFloat64, ScalarType::kFloat64}};
+      {detail::pcd_type::kInt8, ScalarType::kInt8},       {detail::pcd_type::kUint8, ScalarType::kUint8},
+      {detail::pcd_type::kInt16, ScalarType::kInt16},     {detail::pcd_type::kUint16, ScalarType::kUint16},
+      {detail::pcd_type::kInt32, ScalarType::kInt32},     {detail::pcd_type::kUint32, ScalarType::kUint32},
+      {detail::pcd_type::kFloat32, ScalarType::kFloat32}, {detail::pcd_type::kFloat64, ScalarType::kFloat64}};
   for (const auto& [pcl_type, type] : kTypes) {
-    if (pcl_type == datatype) {
-      value = decodeScalar(src, type);
-      return true;
-    }
+    if (pcl_type == datatype) return type;
   }
-  return false;
+  return std::nullopt;
 }
 
-// Bytes of one scalar of a PCD datatype (pcl::getFieldSize); 0 for an unknown one.
-size_t datatypeBytes(uint8_t datatype) {
-  switch (datatype) {
-    case detail::kPcdInt8:
-    case detail::kPcdUint8: return 1;
-    case detail::kPcdInt16:
-    case detail::kPcdUint16: return 2;
-    case detail::kPcdInt32:
-    case detail::kPcdUint32:
-    case detail::kPcdFloat32: return 4;
-    case detail::kPcdFloat64: return 8;
-    default: return 0;
-  }
+// One scalar of a PCD field as a double; false for a type we do not read.
+bool decodePclScalar(const uint8_t* src, uint8_t datatype, double& value) {
+  const std::optional<ScalarType> type = scalarTypeOf(datatype);
+  if (type) value = decodeScalar(src, *type);
+  return type.has_value();
 }
 
 const PcdField* findField(const PcdCloud& cloud, const std::string& name) {
@@ -130,7 +118,8 @@ PcdPoints readPcd(const std::string& path) {
   if (!axes[0] || !axes[1] || !axes[2]) throw Error(path + ": PCD FIELDS has no x, y and z");
   const PcdField* rgb = findField(cloud, "rgb");
   if (!rgb) rgb = findField(cloud, "rgba");
-  if (rgb && datatypeBytes(rgb->datatype) != 4) {
+  const std::optional<ScalarType> rgb_type = rgb ? scalarTypeOf(rgb->datatype) : std::nullopt;
+  if (rgb && (!rgb_type || sizeOf(*rgb_type) != 4)) {
     throw Error(path + ": PCD field " + rgb->name + " must be 4 bytes (packed 0x00RRGGBB)");
   }
   const size_t n = static_cast<size_t>(cloud.width) * cloud.height;

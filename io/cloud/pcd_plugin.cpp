@@ -14,12 +14,12 @@ namespace {
 using cenote::io::detail::kPcdThrew;
 using cenote::io::detail::PcdCloud;
 
-static_assert(pcl::PCLPointField::INT8 == cenote::io::detail::kPcdInt8 &&
-              pcl::PCLPointField::FLOAT64 == cenote::io::detail::kPcdFloat64);
+static_assert(pcl::PCLPointField::INT8 == cenote::io::detail::pcd_type::kInt8 &&
+              pcl::PCLPointField::FLOAT64 == cenote::io::detail::pcd_type::kFloat64);
 
 void copyCloud(const pcl::PCLPointCloud2& in, PcdCloud& out) {
   out.fields.clear();
-  for (const pcl::PCLPointField& f : in.fields) out.fields.push_back({f.name, f.offset, f.datatype, f.count});
+  for (const pcl::PCLPointField& f : in.fields) out.fields.push_back({f.name, f.offset, f.count, f.datatype});
   out.width = in.width;
   out.height = in.height;
   out.point_step = in.point_step;

@@ -13,22 +13,15 @@
 namespace cenote::io::detail {
 
 // PCL's PCLPointField datatypes (pcl/PCLPointField.h), the same numbers.
-enum PcdDatatype : uint8_t {
-  kPcdInt8 = 1,
-  kPcdUint8,
-  kPcdInt16,
-  kPcdUint16,
-  kPcdInt32,
-  kPcdUint32,
-  kPcdFloat32,
-  kPcdFloat64
-};
+namespace pcd_type {
+enum : uint8_t { kInt8 = 1, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
+}  // namespace pcd_type
 
+// A pcl::PCLPointField: `count` scalars of `datatype` at byte `offset` of each point.
 struct PcdField {
   std::string name;
-  uint32_t offset = 0;
+  uint32_t offset = 0, count = 0;
   uint8_t datatype = 0;
-  uint32_t count = 0;
 };
 
 // A pcl::PCLPointCloud2, as plain data.
