@@ -6,7 +6,10 @@
 # Besides the wall-clock fps it prints the CPU time of the whole run per frame (user + system, all
 # threads, start-up included) and the rate two cores would sustain at that cost (2000 / CPU ms):
 # on a machine shared with other work the wall clock says how busy the machine was, the CPU time
-# what the pipeline costs.
+# what the pipeline costs. A second table splits the run's CPU time per frame by stage (each
+# stage's thread with its OpenMP threads, from the run's own report: cpu_ms_per_frame in
+# report.json, pipeline/runner/runner.h), with "other" the rest of the process during the run and
+# "start-up + save" the process's time outside the run (loading, writing the map at the end).
 set -euo pipefail
 cenote=$1
 source_dir=$2
@@ -27,7 +30,8 @@ PY
   { time "$cenote" run --dataset "$work/cave" --config "$work/config.yaml" --out "$work/run$paths" \
       --map "$work/run$paths/map.vdb" >/dev/null 2>&1 ; } \
     2>"$work/cpu$paths.txt"
-  /usr/bin/python3 - "$work/run$paths/report.json" "$paths" "$frames" "$work/cpu$paths.txt" <<'PY'
+  /usr/bin/python3 - "$work/run$paths/report.json" "$paths" "$frames" "$work/cpu$paths.txt" \
+    "$work/cpu_table.txt" >>"$work/table.txt" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 s = r["stages"]
@@ -36,6 +40,16 @@ cpu_ms = (user + system) * 1000.0 / max(r["frames_processed"], 1)
 print(f"| cenote run, {sys.argv[2]} paths, {sys.argv[3]} frames | {r['fps']:.1f} | "
       + " | ".join(f"{s[k]['median_ms']:.1f}" for k in ("read_rectify", "stereo", "fusion", "output", "map"))
       + f" | {r['peak_memory_mb']:.0f} | {r['fps'] / 10.2:.1f}x | {cpu_ms:.0f} | {2000.0 / cpu_ms:.1f} |")
+c = r["cpu_ms_per_frame"]
+print(f"| cenote run, {sys.argv[2]} paths, {sys.argv[3]} frames | "
+      + " | ".join(f"{c.get(k, 0.0):.1f}" for k in ("read_rectify", "stereo", "fusion", "output", "map", "other", "total"))
+      + f" | {cpu_ms - c['total']:.1f} | {cpu_ms:.1f} |", file=open(sys.argv[5], "a"))
 PY
 done
+cat "$work/table.txt"
 echo "| paper (8-core i7-10700K, keyframes only) | 2.8-10.2 | | 323-399 | 375-678 | | | | 1.0x | | |"
+echo
+echo "CPU ms per frame processed, by stage (user + system, each stage's thread with its OpenMP threads):"
+echo "| run | read+rectify | stereo | fusion | output | map | other | run total | start-up + save | process |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
+cat "$work/cpu_table.txt"

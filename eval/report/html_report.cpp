@@ -8,7 +8,6 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
@@ -18,6 +17,7 @@
 #include "common/text_file.h"
 #include "eval/report/metrics_json.h"
 #include "io/image/image_io.h"
+#include "io/image/opencv_codecs.h"
 
 namespace cenote::eval {
 namespace {
@@ -49,7 +49,7 @@ std::string encodePng(const cv::Mat& image, int width_px) {
     cv::resize(image, shown, cv::Size(width_px, std::max(1, image.rows * width_px / image.cols)), 0, 0, cv::INTER_AREA);
   }
   std::vector<uchar> bytes;
-  cv::imencode(".png", shown, bytes);
+  io::opencvEncode(".png", shown, bytes);
   return std::string(bytes.begin(), bytes.end());
 }
 

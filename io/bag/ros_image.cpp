@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
+#include "io/image/opencv_codecs.h"
 #include "io/image/png_decoder.h"
 
 namespace cenote::io {
@@ -67,8 +68,7 @@ cv::Mat compressedImageToMat(const RosCompressedImage& image, const std::string&
   cv::Mat out;
   if (png) out = decodePngFast(d.data(), d.size());
   if (out.empty()) {
-    const cv::Mat bytes(1, static_cast<int>(d.size()), CV_8UC1, const_cast<std::uint8_t*>(d.data()));
-    out = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+    out = opencvDecode(d.data(), d.size(), cv::IMREAD_UNCHANGED);
   }
   if (out.empty()) throw Error(where + " cannot be decoded");
   if (out.depth() != CV_8U) throw Error(where + " is not 8-bit; cenote reads 8-bit grey or colour images");

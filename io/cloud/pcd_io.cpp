@@ -1,68 +1,68 @@
-// pcd_io.cpp: the one file of io/ that sees PCL's I/O headers (pcd_io.h).
+// pcd_io.cpp: PCD files through PCL's reader and writer, which the plugin libcenote_pcd.so holds
+// (pcd_plugin.h); the checks and conversions are here.
 #include "io/cloud/pcd_io.h"
 
-#include <pcl/io/pcd_io.h>
-#include <pcl/point_types.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <optional>
 #include <utility>
 
 #include "common/error.h"
+#include "common/plugin_library.h"
 #include "common/scalar_bytes.h"
+#include "io/cloud/pcd_plugin.h"
 
 namespace cenote::io {
 namespace {
 
 namespace fs = std::filesystem;
 
-// One scalar of a PCLPointCloud2 field as a double; false for a type we do not read.
-bool decodePclScalar(const uint8_t* src, uint8_t datatype, double& value) {
-  constexpr std::pair<uint8_t, ScalarType> kTypes[] = {
-      {pcl::PCLPointField::INT8, ScalarType::kInt8},       {pcl::PCLPointField::UINT8, ScalarType::kUint8},
-      {pcl::PCLPointField::INT16, ScalarType::kInt16},     {pcl::PCLPointField::UINT16, ScalarType::kUint16},
-      {pcl::PCLPointField::INT32, ScalarType::kInt32},     {pcl::PCLPointField::UINT32, ScalarType::kUint32},
-      {pcl::PCLPointField::FLOAT32, ScalarType::kFloat32}, {pcl::PCLPointField::FLOAT64, ScalarType::kFloat64}};
-  for (const auto& [pcl_type, type] : kTypes) {
-    if (pcl_type == datatype) {
-      value = decodeScalar(src, type);
-      return true;
-    }
-  }
-  return false;
+using detail::PcdCloud;
+using detail::PcdField;
+
+PluginLibrary& plugin() {
+  static PluginLibrary library(CENOTE_PCD_PLUGIN_PATH, "libcenote_pcd.so");
+  return library;
 }
 
-const pcl::PCLPointField* findField(const pcl::PCLPointCloud2& cloud, const std::string& name) {
-  for (const pcl::PCLPointField& f : cloud.fields) {
+// PCL's reader on `path`: its status; a PCL exception is rethrown as "cannot read PATH as PCD: ...".
+int readWithPcl(const std::string& path, bool header_only, PcdCloud& cloud) {
+  static const detail::PcdReadFn read = plugin().function<detail::PcdReadFn>("cenote_pcd_read");
+  std::string error;
+  const int status = read(path.c_str(), header_only, &cloud, &error);
+  if (status == detail::kPcdThrew) throw Error("cannot read " + path + " as PCD: " + error);
+  return status;
+}
+
+// The scalar type of a PCD datatype; nullopt for one we do not read.
+std::optional<ScalarType> scalarTypeOf(uint8_t datatype) {
+  constexpr std::pair<uint8_t, ScalarType> kTypes[] = {
+      {detail::pcd_type::kInt8, ScalarType::kInt8},       {detail::pcd_type::kUint8, ScalarType::kUint8},
+      {detail::pcd_type::kInt16, ScalarType::kInt16},     {detail::pcd_type::kUint16, ScalarType::kUint16},
+      {detail::pcd_type::kInt32, ScalarType::kInt32},     {detail::pcd_type::kUint32, ScalarType::kUint32},
+      {detail::pcd_type::kFloat32, ScalarType::kFloat32}, {detail::pcd_type::kFloat64, ScalarType::kFloat64}};
+  for (const auto& [pcl_type, type] : kTypes) {
+    if (pcl_type == datatype) return type;
+  }
+  return std::nullopt;
+}
+
+// One scalar of a PCD field as a double; false for a type we do not read.
+bool decodePclScalar(const uint8_t* src, uint8_t datatype, double& value) {
+  const std::optional<ScalarType> type = scalarTypeOf(datatype);
+  if (type) value = decodeScalar(src, *type);
+  return type.has_value();
+}
+
+const PcdField* findField(const PcdCloud& cloud, const std::string& name) {
+  for (const PcdField& f : cloud.fields) {
     if (f.name == name) return &f;
   }
   return nullptr;
-}
-
-template <typename Cloud>
-void writeCloud(const std::string& temp, const Cloud& cloud, PcdEncoding encoding) {
-  using PointT = typename Cloud::PointType;
-  pcl::PCDWriter writer;
-  if (cloud.empty()) {
-    // PCL's writers refuse an empty cloud; its own header with no data is a valid PCD of 0 points.
-    std::ofstream out(temp, std::ios::binary);
-    out << pcl::PCDWriter::generateHeader<PointT>(cloud, 0) << "DATA ascii\n";
-    out.flush();
-    if (!out) throw Error(std::strerror(errno));
-    return;
-  }
-  int status = 0;
-  switch (encoding) {
-    case PcdEncoding::kAscii: status = writer.writeASCII(temp, cloud, 9); break;  // 9 digits: floats exactly
-    case PcdEncoding::kBinary: status = writer.writeBinary(temp, cloud); break;
-    case PcdEncoding::kBinaryCompressed: status = writer.writeBinaryCompressed(temp, cloud); break;
-  }
-  if (status != 0) throw Error("pcl::PCDWriter returned " + std::to_string(status));
 }
 
 }  // namespace
@@ -74,27 +74,15 @@ void writePcd(const std::string& path, const std::vector<Eigen::Vector3f>& point
                 std::to_string(colors.size()) + " colours");
   }
   const std::string temp = path + ".tmp." + std::to_string(::getpid());
-  try {
-    if (colors.empty()) {
-      pcl::PointCloud<pcl::PointXYZ> cloud;
-      cloud.reserve(points.size());
-      for (const Eigen::Vector3f& p : points) cloud.push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-      writeCloud(temp, cloud, encoding);
-    } else {
-      pcl::PointCloud<pcl::PointXYZRGB> cloud;
-      cloud.reserve(points.size());
-      for (size_t i = 0; i < points.size(); ++i) {
-        pcl::PointXYZRGB q(colors[i][0], colors[i][1], colors[i][2]);
-        q.x = points[i].x();
-        q.y = points[i].y();
-        q.z = points[i].z();
-        cloud.push_back(q);
-      }
-      writeCloud(temp, cloud, encoding);
-    }
-  } catch (const std::exception& e) {
+  static const detail::PcdWriteFn write = plugin().function<detail::PcdWriteFn>("cenote_pcd_write");
+  std::string error;
+  const int status = write(temp.c_str(), points.empty() ? nullptr : points.front().data(),
+                           colors.empty() ? nullptr : colors.front().data(), points.size(), static_cast<int>(encoding),
+                           &error);
+  if (status != 0) {
     std::remove(temp.c_str());
-    throw Error("cannot write " + path + ": " + e.what());
+    throw Error("cannot write " + path + ": " +
+                (status == detail::kPcdThrew ? error : "pcl::PCDWriter returned " + std::to_string(status)));
   }
   std::error_code ec;
   fs::rename(temp, path, ec);
@@ -106,21 +94,11 @@ void writePcd(const std::string& path, const std::vector<Eigen::Vector3f>& point
 
 PcdPoints readPcd(const std::string& path) {
   if (!fs::exists(path)) throw Error("cannot read " + path + ": no such file");
-  pcl::PCLPointCloud2 cloud;
-  pcl::PCDReader reader;
-  int status = 0;
+  PcdCloud cloud;
   // The header first: PCL 1.13's read() crashes on a file without FIELDS (e.g. not a PCD at all).
   {
-    Eigen::Vector4f origin;
-    Eigen::Quaternionf orientation;
-    int version = 0, data_type = 0;
-    unsigned int data_index = 0;
-    pcl::PCLPointCloud2 header;
-    try {
-      status = reader.readHeader(path, header, origin, orientation, version, data_type, data_index);
-    } catch (const std::exception& e) {
-      throw Error("cannot read " + path + " as PCD: " + e.what());
-    }
+    PcdCloud header;
+    const int status = readWithPcl(path, true, header);
     if (status < 0 || header.fields.empty()) {
       throw Error("cannot read " + path +
                   " as PCD: pcl::PCDReader finds no PCD header (FIELDS, SIZE, TYPE, WIDTH, "
@@ -131,20 +109,17 @@ PcdPoints readPcd(const std::string& path) {
     }
     if (static_cast<size_t>(header.width) * header.height == 0) return PcdPoints{};
   }
-  try {
-    status = reader.read(path, cloud);
-  } catch (const std::exception& e) {
-    throw Error("cannot read " + path + " as PCD: " + e.what());
-  }
+  const int status = readWithPcl(path, false, cloud);
   if (status < 0) {
     throw Error("cannot read " + path + " as PCD: pcl::PCDReader failed (" + std::to_string(status) +
                 "; its message is printed above): a malformed header, a truncated body or not a PCD file");
   }
-  const pcl::PCLPointField* axes[3] = {findField(cloud, "x"), findField(cloud, "y"), findField(cloud, "z")};
+  const PcdField* axes[3] = {findField(cloud, "x"), findField(cloud, "y"), findField(cloud, "z")};
   if (!axes[0] || !axes[1] || !axes[2]) throw Error(path + ": PCD FIELDS has no x, y and z");
-  const pcl::PCLPointField* rgb = findField(cloud, "rgb");
+  const PcdField* rgb = findField(cloud, "rgb");
   if (!rgb) rgb = findField(cloud, "rgba");
-  if (rgb && pcl::getFieldSize(rgb->datatype) != 4) {
+  const std::optional<ScalarType> rgb_type = rgb ? scalarTypeOf(rgb->datatype) : std::nullopt;
+  if (rgb && (!rgb_type || sizeOf(*rgb_type) != 4)) {
     throw Error(path + ": PCD field " + rgb->name + " must be 4 bytes (packed 0x00RRGGBB)");
   }
   const size_t n = static_cast<size_t>(cloud.width) * cloud.height;

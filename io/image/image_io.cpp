@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
@@ -15,6 +14,7 @@
 #include "common/error.h"
 #include "io/image/image_header.h"
 #include "io/image/jpeg_decoder.h"
+#include "io/image/opencv_codecs.h"
 #include "io/image/png_decoder.h"
 #include "io/image/png_encoder.h"
 
@@ -27,7 +27,7 @@ std::vector<uint8_t> encodeWithOpenCv(const std::string& ext, const cv::Mat& ima
   std::vector<uint8_t> bytes;
   bool ok = false;
   try {
-    ok = cv::imencode(ext, image, bytes, params);
+    ok = opencvEncode(ext, image, bytes, params);
   } catch (const cv::Exception& e) {
     throw Error("cannot encode " + what + ": " + e.what());
   }
@@ -152,7 +152,7 @@ cv::Mat readImage(const std::string& path, int flags) {
     cv::Mat fast = decodePngFast(bytes.data(), bytes.size());
     if (!fast.empty() && (flags == cv::IMREAD_UNCHANGED || fast.channels() == 3)) return fast;
   }
-  cv::Mat image = bytes.empty() ? cv::Mat() : cv::imdecode(bytes, flags);
+  cv::Mat image = opencvDecode(bytes.data(), bytes.size(), flags);
   if (image.empty()) throw Error("cannot read image " + path + ": not a readable image file");
   return image;
 }
@@ -180,7 +180,7 @@ cv::Mat decodeImageStrict(const uint8_t* data, std::size_t size, const std::stri
     throw ResourceExhaustedError(what + ": PNG of " + std::to_string(size) + " bytes, more than OpenCV takes (2^31 - 1)");
   }
   try {
-    image = cv::imdecode(cv::Mat(1, static_cast<int>(size), CV_8U, const_cast<uint8_t*>(data)), cv::IMREAD_UNCHANGED);
+    image = opencvDecode(data, size, cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {
     throw Error(what + ": PNG cannot be decoded: " + e.what());
   }

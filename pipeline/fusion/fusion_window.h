@@ -9,6 +9,7 @@
 // must not be used from two threads at once.
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "common/point_batch.h"
@@ -44,6 +45,10 @@ class FusionWindow {
   //         pose) or its size differs from the frames already in the window. The window is then
   //         unchanged.
   const FusedFrame* push(const DepthFrame& frame);
+
+  // Hands the last fused frame's points to `out` without copying them (their buffers are
+  // swapped: the window's points are then out's old ones, overwritten by the next push()).
+  void takePoints(PointBatch& out) { std::swap(out, result_.points); }
 
   // Empties the window (buffers are kept); the next frames may have another size.
   void reset();

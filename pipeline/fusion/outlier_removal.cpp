@@ -1,28 +1,34 @@
-// outlier_removal.cpp: with pcd_io.cpp, the only files of the pipeline that see PCL's headers.
+// outlier_removal.cpp: PCL's filter through the plugin libcenote_pcl_filters.so (outlier_plugin.cpp).
 #include "pipeline/fusion/outlier_removal.h"
 
-#include <pcl/filters/statistical_outlier_removal.h>
-#include <pcl/point_types.h>
-
 #include <string>
+#include <vector>
 
 #include "common/error.h"
+#include "common/plugin_library.h"
 
 namespace cenote::pipeline {
+namespace {
+
+using InliersFn = bool (*)(const float*, std::size_t, int, double, std::vector<int>*, std::string*);
+
+PluginLibrary& plugin() {
+  static PluginLibrary library(CENOTE_PCL_FILTERS_PATH, "libcenote_pcl_filters.so");
+  return library;
+}
+
+}  // namespace
 
 PointBatch removeStatisticalOutliers(const PointBatch& batch, int neighbours, double stddev_mul) {
   if (neighbours < 1) throw Error("outlier removal: neighbours = " + std::to_string(neighbours) + ": must be >= 1");
   if (!(stddev_mul > 0.0)) throw Error("outlier removal: stddev_mul = " + std::to_string(stddev_mul) + ": must be > 0");
   if (batch.size() <= static_cast<size_t>(neighbours)) return batch;
-  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  cloud->reserve(batch.size());
-  for (const Eigen::Vector3f& p : batch.points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-  pcl::StatisticalOutlierRemoval<pcl::PointXYZ> filter;
-  filter.setInputCloud(cloud);
-  filter.setMeanK(neighbours);
-  filter.setStddevMulThresh(stddev_mul);
-  pcl::Indices kept;
-  filter.filter(kept);
+  static const InliersFn inliers = plugin().function<InliersFn>("cenote_statistical_inliers");
+  std::vector<int> kept;
+  std::string error;
+  if (!inliers(batch.points.front().data(), batch.size(), neighbours, stddev_mul, &kept, &error)) {
+    throw Error("outlier removal: PCL failed: " + error);
+  }
   PointBatch out;
   out.t_s = batch.t_s;
   out.origin = batch.origin;

@@ -2,8 +2,10 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "common/thread_name.h"
 #include "pipeline/fusion/back_projection.h"
 #include "pipeline/fusion/fusion_window.h"
+#include "pipeline/runner/team_cpu.h"
 #include "pipeline/stereo/stereo_matcher.h"
 
 namespace cenote::pipeline {
@@ -27,14 +29,18 @@ FramePipeline::FramePipeline(const PipelineConfig& config, bool keep_maps, std::
       depths_(config.run.queue_depth),
       outputs_(config.run.queue_depth) {
   throwIfInvalid(config_.validate(), "pipeline configuration");
-  stereo_thread_ = std::thread(
-      [this, on_thread_start] { runStage(&FramePipeline::stereoStage, depths_, on_thread_start); });
-  fusion_thread_ = std::thread(
-      [this, on_thread_start] { runStage(&FramePipeline::fusionStage, outputs_, on_thread_start); });
+  stereo_thread_ = std::thread([this, on_thread_start] {
+    runStage("cenote-stereo", &FramePipeline::stereoStage, depths_, stereo_cpu_ms_, on_thread_start);
+  });
+  fusion_thread_ = std::thread([this, on_thread_start] {
+    runStage("cenote-fusion", &FramePipeline::fusionStage, outputs_, fusion_cpu_ms_, on_thread_start);
+  });
 }
 
 template <typename Output>
-void FramePipeline::runStage(void (FramePipeline::*stage)(), Output& output, const std::function<void()>& on_thread_start) {
+void FramePipeline::runStage(const char* name, void (FramePipeline::*stage)(), Output& output, double& cpu_ms,
+                             const std::function<void()>& on_thread_start) {
+  nameThisThread(name);
   if (on_thread_start) on_thread_start();
   try {
     (this->*stage)();
@@ -42,6 +48,7 @@ void FramePipeline::runStage(void (FramePipeline::*stage)(), Output& output, con
     failure_.set(std::current_exception());
     abort();
   }
+  cpu_ms = teamCpuMs();  // before close(): the owner reads it once the output has drained
   output.close();
 }
 
@@ -108,7 +115,7 @@ void FramePipeline::fusionStage() {
         out.frame.confidence = result->frame.confidence.clone();
         out.frame.color = result->frame.color.clone();
       }
-      out.points = result->points;
+      window->takePoints(out.points);  // 270k points: a swap, not a copy
     } else {
       backProject(*frame, out.points);
       out.frame = std::move(*frame);

@@ -62,14 +62,20 @@ class FramePipeline {
   // Per-frame durations; read once the pipeline has drained.
   StageSummary stereoTiming() const { return stereo_timer_.summary(); }
   StageSummary fusionTiming() const { return fusion_timer_.summary(); }
+  // CPU time of each stage's thread and its OpenMP threads over the whole run, in ms (team_cpu.h);
+  // read once the pipeline has drained.
+  double stereoCpuMs() const { return stereo_cpu_ms_; }
+  double fusionCpuMs() const { return fusion_cpu_ms_; }
 
  private:
   void stereoStage();
   void fusionStage();
-  // Runs `stage` on this thread: its first exception is kept (rethrowIfFailed) and stops every
-  // stage; the stage's `output` is closed either way, which ends the next stage.
+  // Runs `stage` on this thread, named `name` (thread_name.h): its first exception is kept
+  // (rethrowIfFailed) and stops every stage; its CPU time goes to `cpu_ms`; the stage's `output`
+  // is closed either way, which ends the next stage.
   template <typename Output>
-  void runStage(void (FramePipeline::*stage)(), Output& output, const std::function<void()>& on_thread_start);
+  void runStage(const char* name, void (FramePipeline::*stage)(), Output& output, double& cpu_ms,
+                const std::function<void()>& on_thread_start);
   void join();
 
   const PipelineConfig config_;
@@ -79,6 +85,7 @@ class FramePipeline {
   BoundedQueue<FusedOutput> outputs_;
   StageFailure failure_;
   StageTimer stereo_timer_, fusion_timer_;
+  double stereo_cpu_ms_ = 0.0, fusion_cpu_ms_ = 0.0;  // written by the stage threads before they close
   std::atomic<size_t> processed_{0}, fused_{0};
   std::thread stereo_thread_, fusion_thread_;
 };

@@ -12,20 +12,26 @@
 #include <sstream>
 #include <thread>
 
+#include "common/cpu_clock.h"
 #include "common/error.h"
 #include "common/size_format.h"
+#include "common/thread_name.h"
 #include "pipeline/calibration/rectifier.h"
 #include "io/image/image_io.h"
 #include "pipeline/fusion/outlier_removal.h"
 #include "pipeline/runner/frame_pipeline.h"
 #include "pipeline/frame/frame_admission.h"
 #include "pipeline/runner/point_output.h"
+#include "pipeline/runner/team_cpu.h"
 
 namespace cenote::pipeline {
 namespace fs = std::filesystem;
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// The rows of the report's CPU table, in pipeline order.
+constexpr const char* kCpuRows[] = {"read_rectify", "stereo", "fusion", "output", "map", "other", "total"};
 
 // Dataset names of the frames in flight, by timestamp (a double copied unchanged through the
 // stages, so equality holds). Entries leave as frames come out (or are passed by), so the table
@@ -76,6 +82,11 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   std::atomic<size_t> read_done{0};
   std::atomic<bool> interrupted{false};
   StageTimer read_timer, output_timer, sink_timer;
+  // CPU time (cpu_clock.h): the reader's team, the output thread's own in each of its two stages,
+  // and the output thread's OpenMP pool (the map's ray marching) as it was before the run.
+  double read_cpu_ms = 0.0, output_cpu_ms = 0.0, sink_cpu_ms = 0.0;
+  const double process_cpu0_ms = processCpuMs();
+  const double pool_cpu0_ms = teamCpuMs() - threadCpuMs();
   FramePipeline stages(config_, rc.write_depth);
   StageFailure failure;
   FrameNames names;
@@ -84,6 +95,7 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   const std::unique_ptr<FrameCursor> cursor = dataset.frames();
   size_t frames_read = 0;
   std::thread reader([&] {
+    nameThisThread("cenote-read");
     try {
       FrameAdmission admission(rectifier, rc);
       for (size_t i = 0; (rc.max_frames == 0 || i < static_cast<size_t>(rc.max_frames)) && !failure.failed();
@@ -118,6 +130,7 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
       failure.set(std::current_exception());
       stages.abort();
     }
+    read_cpu_ms = teamCpuMs();  // joined before it is read
     stages.close();
   });
 
@@ -125,6 +138,7 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   try {
     while (std::optional<FusedOutput> item = stages.pop()) {
       const auto t0 = Clock::now();
+      const double cpu0_ms = threadCpuMs();
       if (rc.write_depth) {
         const std::string base = (fs::path(out_dir) / "depth" / names.take(item->frame.t_s)).string();
         io::writePfm(base + ".depth.pfm", item->frame.depth);
@@ -137,10 +151,13 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
       }
       points.append(item->points);
       output_timer.add(msSince(t0));
+      const double cpu1_ms = threadCpuMs();
+      output_cpu_ms += cpu1_ms - cpu0_ms;
       if (sink) {
         const auto t1 = Clock::now();
         sink(item->points, item->frame.T_world_cam);
         sink_timer.add(msSince(t1));
+        sink_cpu_ms += threadCpuMs() - cpu1_ms;
       }
       if (progress) progress(read_done.load(), total);
     }
@@ -183,6 +200,22 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
   report.stages["fusion"] = stages.fusionTiming();
   report.stages["output"] = output_timer.summary();
   if (sink) report.stages["map"] = sink_timer.summary();
+  // The output thread's OpenMP pool works only inside the sink (the map's ray marching).
+  sink_cpu_ms += teamCpuMs() - threadCpuMs() - pool_cpu0_ms;
+  const double frames = static_cast<double>(std::max<size_t>(report.frames_processed, 1));
+  const double total_cpu_ms = processCpuMs() - process_cpu0_ms;
+  const std::array<std::pair<const char*, double>, 5> cpu = {{{"read_rectify", read_cpu_ms},
+                                                              {"stereo", stages.stereoCpuMs()},
+                                                              {"fusion", stages.fusionCpuMs()},
+                                                              {"output", output_cpu_ms},
+                                                              {"map", sink_cpu_ms}}};
+  double staged_ms = 0.0;
+  for (const auto& [name, ms] : cpu) {
+    if (report.stages.count(name)) report.cpu_ms_per_frame[name] = ms / frames;
+    staged_ms += ms;
+  }
+  report.cpu_ms_per_frame["other"] = (total_cpu_ms - staged_ms) / frames;
+  report.cpu_ms_per_frame["total"] = total_cpu_ms / frames;
   return report;
 }
 
@@ -218,6 +251,11 @@ std::string RunReport::toJson() const {
     stage_json[name] = {{"median_ms", s.median_ms}, {"p95_ms", s.p95_ms}, {"mean_ms", s.mean_ms}, {"frames", s.frames}};
   }
   j["stages"] = stage_json;
+  nlohmann::ordered_json cpu_json = nlohmann::ordered_json::object();
+  for (const char* name : kCpuRows) {
+    if (const auto it = cpu_ms_per_frame.find(name); it != cpu_ms_per_frame.end()) cpu_json[name] = it->second;
+  }
+  j["cpu_ms_per_frame"] = cpu_json;
   return j.dump(2) + "\n";
 }
 
@@ -240,14 +278,24 @@ std::string RunReport::toTable() const {
   }
   if (!source_truncation.empty()) t << "source cut short: " << source_truncation << "\n";
   for (const std::string& damage : source_skipped) t << "source damaged: " << damage << "\n";
-  t << "stage           median ms    p95 ms   frames\n";
-  for (const char* name : {"read_rectify", "stereo", "fusion", "output", "map"}) {
+  t << "stage           median ms    p95 ms   frames   CPU ms/frame\n";
+  for (const char* name : kCpuRows) {
     const auto it = stages.find(name);
-    if (it == stages.end()) continue;
+    const auto cpu = cpu_ms_per_frame.find(name);
+    if (it == stages.end() && cpu == cpu_ms_per_frame.end()) continue;
     char line[128];
-    std::snprintf(line, sizeof(line), "%-14s %10.1f %9.1f %8zu\n", name, it->second.median_ms, it->second.p95_ms,
-                  it->second.frames);
+    if (it != stages.end()) {
+      std::snprintf(line, sizeof(line), "%-14s %10.1f %9.1f %8zu", name, it->second.median_ms, it->second.p95_ms,
+                    it->second.frames);
+    } else {
+      std::snprintf(line, sizeof(line), "%-14s %10s %9s %8s", name, "", "", "");
+    }
     t << line;
+    if (cpu != cpu_ms_per_frame.end()) {
+      std::snprintf(line, sizeof(line), " %14.1f", cpu->second);
+      t << line;
+    }
+    t << "\n";
   }
   t << "end to end: " << fps << " fps over " << wall_s << " s, peak memory " << formatBytes(peak_memory_mb * 1048576.0)
     << ", " << points_written << " points\n";

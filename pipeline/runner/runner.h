@@ -59,8 +59,13 @@ struct RunReport {
   double fps = 0.0;                            // frames processed per second of wall time
   double peak_memory_mb = 0.0;                 // resident set, high-water mark of the process
   std::map<std::string, StageSummary> stages;  // read_rectify, stereo, fusion, output (+ map: the sink)
+  // CPU ms per frame processed (user + system, every thread; common/cpu_clock.h): of each stage
+  // above, with its OpenMP threads; "other" (the rest of the process during the run: OpenCV's
+  // and TBB's pools, the queues, the progress bar) and "total" (the whole process during the run).
+  std::map<std::string, double> cpu_ms_per_frame;
 
-  // JSON object with the keys above ("stages": {name: {median_ms, p95_ms, mean_ms, frames}}).
+  // JSON object with the keys above ("stages": {name: {median_ms, p95_ms, mean_ms, frames}},
+  // "cpu_ms_per_frame": {name: ms}).
   std::string toJson() const;
   // A table for a person at a terminal.
   std::string toTable() const;
