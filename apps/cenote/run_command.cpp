@@ -112,7 +112,11 @@ std::unique_ptr<pipeline::StereoDataset> openDataset(const RunOptions& o) {
 pipeline::CameraTrajectory poseTopicTrajectory(const pipeline::StereoDataset& dataset, const RunOptions& o,
                                                pipeline::PoseFrame pose_frame) {
   pipeline::CameraTrajectory out;
-  const io::Trajectory poses = pipeline::readPoseTopic(o.dataset, o.pose_topic, o.tf_parent, o.tf_child);
+  // The left images' stamps come in the same pass: a VIO's keyframe odometry poses only some of them.
+  const auto* recording = dynamic_cast<const pipeline::RecordingDataset*>(&dataset);
+  std::vector<double> frame_times;
+  const io::Trajectory poses = pipeline::readPoseTopic(o.dataset, o.pose_topic, o.tf_parent, o.tf_child,
+                                                       recording ? recording->leftTopic() : "", &frame_times);
   out.file_describes_body = pose_frame == pipeline::PoseFrame::kBody;
   const bool extrinsics_matter = !dataset.T_body_cam().isApprox(Eigen::Isometry3d::Identity(), 1e-12);
   out.frame_assumed = pose_frame == pipeline::PoseFrame::kAuto && extrinsics_matter;
@@ -121,6 +125,7 @@ pipeline::CameraTrajectory poseTopicTrajectory(const pipeline::StereoDataset& da
                "if they are body (IMU) poses";
   }
   out.trajectory = out.file_describes_body ? poses.transformedBy(dataset.T_body_cam()) : poses;
+  out.keyframes_only = pipeline::isKeyframeTrajectory(poses, std::move(frame_times));
   return out;
 }
 

@@ -266,7 +266,7 @@ std::unique_ptr<FrameCursor> RecordingDataset::frames() const {
 }
 
 io::Trajectory readPoseTopic(const std::string& path, const std::string& topic, const std::string& parent,
-                             const std::string& child) {
+                             const std::string& child, const std::string& image_topic, std::vector<double>* image_times) {
   const std::unique_ptr<io::Recording> rec = io::openRecording(path);
   const io::TopicInfo* t = findTopic(*rec, topic);
   if (t == nullptr) {
@@ -286,7 +286,14 @@ io::Trajectory readPoseTopic(const std::string& path, const std::string& topic, 
   }
   std::vector<io::StampedPose> poses;
   io::RecordedMessage m;
-  while (rec->next({topic}, m)) {
+  const bool with_images = image_times != nullptr && !image_topic.empty() && image_topic != topic;
+  const std::vector<std::string> wanted = with_images ? std::vector<std::string>{topic, image_topic}
+                                                      : std::vector<std::string>{topic};
+  while (rec->next(wanted, m)) {
+    if (with_images && m.topic->name == image_topic) {
+      image_times->push_back(seconds(imageStampNs(m)));
+      continue;
+    }
     const std::optional<io::RosPose> pose = io::decodePose(m, parent, child);
     if (!pose) continue;
     const double t_s = seconds(pose->stamp_ns);

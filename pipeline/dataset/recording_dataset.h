@@ -18,6 +18,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "io/bag/recording.h"
 #include "io/bag/ros_messages.h"
@@ -70,10 +71,13 @@ class RecordingDataset final : public StereoDataset {
 // The poses of `topic` in `path` (nav_msgs/Odometry, geometry_msgs/PoseStamped,
 // geometry_msgs/TransformStamped, tf2_msgs/TFMessage), by header stamp; for a TFMessage the
 // transforms from `parent` to `child` (required then; leading '/' ignored).
+// In the same pass, when `image_times` is given, the header stamps (seconds) of `image_topic`'s messages,
+// the frames the poses are to cover (for isKeyframeTrajectory: a VIO's keyframe odometry).
 // @throws Error naming the topic when it is missing, not a pose type, has no poses (of that pair),
 //         or its stamps do not increase.
 io::Trajectory readPoseTopic(const std::string& path, const std::string& topic, const std::string& parent = "",
-                             const std::string& child = "");
+                             const std::string& child = "", const std::string& image_topic = "",
+                             std::vector<double>* image_times = nullptr);
 
 // A stereo calibration from the CameraInfo of both cameras (K, D, R, P of each; ROS's convention:
 // R rotates the raw camera into the rectified one, the right P[3] = -fx' * B).

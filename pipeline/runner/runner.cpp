@@ -347,15 +347,19 @@ CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const Trajec
 }
 
 bool isKeyframeTrajectory(const io::Trajectory& trajectory, const StereoDataset& dataset) {
-  constexpr double kSameTime = 1e-6;
-  const std::vector<io::StampedPose>& poses = trajectory.poses();
-  if (poses.size() < 2 || dataset.size() == 0) return false;
   std::vector<double> frames(dataset.size());
   try {
     for (size_t i = 0; i < frames.size(); ++i) frames[i] = dataset.timestamp(i);
   } catch (const FailedPreconditionError&) {
     return false;  // a recording, read front to back only: its frame times are known only in the run
   }
+  return isKeyframeTrajectory(trajectory, std::move(frames));
+}
+
+bool isKeyframeTrajectory(const io::Trajectory& trajectory, std::vector<double> frames) {
+  constexpr double kSameTime = 1e-6;
+  const std::vector<io::StampedPose>& poses = trajectory.poses();
+  if (poses.size() < 2 || frames.empty()) return false;
   std::sort(frames.begin(), frames.end());
   for (const io::StampedPose& p : poses) {
     const auto at = std::lower_bound(frames.begin(), frames.end(), p.t_s - kSameTime);

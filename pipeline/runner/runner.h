@@ -124,6 +124,8 @@ struct CameraTrajectory {
 // last pose. Interpolating between keyframes seconds apart would invent poses. False for a dataset
 // whose frames are known only when read front to back (a recording).
 bool isKeyframeTrajectory(const io::Trajectory& trajectory, const StereoDataset& dataset);
+// The same test against frame times (seconds, any order): a recording's, read with its pose topic.
+bool isKeyframeTrajectory(const io::Trajectory& trajectory, std::vector<double> frame_times);
 
 // The trajectory of the dataset's left camera: `request.path` (read the way the dataset reads its
 // own files, StereoDataset::trajectoryFile: a KITTI sequence times KITTI poses with its times.txt

@@ -4,8 +4,9 @@
 # map as the folder it came from: the same voxels (and the same points.ply, byte for byte) with raw
 # or PNG images and uncompressed, bz2 or lz4 chunks, and with the calibration from CameraInfo and
 # poses from TF; at least 92 % voxel agreement with JPEG at quality 95. Jittered right stamps with one right image
-# dropped: every other frame paired, one unpaired image counted. A bag cut mid-chunk runs and says
-# where it stopped. Memory does not grow with the bag. Bad input: the exact messages.
+# dropped: every other frame paired, one unpaired image counted. A keyframe-only pose topic gives
+# keyframe-only processing. A bag cut mid-chunk runs and says where it stopped; a damaged chunk is
+# stepped over and named. Memory does not grow with the bag. Bad input: the exact messages.
 # Usage: cli_bag_test.sh <cenote binary> <source dir>
 set -u
 cenote=$1
@@ -78,6 +79,25 @@ to_bag "$work/jitter.bag" --images raw --right-jitter-ms 3 --drop-right 5
 bag_run jitter "$work/jitter.bag" --calibration "$calib"
 [ "$(json "$work/jitter-out/report.json" 'd["source"]["unpaired_images"]')" = 1 ] || fail "jitter: unpaired images not 1"
 [ "$(json "$work/jitter-out/report.json" 'd["frames_in"]')" = $((frames - 1)) ] || fail "jitter: frames_in not $((frames - 1))"
+
+# A keyframe-only pose topic (a VIO's keyframe odometry: the left camera's pose at every 5th image):
+# keyframe-only processing, said in the report, with the points of the folder run on the same
+# keyframes as a TUM file.
+to_bag "$work/keyframes.bag" --images raw --keyframe-poses 5
+run keyframes --dataset "$work/keyframes.bag" --pose-topic /odom --pose-frame camera --calibration "$calib"
+awk '!/^#/ { if (k++ % 5 == 0) print }' "$work/dive/groundtruth/cam0.tum" >"$work/keyframes.tum"
+run keyframes-folder --dataset "$work/dive" --trajectory "$work/keyframes.tum" --pose-frame camera
+keyframes=$(( (frames + 4) / 5 ))
+for name in keyframes keyframes-folder; do
+  [ "$(json "$work/$name-out/report.json" 'd.get("pose_keyframes_only")')" = $keyframes ] || fail "$name: keyframe-only poses not reported"
+  [ "$(json "$work/$name-out/report.json" 'd["frames_processed"]')" = $keyframes ] || fail "$name: not the $keyframes keyframes processed"
+  [ "$(json "$work/$name-out/report.json" 'd["frames_skipped"]["no_pose"]')" = $((frames - keyframes)) ] ||
+    fail "$name: $((frames - keyframes)) frames without pose expected"
+done
+grep -q "note: the poses are keyframes only ($keyframes): only the frames at a keyframe are processed" "$work/keyframes.txt" ||
+  fail "keyframe-only pose topic: no note"
+cmp -s "$work/keyframes-folder-out/points.ply" "$work/keyframes-out/points.ply" || fail "keyframes: points differ from the folder's"
+[ "$(json "$work/raw-none-out/report.json" "'pose_keyframes_only' in d")" = False ] || fail "200 Hz poses taken as keyframes"
 
 # A bag cut mid-chunk (the recorder killed): every complete message before the cut, and where.
 size=$(stat -c %s "$work/raw-none.bag")

@@ -3,6 +3,7 @@
 
 Usage: euroc_to_bag.py EUROC_DIR OUT.bag [--images raw|png|jpeg] [--compression none|bz2|lz4]
                        [--right-jitter-ms J] [--drop-right N,...] [--camera-info] [--poses odometry|tf]
+                       [--pose-of body|camera] [--keyframe-poses N]
   raw:  sensor_msgs/Image (bgr8 or mono8, the PNGs' pixels) on /left/image_raw and /right/image_raw
   png:  sensor_msgs/CompressedImage holding the PNG files' bytes, format "png", on
         /slave1/image_raw/compressed and /slave2/image_raw/compressed (the SVIn2 rig's topics)
@@ -15,6 +16,8 @@ Usage: euroc_to_bag.py EUROC_DIR OUT.bag [--images raw|png|jpeg] [--compression 
   --poses: the ground-truth body poses as nav_msgs/Odometry on /odom (frame world, child body), or
         as tf2_msgs/TFMessage world -> body on /tf
   --pose-of camera: the left camera's poses instead (T_world_body * T_BS of cam0, child cam0)
+  --keyframe-poses N: only the left camera's poses at every Nth image (cenote sim's groundtruth/cam0.tum,
+        child cam0), as a VIO's keyframe odometry (SVIn2) publishes them
 Messages are written in stamp order; the log time is the header stamp.
 """
 import argparse
@@ -40,6 +43,7 @@ ap.add_argument("--drop-right", default="")
 ap.add_argument("--camera-info", action="store_true")
 ap.add_argument("--poses", default="odometry", choices=["odometry", "tf"])
 ap.add_argument("--pose-of", default="body", choices=["body", "camera"])
+ap.add_argument("--keyframe-poses", type=int, default=0)
 a = ap.parse_args()
 mav0 = os.path.join(a.euroc, "mav0") if os.path.isdir(os.path.join(a.euroc, "mav0")) else a.euroc
 
@@ -131,11 +135,20 @@ for side, (cam, topic) in enumerate(zip(("cam0", "cam1"), names)):
         events.append((stamp, 1 + side, topic, path))
         if camera_infos is not None:
             events.append((stamp, 3 + side, infos[side], None))
-for line in open(os.path.join(mav0, "state_groundtruth_estimate0", "data.csv")):
-    if line.startswith("#") or not line.strip():
-        continue
-    v = line.strip().split(",")
-    events.append((int(v[0]), 0, "/odom" if a.poses == "odometry" else "/tf", v))
+pose_topic = "/odom" if a.poses == "odometry" else "/tf"
+if a.keyframe_poses:  # the left camera's poses (cenote sim's groundtruth/cam0.tum) at every Nth image
+    rows = [l.split() for l in open(os.path.join(a.euroc, "groundtruth", "cam0.tum")) if not l.startswith("#")]
+    for k, r in enumerate(rows):
+        if k % a.keyframe_poses == 0:
+            sec, frac = r[0].split(".")
+            ns = int(sec) * 1000000000 + int(frac.ljust(9, "0"))
+            events.append((ns, 0, pose_topic, [ns] + r[1:4] + [r[7]] + r[4:7]))  # as the CSV: p, then qw qx qy qz
+else:
+    for line in open(os.path.join(mav0, "state_groundtruth_estimate0", "data.csv")):
+        if line.startswith("#") or not line.strip():
+            continue
+        v = line.strip().split(",")
+        events.append((int(v[0]), 0, pose_topic, v))
 events.sort(key=lambda e: (e[0], e[1]))
 
 with rosbag.Bag(a.out, "w", compression=a.compression) as bag:
@@ -143,8 +156,8 @@ with rosbag.Bag(a.out, "w", compression=a.compression) as bag:
         t = time_of(stamp)
         if order == 0:
             p = [float(x) for x in payload[1:8]]  # px py pz qw qx qy qz, as the CSV has them
-            child = "body"
-            if a.pose_of == "camera":
+            child = "cam0" if a.keyframe_poses else "body"
+            if a.pose_of == "camera" and not a.keyframe_poses:
                 T = np.eye(4)
                 T[:3, :3] = quat_to_matrix(*p[3:7])
                 T[:3, 3] = p[0:3]
