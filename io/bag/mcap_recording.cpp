@@ -38,8 +38,10 @@ class McapRecording final : public Recording {
   const std::vector<TopicInfo>& topics() const override { return topics_; }
   bool next(const std::vector<std::string>& wanted, RecordedMessage& out) override;
   std::string truncation() const override { return truncation_; }
+  std::vector<std::string> skipped() const override { return skipped_; }
 
  private:
+  void noteSkips();
   void define(std::uint8_t op, Fields& f, bool create_topics);
   bool readSummary();
   void scan();
@@ -50,6 +52,7 @@ class McapRecording final : public Recording {
   std::unordered_map<std::uint16_t, SchemaInfo> schemas_;
   std::unordered_map<std::uint16_t, int> channel_topic_;  // channel id -> index in topics_, -1: not a topic
   std::string truncation_;
+  std::vector<std::string> skipped_;
   std::optional<RecordCursor> cursor_;
 };
 
@@ -253,9 +256,31 @@ bool McapRecording::readSummary() {
   return true;
 }
 
+// The cursor's new skipped chunks, as a ROS 1 bag names them: "<damage>; skipped the chunk (of its N
+// messages: n on /topic, ...)", the channels by topic.
+void McapRecording::noteSkips() {
+  for (std::size_t i = skipped_.size(); i < cursor_->skipped().size(); ++i) {
+    const RecordCursor::SkippedChunk& chunk = cursor_->skipped()[i];
+    std::string what = chunk.error + "; skipped the chunk";
+    std::uint64_t total = 0;
+    std::string list;
+    for (const auto& [channel, n] : chunk.messages) {
+      const auto it = channel_topic_.find(channel);
+      const std::string name = it == channel_topic_.end() || it->second < 0 ? "channel " + std::to_string(channel)
+                                                                            : topics_[it->second].name;
+      list += (list.empty() ? " " : ", ") + std::to_string(n) + " on " + name;
+      total += n;
+    }
+    what += chunk.messages.empty() ? " (its messages unknown: no message index follows it)"
+                                   : " (of its " + std::to_string(total) + " messages:" + list + ")";
+    skipped_.push_back(what);
+  }
+}
+
 bool McapRecording::next(const std::vector<std::string>& wanted, RecordedMessage& out) {
   RawMessage raw;
   while (cursor_->next(raw)) {
+    noteSkips();
     const auto it = channel_topic_.find(raw.channel);
     if (it == channel_topic_.end() || it->second < 0) continue;
     const TopicInfo& t = topics_[it->second];
@@ -266,6 +291,7 @@ bool McapRecording::next(const std::vector<std::string>& wanted, RecordedMessage
     out.file_offset = raw.offset;
     return true;
   }
+  noteSkips();
   return false;
 }
 

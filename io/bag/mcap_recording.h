@@ -11,7 +11,10 @@
 // - A file cut short (no footer, a partial record): every complete message before the cut; a cut
 //   uncompressed chunk gives the messages wholly inside what is left of it. truncation() says where
 //   ("cut at byte 123456 inside a chunk record: no footer; 812 complete messages read").
-// Errors (IoError naming the file and the record's offset): a CRC mismatch, an unknown compression, a
+// - A chunk that does not decompress, fails its CRC or holds a malformed record is skipped and listed in
+//   skipped() (the file, the chunk's byte offset, the error, the messages per topic of the Message Index
+//   records after it); reading goes on with the next chunk.
+// Errors (IoError naming the file and the record's offset): an unknown compression, a top-level
 // record whose fields run past its end, a chunk or message larger than 1 GiB.
 // Threads: one Recording per thread.
 #pragma once

@@ -16,6 +16,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/error.h"
@@ -154,8 +155,12 @@ class RecordCursor {
             return true;
           }
           if (op == kChunk) {
-            openChunk(fields, at);
-            in_chunk_ = true;
+            try {
+              openChunk(fields, at);
+              in_chunk_ = true;
+            } catch (const Malformed& m) {
+              skip(at, "chunk: " + m.what);
+            }
             continue;
           }
           on_definition_(op, fields, at);
@@ -170,6 +175,13 @@ class RecordCursor {
   /// Empty when the data section ended properly; otherwise where reading stopped.
   const std::string& cut() const { return cut_; }
   const std::string& path() const { return path_; }
+  /// The chunks stepped over, in file order: the error, and the messages per channel the chunk held
+  /// (from the Message Index records after it; empty when there are none).
+  struct SkippedChunk {
+    std::string error;
+    std::vector<std::pair<std::uint16_t, std::uint64_t>> messages;
+  };
+  const std::vector<SkippedChunk>& skipped() const { return skipped_; }
 
  private:
   static std::string recordName(std::uint8_t op) {
@@ -255,8 +267,8 @@ class RecordCursor {
                         std::to_string(h.uncompressed_size)};
     } else if (h.compression == "lz4") {
       lz4Frame(records);
-    } else {
-      throw Malformed{"unknown compression '" + h.compression + "' (this reader reads none, zstd and lz4)"};
+    } else {  // not damage of this chunk: an error, not a skip
+      fail(at, "chunk: unknown compression '" + h.compression + "' (this reader reads none, zstd and lz4)");
     }
     if (h.crc != 0) {
       const std::uint32_t crc = static_cast<std::uint32_t>(libdeflate_crc32(0, chunk_.data(), chunk_.size()));
@@ -317,8 +329,8 @@ class RecordCursor {
         for (int i = 0; i < 8; ++i) len |= std::uint64_t{chunk_[chunk_pos_ + 1 + i]} << (8 * i);
       if (left < kRecordHeader || len > left - kRecordHeader) {
         if (partial_chunk_) return false;  // the cut; cut_ says so
-        fail(chunk_offset_, "chunk: its record at byte " + std::to_string(chunk_pos_) + " of " +
-                                std::to_string(chunk_.size()) + " uncompressed bytes runs past its end");
+        return skip(chunk_offset_, "chunk: its record at byte " + std::to_string(chunk_pos_) + " of " +
+                                       std::to_string(chunk_.size()) + " uncompressed bytes runs past its end");
       }
       const std::uint8_t op = chunk_[chunk_pos_];
       Fields fields(std::span<const std::uint8_t>(chunk_).subspan(chunk_pos_ + kRecordHeader, len));
@@ -331,10 +343,33 @@ class RecordCursor {
         }
         if (op == kSchema || op == kChannel) on_definition_(op, fields, chunk_offset_);
       } catch (const Malformed& m) {
-        fail(chunk_offset_,
-             "chunk: " + recordName(op) + " at byte " + std::to_string(inner) + " of its records: " + m.what);
+        return skip(chunk_offset_,
+                    "chunk: " + recordName(op) + " at byte " + std::to_string(inner) + " of its records: " + m.what);
       }
     }
+    return false;
+  }
+
+  // A chunk that does not decompress or holds a malformed record: listed in skipped(), with the
+  // message counts of the Message Index records that follow it in the file, and stepped over (the
+  // rest of it, when some of its messages went out already).
+  bool skip(std::uint64_t at, const std::string& what) {
+    SkippedChunk s{path_ + ": " + recordAt(at, what), {}};
+    std::uint8_t head[kRecordHeader + 6];  // opcode, length, channel id, entries' byte length
+    for (std::uint64_t p = pos_; file_size_ - p >= sizeof head;) {
+      readAt(p, head, sizeof head);
+      if (head[0] != kMessageIndex) break;
+      std::uint64_t len = 0;
+      for (int i = 0; i < 8; ++i) len |= std::uint64_t{head[1 + i]} << (8 * i);
+      if (len < 6 || len > file_size_ - p - kRecordHeader) break;
+      std::uint32_t bytes = 0;
+      for (int i = 0; i < 4; ++i) bytes |= std::uint32_t{head[kRecordHeader + 2 + i]} << (8 * i);
+      const auto channel = static_cast<std::uint16_t>(head[kRecordHeader] | head[kRecordHeader + 1] << 8);
+      if (bytes >= 16) s.messages.emplace_back(channel, bytes / 16);
+      p += kRecordHeader + len;
+    }
+    skipped_.push_back(std::move(s));
+    chunk_pos_ = chunk_.size();
     return false;
   }
 
@@ -351,6 +386,7 @@ class RecordCursor {
   bool partial_chunk_ = false;
   bool done_ = false;
   std::string cut_;
+  std::vector<SkippedChunk> skipped_;
 };
 
 }  // namespace cenote::io::detail

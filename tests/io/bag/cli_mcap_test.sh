@@ -5,7 +5,7 @@
 # byte, and the same voxels as the folder it came from, with raw (sensor_msgs/Image) or PNG
 # (CompressedImage) images and uncompressed, zstd or lz4 chunks; so does a ROS 2 sqlite3 bag of the
 # same messages (mcap_to_db3.py), with or without its metadata.yaml. A recording cut short runs to the
-# cut and says where it stopped.
+# cut and says where it stopped. A damaged chunk is skipped and named, the other frames as in the folder.
 # Usage: cli_mcap_test.sh <cenote binary> <source dir> <build dir of tests/io/bag/gen (node_modules)>
 set -u
 cenote=$1
@@ -81,3 +81,33 @@ processed=$(json "$work/cut-out/report.json" 'd["frames_processed"]')
 grep -q "source cut short: cut at byte $((size * 6 / 10)) inside the chunk record at byte" "$work/cut.txt" ||
   fail "the cut is not reported: $(grep -i cut "$work/cut.txt")"
 echo "MCAP: the folder's map with raw and PNG images, none/zstd/lz4 chunks; a cut recording read to the cut"
+
+# A damaged chunk (tests/io/bag/damage_chunk.py: bytes of an uncompressed chunk's records, of a zstd
+# chunk's compressed data): skipped, counted and named in the report; the run goes on, and its points
+# are those of the folder without the frames and poses the chunk held (byte for byte).
+for variant in "raw-none record" "raw-zstd data"; do
+  set -- $variant
+  name=bad-$2
+  $py "$source_dir/tests/io/bag/damage_chunk.py" "$work/$1.mcap" "$work/$name.mcap" --mode "$2" --euroc "$work/dive" \
+    --euroc-out "$work/$name-dive" >"$work/$name.json" || fail "damage_chunk.py $name"
+  mcap_run "$name" image_raw
+  run "$name-folder" --dataset "$work/$name-dive"
+  cmp -s "$work/$name-folder-out/points.ply" "$work/$name-out/points.ply" || fail "$name: points.ply differs from the trimmed folder's"
+  [ "$(json "$work/$name-out/report.json" 'd["frames_processed"]')" = "$(json "$work/$name-folder-out/report.json" 'd["frames_processed"]')" ] ||
+    fail "$name: frames processed differ from the trimmed folder's"
+  [ "$(json "$work/$name-out/report.json" 'd["source"]["damaged_chunks_skipped"]')" = 1 ] || fail "$name: damaged_chunks_skipped not 1"
+  skipped=$(json "$work/$name-out/report.json" 'd["source"]["skipped"][0]')
+  prefix="$work/$name.mcap: chunk at byte $(json "$work/$name.json" 'd["offset"]'): CRC mismatch: the chunk stores"
+  suffix="uncompressed bytes give"
+  [ $2 = record ] && prefix="$prefix $(json "$work/$name.json" 'd["stored_crc"]'), its $(json "$work/$name.json" 'd["size"]')" &&
+    suffix="$suffix $(json "$work/$name.json" 'd["actual_crc"]')"
+  # The counts per topic are those of the Message Index records after the chunk.
+  held=$(json "$work/$name.json" 'd["held_text"]')
+  case "$skipped" in
+    "$prefix "*"$suffix"*"; skipped the chunk ($held)") ;;
+    *) fail "$name: skipped '$skipped', expected '$prefix ... $suffix ...; skipped the chunk ($held)'" ;;
+  esac
+  [ $2 = record ] && [ "$skipped" != "$prefix $suffix; skipped the chunk ($held)" ] &&
+    fail "$name: skipped '$skipped', expected '$prefix $suffix; skipped the chunk ($held)'"
+done
+echo "MCAP: a damaged chunk skipped and named, the other frames as in the folder"
