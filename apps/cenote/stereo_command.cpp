@@ -140,7 +140,7 @@ void registerStereoCommand(CLI::App& app) {
   cmd->add_option("--left-topic", options->left_topic,
                   "Recording: left image topic (default: the first rig preset of bag.rigs found)");
   cmd->add_option("--right-topic", options->right_topic, "Recording: right image topic");
-  cmd->add_option("--calib", options->calib,
+  cmd->add_option("--calib,--calibration", options->calib,
                   "Stereo calibration: OpenCV YAML, EuRoC cam0/sensor.yaml (+ cam1), KITTI calib.txt, the paper's "
                   "intrinsics.yaml (raw pairs are rectified); with --dataset it replaces the dataset's (a "
                   "recording's CameraInfo topics)");
