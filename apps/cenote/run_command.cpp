@@ -14,6 +14,7 @@
 #include <memory>
 
 #include "apps/cenote/commands.h"
+#include "apps/cenote/dataset_source.h"
 #include "apps/cenote/progress_bar.h"
 #include "common/error.h"
 #include "pipeline/dataset/recording_dataset.h"
@@ -67,45 +68,18 @@ mapping::MapConfig mapConfig(const RunOptions& o) {
   return config;
 }
 
-// The `bag:` section of the configuration file (defaults without one).
-pipeline::RecordingConfig bagConfig(const RunOptions& o) {
-  pipeline::RecordingConfig config;
-  if (o.config.empty()) return config;
-  YamlSection root(loadYamlFile(o.config), "", o.config);
-  YamlSection section = root.section("bag");
-  config.read(section);
-  section.finish();
-  return config;
+// The dataset of the run, as `cenote stereo` opens one (dataset_source.h).
+DatasetSource datasetSource(const RunOptions& o) {
+  return {o.dataset,
+          o.format,
+          o.left,
+          o.right,
+          o.calibration,
+          o.config,
+          {{"--left", o.left}, {"--right", o.right}, {"--calibration", o.calibration}, {"--pose-topic", o.pose_topic}}};
 }
 
-// A ROS 2 bag folder: metadata.yaml and .db3 files, or .db3 files alone (a recorder that never finished).
-bool isRos2BagFolder(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::is_directory(path, ec)) return false;
-  for (const fs::directory_entry& e : fs::directory_iterator(path, ec))
-    if (e.path().extension() == ".db3") return true;
-  return false;
-}
-
-bool isRecording(const RunOptions& o) {
-  return o.format == "bag" ||
-         (o.format == "auto" && (std::filesystem::is_regular_file(o.dataset) || isRos2BagFolder(o.dataset)));
-}
-
-std::unique_ptr<pipeline::StereoDataset> openDataset(const RunOptions& o) {
-  if (isRecording(o)) {
-    return std::make_unique<pipeline::RecordingDataset>(
-        o.dataset, pipeline::RecordingTopics{o.left, o.right, o.calibration, "", ""}, bagConfig(o));
-  }
-  for (const auto& [flag, value] : {std::pair{"--left", &o.left}, std::pair{"--right", &o.right},
-                                    std::pair{"--calibration", &o.calibration}, std::pair{"--pose-topic", &o.pose_topic}}) {
-    if (!value->empty()) {
-      throw Error(std::string(flag) + " is for recordings (.bag, .mcap, a ROS 2 bag); " + o.dataset + " is a folder");
-    }
-  }
-  return pipeline::openDataset(o.dataset, pipeline::parseDatasetFormat(o.format));
-}
+bool isRecording(const RunOptions& o) { return apps::isRecording(datasetSource(o)); }
 
 // The poses of a recording's pose topic, as the raw left camera's (composed with T_body_cam when
 // they are body poses).
@@ -157,7 +131,7 @@ struct CorrectionReplay {
 void run(const RunOptions& o) {
   pipeline::PipelineConfig config = makeConfig(o);
   if (!o.corrections.empty() && o.map.empty()) throw Error("--corrections " + o.corrections + " needs --map");
-  const std::unique_ptr<pipeline::StereoDataset> dataset = openDataset(o);
+  const std::unique_ptr<pipeline::StereoDataset> dataset = openDatasetSource(datasetSource(o));
   if (!o.pose_topic.empty() && !o.trajectory.empty()) throw Error("give --pose-topic or --trajectory, not both");
   if (isRecording(o) && o.pose_topic.empty() && o.trajectory.empty()) {
     throw Error("no poses for recording " + o.dataset + ": give --pose-topic TOPIC (`cenote bag info " + o.dataset +

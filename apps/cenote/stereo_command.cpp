@@ -2,9 +2,12 @@
 #include <algorithm>
 #include <chrono>
 #include <iostream>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "apps/cenote/commands.h"
+#include "apps/cenote/dataset_source.h"
 #include "apps/cenote/subcommand.h"
 #include "common/error.h"
 #include "common/median.h"
@@ -18,6 +21,8 @@ namespace {
 
 struct StereoOptions {
   std::string left, right, calib, config;
+  std::string dataset, format = "auto", left_topic, right_topic;  // a dataset source instead of two images
+  int frame = -1;
   std::string out_disparity, out_confidence, out_depth, out_preview;
   std::string cost, search;
   int disparities = 0, min_disparity = -1, window = 0, paths = 0, repeat = 0;
@@ -41,23 +46,52 @@ pipeline::StereoConfig makeConfig(const StereoOptions& o) {
   return config;
 }
 
+// The pair to match: two image files, or frame --frame of --dataset (images as recorded).
+pipeline::StereoFrame readPair(const StereoOptions& o, std::unique_ptr<pipeline::StereoDataset>& dataset) {
+  if (o.dataset.empty()) {
+    if (o.left.empty() || o.right.empty()) throw Error("stereo: give --left and --right images, or --dataset and --frame");
+    if (o.frame >= 0) throw Error("stereo: --frame needs --dataset");
+    for (const auto& [flag, value] : {std::pair{"--left-topic", &o.left_topic}, std::pair{"--right-topic", &o.right_topic}})
+      if (!value->empty()) throw Error(std::string("stereo: ") + flag + " needs --dataset");
+    pipeline::StereoFrame frame;
+    frame.left = io::readImage(o.left, cv::IMREAD_COLOR);
+    frame.right = io::readImage(o.right, cv::IMREAD_COLOR);
+    return frame;
+  }
+  if (!o.left.empty() || !o.right.empty()) throw Error("stereo: give --left/--right images or --dataset, not both");
+  if (o.frame < 0) throw Error("stereo: --dataset needs --frame N (the N-th stereo pair, from 0)");
+  // A recording takes --calib in place of its CameraInfo topics; a folder's own calibration is replaced below.
+  const DatasetSource source{o.dataset,
+                             o.format,
+                             o.left_topic,
+                             o.right_topic,
+                             o.calib,
+                             o.config,
+                             {{"--left-topic", o.left_topic}, {"--right-topic", o.right_topic}}};
+  dataset = openDatasetSource(source);
+  return loadNthFrame(*dataset, static_cast<size_t>(o.frame), o.dataset);
+}
+
 void run(const StereoOptions& o) {
   pipeline::StereoMatcher matcher(makeConfig(o));
-  pipeline::StereoFrame frame;
-  frame.left = io::readImage(o.left, cv::IMREAD_COLOR);
-  frame.right = io::readImage(o.right, cv::IMREAD_COLOR);
+  std::unique_ptr<pipeline::StereoDataset> dataset;
+  const pipeline::StereoFrame frame = readPair(o, dataset);
+  const std::string left_name = o.dataset.empty() ? o.left : "left image of frame " + std::to_string(o.frame);
+  const std::string right_name = o.dataset.empty() ? o.right : "right image of frame " + std::to_string(o.frame);
   double focal_px = o.focal_px, baseline_m = o.baseline_m;
   cv::Mat left = frame.left, right = frame.right;
-  if (!o.calib.empty()) {
-    const pipeline::Rectifier rectifier(pipeline::readCalibrationFile(o.calib, frame.left.size()));
+  if (!o.calib.empty() || dataset) {
+    const pipeline::Rectifier rectifier(o.calib.empty() ? dataset->calibration()
+                                                        : pipeline::readCalibrationFile(o.calib, frame.left.size()));
     const pipeline::RectifiedPair pair = rectifier.rectify(frame);
     left = pair.left;
     right = pair.right;
     focal_px = pair.geometry.fx;
     baseline_m = pair.geometry.baseline_m;
   } else if (left.size() != right.size()) {
-    throw Error("stereo: right image " + o.right + " is " + std::to_string(right.cols) + "x" + std::to_string(right.rows) +
-                " but left image " + o.left + " is " + std::to_string(left.cols) + "x" + std::to_string(left.rows));
+    throw Error("stereo: right image " + right_name + " is " + std::to_string(right.cols) + "x" +
+                std::to_string(right.rows) + " but left image " + left_name + " is " + std::to_string(left.cols) + "x" +
+                std::to_string(left.rows));
   }
   if (!o.out_depth.empty() && !(focal_px > 0.0 && baseline_m > 0.0)) {
     throw Error("stereo: --out-depth needs --calib (or --focal-px and --baseline-m)");
@@ -95,12 +129,22 @@ void run(const StereoOptions& o) {
 void registerStereoCommand(CLI::App& app) {
   const auto [cmd, options] = addSubcommand<StereoOptions>(app, "stereo",
                                                            "Disparity, confidence and depth of one stereo pair", run);
-  cmd->add_option("--left", options->left, "Left image")->required();
-  cmd->add_option("--right", options->right, "Right image")->required();
-  cmd->add_option(
-      "--calib", options->calib,
-      "Stereo calibration: OpenCV YAML, EuRoC cam0/sensor.yaml (+ cam1), KITTI calib.txt (raw pairs are rectified)");
-  cmd->add_option("--config", options->config, "YAML file with a `stereo:` section");
+  cmd->add_option("--left", options->left, "Left image");
+  cmd->add_option("--right", options->right, "Right image");
+  cmd->add_option("--dataset", options->dataset,
+                  "Instead of --left/--right: a dataset as `cenote run` reads it (EuRoC, KITTI, the paper's layout, "
+                  "ROS 1 bag, MCAP, ROS 2 bag), its pair --frame rectified with its calibration (or --calib)");
+  cmd->add_option("--format", options->format, "Dataset layout (auto: a file or a ROS 2 bag folder is a recording)")
+      ->check(CLI::IsMember({"auto", "euroc", "kitti", "paper", "bag"}));
+  cmd->add_option("--frame", options->frame, "Dataset: the stereo pair to match, from 0")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--left-topic", options->left_topic,
+                  "Recording: left image topic (default: the first rig preset of bag.rigs found)");
+  cmd->add_option("--right-topic", options->right_topic, "Recording: right image topic");
+  cmd->add_option("--calib,--calibration", options->calib,
+                  "Stereo calibration: OpenCV YAML, EuRoC cam0/sensor.yaml (+ cam1), KITTI calib.txt, the paper's "
+                  "intrinsics.yaml (raw pairs are rectified); with --dataset it replaces the dataset's (a "
+                  "recording's CameraInfo topics)");
+  cmd->add_option("--config", options->config, "YAML file with a `stereo:` section (and `bag:` for a recording)");
   cmd->add_option("--disparities", options->disparities, "Number of disparities (multiple of 16)");
   cmd->add_option("--min-disparity", options->min_disparity, "First disparity searched");
   cmd->add_option("--cost", options->cost, "Matching cost")->check(CLI::IsMember({"sad", "census"}));

@@ -123,6 +123,47 @@ done
 expect_error 1 "cam1/sensor.yaml: an EuRoC / Kalibr sensor.yaml describes one camera; give the left camera's" stereo --left "$work/left.png" \
   --right "$work/right.png" --calib "$work/mav0/cam1/sensor.yaml" --out-disparity "$work/x.pfm"
 
+# 6. A pair of a dataset (`--dataset X --frame N`), opened as `cenote run` opens it: a simulated dive
+#    converted to ROS 1 bags by ROS's own rosbag gives the same disparity, byte for byte, as frame 2's
+#    PNG files of the folder with its calibration file; so do the folder itself and a bag of PNG
+#    CompressedImages calibrated by its CameraInfo topics alone (cv2.stereoRectify's K, D, R, P).
+simulate_reef 6 "$work/dive"
+to_bag() { /usr/bin/python3 "$source_dir/tests/io/bag/euroc_to_bag.py" "$work/dive" "$@" || fail "euroc_to_bag.py $*"; }
+to_bag "$work/raw.bag" --images raw
+to_bag "$work/info.bag" --images png --camera-info
+frame2=$(ls "$work/dive/mav0/cam0/data" | sort | sed -n 3p)
+frame1=$(ls "$work/dive/mav0/cam0/data" | sort | sed -n 2p)
+sensor="$work/dive/mav0/cam0/sensor.yaml"
+stereo_of() {  # stereo_of OUT ARGS...: cenote stereo ARGS --out-disparity OUT, or fail
+  local out=$1
+  shift
+  "$cenote" stereo "$@" --out-disparity "$out" >"$work/ds.txt" 2>&1 || fail "stereo $* failed: $(cat "$work/ds.txt")"
+}
+stereo_of "$work/files2.pfm" --left "$work/dive/mav0/cam0/data/$frame2" --right "$work/dive/mav0/cam1/data/$frame2" --calib "$sensor"
+stereo_of "$work/files1.pfm" --left "$work/dive/mav0/cam0/data/$frame1" --right "$work/dive/mav0/cam1/data/$frame1" --calib "$sensor"
+cmp -s "$work/files1.pfm" "$work/files2.pfm" && fail "frames 1 and 2 of the dive give the same disparity"
+stereo_of "$work/bag2.pfm" --dataset "$work/raw.bag" --frame 2 --calib "$sensor"
+cmp "$work/bag2.pfm" "$work/files2.pfm" || fail "stereo --dataset raw.bag --frame 2 differs from frame 2's files"
+stereo_of "$work/topics2.pfm" --dataset "$work/raw.bag" --frame 2 --left-topic /left/image_raw \
+  --right-topic /right/image_raw --calibration "$sensor"
+cmp "$work/topics2.pfm" "$work/files2.pfm" || fail "stereo --dataset raw.bag --left-topic ... --frame 2 differs"
+stereo_of "$work/folder2.pfm" --dataset "$work/dive" --frame 2
+cmp "$work/folder2.pfm" "$work/files2.pfm" || fail "stereo --dataset <EuRoC folder> --frame 2 differs from its files"
+stereo_of "$work/info2.pfm" --dataset "$work/info.bag" --frame 2
+cmp "$work/info2.pfm" "$work/files2.pfm" || fail "stereo --dataset info.bag (CameraInfo) --frame 2 differs"
+#    Bad input: a frame past the end names the count; options that do not go together.
+expect_error 1 "--frame 6: $work/raw.bag has 6 stereo pairs (frames 0..5)" stereo --dataset "$work/raw.bag" --frame 6 \
+  --calib "$sensor" --out-disparity "$work/x.pfm"
+expect_error 1 "--frame 9: $work/dive has 6 stereo pairs (frames 0..5)" stereo --dataset "$work/dive" --frame 9 --out-disparity "$work/x.pfm"
+expect_error 1 "has no CameraInfo topic /left/camera_info" stereo --dataset "$work/raw.bag" --frame 0 --out-disparity "$work/x.pfm"
+expect_error 1 "--left-topic is for recordings (.bag, .mcap, a ROS 2 bag); $work/dive is a folder" stereo --dataset "$work/dive" \
+  --frame 0 --left-topic /left/image_raw --out-disparity "$work/x.pfm"
+expect_error 1 "stereo: --dataset needs --frame N" stereo --dataset "$work/dive" --out-disparity "$work/x.pfm"
+expect_error 1 "stereo: give --left/--right images or --dataset, not both" stereo --dataset "$work/dive" --frame 0 \
+  --left "$work/left.png" --out-disparity "$work/x.pfm"
+expect_error 1 "stereo: give --left and --right images, or --dataset and --frame" stereo --left "$work/left.png" --out-disparity "$work/x.pfm"
+expect_error 1 "stereo: --frame needs --dataset" stereo --left "$work/left.png" --right "$work/right.png" --frame 0 --out-disparity "$work/x.pfm"
+
 # 5. `cenote calibrate --help` shows the board defaults.
 "$cenote" calibrate --help >"$work/calibrate_help.txt" 2>&1
 # (CLI11 prints a default as TYPE=VALUE: `--board TEXT=9x6`.)
