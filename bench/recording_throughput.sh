@@ -11,6 +11,7 @@
 # the other stages, fps and the CPU time of the whole run per frame (user + system, all threads), and
 # the recording's figures over the folder's.
 set -euo pipefail
+source "$(dirname "$0")/timed_run.sh"
 cenote=$1
 source_dir=$2
 gen=$3/tests/io/bag/gen
@@ -44,7 +45,6 @@ else
 fi
 echo "| input | frames | read+rectify ms | stereo ms | fusion ms | fps | CPU ms/frame | peak MiB |"
 echo "|---|---|---|---|---|---|---|---|"
-TIMEFORMAT='%U %S'
 for input in folder "$format"; do
   if [ "$input" = folder ]; then
     run_args=(--dataset "$work/cave")
@@ -53,13 +53,12 @@ for input in folder "$format"; do
     run_args=("${args[@]}")
     label=$name
   fi
-  { time "$cenote" run "${run_args[@]}" --out "$work/$input" >/dev/null 2>&1; } 2>"$work/cpu-$input.txt"
-  /usr/bin/python3 - "$work/$input/report.json" "$label" "$work/cpu-$input.txt" "$work/ratio.txt" <<'PY'
+  cpu=$(timed_cenote_run "$cenote" "$work/$input" "${run_args[@]}")
+  /usr/bin/python3 - "$work/$input/report.json" "$label" "$cpu" "$work/ratio.txt" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 s = r["stages"]
-user, system = map(float, open(sys.argv[3]).read().split())
-cpu = (user + system) * 1000.0 / max(r["frames_processed"], 1)
+cpu = float(sys.argv[3])
 print(f"| {sys.argv[2]} | {r['frames_processed']} | {s['read_rectify']['median_ms']:.1f} | {s['stereo']['median_ms']:.1f} | "
       f"{s['fusion']['median_ms']:.1f} | {r['fps']:.1f} | {cpu:.0f} | {r['peak_memory_mb']:.0f} |")
 with open(sys.argv[4], "a") as f:

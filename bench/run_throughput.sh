@@ -11,6 +11,7 @@
 # report.json, pipeline/runner/runner.h), with "other" the rest of the process during the run and
 # "start-up + save" the process's time outside the run (loading, writing the map at the end).
 set -euo pipefail
+source "$(dirname "$0")/timed_run.sh"
 cenote=$1
 source_dir=$2
 frames=${3:-150}
@@ -26,17 +27,14 @@ import sys
 text = open(sys.argv[1]).read().replace("num_paths: 4", "num_paths: " + sys.argv[2], 1)
 open(sys.argv[3], "w").write(text)
 PY
-  TIMEFORMAT='%U %S'
-  { time "$cenote" run --dataset "$work/cave" --config "$work/config.yaml" --out "$work/run$paths" \
-      --map "$work/run$paths/map.vdb" >/dev/null 2>&1 ; } \
-    2>"$work/cpu$paths.txt"
-  /usr/bin/python3 - "$work/run$paths/report.json" "$paths" "$frames" "$work/cpu$paths.txt" \
-    "$work/cpu_table.txt" >>"$work/table.txt" <<'PY'
+  cpu_ms=$(timed_cenote_run "$cenote" "$work/run$paths" --dataset "$work/cave" --config "$work/config.yaml" \
+    --map "$work/run$paths/map.vdb")
+  /usr/bin/python3 - "$work/run$paths/report.json" "$paths" "$frames" "$cpu_ms" "$work/cpu_table.txt" \
+    >>"$work/table.txt" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 s = r["stages"]
-user, system = map(float, open(sys.argv[4]).read().split())
-cpu_ms = (user + system) * 1000.0 / max(r["frames_processed"], 1)
+cpu_ms = float(sys.argv[4])
 print(f"| cenote run, {sys.argv[2]} paths, {sys.argv[3]} frames | {r['fps']:.1f} | "
       + " | ".join(f"{s[k]['median_ms']:.1f}" for k in ("read_rectify", "stereo", "fusion", "output", "map"))
       + f" | {r['peak_memory_mb']:.0f} | {r['fps'] / 10.2:.1f}x | {cpu_ms:.0f} | {2000.0 / cpu_ms:.1f} |")

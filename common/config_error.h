@@ -5,6 +5,7 @@
 #include <initializer_list>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace cenote {
@@ -28,6 +29,17 @@ class ConfigErrors {
     std::ostringstream text;
     text << value;
     errors_.push_back({prefix_.empty() ? key : prefix_ + "." + key, text.str(), rule});
+  }
+
+  // check(lo <= value <= hi) with the rule "must be in [lo, hi]" followed by `note` (" (0: off)"),
+  // the bounds printed as check() prints values. A NaN is outside every range.
+  template <typename T>
+  void checkRange(const std::string& key, const T& value, std::type_identity_t<T> lo, std::type_identity_t<T> hi,
+                  const std::string& note = "") {
+    if (value >= lo && value <= hi) return;
+    std::ostringstream rule;
+    rule << "must be in [" << lo << ", " << hi << "]" << note;
+    check(false, key, value, rule.str());
   }
 
   std::vector<ConfigError> take() { return std::move(errors_); }

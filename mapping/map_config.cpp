@@ -17,7 +17,7 @@ LogOddsModel MapConfig::logOddsModel() const {
 std::vector<ConfigError> MapConfig::validate() const {
   ConfigErrors errors("map");
   // Written so that NaN fails every rule.
-  errors.check(voxel_size_m >= 0.001 && voxel_size_m <= 10.0, "voxel_size_m", voxel_size_m, "must be in [0.001, 10]");
+  errors.checkRange("voxel_size_m", voxel_size_m, 0.001, 10.0);
   errors.check(prob_hit > 0.5 && prob_hit < 1.0, "prob_hit", prob_hit, "must be in (0.5, 1)");
   errors.check(prob_miss > 0.0 && prob_miss < 0.5, "prob_miss", prob_miss, "must be in (0, 0.5)");
   errors.check(clamp_min > 0.0 && clamp_min <= prob_miss, "clamp_min", clamp_min, "must be in (0, prob_miss]");
@@ -26,15 +26,13 @@ std::vector<ConfigError> MapConfig::validate() const {
                "must be in (clamp_min, clamp_max)");
   errors.check(max_range_m <= 1e4 && !(max_range_m != max_range_m), "max_range_m", max_range_m,
                "must be <= 10000 (<= 0: unlimited)");
-  errors.check(ray_stop_run >= 0 && ray_stop_run <= 1000, "ray_stop_run", ray_stop_run, "must be in [0, 1000]");
-  errors.check(publish_blocks >= 1 && publish_blocks <= 1 << 20, "publish_blocks", publish_blocks,
-               "must be in [1, 1048576]");
-  errors.check(num_threads >= 0 && num_threads <= 256, "num_threads", num_threads, "must be in [0, 256]");
+  errors.checkRange("ray_stop_run", ray_stop_run, 0, 1000);
+  errors.checkRange("publish_blocks", publish_blocks, 1, 1 << 20);
+  errors.checkRange("num_threads", num_threads, 0, 256);
   errors.check(max_distance_m > 0.0 && max_distance_m <= 100.0, "max_distance_m", max_distance_m, "must be in (0, 100]");
   errors.check(frontier_min_voxels >= 1, "frontier_min_voxels", frontier_min_voxels, "must be >= 1");
   errors.check(frontier_max_extent_m > 0.0, "frontier_max_extent_m", frontier_max_extent_m, "must be > 0");
-  errors.check(history_max_mb >= 1 && history_max_mb <= 1 << 20, "history_max_mb", history_max_mb,
-               "must be in [1, 1048576]");
+  errors.checkRange("history_max_mb", history_max_mb, 1, 1 << 20);
   errors.check(history_quantum_m > 0.0 && history_quantum_m <= voxel_size_m / 4, "history_quantum_m", history_quantum_m,
                "must be in (0, voxel_size_m / 4]");
   errors.check(correction_min_shift_m >= 0.0, "correction_min_shift_m", correction_min_shift_m, "must be >= 0");

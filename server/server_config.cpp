@@ -13,27 +13,23 @@ std::vector<ConfigError> ServerConfig::validate() const {
   errors.check(!listen.empty() && listen.find(':') != std::string::npos, "listen", listen, "must be HOST:PORT");
   errors.check(snapshot_period_s >= 0.0, "snapshot_period_s", snapshot_period_s, "must be >= 0 (0: only on shutdown)");
   errors.check(!snapshot_dir.empty(), "snapshot_dir", snapshot_dir, "must not be empty");
-  errors.check(pose_wait_s >= 0.0 && pose_wait_s <= 60.0, "pose_wait_s", pose_wait_s, "must be in [0, 60]");
+  errors.checkRange("pose_wait_s", pose_wait_s, 0.0, 60.0);
   errors.check(pose_history_s > 0.0, "pose_history_s", pose_history_s, "must be > 0");
   errors.check(pose_max_jump_s > 0.0, "pose_max_jump_s", pose_max_jump_s, "must be > 0");
-  errors.check(max_frame_streams >= 1 && max_frame_streams <= 64, "max_frame_streams", max_frame_streams,
-               "must be in [1, 64]");
+  errors.checkRange("max_frame_streams", max_frame_streams, 1, 64);
   errors.check(host.max_subscriber_lag >= 1, "max_subscriber_lag", host.max_subscriber_lag, "must be >= 1");
   errors.check(host.max_subscriber_bytes >= 4096, "max_subscriber_bytes", host.max_subscriber_bytes, "must be >= 4096");
   errors.check(read_token_file.empty() || !token_file.empty(), "read_token_file", read_token_file,
                "needs server.token_file (the operator's token) as well");
-  errors.check(completion_queues >= 1 && completion_queues <= 64, "completion_queues", completion_queues,
-               "must be in [1, 64]");
+  errors.checkRange("completion_queues", completion_queues, 1, 64);
   errors.check(min_pollers >= 1 && min_pollers <= max_pollers, "min_pollers", min_pollers, "must be in [1, max_pollers]");
-  errors.check(max_pollers >= 1 && max_pollers <= 1024, "max_pollers", max_pollers, "must be in [1, 1024]");
+  errors.checkRange("max_pollers", max_pollers, 1, 1024);
   errors.check(time_slice_ms == 0.0 || (time_slice_ms >= 0.1 && time_slice_ms <= 100.0), "time_slice_ms", time_slice_ms,
                "must be 0 (kernel default) or in [0.1, 100]");
-  errors.check(query_cpus >= 0 && query_cpus <= CPU_SETSIZE, "query_cpus", query_cpus,
-               "must be in [0, " + std::to_string(CPU_SETSIZE) + "] (0: gRPC threads not pinned)");
-  errors.check(host.ingest_nice >= 0 && host.ingest_nice <= 19, "ingest_nice", host.ingest_nice, "must be in [0, 19]");
-  errors.check(host.derived_nice >= 0 && host.derived_nice <= 19, "derived_nice", host.derived_nice, "must be in [0, 19]");
-  errors.check(host.derived_period_s >= 0.0 && host.derived_period_s <= 3600.0, "derived_period_s", host.derived_period_s,
-               "must be in [0, 3600]");
+  errors.checkRange("query_cpus", query_cpus, 0, CPU_SETSIZE, " (0: gRPC threads not pinned)");
+  errors.checkRange("ingest_nice", host.ingest_nice, 0, 19);
+  errors.checkRange("derived_nice", host.derived_nice, 0, 19);
+  errors.checkRange("derived_period_s", host.derived_period_s, 0.0, 3600.0);
   errors.check(host.derived_follow_s >= 0.0, "derived_follow_s", host.derived_follow_s, "must be >= 0");
   errors.check(limits.max_message_bytes >= 1 << 20 && limits.max_message_bytes <= (int64_t{1} << 31) - 1,
                "limits.max_message_bytes", limits.max_message_bytes, "must be in [1 MiB, 2 GiB)");
@@ -60,8 +56,7 @@ std::vector<ConfigError> ServerConfig::validate() const {
                "must exceed max_frame_streams + limits.max_ingest_streams + limits.max_snapshot_downloads + "
                "max_pollers (" +
                    std::to_string(stream_threads + max_pollers) + ")");
-  errors.check(t.max_threads >= 8 && t.max_threads <= 65536, "transport.max_threads", t.max_threads,
-               "must be in [8, 65536]");
+  errors.checkRange("transport.max_threads", t.max_threads, 8, 65536);
   errors.check(t.keepalive_time_s >= 1.0, "transport.keepalive_time_s", t.keepalive_time_s, "must be >= 1");
   errors.check(t.keepalive_timeout_s >= 0.1, "transport.keepalive_timeout_s", t.keepalive_timeout_s, "must be >= 0.1");
   errors.check(t.min_client_ping_interval_s >= 0.0, "transport.min_client_ping_interval_s", t.min_client_ping_interval_s,
@@ -72,8 +67,7 @@ std::vector<ConfigError> ServerConfig::validate() const {
                t.max_connection_age_s, "must be 0 (never) or >= 1");
   errors.check(t.max_connection_age_grace_s >= 0.0, "transport.max_connection_age_grace_s", t.max_connection_age_grace_s,
                "must be >= 0 (0: unbounded)");
-  errors.check(t.shutdown_grace_s >= 0.0 && t.shutdown_grace_s <= 60.0, "transport.shutdown_grace_s", t.shutdown_grace_s,
-               "must be in [0, 60]");
+  errors.checkRange("transport.shutdown_grace_s", t.shutdown_grace_s, 0.0, 60.0);
   std::vector<ConfigError> all = errors.take();
   for (auto& e : viewer.validate()) all.push_back(std::move(e));
   return all;

@@ -8,6 +8,8 @@
 //   info                                         resolution, frame, bounds, counts, sensor model
 #include <cstdio>
 #include <functional>
+#include <memory>
+#include <tuple>
 
 #include "clients/cli/cli_input.h"
 #include "clients/cli/commands.h"
@@ -89,39 +91,63 @@ void registerBox(CLI::App& app, Connection& connection) {
   });
 }
 
-void registerSegment(CLI::App& app, Connection& connection) {
-  struct Options {
-    std::string start, end;
-    double radius_m = 0.0;
-    bool stop_at_unknown = false;
-  };
-  auto o = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("segment", "First occupied voxel along a segment (or a capsule with --radius)");
-  cmd->add_option("start", o->start, "X,Y,Z")->required();
-  cmd->add_option("end", o->end, "X,Y,Z")->required();
-  cmd->add_option("--radius", o->radius_m, "Capsule radius, metres (0: the voxels the segment passes through)");
+// The options of a collision query: two points (START END, or ORIGIN DIRECTION), its one number
+// (radius, or maximum range) and --stop-at-unknown.
+struct CollisionOptions {
+  std::string first, second;
+  double number = 0.0;
+  bool stop_at_unknown = false;
+};
+
+// What names a collision query's subcommand and its options.
+struct CollisionCommand {
+  const char* name;
+  const char* help;
+  const char* first;        // the first point's name ("X,Y,Z")
+  const char* second;       // the second point's name
+  const char* second_help;  // what the second point is
+  const char* number;       // the number's option
+  const char* number_help;
+};
+
+// The subcommand of a collision query with its options in help order (two required points, the
+// number's option, which is returned to give it more, then --stop-at-unknown); the caller adds the
+// callback.
+std::tuple<CLI::App*, std::shared_ptr<CollisionOptions>, CLI::Option*> addCollisionCommand(CLI::App& app,
+                                                                                           const CollisionCommand& c,
+                                                                                           double number) {
+  auto o = std::make_shared<CollisionOptions>();
+  o->number = number;
+  CLI::App* cmd = app.add_subcommand(c.name, c.help);
+  cmd->add_option(c.first, o->first, "X,Y,Z")->required();
+  cmd->add_option(c.second, o->second, c.second_help)->required();
+  CLI::Option* number_option = cmd->add_option(c.number, o->number, c.number_help);
   cmd->add_flag("--stop-at-unknown", o->stop_at_unknown, "Unknown voxels are not free to pass");
-  cmd->callback([o, &connection] {
-    const client::Segment segment{parsePoint(o->start, "segment START"), parsePoint(o->end, "segment END"), o->radius_m};
+  return {cmd, o, number_option};
+}
+
+void registerSegment(CLI::App& app, Connection& connection) {
+  const auto [cmd, o, radius] = addCollisionCommand(
+      app,
+      {"segment", "First occupied voxel along a segment (or a capsule with --radius)", "start", "end", "X,Y,Z", "--radius",
+       "Capsule radius, metres (0: the voxels the segment passes through)"},
+      0.0);
+  cmd->callback([o = o, &connection] {
+    const client::Segment segment{parsePoint(o->first, "segment START"), parsePoint(o->second, "segment END"), o->number};
     printCollision(connection.client().segment(segment, o->stop_at_unknown));
   });
 }
 
 void registerRaycast(CLI::App& app, Connection& connection) {
-  struct Options {
-    std::string origin, direction;
-    double max_range_m = 10.0;
-    bool stop_at_unknown = false;
-  };
-  auto o = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("raycast", "First occupied voxel along a ray");
-  cmd->add_option("origin", o->origin, "X,Y,Z")->required();
-  cmd->add_option("direction", o->direction, "DX,DY,DZ (any non-zero length)")->required();
-  cmd->add_option("--max-range", o->max_range_m, "Metres")->capture_default_str();
-  cmd->add_flag("--stop-at-unknown", o->stop_at_unknown, "Unknown voxels are not free to pass");
-  cmd->callback([o, &connection] {
-    const client::Ray ray{parsePoint(o->origin, "raycast ORIGIN"), parsePoint(o->direction, "raycast DIRECTION")};
-    printCollision(connection.client().raycast({ray}, o->max_range_m, o->stop_at_unknown).front());
+  const auto [cmd, o, max_range] = addCollisionCommand(
+      app,
+      {"raycast", "First occupied voxel along a ray", "origin", "direction", "DX,DY,DZ (any non-zero length)",
+       "--max-range", "Metres"},
+      10.0);
+  max_range->capture_default_str();
+  cmd->callback([o = o, &connection] {
+    const client::Ray ray{parsePoint(o->first, "raycast ORIGIN"), parsePoint(o->second, "raycast DIRECTION")};
+    printCollision(connection.client().raycast({ray}, o->number, o->stop_at_unknown).front());
   });
 }
 

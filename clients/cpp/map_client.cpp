@@ -49,6 +49,33 @@ void checkCount(const char* what, size_t got, size_t want) {
   }
 }
 
+// The fill of a batched point query: the batch's points as flat x, y, z into request.xyz.
+template <typename Request>
+auto points(const std::vector<Eigen::Vector3d>& points_m, Request& request) {
+  return [&points_m, &request](size_t begin, size_t end) {
+    request.clear_xyz();
+    detail::appendFlat(points_m, begin, end, request.mutable_xyz());
+  };
+}
+
+// The fill of a batched query of client values: the batch's items through detail::toWire into the
+// request's repeated field that `clear` empties and `add` appends to.
+template <typename Item, typename Request, typename Wire>
+auto wireItems(const std::vector<Item>& items, Request& request, void (Request::*clear)(), Wire* (Request::*add)()) {
+  return [&items, &request, clear, add](size_t begin, size_t end) {
+    (request.*clear)();
+    for (size_t i = begin; i < end; ++i) detail::toWire(items[i], (request.*add)());
+  };
+}
+
+// The take of a batched segment or ray query: one collision per item, appended to out.
+auto collisions(const v1::CollisionsReply& reply, std::vector<Collision>& out) {
+  return [&reply, &out](size_t begin, size_t end) {
+    checkCount("collisions", static_cast<size_t>(reply.results_size()), end - begin);
+    for (const auto& result : reply.results()) out.push_back(detail::fromWire(result));
+  };
+}
+
 }  // namespace
 
 MapClient::MapClient(const std::string& target, const ClientOptions& options)
@@ -78,30 +105,28 @@ std::vector<VoxelResult> MapClient::voxels(const std::vector<Eigen::Vector3d>& p
   out.reserve(points_m.size());
   v1::VoxelsRequest request;
   v1::VoxelsReply reply;
-  for (const auto& [begin, end] : batchRanges(points_m.size(), impl_->options.max_batch_items)) {
-    request.clear_xyz();
-    detail::appendFlat(points_m, begin, end, request.mutable_xyz());
-    impl_->unary(*impl_->query, &v1::Query::Stub::GetVoxels, request, reply);
-    checkCount("states", static_cast<size_t>(reply.states_size()), end - begin);
-    checkCount("probabilities", static_cast<size_t>(reply.probabilities_size()), end - begin);
-    for (int i = 0; i < reply.states_size(); ++i) {
-      out.push_back({static_cast<VoxelState>(reply.states(i)), reply.probabilities(i)});
-    }
-  }
+  impl_->batched(points_m.size(), &v1::Query::Stub::GetVoxels, request, reply, points(points_m, request),
+                 [&](size_t begin, size_t end) {
+                   checkCount("states", static_cast<size_t>(reply.states_size()), end - begin);
+                   checkCount("probabilities", static_cast<size_t>(reply.probabilities_size()), end - begin);
+                   for (int i = 0; i < reply.states_size(); ++i) {
+                     out.push_back({static_cast<VoxelState>(reply.states(i)), reply.probabilities(i)});
+                   }
+                 });
   return out;
 }
 
 std::vector<BoxCounts> MapClient::boxes(const std::vector<Box>& boxes) {
   std::vector<BoxCounts> out;
   out.reserve(boxes.size());
-  for (const auto& [begin, end] : batchRanges(boxes.size(), impl_->options.max_batch_items)) {
-    v1::BoxesRequest request;
-    v1::BoxesReply reply;
-    for (size_t i = begin; i < end; ++i) detail::toWire(boxes[i], request.add_boxes());
-    impl_->unary(*impl_->query, &v1::Query::Stub::GetBoxes, request, reply);
-    checkCount("box counts", static_cast<size_t>(reply.counts_size()), end - begin);
-    for (const auto& counts : reply.counts()) out.push_back(detail::fromWire(counts));
-  }
+  v1::BoxesRequest request;
+  v1::BoxesReply reply;
+  impl_->batched(boxes.size(), &v1::Query::Stub::GetBoxes, request, reply,
+                 wireItems(boxes, request, &v1::BoxesRequest::clear_boxes, &v1::BoxesRequest::add_boxes),
+                 [&](size_t begin, size_t end) {
+                   checkCount("box counts", static_cast<size_t>(reply.counts_size()), end - begin);
+                   for (const auto& counts : reply.counts()) out.push_back(detail::fromWire(counts));
+                 });
   return out;
 }
 
@@ -111,13 +136,9 @@ std::vector<Collision> MapClient::segments(const std::vector<Segment>& segments,
   v1::SegmentsRequest request;
   v1::CollisionsReply reply;
   request.set_stop_at_unknown(stop_at_unknown);
-  for (const auto& [begin, end] : batchRanges(segments.size(), impl_->options.max_batch_items)) {
-    request.clear_segments();
-    for (size_t i = begin; i < end; ++i) detail::toWire(segments[i], request.add_segments());
-    impl_->unary(*impl_->query, &v1::Query::Stub::CheckSegments, request, reply);
-    checkCount("collisions", static_cast<size_t>(reply.results_size()), end - begin);
-    for (const auto& result : reply.results()) out.push_back(detail::fromWire(result));
-  }
+  impl_->batched(segments.size(), &v1::Query::Stub::CheckSegments, request, reply,
+                 wireItems(segments, request, &v1::SegmentsRequest::clear_segments, &v1::SegmentsRequest::add_segments),
+                 collisions(reply, out));
   return out;
 }
 
@@ -128,13 +149,9 @@ std::vector<Collision> MapClient::raycast(const std::vector<Ray>& rays, double m
   v1::CollisionsReply reply;
   request.set_max_range_m(max_range_m);
   request.set_stop_at_unknown(stop_at_unknown);
-  for (const auto& [begin, end] : batchRanges(rays.size(), impl_->options.max_batch_items)) {
-    request.clear_rays();
-    for (size_t i = begin; i < end; ++i) detail::toWire(rays[i], request.add_rays());
-    impl_->unary(*impl_->query, &v1::Query::Stub::Raycast, request, reply);
-    checkCount("collisions", static_cast<size_t>(reply.results_size()), end - begin);
-    for (const auto& result : reply.results()) out.push_back(detail::fromWire(result));
-  }
+  impl_->batched(rays.size(), &v1::Query::Stub::Raycast, request, reply,
+                 wireItems(rays, request, &v1::RaycastRequest::clear_rays, &v1::RaycastRequest::add_rays),
+                 collisions(reply, out));
   return out;
 }
 
@@ -143,20 +160,19 @@ std::vector<DistanceResult> MapClient::distances(const std::vector<Eigen::Vector
   out.reserve(points_m.size());
   v1::DistancesRequest request;
   v1::DistancesReply reply;
-  for (const auto& [begin, end] : batchRanges(points_m.size(), impl_->options.max_batch_items)) {
-    request.clear_xyz();
-    detail::appendFlat(points_m, begin, end, request.mutable_xyz());
-    impl_->unary(*impl_->query, &v1::Query::Stub::GetDistances, request, reply);
-    const size_t n = end - begin;
-    checkCount("distances", static_cast<size_t>(reply.distances_m_size()), n);
-    checkCount("gradient components", static_cast<size_t>(reply.gradients_size()), 3 * n);
-    checkCount("within_max flags", static_cast<size_t>(reply.within_max_size()), n);
-    for (int i = 0; i < reply.distances_m_size(); ++i) {
-      out.push_back({reply.distances_m(i),
-                     Eigen::Vector3d(reply.gradients(3 * i), reply.gradients(3 * i + 1), reply.gradients(3 * i + 2)),
-                     reply.within_max(i)});
-    }
-  }
+  impl_->batched(
+      points_m.size(), &v1::Query::Stub::GetDistances, request, reply, points(points_m, request),
+      [&](size_t begin, size_t end) {
+        const size_t n = end - begin;
+        checkCount("distances", static_cast<size_t>(reply.distances_m_size()), n);
+        checkCount("gradient components", static_cast<size_t>(reply.gradients_size()), 3 * n);
+        checkCount("within_max flags", static_cast<size_t>(reply.within_max_size()), n);
+        for (int i = 0; i < reply.distances_m_size(); ++i) {
+          out.push_back({reply.distances_m(i),
+                         Eigen::Vector3d(reply.gradients(3 * i), reply.gradients(3 * i + 1), reply.gradients(3 * i + 2)),
+                         reply.within_max(i)});
+        }
+      });
   return out;
 }
 

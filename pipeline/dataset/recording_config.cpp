@@ -10,7 +10,7 @@ std::vector<ConfigError> RecordingConfig::validate() const {
   ConfigErrors errors("bag");
   errors.check(sync_tolerance_s >= 0.0 && sync_tolerance_s < 1.0, "sync_tolerance_s", sync_tolerance_s,
                "must be in [0, 1)");
-  errors.check(sync_queue >= 2 && sync_queue <= 4096, "sync_queue", sync_queue, "must be in [2, 4096]");
+  errors.checkRange("sync_queue", sync_queue, 2, 4096);
   const bool known = rig == "auto" ||
                      std::any_of(rigs.begin(), rigs.end(), [&](const RigPreset& p) { return p.name == rig; });
   errors.check(known, "rig", rig, "must be auto or one of the names under bag.rigs");

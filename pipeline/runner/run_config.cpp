@@ -8,7 +8,7 @@ namespace cenote::pipeline {
 
 std::vector<ConfigError> RunConfig::validate() const {
   ConfigErrors errors("run");
-  errors.check(queue_depth >= 1 && queue_depth <= 64, "queue_depth", queue_depth, "must be in [1, 64]");
+  errors.checkRange("queue_depth", queue_depth, 1, 64);
   errors.check(pose_max_gap_s > 0.0, "pose_max_gap_s", pose_max_gap_s, "must be > 0");
   errors.check(keyframe_translation_m >= 0.0, "keyframe_translation_m", keyframe_translation_m, "must be >= 0");
   errors.check(keyframe_rotation_deg >= 0.0, "keyframe_rotation_deg", keyframe_rotation_deg, "must be >= 0");

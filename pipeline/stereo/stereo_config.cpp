@@ -65,15 +65,14 @@ std::vector<ConfigError> StereoConfig::validate() const {
   ConfigErrors errors("stereo");
   errors.check(num_disparities >= 16 && num_disparities <= 512 && num_disparities % 16 == 0, "num_disparities",
                num_disparities, "must be a multiple of 16 in [16, 512]");
-  errors.check(min_disparity_px >= 0 && min_disparity_px <= 4096, "min_disparity_px", min_disparity_px,
-               "must be in [0, 4096]");
+  errors.checkRange("min_disparity_px", min_disparity_px, 0, 4096);
   if (cost == MatchingCost::kSad) {
     errors.check(window_px >= 1 && window_px <= 9 && window_px % 2 == 1, "window_px", window_px,
                  "SAD window must be odd in [1, 9]");
   } else {
     errors.check(window_px == 3 || window_px == 5, "window_px", window_px, "census window must be 3 or 5");
   }
-  errors.check(prefilter_cap >= 1 && prefilter_cap <= 127, "prefilter_cap", prefilter_cap, "must be in [1, 127]");
+  errors.checkRange("prefilter_cap", prefilter_cap, 1, 127);
   errors.check(num_paths == 4 || num_paths == 8, "num_paths", num_paths, "must be 4 or 8");
   errors.check(coarse_scale == 2 || coarse_scale == 4, "coarse_scale", coarse_scale, "must be 2 or 4");
   errors.check(p1 >= -1, "p1", p1, "must be >= 0 (or -1 for the default)");
@@ -90,9 +89,8 @@ std::vector<ConfigError> StereoConfig::validate() const {
   errors.check(p2_gradient_scale > 0.0, "p2_gradient_scale", p2_gradient_scale, "must be > 0");
   errors.check(min_confidence >= 0.0, "min_confidence", min_confidence, "must be >= 0");
   errors.check(lr_max_diff_px >= 0, "lr_max_diff_px", lr_max_diff_px, "must be >= 0");
-  errors.check(num_strips >= 1 && num_strips <= 64, "num_strips", num_strips, "must be in [1, 64]");
-  errors.check(strip_overlap_px >= 0 && strip_overlap_px <= 256, "strip_overlap_px", strip_overlap_px,
-               "must be in [0, 256]");
+  errors.checkRange("num_strips", num_strips, 1, 64);
+  errors.checkRange("strip_overlap_px", strip_overlap_px, 0, 256);
   return errors.take();
 }
 

@@ -10,18 +10,14 @@ std::vector<ConfigError> ViewerConfig::validate() const {
                "must be HOST:PORT (port 0 picks a free one), or empty for no viewer");
   errors.check(budget_bytes_per_s >= 1.0e4 && budget_bytes_per_s <= 1.0e10, "budget_bytes_per_s", budget_bytes_per_s,
                "must be in [1e4, 1e10]");
-  errors.check(tick_s >= 0.005 && tick_s <= 10.0, "tick_s", tick_s, "must be in [0.005, 10]");
-  errors.check(stats_period_s >= 0.05 && stats_period_s <= 3600.0, "stats_period_s", stats_period_s,
-               "must be in [0.05, 3600]");
-  errors.check(refresh_s >= 0.0 && refresh_s <= 86400.0, "refresh_s", refresh_s, "must be in [0, 86400]");
-  errors.check(resend_s >= 0.0 && resend_s <= 3600.0, "resend_s", resend_s, "must be in [0, 3600]");
-  errors.check(max_cloud_points >= 0 && max_cloud_points <= 1000000, "max_cloud_points", max_cloud_points,
-               "must be in [0, 1000000] (0: no point cloud channel data)");
-  errors.check(max_trajectory_poses >= 1 && max_trajectory_poses <= 1000000, "max_trajectory_poses", max_trajectory_poses,
-               "must be in [1, 1000000]");
-  errors.check(image_hz >= 0.0 && image_hz <= 30.0, "image_hz", image_hz, "must be in [0, 30] (0: no camera images)");
-  errors.check(image_max_width_px >= 16 && image_max_width_px <= 8192, "image_max_width_px", image_max_width_px,
-               "must be in [16, 8192]");
+  errors.checkRange("tick_s", tick_s, 0.005, 10.0);
+  errors.checkRange("stats_period_s", stats_period_s, 0.05, 3600.0);
+  errors.checkRange("refresh_s", refresh_s, 0.0, 86400.0);
+  errors.checkRange("resend_s", resend_s, 0.0, 3600.0);
+  errors.checkRange("max_cloud_points", max_cloud_points, 0, 1000000, " (0: no point cloud channel data)");
+  errors.checkRange("max_trajectory_poses", max_trajectory_poses, 1, 1000000);
+  errors.checkRange("image_hz", image_hz, 0.0, 30.0, " (0: no camera images)");
+  errors.checkRange("image_max_width_px", image_max_width_px, 16, 8192);
   errors.check(color_by == "image" || color_by == "height", "color_by", color_by, "must be image or height");
   errors.check(tls_cert_file.empty() == tls_key_file.empty(), "tls_key_file", tls_key_file,
                "must be given with tls_cert_file (both or neither)");

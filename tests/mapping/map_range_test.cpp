@@ -8,6 +8,7 @@
 
 #include "common/error.h"
 #include "mapping/occupancy_map.h"
+#include "tests/mapping/support/ray_maps.h"
 
 namespace cenote::mapping {
 namespace {
@@ -69,21 +70,16 @@ TEST(MapRange, NonFiniteBoxIsAnErrorNamingIt) {
 // Rays from the origin in all directions, 0.1 m voxels: known voxels on both sides of every plane
 // through the origin.
 std::unique_ptr<OccupancyMap> star() {
-  MapConfig c;
-  c.voxel_size_m = 0.1;
-  auto map = std::make_unique<OccupancyMap>(c);
-  PointBatch b;
-  b.origin = Eigen::Vector3d(0.01, 0.02, 0.03);
+  std::vector<Eigen::Vector3f> ends;
   for (int i = -4; i <= 4; ++i) {
     for (int j = -4; j <= 4; ++j) {
-      b.points.emplace_back(2.0f, 0.4f * i, 0.4f * j);
-      b.points.emplace_back(-2.0f, 0.4f * i, 0.4f * j);
-      b.points.emplace_back(0.4f * i, 2.0f, 0.4f * j);
-      b.points.emplace_back(0.4f * i, -2.0f, 0.4f * j);
+      ends.emplace_back(2.0f, 0.4f * i, 0.4f * j);
+      ends.emplace_back(-2.0f, 0.4f * i, 0.4f * j);
+      ends.emplace_back(0.4f * i, 2.0f, 0.4f * j);
+      ends.emplace_back(0.4f * i, -2.0f, 0.4f * j);
     }
   }
-  map->integrate(b);
-  return map;
+  return test::mapOfRays(0.1, {test::rays(Eigen::Vector3d(0.01, 0.02, 0.03), std::move(ends))});
 }
 
 struct KnownVoxel {

@@ -13,6 +13,7 @@
 #include "cenote/v1/ingest.grpc.pb.h"
 #include "cenote/v1/query.grpc.pb.h"
 #include "cenote/v1/updates.grpc.pb.h"
+#include "clients/cpp/batching.h"
 #include "clients/cpp/map_client.h"
 
 namespace cenote::client {
@@ -54,6 +55,20 @@ struct MapClient::Impl {
     grpc::ClientContext context;
     prepare(context, options.deadline_s);
     detail::throwIfFailed((stub.*method)(&context, request, &reply));
+  }
+
+  // A query over `count` items, one call per batch of at most options.max_batch_items, in order:
+  // for each [begin, end), `fill(begin, end)` writes the batch into `request` (replacing the last
+  // one's items; fields common to all batches are set once by the caller), the call answers into
+  // `reply`, and `take(begin, end)` appends what it says.
+  template <typename Request, typename Reply, typename Fill, typename Take>
+  void batched(size_t count, grpc::Status (v1::Query::Stub::*method)(grpc::ClientContext*, const Request&, Reply*),
+               Request& request, Reply& reply, Fill fill, Take take) const {
+    for (const auto& [begin, end] : batchRanges(count, options.max_batch_items)) {
+      fill(begin, end);
+      unary(*query, method, request, reply);
+      take(begin, end);
+    }
   }
 };
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "common/error.h"
+#include "tests/mapping/support/ray_maps.h"
 
 namespace cenote::mapping {
 namespace {
@@ -10,18 +11,8 @@ namespace {
 // A 0.1 m map: free corridor x in [0, 2) along y = z = 0.05, a wall voxel at x = 1.05, and one
 // more ray along y = 0.35 ending at x = 2.05.
 std::unique_ptr<OccupancyMap> corridor() {
-  MapConfig c;
-  c.voxel_size_m = 0.1;
-  auto map = std::make_unique<OccupancyMap>(c);
-  PointBatch b;
-  b.origin = Eigen::Vector3d(0.05, 0.05, 0.05);
-  b.points = {Eigen::Vector3f(1.05f, 0.05f, 0.05f)};
-  map->integrate(b);
-  PointBatch c2;
-  c2.origin = Eigen::Vector3d(0.05, 0.35, 0.05);
-  c2.points = {Eigen::Vector3f(2.05f, 0.35f, 0.05f)};
-  map->integrate(c2);
-  return map;
+  return test::mapOfRays(0.1, {test::rays(Eigen::Vector3d(0.05, 0.05, 0.05), {Eigen::Vector3f(1.05f, 0.05f, 0.05f)}),
+                               test::rays(Eigen::Vector3d(0.05, 0.35, 0.05), {Eigen::Vector3f(2.05f, 0.35f, 0.05f)})});
 }
 
 TEST(MapQuery, VoxelStatesAndProbabilitiesInOneBatch) {

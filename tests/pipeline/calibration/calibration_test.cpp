@@ -8,6 +8,7 @@
 
 #include "common/error.h"
 #include "tests/support/error_message.h"
+#include "tests/support/raw_rig.h"
 #include "pipeline/calibration/rectifier.h"
 #include "pipeline/calibration/stereo_calibration.h"
 
@@ -17,17 +18,9 @@ namespace {
 std::string temp(const std::string& name) { return testing::TempDir() + "/" + name; }
 
 StereoCalibration exampleRig() {
-  StereoCalibration c;
-  c.image_size = cv::Size(640, 480);
-  c.left.K = cv::Matx33d(500, 0, 320, 0, 502, 241, 0, 0, 1);
-  c.right.K = cv::Matx33d(505, 0, 318, 0, 506, 238, 0, 0, 1);
-  c.left.distortion = {-0.12, 0.03, 0.001, -0.0005};
-  c.right.distortion = {-0.11, 0.02, -0.0008, 0.0003};
-  cv::Mat R;
-  cv::Rodrigues(cv::Vec3d(0.01, -0.02, 0.005), R);
-  c.R = cv::Matx33d(R);
-  c.T = cv::Vec3d(-0.12, 0.002, 0.001);
-  return c;
+  return test::rawRig(cv::Size(640, 480), {cv::Matx33d(500, 0, 320, 0, 502, 241, 0, 0, 1), {-0.12, 0.03, 0.001, -0.0005}},
+                      {cv::Matx33d(505, 0, 318, 0, 506, 238, 0, 0, 1), {-0.11, 0.02, -0.0008, 0.0003}},
+                      cv::Vec3d(0.01, -0.02, 0.005), cv::Vec3d(-0.12, 0.002, 0.001));
 }
 
 TEST(StereoCalibration, WrittenAndReadBackGivesTheSameRig) {

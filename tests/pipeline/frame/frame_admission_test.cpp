@@ -10,23 +10,16 @@
 #include <vector>
 
 #include "common/error.h"
+#include "tests/support/raw_rig.h"
 
 namespace cenote::pipeline {
 namespace {
 
 // A raw rig whose rectification turns the left camera by a visible amount (R1 far from identity).
 StereoCalibration tiltedRig() {
-  StereoCalibration c;
-  c.image_size = cv::Size(64, 48);
-  c.left.K = cv::Matx33d(50, 0, 32, 0, 51, 24, 0, 0, 1);
-  c.right.K = cv::Matx33d(52, 0, 31, 0, 52, 23, 0, 0, 1);
-  c.left.distortion = {-0.1, 0.02, 0.001, -0.0005};
-  c.right.distortion = {-0.09, 0.01, -0.0008, 0.0003};
-  cv::Mat R;
-  cv::Rodrigues(cv::Vec3d(0.02, -0.04, 0.01), R);
-  c.R = cv::Matx33d(R);
-  c.T = cv::Vec3d(-0.12, 0.004, 0.003);
-  return c;
+  return test::rawRig(cv::Size(64, 48), {cv::Matx33d(50, 0, 32, 0, 51, 24, 0, 0, 1), {-0.1, 0.02, 0.001, -0.0005}},
+                      {cv::Matx33d(52, 0, 31, 0, 52, 23, 0, 0, 1), {-0.09, 0.01, -0.0008, 0.0003}},
+                      cv::Vec3d(0.02, -0.04, 0.01), cv::Vec3d(-0.12, 0.004, 0.003));
 }
 
 RunConfig keyframesAt(double translation_m, double rotation_deg) {
