@@ -18,10 +18,10 @@ void requireFile(const std::string& path) {
   if (!std::filesystem::exists(path)) throw NotFoundError("calibration file not found: " + path);
 }
 
-cv::Mat readMatrix(const cv::FileStorage& fs, const std::string& path, std::initializer_list<const char*> names, int rows,
+cv::Mat readMatrix(const cv::FileNode& parent, const std::string& path, std::initializer_list<const char*> names, int rows,
                    int cols, bool required) {
   for (const char* name : names) {
-    cv::FileNode node = fs[name];
+    cv::FileNode node = parent.isMap() ? parent[name] : cv::FileNode();
     if (node.empty()) continue;
     cv::Mat m;
     node >> m;
@@ -69,6 +69,12 @@ cv::Size openWithImageSize(cv::FileStorage& fs, const std::string& path, const s
   int width = 0, height = 0;
   fs["image_width"] >> width;
   fs["image_height"] >> height;
+  // The reference paper's own files (github.com/ApdowJN/RTDense3DMapping) write `size: [w, h]`.
+  const cv::FileNode size = fs["size"];
+  if (width <= 0 && height <= 0 && size.isSeq() && size.size() == 2) {
+    width = static_cast<int>(size[0]);
+    height = static_cast<int>(size[1]);
+  }
   if (width <= 0 || height <= 0) throw Error(path + ": missing image_width / image_height");
   return cv::Size(width, height);
 }
@@ -115,20 +121,20 @@ StereoCalibration readStereoCalibration(const std::string& path) {
   cv::FileStorage fs;
   StereoCalibration c;
   c.image_size = openWithImageSize(fs, path, "calibration");
-  const cv::Mat P1 = readMatrix(fs, path, {"P1"}, 3, 4, false);
-  const cv::Mat K1 = readMatrix(fs, path, {"K1", "M1"}, 3, 3, false);
+  const cv::Mat P1 = readMatrix(fs.root(), path, {"P1"}, 3, 4, false);
+  const cv::Mat K1 = readMatrix(fs.root(), path, {"K1", "M1"}, 3, 3, false);
   if (K1.empty() && !P1.empty()) {
-    const cv::Mat P2 = readMatrix(fs, path, {"P2"}, 3, 4, true);
+    const cv::Mat P2 = readMatrix(fs.root(), path, {"P2"}, 3, 4, true);
     c.rectified = true;
     c.rectified_geometry = geometryFromProjections(cv::Matx34d(P1), cv::Matx34d(P2), c.image_size);
   } else {
     if (K1.empty()) throw Error(path + ": missing K1 (or P1/P2 for a rectified rig)");
     c.left.K = cv::Matx33d(K1);
-    c.right.K = cv::Matx33d(readMatrix(fs, path, {"K2", "M2"}, 3, 3, true));
-    c.left.distortion = toVector(readMatrix(fs, path, {"D1"}, 0, 0, false));
-    c.right.distortion = toVector(readMatrix(fs, path, {"D2"}, 0, 0, false));
-    c.R = cv::Matx33d(readMatrix(fs, path, {"R"}, 3, 3, true));
-    const cv::Mat T = readMatrix(fs, path, {"T"}, 3, 1, true);
+    c.right.K = cv::Matx33d(readMatrix(fs.root(), path, {"K2", "M2"}, 3, 3, true));
+    c.left.distortion = toVector(readMatrix(fs.root(), path, {"D1"}, 0, 0, false));
+    c.right.distortion = toVector(readMatrix(fs.root(), path, {"D2"}, 0, 0, false));
+    c.R = cv::Matx33d(readMatrix(fs.root(), path, {"R"}, 3, 3, true));
+    const cv::Mat T = readMatrix(fs.root(), path, {"T"}, 3, 1, true);
     c.T = cv::Vec3d(T.at<double>(0), T.at<double>(1), T.at<double>(2));
   }
   return validated(std::move(c), path);
@@ -151,19 +157,30 @@ StereoCalibration readPaperIntrinsics(const std::string& path) {
   cv::FileStorage fs;
   StereoCalibration c;
   c.image_size = openWithImageSize(fs, path, "intrinsics");
-  c.left.K = cv::Matx33d(readMatrix(fs, path, {"K1", "K_left"}, 3, 3, true));
-  c.right.K = cv::Matx33d(readMatrix(fs, path, {"K2", "K_right"}, 3, 3, true));
-  c.left.distortion = toVector(readMatrix(fs, path, {"D1", "D_left"}, 0, 0, false));
-  c.right.distortion = toVector(readMatrix(fs, path, {"D2", "D_right"}, 0, 0, false));
+  // Each camera as K1 D1 / K2 D2 (or K_left ...) at the top, or as the paper's own files have it:
+  // `left:` and `right:` mappings holding K and D.
+  const auto camera = [&](const char* side, std::initializer_list<const char*> K, std::initializer_list<const char*> D) {
+    CameraIntrinsics cam;
+    cv::Mat k = readMatrix(fs.root(), path, K, 3, 3, false);
+    if (k.empty()) k = readMatrix(fs[side], path, {"K"}, 3, 3, false);
+    if (k.empty()) throw Error(path + ": missing " + std::string(*K.begin()));
+    cam.K = cv::Matx33d(k);
+    cv::Mat d = readMatrix(fs.root(), path, D, 0, 0, false);
+    if (d.empty()) d = readMatrix(fs[side], path, {"D"}, 0, 0, false);
+    cam.distortion = toVector(d);
+    return cam;
+  };
+  c.left = camera("left", {"K1", "K_left"}, {"D1", "D_left"});
+  c.right = camera("right", {"K2", "K_right"}, {"D2", "D_right"});
   const cv::FileNode baseline_node = fs["baseline"];
   if (baseline_node.empty() || (!baseline_node.isReal() && !baseline_node.isInt()))
     throw Error(path + ": missing baseline (millimetres)");
   const double baseline_mm = static_cast<double>(baseline_node);
   if (!(baseline_mm > 0))
     throw Error(path + ": baseline = " + std::to_string(baseline_mm) + ": must be positive (millimetres)");
-  const cv::Mat R = readMatrix(fs, path, {"R"}, 3, 3, false);
+  const cv::Mat R = readMatrix(fs.root(), path, {"R"}, 3, 3, false);
   if (!R.empty()) c.R = cv::Matx33d(R);
-  const cv::Mat T = readMatrix(fs, path, {"T"}, 3, 1, false);
+  const cv::Mat T = readMatrix(fs.root(), path, {"T"}, 3, 1, false);
   if (T.empty()) {
     c.T = cv::Vec3d(-baseline_mm * 1e-3, 0.0, 0.0);
   } else {

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The reference paper's layout as a `cenote run --dataset`: a simulated dive (`cenote sim`, EuRoC layout)
 # rewritten in the paper's layout by euroc_to_paper.py (OpenCV's FileStorage writes intrinsics.yaml, with
-# the baseline and T in millimetres) must give the same points and the same map, voxel for voxel, as the
+# the baseline and T in millimetres, or laid out as the paper's repository has it) must give the same points and the same map, voxel for voxel, as the
 # EuRoC folder it came from with the same camera poses; `cenote eval cloud --target DATASET` takes its
 # colmap.ply; bad input gets a clear error.
 # Usage: cli_paper_dataset_test.sh <cenote binary> <source dir>
@@ -30,6 +30,16 @@ cmp -s "$work/euroc-out/points.ply" "$work/paper-out/points.ply" || fail "points
 [ "$(json "$work/map.json" 'd["known_either"] == d["known_both"] > 0')" = True ] || fail "known voxels differ"
 [ "$(json "$work/map.json" 'd["occupied_estimate"] == d["occupied_reference"] > 0')" = True ] || fail "occupied voxels differ"
 [ "$(json "$work/map.json" 'd["agreement"]')" = 1.0 ] || fail "maps disagree: $(cat "$work/map.json")"
+
+# intrinsics.yaml as the paper's own repository lays it out (left/right mappings of K and D,
+# size: [w, h], T in metres): the same points.
+/usr/bin/python3 "$(dirname "${BASH_SOURCE[0]}")/euroc_to_paper.py" "$work/euroc" "$work/euroc/groundtruth/cam0.tum" \
+  "$work/published" --as-published || fail "euroc_to_paper.py --as-published failed"
+grep -q "^left:" "$work/published/intrinsics.yaml" && grep -q "^size: \[" "$work/published/intrinsics.yaml" ||
+  fail "not the published layout: $(head -20 "$work/published/intrinsics.yaml")"
+"$cenote" run --dataset "$work/published" --config "$config" --out "$work/published-out" >"$work/published.txt" 2>&1 ||
+  fail "cenote run on the published intrinsics layout failed: $(tail -5 "$work/published.txt")"
+cmp -s "$work/euroc-out/points.ply" "$work/published-out/points.ply" || fail "published layout: points.ply differs"
 
 # colmap.ply is the dataset's reference cloud: the same numbers as naming the file itself.
 "$cenote" eval cloud --source "$work/paper-out/points.ply" --target "$work/paper" --voxel 0.01 --json "$work/a.json" \

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""euroc_to_paper.py EUROC_DIR POSES_TUM OUT_DIR: rewrites a simulated dive (`cenote sim`, EuRoC layout) in
+"""euroc_to_paper.py EUROC_DIR POSES_TUM OUT_DIR [--as-published]: rewrites a simulated dive (`cenote sim`, EuRoC layout) in
 the reference paper's layout, independently of cenote's own readers:
   left/, right/             the PNG images, named by their timestamp in nanoseconds
   filename_mapping.csv      "ts,ts.png" rows under a header row
@@ -7,6 +7,9 @@ the reference paper's layout, independently of cenote's own readers:
   intrinsics.yaml           written by OpenCV's FileStorage: K1 D1 K2 D2, image size, baseline in
                             millimetres, R and T (T in millimetres) from the two sensor.yaml files' T_BS
   colmap.ply                the dive's ground-truth surface (groundtruth/surface.ply), as the reference cloud
+With --as-published, intrinsics.yaml is laid out as the paper's own repository documents and reads it
+(github.com/ApdowJN/RTDense3DMapping, README and src/util.cpp): `left:` and `right:` mappings holding K
+and D, `size: [w, h]`, the baseline in millimetres and T in metres.
 """
 import os
 import shutil
@@ -17,6 +20,7 @@ import numpy as np
 import yaml
 
 euroc, poses, out = sys.argv[1:4]
+as_published = "--as-published" in sys.argv[4:]
 mav0 = os.path.join(euroc, "mav0")
 
 
@@ -62,13 +66,27 @@ T_right_left = np.linalg.inv(T_B1) @ T_B0  # p_right = R p_left + T
 R = T_right_left[:3, :3]
 T_mm = T_right_left[:3, 3:4] * 1000.0
 fs = cv2.FileStorage(os.path.join(out, "intrinsics.yaml"), cv2.FILE_STORAGE_WRITE)
-fs.write("image_width", int(size[0]))
-fs.write("image_height", int(size[1]))
-fs.write("K1", K1)
-fs.write("D1", D1)
-fs.write("K2", K2)
-fs.write("D2", D2)
-fs.write("baseline", float(np.linalg.norm(T_mm)))
-fs.write("R", R)
-fs.write("T", T_mm)
+if as_published:
+    for side, K, D in (("left", K1, D1), ("right", K2, D2)):
+        fs.startWriteStruct(side, cv2.FileNode_MAP)
+        fs.write("K", K)
+        fs.write("D", D)
+        fs.endWriteStruct()
+    fs.startWriteStruct("size", cv2.FileNode_SEQ | cv2.FileNode_FLOW)
+    fs.write("", int(size[0]))
+    fs.write("", int(size[1]))
+    fs.endWriteStruct()
+    fs.write("baseline", float(np.linalg.norm(T_mm)))
+    fs.write("R", R)
+    fs.write("T", (T_mm / 1000.0).reshape(1, 3))
+else:
+    fs.write("image_width", int(size[0]))
+    fs.write("image_height", int(size[1]))
+    fs.write("K1", K1)
+    fs.write("D1", D1)
+    fs.write("K2", K2)
+    fs.write("D2", D2)
+    fs.write("baseline", float(np.linalg.norm(T_mm)))
+    fs.write("R", R)
+    fs.write("T", T_mm)
 fs.release()
