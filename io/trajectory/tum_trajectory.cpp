@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -17,17 +18,35 @@ TumTrajectory TumTrajectory::read(const std::string& path) {
   return parse(in, path);
 }
 
+namespace {
+
+// Whether `row` starts with a word rather than a number (strtod's "nan" and "inf" are numbers).
+bool isColumnNames(const std::string& row) {
+  if (row.empty() || !std::isalpha(static_cast<unsigned char>(row[0]))) return false;
+  std::string head = row.substr(0, 3);
+  for (char& c : head) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return head != "nan" && head != "inf";
+}
+
+}  // namespace
+
 TumTrajectory TumTrajectory::parse(std::istream& in, const std::string& name) {
   TumTrajectory trajectory;
   std::string line;
   int line_number = 0;
   bool nanoseconds = false;
+  bool seen_row = false;  // a row other than a comment or blank
   while (std::getline(in, line)) {
     ++line_number;
     if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF files
     const std::string where = name + ":" + std::to_string(line_number) + ": ";
     const size_t first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
+    // One header row naming the columns, as the first row ("stamp tx ty tz qx qy qz qw"): the
+    // reference paper's loader skips rows that begin with "stamp" or "frame", so its files may have one.
+    const bool first_row = !seen_row;
+    seen_row = true;
+    if (first_row && isColumnNames(line.substr(first))) continue;
 
     std::istringstream words(line);
     std::array<double, 8> v{};

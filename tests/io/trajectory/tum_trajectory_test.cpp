@@ -55,6 +55,16 @@ TEST(TumTrajectory, ErrorsNameFileLineAndProblem) {
   EXPECT_THROW(TumTrajectory::read("/nonexistent/traj.txt"), Error);
 }
 
+// The reference paper's poses.txt may begin with a row of column names; only the first row may be one.
+TEST(TumTrajectory, SkipsOneHeaderRowOfColumnNames) {
+  const TumTrajectory t = parse("# comment\nstamp tx ty tz qx qy qz qw\n1.0 0 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n");
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_EQ(t.poses()[0].t_s, 1.0);
+  EXPECT_EQ(errorOf("stamp tx ty tz qx qy qz qw\nframe 1\n"), "traj.txt:2: 'frame' is not a number");
+  EXPECT_EQ(errorOf("1.0 0 0 0 0 0 0 1\nstamp tx ty tz qx qy qz qw\n"), "traj.txt:2: 'stamp' is not a number");
+  EXPECT_NE(errorOf("NaN 0 0 0 0 0 0 1\n").find("traj.txt:1: non-finite value"), std::string::npos);
+}
+
 TEST(TumTrajectory, AcceptsWindowsLineEndingsAndTabs) {
   const TumTrajectory t = parse("# comment\r\n1.0\t0 0 0 0 0 0 1\r\n2.0 0 0 0 0 0 0 1\r\n");
   EXPECT_EQ(t.size(), 2u);
