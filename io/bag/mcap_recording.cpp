@@ -261,18 +261,14 @@ bool McapRecording::readSummary() {
 void McapRecording::noteSkips() {
   for (std::size_t i = skipped_.size(); i < cursor_->skipped().size(); ++i) {
     const RecordCursor::SkippedChunk& chunk = cursor_->skipped()[i];
-    std::string what = chunk.error + "; skipped the chunk";
-    std::uint64_t total = 0;
-    std::string list;
+    std::vector<std::pair<std::string, std::uint64_t>> held;
     for (const auto& [channel, n] : chunk.messages) {
       const auto it = channel_topic_.find(channel);
-      const std::string name = it == channel_topic_.end() || it->second < 0 ? "channel " + std::to_string(channel)
-                                                                            : topics_[it->second].name;
-      list += (list.empty() ? " " : ", ") + std::to_string(n) + " on " + name;
-      total += n;
+      held.emplace_back(
+          it == channel_topic_.end() || it->second < 0 ? "channel " + std::to_string(channel) : topics_[it->second].name,
+          n);
     }
-    what += chunk.messages.empty() ? " (its messages unknown: no message index follows it)"
-                                   : " (of its " + std::to_string(total) + " messages:" + list + ")";
+    const std::string what = describeSkippedChunk(chunk.error + "; skipped the chunk", held);
     skipped_.push_back(what);
   }
 }

@@ -11,6 +11,18 @@
 
 namespace cenote::io {
 
+std::string describeSkippedChunk(const std::string& damage,
+                                 const std::vector<std::pair<std::string, std::uint64_t>>& held) {
+  if (held.empty()) return damage + " (its messages unknown: no index records follow it)";
+  std::uint64_t total = 0;
+  std::string list;
+  for (const auto& [topic, n] : held) {
+    list += (list.empty() ? " " : ", ") + std::to_string(n) + " on " + topic;
+    total += n;
+  }
+  return damage + " (of its " + std::to_string(total) + " messages:" + list + ")";
+}
+
 std::vector<int> sortTopicsByName(std::vector<TopicInfo>& topics) {
   std::vector<int> order(topics.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);

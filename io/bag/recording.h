@@ -8,6 +8,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace cenote::io {
@@ -50,10 +51,15 @@ class Recording {
   virtual std::string truncation() const = 0;
 
   /// The damage reading stepped over so far, one line each, naming the file, the byte offset and
-  /// what was lost ("bag dive.bag, byte 1234 (chunk): bz2 data are corrupt (...); skipped with its
-  /// 24 messages: 12 on /left, 12 on /right"). A damaged chunk loses its messages, not the rest.
+  /// what was lost ("bag dive.bag, byte 1234 (chunk): bz2 data are corrupt (...); skipped the chunk
+  /// (of its 24 messages: 12 on /left, 12 on /right)"). A damaged chunk loses its messages, not the rest.
   virtual std::vector<std::string> skipped() const { return {}; }
 };
+
+/// One line of Recording::skipped(): `damage` ("...; skipped the chunk"), then the messages the
+/// file's index says the chunk held, by topic in the order given ("(of its 24 messages: 12 on /left,
+/// 12 on /right)"); `held` empty: "(its messages unknown: no index records follow it)".
+std::string describeSkippedChunk(const std::string& damage, const std::vector<std::pair<std::string, std::uint64_t>>& held);
 
 /// Sorts `topics` by name, as `rosbag info` lists them. @return where each topic went: the new index
 /// of the topic that was at index i.

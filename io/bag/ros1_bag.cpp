@@ -325,19 +325,9 @@ bool Ros1Bag::countFromIndex(const Record& chunk) {
 
 void Ros1Bag::skipChunk(const Record& chunk, const std::string& damage, const std::string& lost) {
   if (skipped_.count(chunk.pos) != 0) return;
-  std::string what = damage + "; skipped " + lost;
-  const std::vector<IndexEntries> entries = indexAfter(chunk);
-  std::uint64_t total = 0;
-  for (const IndexEntries& e : entries) total += e.n;
-  if (entries.empty()) {
-    what += " (its messages unknown: no index records follow it)";
-  } else {
-    what += " (of its " + std::to_string(total) + " messages:";
-    for (std::size_t i = 0; i < entries.size(); ++i) {
-      what += (i == 0 ? " " : ", ") + std::to_string(entries[i].n) + " on " + topics_[entries[i].topic].name;
-    }
-    what += ")";
-  }
+  std::vector<std::pair<std::string, std::uint64_t>> held;
+  for (const IndexEntries& e : indexAfter(chunk)) held.emplace_back(topics_[e.topic].name, e.n);
+  const std::string what = describeSkippedChunk(damage + "; skipped " + lost, held);
   skipped_[chunk.pos] = what;
 }
 
