@@ -1,6 +1,7 @@
 #include "io/bag/ros_messages.h"
 
 #include <cmath>
+#include <type_traits>
 
 #include "io/bag/cdr_wire.h"
 #include "io/bag/ros1_wire.h"
@@ -65,6 +66,13 @@ RosImage decodeImage(const RecordedMessage& message) {
 RosCompressedImage decodeCompressedImage(const RecordedMessage& message) {
   expectType(message, "sensor_msgs/CompressedImage");
   return decode(message, [](auto& w) { return parseCompressedImage(w); });
+}
+
+std::int64_t decodeHeaderStampNs(const RecordedMessage& message) {
+  return decode(message, [&](auto& w) {
+    detail::FieldReader<std::decay_t<decltype(w)>> r(w, message.topic->type.c_str());
+    return r.header(nullptr);
+  });
 }
 
 RosCameraInfo decodeCameraInfo(const RecordedMessage& message) {

@@ -98,6 +98,9 @@ bool isPoseType(const std::string& type);
 RosImage decodeImage(const RecordedMessage& message);
 RosCompressedImage decodeCompressedImage(const RecordedMessage& message);
 RosCameraInfo decodeCameraInfo(const RecordedMessage& message);
+// The header stamp of a message whose first field is a std_msgs/Header (sensor_msgs/Image,
+// CompressedImage, CameraInfo, ...), read without parsing or copying the rest.
+std::int64_t decodeHeaderStampNs(const RecordedMessage& message);
 
 /// The pose a message of a pose topic gives (isPoseType): Odometry, PoseStamped, TransformStamped;
 /// of a TFMessage the transform from `parent` to `child` (leading '/' ignored), nullopt when the

@@ -291,7 +291,7 @@ io::Trajectory readPoseTopic(const std::string& path, const std::string& topic, 
                                                       : std::vector<std::string>{topic};
   while (rec->next(wanted, m)) {
     if (with_images && m.topic->name == image_topic) {
-      image_times->push_back(seconds(imageStampNs(m)));
+      image_times->push_back(seconds(io::decodeHeaderStampNs(m)));  // the stamp only: no pixel copy
       continue;
     }
     const std::optional<io::RosPose> pose = io::decodePose(m, parent, child);
