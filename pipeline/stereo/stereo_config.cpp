@@ -27,8 +27,12 @@ StereoConfig StereoConfig::coarseConfig() const {
   coarse.p2 = effectiveP2();
   // Eight paths where their sum fits 16 bits (validate()): at a sixteenth of the pixels the second
   // pass costs little, and its winners place far fewer bands wrongly (middlebury_test.cpp).
-  if (8L * (maxCost() + coarse.p1 + coarse.p2) <= 65535) coarse.num_paths = 8;
+  if (coarse.pathSumFits(8)) coarse.num_paths = 8;
   return coarse;
+}
+
+bool StereoConfig::pathSumFits(int paths) const {
+  return static_cast<long>(paths) * (maxCost() + effectiveP1() + effectiveP2()) <= 65535;
 }
 
 int StereoConfig::sadPixelRange() const { return prefilter == Prefilter::kSobelX ? 2 * prefilter_cap : 255; }
@@ -81,9 +85,7 @@ std::vector<ConfigError> StereoConfig::validate() const {
   if (p1 >= -1 && p2 >= -1 && window_ok) {
     errors.check(effectiveP2() >= effectiveP1(), "p2", effectiveP2(),
                  "must be >= p1 (" + std::to_string(effectiveP1()) + ")");
-    // Path costs are bounded by maxCost + P2; the sum over all paths must fit in 16 bits.
-    const long bound = static_cast<long>(num_paths) * (maxCost() + effectiveP2() + effectiveP1());
-    errors.check(bound <= 65535, "p2", effectiveP2(),
+    errors.check(pathSumFits(num_paths), "p2", effectiveP2(),
                  "num_paths * (max cost " + std::to_string(maxCost()) + " + p1 + p2) must be <= 65535");
   }
   errors.check(p2_gradient_scale > 0.0, "p2_gradient_scale", p2_gradient_scale, "must be > 0");

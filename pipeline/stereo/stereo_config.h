@@ -67,6 +67,8 @@ struct StereoConfig {
   int effectiveP2() const;
   // Largest cost of one pixel and disparity in cost units.
   int maxCost() const;
+  // Whether the sum of `paths` path costs, each at most maxCost() + P1 + P2, fits the engine's 16 bits.
+  bool pathSumFits(int paths) const;
   // True when matching uses the coarse-to-fine band (kBand and a range wider than the band).
   bool usesBand() const;
   // kBand: the settings of the coarse match. Disparities divided by coarse_scale (the range rounded
