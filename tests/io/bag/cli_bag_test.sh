@@ -13,6 +13,7 @@ set -u
 cenote=$1
 source_dir=$2
 source "$(dirname "${BASH_SOURCE[0]}")/../../support/cli_test_lib.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/jpeg_map_check.sh"
 py=/usr/bin/python3
 json() { $py -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2], {}, {'d': d}))" "$@"; }
 to_bag() { $py "$source_dir/tests/io/bag/euroc_to_bag.py" "$work/dive" "$@" || fail "euroc_to_bag.py $*"; }
@@ -66,15 +67,7 @@ bag_run jpeg "$work/jpeg.bag" --calibration "$calib"
 grep -q "/slave1/image_raw/compressed + /slave2/image_raw/compressed" "$work/jpeg.txt" || fail "svin2 preset not used"
 run jpeg-pixels --dataset "$work/jpeg-pixels"
 cmp -s "$work/jpeg-pixels-out/points.ply" "$work/jpeg-out/points.ply" || fail "jpeg: points differ from OpenCV's decoding's"
-"$cenote" eval map --estimate "$work/jpeg.vdb" --reference "$work/jpeg-pixels.vdb" --json "$work/jpeg-pixels-same.json" \
-  >/dev/null 2>&1 || fail "cenote eval map (jpeg against jpeg-pixels) failed"
-[ "$(json "$work/jpeg-pixels-same.json" 'd["agreement"]')" = 1.0 ] || fail "jpeg: voxels differ from OpenCV's decoding's"
-a=$(agreement jpeg)
-both=$(json "$work/jpeg-agreement.json" 'd["known_agreement"]')
-within=$(json "$work/jpeg-agreement.json" 'd["agreement_within_voxel"]')
-echo "jpeg q95 images: OpenCV's decoded pixels' points and voxels; voxel agreement within one voxel $within (strict: $a, known in both: $both)"
-$py -c "import sys; sys.exit(0 if $within >= 0.99 and $a >= 0.92 and $both >= 0.955 else 1)" ||
-  fail "jpeg: voxel agreement within one voxel $within, expected >= 0.99 (strict $a >= 0.92, known in both $both >= 0.955)"
+expect_jpeg_map "jpeg q95 images" "$work/jpeg.vdb" "$work/jpeg-pixels.vdb" "$work/euroc.vdb" 0.92 0.955
 awk '/^#/ { print; next } { $2 = sprintf("%.9f", $2 + 0.1); print }' "$work/dive/groundtruth/cam0.tum" >"$work/shifted.tum"
 run shifted --dataset "$work/dive" --trajectory "$work/shifted.tum" --pose-frame camera
 agreement shifted >/dev/null
