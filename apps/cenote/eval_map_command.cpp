@@ -32,6 +32,7 @@ void runMap(const MapOptions& o) {
             << "  voxels known in both      " << a.known_both << "\n"
             << "  agreement (either)        " << fraction(a.agreement) << "\n"
             << "  agreement (both known)    " << fraction(a.known_agreement) << "\n"
+            << "  agreement within a voxel  " << fraction(a.agreement_within_voxel) << "\n"
             << "  occupied IoU              " << fraction(a.occupied_iou) << "\n"
             << "  occupied precision        " << fraction(a.occupied_precision) << "\n"
             << "  occupied recall           " << fraction(a.occupied_recall) << "\n"

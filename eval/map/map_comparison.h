@@ -12,7 +12,8 @@
 
 namespace cenote::eval {
 
-// Every voxel known in either map, counted by its pair of states.
+// Every voxel known in either map, counted by its pair of states and by whether the states agree
+// within one voxel (occupancy_agreement.h).
 // @throws cenote::Error when the voxel sizes differ.
 OccupancyConfusion compareMaps(const mapping::OccupancyMap& estimate, const mapping::OccupancyMap& reference);
 

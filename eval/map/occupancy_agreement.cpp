@@ -32,6 +32,7 @@ OccupancyAgreement summarizeAgreement(const OccupancyConfusion& c) {
   const int64_t both_occupied = c.at(Occupancy::kOccupied, Occupancy::kOccupied);
   a.agreement = ratio(same, a.known_either);
   a.known_agreement = ratio(same_known, a.known_both);
+  a.agreement_within_voxel = ratio(c.within_voxel, a.known_either);
   a.occupied_iou = ratio(both_occupied, a.occupied_estimate + a.occupied_reference - both_occupied);
   a.occupied_precision = ratio(both_occupied, a.occupied_estimate);
   a.occupied_recall = ratio(both_occupied, a.occupied_reference);
@@ -47,6 +48,7 @@ std::string toJson(const OccupancyAgreement& a, const OccupancyConfusion& c, con
   j["occupied_iou"] = jsonNumber(a.occupied_iou);
   j["occupied_precision"] = jsonNumber(a.occupied_precision);
   j["occupied_recall"] = jsonNumber(a.occupied_recall);
+  j["agreement_within_voxel"] = jsonNumber(a.agreement_within_voxel);
   j["known_either"] = a.known_either;
   j["known_both"] = a.known_both;
   j["occupied_estimate"] = a.occupied_estimate;

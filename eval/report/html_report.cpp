@@ -133,6 +133,7 @@ std::string metricsTable(const Json& j, const std::string& file) {
   } else if (kind == "map") {
     html += row("agreement (voxels known in either)", percent(v("agreement"))) +
             row("agreement (voxels known in both)", percent(v("known_agreement"))) +
+            row("agreement within one voxel", percent(v("agreement_within_voxel"))) +
             row("occupied IoU", percent(v("occupied_iou"))) + row("occupied precision", percent(v("occupied_precision"))) +
             row("occupied recall", percent(v("occupied_recall"))) + row("voxel size", fmt(v("voxel_size"), " m"));
   }

@@ -25,6 +25,7 @@ TEST(OccupancyAgreement, HandComputedTable) {
   add(Occupancy::kFree, Occupancy::kFree, 30);
   add(Occupancy::kUnknown, Occupancy::kOccupied, 3);
   add(Occupancy::kFree, Occupancy::kUnknown, 8);
+  c.within_voxel = 45;
   const OccupancyAgreement a = summarizeAgreement(c);
   EXPECT_EQ(a.known_either, 50);
   EXPECT_EQ(a.known_both, 39);
@@ -33,8 +34,10 @@ TEST(OccupancyAgreement, HandComputedTable) {
   EXPECT_DOUBLE_EQ(a.occupied_precision, 6.0 / 8.0);
   EXPECT_DOUBLE_EQ(a.occupied_recall, 6.0 / 10.0);
   EXPECT_DOUBLE_EQ(a.occupied_iou, 6.0 / 12.0);
+  EXPECT_DOUBLE_EQ(a.agreement_within_voxel, 45.0 / 50.0);
   const std::string json = toJson(a, c, "a.vdb", "b.bt", 0.05);
-  for (const char* key : {"\"agreement\"", "\"known_agreement\"", "\"occupied_iou\"", "\"confusion\""}) {
+  for (const char* key :
+       {"\"agreement\"", "\"known_agreement\"", "\"occupied_iou\"", "\"agreement_within_voxel\"", "\"confusion\""}) {
     EXPECT_NE(json.find(key), std::string::npos) << key;
   }
 }

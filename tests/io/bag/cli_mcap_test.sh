@@ -3,7 +3,8 @@
 # (`cenote sim`, EuRoC layout) converted to MCAP by the MCAP team's own writer (tests/io/bag/gen/
 # euroc_to_mcap.js: @mcap/core, CDR from Foxglove's serialiser) gives the same points.ply, byte for
 # byte, and the same voxels as the folder it came from, with raw (sensor_msgs/Image) or PNG
-# (CompressedImage) images and uncompressed, zstd or lz4 chunks; so does a ROS 2 sqlite3 bag of the
+# (CompressedImage) images and uncompressed, zstd or lz4 chunks; with JPEG images at quality 95 those of
+# OpenCV's decoding of the same bytes, and the folder's voxels within one voxel; so does a ROS 2 sqlite3 bag of the
 # same messages (mcap_to_db3.py), with or without its metadata.yaml. A recording cut short runs to the
 # cut and says where it stopped. A damaged chunk is skipped and named, the other frames as in the folder.
 # Usage: cli_mcap_test.sh <cenote binary> <source dir> <build dir of tests/io/bag/gen (node_modules)>
@@ -12,13 +13,14 @@ cenote=$1
 source_dir=$2
 gen=$3
 source "$(dirname "${BASH_SOURCE[0]}")/../../support/cli_test_lib.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/jpeg_map_check.sh"
 py=/usr/bin/python3
 json() { $py -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2], {}, {'d': d}))" "$@"; }
 frames=20
 
 "$cenote" sim --scene reef --frames $frames --width 320 --height 240 --quiet --out "$work/dive" >/dev/null 2>&1 ||
   fail "cenote sim failed"
-$py "$source_dir/tests/io/bag/gen/dump_pixels.py" "$work/dive" "$work/pixels" || fail "dump_pixels.py failed"
+$py "$source_dir/tests/io/bag/gen/dump_pixels.py" "$work/dive" "$work/pixels" "$work/jpeg-pixels" || fail "dump_pixels.py failed"
 to_mcap() {  # to_mcap NAME IMAGES COMPRESSION
   node "$gen/euroc_to_mcap.js" "$work/dive" "$work/$1.mcap" "$2" "$3" "$work/pixels" || fail "euroc_to_mcap.js $*"
 }
@@ -48,6 +50,15 @@ for variant in "raw none image_raw" "raw zstd image_raw" "png lz4 image_raw/comp
     fail "$1-$2: the voxels differ from the folder's: $(head -c 400 "$work/$1-$2.json")"
   echo "$1 images, $2 chunks: the folder's points and voxels"
 done
+
+# JPEG at quality 95 (OpenCV's bytes, CompressedImage "bgr8; jpeg compressed bgr8"): the points and
+# voxels of a folder of OpenCV's decoding of the same bytes, and the folder's map within one voxel
+# (jpeg_map_check.sh; strictly about 92 % of the voxels agree).
+to_mcap jpeg jpeg lz4
+mcap_run jpeg image_raw/compressed
+run jpeg-pixels --dataset "$work/jpeg-pixels"
+cmp -s "$work/jpeg-pixels-out/points.ply" "$work/jpeg-out/points.ply" || fail "jpeg: points differ from OpenCV's decoding's"
+expect_jpeg_map "MCAP jpeg q95 images" "$work/jpeg.vdb" "$work/jpeg-pixels.vdb" "$work/euroc.vdb" 0.92 0.955
 
 # The same messages in a ROS 2 sqlite3 bag (mcap_to_db3.py: Python's sqlite3, rosbag2's tables): the
 # folder's points and voxels too, also from the .db3 file alone without its metadata.yaml.

@@ -3,12 +3,14 @@
 
 Usage: euroc_to_bag.py EUROC_DIR OUT.bag [--images raw|png|jpeg] [--compression none|bz2|lz4]
                        [--right-jitter-ms J] [--drop-right N,...] [--camera-info] [--poses odometry|tf]
-                       [--pose-of body|camera] [--keyframe-poses N]
+                       [--pose-of body|camera] [--keyframe-poses N] [--decoded-folder DIR]
   raw:  sensor_msgs/Image (bgr8 or mono8, the PNGs' pixels) on /left/image_raw and /right/image_raw
   png:  sensor_msgs/CompressedImage holding the PNG files' bytes, format "png", on
         /slave1/image_raw/compressed and /slave2/image_raw/compressed (the SVIn2 rig's topics)
   jpeg: the same topics, each image JPEG-encoded by OpenCV at quality 95, format
         "bgr8; jpeg compressed bgr8" (as ROS's compressed_image_transport writes it)
+  --decoded-folder DIR (with jpeg): also a copy of the EuRoC folder whose images are the bag's JPEG
+        bytes decoded by OpenCV (cv2.imdecode), as PNG: the pixels an independent decoder gets
   --right-jitter-ms: the right stamps moved by a seeded uniform offset in [-J, J] ms
   --drop-right: indices of right images left out
   --camera-info: sensor_msgs/CameraInfo of both cameras (<ns>/camera_info), K, D, R, P from
@@ -23,6 +25,7 @@ Messages are written in stamp order; the log time is the header stamp.
 import argparse
 import os
 import random
+import shutil
 
 import cv2
 import numpy as np
@@ -44,7 +47,10 @@ ap.add_argument("--camera-info", action="store_true")
 ap.add_argument("--poses", default="odometry", choices=["odometry", "tf"])
 ap.add_argument("--pose-of", default="body", choices=["body", "camera"])
 ap.add_argument("--keyframe-poses", type=int, default=0)
+ap.add_argument("--decoded-folder", default="")
 a = ap.parse_args()
+if a.decoded_folder and a.images != "jpeg":
+    ap.error("--decoded-folder needs --images jpeg")
 mav0 = os.path.join(a.euroc, "mav0") if os.path.isdir(os.path.join(a.euroc, "mav0")) else a.euroc
 
 
@@ -77,6 +83,8 @@ names = ("/left/image_raw", "/right/image_raw") if a.images == "raw" else (
 infos = ("/left/camera_info", "/right/camera_info") if a.images == "raw" else (
     "/slave1/camera_info", "/slave2/camera_info")
 rng = random.Random(15)
+if a.decoded_folder:
+    shutil.copytree(a.euroc, a.decoded_folder)
 drop = {int(i) for i in a.drop_right.split(",") if i}
 
 camera_infos = None
@@ -196,6 +204,9 @@ with rosbag.Bag(a.out, "w", compression=a.compression) as bag:
                 else:
                     m.format = "bgr8; jpeg compressed bgr8"
                     m.data = cv2.imencode(".jpg", pixels, [cv2.IMWRITE_JPEG_QUALITY, 95])[1].tobytes()
+                    if a.decoded_folder:
+                        decoded = cv2.imdecode(np.frombuffer(m.data, np.uint8), cv2.IMREAD_UNCHANGED)
+                        cv2.imwrite(os.path.join(a.decoded_folder, os.path.relpath(payload, a.euroc)), decoded)
             m.header.stamp = t
             m.header.frame_id = "cam0" if order == 1 else "cam1"
         bag.write(topic, m, t)

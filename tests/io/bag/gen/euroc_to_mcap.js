@@ -3,6 +3,8 @@
 // Foxglove's ROS 2 serialiser, in the order a recorder would log it (by time; poses before images).
 //   IMAGES png: sensor_msgs/CompressedImage, the PNG files' bytes, on /cam0/image_raw/compressed and
 //              /cam1/image_raw/compressed;
+//          jpeg: the same topics, format "bgr8; jpeg compressed bgr8", the bytes of PIXELS_DIR/<cam>/<name>.jpg
+//              (OpenCV's JPEG at quality 95, dump_pixels.py);
 //          raw: sensor_msgs/Image (mono8 or bgr8) on /cam0/image_raw and /cam1/image_raw, the pixels from
 //              PIXELS_DIR/<cam>/<name>.raw with PIXELS_DIR/pixels.json ({width, height, channels}),
 //              which OpenCV dumped (dump_pixels.py).
@@ -21,7 +23,7 @@ const zstd = require("@foxglove/wasm-zstd");
 const lz4 = require("lz4js");
 
 const [dive, out, images, compression, pixelsDir] = process.argv.slice(2);
-if (!compression) throw new Error("usage: node euroc_to_mcap.js DIVE OUT.mcap png|raw none|zstd|lz4 [PIXELS_DIR]");
+if (!compression) throw new Error("usage: node euroc_to_mcap.js DIVE OUT.mcap png|jpeg|raw none|zstd|lz4 [PIXELS_DIR]");
 const mav0 = path.join(dive, "mav0");
 
 function definitionsOf(type) {
@@ -67,8 +69,11 @@ async function main() {
       const ns = BigInt(stamp);
       const header = { stamp: stampOf(ns), frame_id: cam };
       events.push([ns, 1 + side, `/${cam}/${suffix}`, () => {
-        if (images !== "raw") return { header, format: "png", data: fs.readFileSync(path.join(mav0, cam, "data", file)) };
         const stem = path.parse(file).name;
+        if (images === "png") return { header, format: "png", data: fs.readFileSync(path.join(mav0, cam, "data", file)) };
+        if (images === "jpeg") {
+          return { header, format: "bgr8; jpeg compressed bgr8", data: fs.readFileSync(path.join(pixelsDir, cam, `${stem}.jpg`)) };
+        }
         const data = fs.readFileSync(path.join(pixelsDir, cam, `${stem}.raw`));
         return { header, height: pixels.height, width: pixels.width, encoding: pixels.channels === 3 ? "bgr8" : "mono8",
                  is_bigendian: 0, step: pixels.width * pixels.channels, data };
