@@ -20,11 +20,13 @@ pipeline::RecordingConfig bagConfig(const std::string& config_path) {
   return config;
 }
 
-// A ROS 2 bag folder: metadata.yaml and .db3 files, or .db3 files alone (a recorder that never finished).
+// A ROS 2 bag folder: metadata.yaml (with .db3 files, or .db3.zstd ones when compressed by file), or
+// .db3 files alone (a recorder that never finished); as io::openRecording tells them.
 bool isRos2BagFolder(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::is_directory(path, ec)) return false;
+  if (fs::exists(fs::path(path) / "metadata.yaml", ec)) return true;
   for (const fs::directory_entry& e : fs::directory_iterator(path, ec))
     if (e.path().extension() == ".db3") return true;
   return false;
