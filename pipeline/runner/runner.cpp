@@ -347,13 +347,10 @@ CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const Trajec
 }
 
 bool isKeyframeTrajectory(const io::Trajectory& trajectory, const StereoDataset& dataset) {
-  std::vector<double> frames(dataset.size());
-  try {
-    for (size_t i = 0; i < frames.size(); ++i) frames[i] = dataset.timestamp(i);
-  } catch (const FailedPreconditionError&) {
-    return false;  // a recording, read front to back only: its frame times are known only in the run
-  }
-  return isKeyframeTrajectory(trajectory, std::move(frames));
+  // The frames a trajectory spans are at most the dataset's size() (a recording's: its expected
+  // pairs): as many poses as 3/4 of that are no keyframes, and a recording need not be read to know.
+  if (trajectory.size() < 2 || 4 * trajectory.size() >= 3 * dataset.size()) return false;
+  return isKeyframeTrajectory(trajectory, dataset.frameTimes());
 }
 
 bool isKeyframeTrajectory(const io::Trajectory& trajectory, std::vector<double> frames) {
