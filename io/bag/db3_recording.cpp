@@ -62,16 +62,20 @@ class Db3Recording final : public Recording {
  public:
   // `topics`: the metadata's topics of a FILE-compressed bag (its files' tables are read as each file
   // is decompressed for reading); otherwise empty, and every file's tables are read now.
+  // `sniff_messages`: no metadata says how the bag was compressed, so a message that is a zstd frame
+  // is decompressed (compression_mode MESSAGE).
   Db3Recording(std::vector<fs::path> files, std::string truncation, Db3Compression compression = Db3Compression::kNone,
-               std::vector<TopicInfo> topics = {})
+               std::vector<TopicInfo> topics = {}, bool sniff_messages = false)
       : files_(std::move(files)),
         truncation_(std::move(truncation)),
         compression_(compression),
+        sniff_messages_(sniff_messages),
         topics_(std::move(topics)) {
     topic_of_id_.resize(files_.size());
-    if (compression_ == Db3Compression::kFile) return;
+    if (compression_ == Db3Compression::kFile) return;  // the topics came from metadata.yaml
     for (std::size_t i = 0; i < files_.size(); ++i) {
-      Database db(files_[i]);
+      const std::unique_ptr<TempFile> copy = decompressedCopy(files_[i]);
+      Database db(copy ? copy->path() : files_[i], files_[i]);
       readTopics(db, i, true);
     }
     const std::vector<int> rank = sortTopicsByName(topics_);
@@ -103,7 +107,9 @@ class Db3Recording final : public Recording {
       const int size = sqlite3_column_bytes(db_->stmt_, 2);
       out.data = std::span<const std::uint8_t>(static_cast<const std::uint8_t*>(blob), static_cast<std::size_t>(size));
       out.file_offset = static_cast<std::uint64_t>(sqlite3_column_int64(db_->stmt_, 3));
-      if (compression_ == Db3Compression::kMessage) out.data = decompressed(out, topic);
+      if (compression_ == Db3Compression::kMessage || (sniff_messages_ && isZstd(out.data))) {
+        out.data = decompressed(out, topic);
+      }
       return true;
     }
   }
@@ -114,17 +120,25 @@ class Db3Recording final : public Recording {
   bool openNextFile() {
     if (file_index_ >= files_.size()) return false;
     const fs::path& file = files_[file_index_];
-    if (compression_ == Db3Compression::kFile) {
-      if (!fs::exists(file)) throw NotFoundError("cannot read ROS 2 bag file " + file.string() + ": no such file");
-      copy_ = std::make_unique<TempFile>(file.stem().string());
-      zstdDecompressFile(file, copy_->path());
-      db_ = std::make_unique<Database>(copy_->path(), file);
-      readTopics(*db_, file_index_, false);
-    } else {
-      db_ = std::make_unique<Database>(file);
-    }
+    copy_ = decompressedCopy(file);
+    db_ = std::make_unique<Database>(copy_ ? copy_->path() : file, file);
+    if (compression_ == Db3Compression::kFile) readTopics(*db_, file_index_, false);
     db_->stmt_ = db_->prepare("SELECT topic_id, timestamp, data, id FROM messages ORDER BY timestamp, id");
     return true;
+  }
+
+  // A FILE-compressed file's (.zstd) decompressed copy in the temporary folder; null for a plain file.
+  static std::unique_ptr<TempFile> decompressedCopy(const fs::path& file) {
+    if (file.extension() != ".zstd") return nullptr;
+    if (!fs::exists(file)) throw NotFoundError("cannot read ROS 2 bag file " + file.string() + ": no such file");
+    auto copy = std::make_unique<TempFile>(file.stem().string());
+    zstdDecompressFile(file, copy->path());
+    return copy;
+  }
+
+  // A zstd frame's magic number; a CDR message begins with its encapsulation (00 00, 00 01, ...).
+  static bool isZstd(std::span<const std::uint8_t> data) {
+    return data.size() >= 4 && data[0] == 0x28 && data[1] == 0xB5 && data[2] == 0x2F && data[3] == 0xFD;
   }
 
   // The bytes of a MESSAGE-compressed message, valid until the next message.
@@ -187,6 +201,7 @@ class Db3Recording final : public Recording {
   std::vector<fs::path> files_;
   std::string truncation_;
   Db3Compression compression_;
+  bool sniff_messages_;
   std::vector<TopicInfo> topics_;
   std::vector<std::map<std::int64_t, int>> topic_of_id_;  // per file: topics.id -> index in topics_, -1 not read
   std::size_t file_index_ = 0;
@@ -195,12 +210,13 @@ class Db3Recording final : public Recording {
   std::vector<std::uint8_t> message_;  // a MESSAGE-compressed message's bytes
 };
 
-// The .db3 files of a folder without metadata.yaml, by the number before ".db3" (dive_2 before dive_10).
+// The .db3 (and .db3.zstd) files of a folder without metadata.yaml, by the number before ".db3"
+// (dive_2 before dive_10).
 std::vector<fs::path> db3FilesIn(const fs::path& folder) {
   std::vector<std::pair<long long, fs::path>> found;
-  const std::regex index(R"(_(\d+)\.db3$)");
+  const std::regex index(R"(_(\d+)\.db3(\.zstd)?$)");
   for (const fs::directory_entry& e : fs::directory_iterator(folder)) {
-    if (!e.is_regular_file() || e.path().extension() != ".db3") continue;
+    if (!e.is_regular_file() || !isDb3FileName(e.path())) continue;
     std::smatch m;
     const std::string name = e.path().filename().string();
     found.emplace_back(std::regex_search(name, m, index) ? std::stoll(m[1]) : -1, e.path());
@@ -213,6 +229,14 @@ std::vector<fs::path> db3FilesIn(const fs::path& folder) {
 
 }  // namespace
 
+bool isDb3FileName(const fs::path& path) {
+  const std::string name = path.filename().string();
+  auto endsWith = [&](const std::string& suffix) {
+    return name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  };
+  return endsWith(".db3") || endsWith(".db3.zstd");
+}
+
 std::unique_ptr<Recording> openDb3Recording(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw NotFoundError("cannot read ROS 2 bag " + path.string() + ": no such file or folder");
@@ -221,9 +245,11 @@ std::unique_ptr<Recording> openDb3Recording(const fs::path& path) {
     std::vector<fs::path> files = db3FilesIn(path);
     if (files.empty())
       throw NotFoundError("cannot read ROS 2 bag " + path.string() + ": no metadata.yaml and no .db3 file in it");
+    const auto zstd = std::count_if(files.begin(), files.end(), [](const fs::path& f) { return f.extension() == ".zstd"; });
     const std::string why = "no metadata.yaml (the recorder did not finish): read the " + std::to_string(files.size()) +
-                            " .db3 file" + (files.size() == 1 ? "" : "s") + " in the folder";
-    return std::make_unique<Db3Recording>(std::move(files), why);
+                            " .db3 file" + (files.size() == 1 ? "" : "s") + " in the folder" +
+                            (zstd > 0 ? " (" + std::to_string(zstd) + " of them .db3.zstd)" : "");
+    return std::make_unique<Db3Recording>(std::move(files), why, Db3Compression::kNone, std::vector<TopicInfo>{}, true);
   }
   Db3Metadata metadata = readDb3Metadata(path);
   return std::make_unique<Db3Recording>(std::move(metadata.files), "", metadata.compression, std::move(metadata.topics));

@@ -8,7 +8,10 @@
 //   serialization_format "cdr" is MessageEncoding::kCdr, "ros1" kRos1; other formats are not topics.
 // - A folder without metadata.yaml (the recorder writes it last, so a recording cut short has none):
 //   its .db3 files in the order of their index suffix (dive_0.db3, dive_1.db3, ...), and truncation()
-//   says so. A single .db3 file is read on its own (not a truncation).
+//   says so. A single .db3 file is read on its own (not a truncation). Compression is told without
+//   metadata too: dive_0.db3.zstd files (a FILE-compressed recorder compresses each file it closes,
+//   the open one stays plain) are decompressed at open for their topics and again when read; a message
+//   whose bytes begin with zstd's magic number (28 B5 2F FD; CDR begins 00 0x) is decompressed.
 // - RecordedMessage::file_offset is the message's row id in its file.
 // - Compressed bags (db3_metadata.h: compression_format zstd): compression_mode MESSAGE, each message's
 //   bytes decompressed as it is read; compression_mode FILE (files dive_0.db3.zstd), each file
@@ -28,6 +31,9 @@
 #include "io/bag/recording.h"
 
 namespace cenote::io {
+
+/// True for a rosbag2 sqlite3 file's name: "dive_0.db3", or "dive_0.db3.zstd" (compressed by file).
+bool isDb3FileName(const std::filesystem::path& path);
 
 /// Opens a ROS 2 bag folder or a single .db3 file.
 /// @throws NotFoundError, IoError as the header says.

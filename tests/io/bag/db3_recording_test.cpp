@@ -158,6 +158,22 @@ TEST(Db3Recording, FileCompressedBagGivesEveryMessageThroughOneTemporaryCopyAtAT
   EXPECT_EQ(tmp.files(), 0u) << "each copy is removed once read";
 }
 
+TEST(Db3Recording, AnUnfinishedCompressedBagIsReadFromItsFilesAndSaysSo) {
+  const nlohmann::json want = expectedJson();
+  const TempDirScope tmp("db3_unfinished_tmp");
+  const std::unique_ptr<Recording> by_file = openDb3Recording(kData / "dive_db3_unfinished_file");
+  expectTopics(*by_file, want["topics"]);  // counted from the decompressed copy
+  EXPECT_EQ(by_file->truncation(),
+            "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder (1 of them .db3.zstd)");
+  expectMessages(*by_file, want["messages"], {});
+  EXPECT_EQ(tmp.files(), 0u);
+  const std::unique_ptr<Recording> by_message = openDb3Recording(kData / "dive_db3_unfinished_message");
+  expectTopics(*by_message, want["topics"]);
+  EXPECT_EQ(by_message->truncation(),
+            "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder");
+  expectMessages(*by_message, want["messages"], {});
+}
+
 TEST(Db3Recording, DamagedCompressionNamesTheFileTheMessageOrTheCut) {
   const nlohmann::json damaged = nlohmann::json::parse(std::ifstream(kData / "dive_db3_damaged" / "damaged.json"));
   const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_damaged");

@@ -8,6 +8,9 @@ the CDR bytes Foxglove's serialiser wrote for the MCAP files (OUT_DIR/expected.j
   dive_db3_message/    the same bag with compression_mode MESSAGE: each message's bytes zstd-compressed
   dive_db3_file/       the same bag with compression_mode FILE: dive_db3_file_0.db3.zstd, ..._1.db3.zstd
                        (the second streamed, without its content size)
+  dive_db3_unfinished_file/     no metadata.yaml, dive_db3_0.db3.zstd and dive_db3_1.db3 (a FILE-compressing
+                                recorder stopped with its second file open)
+  dive_db3_unfinished_message/  dive_db3_message's files without metadata.yaml
   dive_db3_damaged/    dive_db3_message with one message's bytes not zstd (damaged.json: its file, row id, topic)
   not_a_database.db3   text
 The tables are rosbag2's (Humble) and its zstd compression, written by rosbag2_db3.py.
@@ -95,6 +98,18 @@ shutil.rmtree(cut, ignore_errors=True)
 os.makedirs(cut)
 for name in files:
     shutil.copy(os.path.join(bag, name), cut)
+# Recorders that never finished, compressing by file (the open file still plain) or by message.
+unfinished = os.path.join(out, "dive_db3_unfinished_file")
+shutil.rmtree(unfinished, ignore_errors=True)
+os.makedirs(unfinished)
+for name in files:
+    shutil.copy(os.path.join(bag, name), unfinished)
+compress_file(os.path.join(unfinished, files[0]))
+unfinished = os.path.join(out, "dive_db3_unfinished_message")
+shutil.rmtree(unfinished, ignore_errors=True)
+shutil.copytree(os.path.join(out, "dive_db3_message"), unfinished)
+os.remove(os.path.join(unfinished, "metadata.yaml"))
+
 with open(os.path.join(out, "not_a_database.db3"), "w") as f:
     f.write("this is not a database, but it is long enough to have a header of a hundred bytes or so, "
             "which sqlite reads first and rejects\n")
