@@ -86,6 +86,15 @@ class Db3Recording final : public Recording {
 
   const std::vector<TopicInfo>& topics() const override { return topics_; }
   std::string truncation() const override { return truncation_; }
+  std::string compression() const override {
+    if (compression_ == Db3Compression::kMessage) return "zstd by message (compression_mode MESSAGE)";
+    std::error_code ec;
+    if (compression_ == Db3Compression::kFile) {
+      return "zstd by file (compression_mode FILE): each file is decompressed into " +
+             fs::temp_directory_path(ec).string() + " (TMPDIR) while it is read, one at a time";
+    }
+    return "";
+  }
 
   bool next(const std::vector<std::string>& wanted, RecordedMessage& out) override {
     while (true) {

@@ -215,6 +215,7 @@ RecordingDataset::RecordingDataset(const std::string& path, const RecordingTopic
   const io::TopicInfo& l = imageTopic(*rec, left_, path);
   const io::TopicInfo& r = imageTopic(*rec, right_, path);
   expected_ = static_cast<size_t>(std::min(l.message_count, r.message_count));
+  compression_ = rec->compression();
 
   if (!topics.calibration.empty()) {
     calibration_ = readCalibrationFile(topics.calibration);
@@ -269,7 +270,7 @@ StereoFrame RecordingDataset::load(size_t index) const {
 
 std::string RecordingDataset::describe() const {
   return "recording " + path_ + ": " + left_ + " + " + right_ + " (" + std::to_string(expected_) + " pairs expected), " +
-         calibration_source_;
+         calibration_source_ + (compression_.empty() ? "" : "; " + compression_);
 }
 
 std::unique_ptr<FrameCursor> RecordingDataset::frames() const {

@@ -65,6 +65,7 @@ class RecordingDataset final : public StereoDataset {
 
  private:
   std::string path_, left_, right_, calibration_source_;
+  std::string compression_;  // io::Recording::compression(), for describe()
   RecordingConfig config_;
   size_t expected_ = 0;
   StereoCalibration calibration_;

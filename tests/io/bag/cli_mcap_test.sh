@@ -89,6 +89,9 @@ for mode in MESSAGE FILE; do
   [ "$(json "$work/db3-$mode-out/report.json" 'd["frames_processed"]')" = $frames ] || fail "db3 $mode: frames not all processed"
   [ -z "$(ls -A "$work/tmp-$mode")" ] || fail "db3 $mode: temporary files left: $(ls "$work/tmp-$mode")"
 done
+grep -qF "zstd by message (compression_mode MESSAGE)" "$work/db3-MESSAGE.txt" || fail "the run does not say MESSAGE"
+grep -qF "zstd by file (compression_mode FILE): each file is decompressed into $work/tmp-FILE (TMPDIR) while it is read" \
+  "$work/db3-FILE.txt" || fail "the run does not say where FILE's copies go: $(head -3 "$work/db3-FILE.txt")"
 ls "$work/db3_FILE" | grep -qx "db3_FILE_0.db3.zstd" || fail "the FILE bag has no db3_FILE_0.db3.zstd: $(ls "$work/db3_FILE")"
 echo "ROS 2 .db3 bag: the folder's points and voxels, also zstd-compressed by message and by file"
 

@@ -105,6 +105,7 @@ TEST(Db3Recording, MessageCompressedBagGivesEveryMessagesBytes) {
   const nlohmann::json want = expectedJson();
   const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_message");
   expectTopics(*rec, want["topics"]);
+  EXPECT_EQ(rec->compression(), "zstd by message (compression_mode MESSAGE)");
   expectMessages(*rec, want["messages"], {});
 }
 
@@ -122,6 +123,7 @@ class TempDirScope {
     if (old_) setenv("TMPDIR", old_->c_str(), 1);
     else unsetenv("TMPDIR");
   }
+  const fs::path& path() const { return dir_; }
   std::size_t files() const { return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir_), {})); }
 
  private:
@@ -135,6 +137,8 @@ TEST(Db3Recording, FileCompressedBagGivesEveryMessageThroughOneTemporaryCopyAtAT
   {
     const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_file");
     EXPECT_EQ(tmp.files(), 0u) << "nothing is decompressed before reading";
+    EXPECT_EQ(rec->compression(), "zstd by file (compression_mode FILE): each file is decompressed into " +
+                                      tmp.path().string() + " (TMPDIR) while it is read, one at a time");
     // Topics and counts from metadata.yaml; each topic spans the bag's time span.
     std::int64_t first = std::numeric_limits<std::int64_t>::max(), last = 0;
     for (const auto& m : want["messages"]) {
