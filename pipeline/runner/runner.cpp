@@ -19,6 +19,7 @@
 #include "pipeline/calibration/rectifier.h"
 #include "io/image/image_io.h"
 #include "pipeline/fusion/outlier_removal.h"
+#include "pipeline/runner/depth_index.h"
 #include "pipeline/runner/frame_pipeline.h"
 #include "pipeline/frame/frame_admission.h"
 #include "pipeline/runner/point_output.h"
@@ -136,11 +137,16 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
 
   // Output on this thread.
   try {
+    // The maps' camera beside them (depth_index.h), for `cenote fuse` on this folder.
+    std::optional<DepthIndexWriter> depth_index;
+    if (rc.write_depth) depth_index.emplace((fs::path(out_dir) / "depth" / "frames.csv").string());
     while (std::optional<FusedOutput> item = stages.pop()) {
       const auto t0 = Clock::now();
       const double cpu0_ms = threadCpuMs();
       if (rc.write_depth) {
-        const std::string base = (fs::path(out_dir) / "depth" / names.take(item->frame.t_s)).string();
+        const std::string name = names.take(item->frame.t_s);
+        const std::string base = (fs::path(out_dir) / "depth" / name).string();
+        depth_index->add({name, item->frame.t_s, item->frame.K, item->frame.T_world_cam});
         io::writePfm(base + ".depth.pfm", item->frame.depth);
         io::writePfm(base + ".conf.pfm", item->frame.confidence);
         // The rectified left image beside its maps (JPEG: a tenth of a PNG's encoding time).

@@ -12,7 +12,9 @@
 // Outputs in the output folder: points.ply (fused coloured points, world frame), and with
 // run.write_depth, depth/<name>.depth.pfm, .conf.pfm and .jpg (the rectified left image) of every
 // fused (or raw) frame, <name>
-// being the dataset's own (StereoDataset::frameName: EuRoC nanoseconds, KITTI 000123).
+// being the dataset's own (StereoDataset::frameName: EuRoC nanoseconds, KITTI 000123), and
+// depth/frames.csv with each map's time, rectified intrinsics and pose (depth_index.h; `cenote fuse
+// --depth-dir OUT` reads it).
 // Threads: run() blocks; it uses four threads plus OpenMP inside stereo and fusion.
 #pragma once
 

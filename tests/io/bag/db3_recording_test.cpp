@@ -35,6 +35,17 @@ void expectMessages(Recording& rec, const nlohmann::json& want, const std::vecto
   EXPECT_FALSE(rec.next(wanted, m)) << "more messages than written after " << i;
 }
 
+// The bag kData/name: expected.json's topics and every message's bytes, with these truncation and
+// compression lines.
+void expectBag(const std::string& name, const std::string& truncation, const std::string& compression) {
+  const nlohmann::json want = expectedJson();
+  const std::unique_ptr<Recording> rec = openDb3Recording(kData / name);
+  expectTopics(*rec, want["topics"]);
+  EXPECT_EQ(rec->truncation(), truncation);
+  EXPECT_EQ(rec->compression(), compression);
+  expectMessages(*rec, want["messages"], {});
+}
+
 TEST(Db3Recording, TopicsCountsAndTimeSpansOfBothFiles) {
   const nlohmann::json want = expectedJson();
   const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3");
@@ -56,11 +67,7 @@ TEST(Db3Recording, OnlyTheWantedTopics) {
 }
 
 TEST(Db3Recording, ABagWithoutMetadataIsReadFromItsFilesAndSaysSo) {
-  const nlohmann::json want = expectedJson();
-  const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_cut");
-  expectTopics(*rec, want["topics"]);
-  EXPECT_EQ(rec->truncation(), "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder");
-  expectMessages(*rec, want["messages"], {});
+  expectBag("dive_db3_cut", "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder", "");
 }
 
 TEST(Db3Recording, OneDb3FileOnItsOwn) {
@@ -102,11 +109,7 @@ TEST(Db3Recording, MissingBagAndMissingListedFile) {
 }
 
 TEST(Db3Recording, MessageCompressedBagGivesEveryMessagesBytes) {
-  const nlohmann::json want = expectedJson();
-  const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_message");
-  expectTopics(*rec, want["topics"]);
-  EXPECT_EQ(rec->compression(), "zstd by message (compression_mode MESSAGE)");
-  expectMessages(*rec, want["messages"], {});
+  expectBag("dive_db3_message", "", "zstd by message (compression_mode MESSAGE)");
 }
 
 // A folder of its own as TMPDIR for the test's lifetime, to see the decompressed copies come and go.
@@ -163,19 +166,14 @@ TEST(Db3Recording, FileCompressedBagGivesEveryMessageThroughOneTemporaryCopyAtAT
 }
 
 TEST(Db3Recording, AnUnfinishedCompressedBagIsReadFromItsFilesAndSaysSo) {
-  const nlohmann::json want = expectedJson();
   const TempDirScope tmp("db3_unfinished_tmp");
-  const std::unique_ptr<Recording> by_file = openDb3Recording(kData / "dive_db3_unfinished_file");
-  expectTopics(*by_file, want["topics"]);  // counted from the decompressed copy
-  EXPECT_EQ(by_file->truncation(),
-            "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder (1 of them .db3.zstd)");
-  expectMessages(*by_file, want["messages"], {});
+  // Topics counted from the compressed file's decompressed copy; nothing says how the bag was compressed.
+  expectBag("dive_db3_unfinished_file",
+            "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder (1 of them .db3.zstd)",
+            "");
   EXPECT_EQ(tmp.files(), 0u);
-  const std::unique_ptr<Recording> by_message = openDb3Recording(kData / "dive_db3_unfinished_message");
-  expectTopics(*by_message, want["topics"]);
-  EXPECT_EQ(by_message->truncation(),
-            "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder");
-  expectMessages(*by_message, want["messages"], {});
+  expectBag("dive_db3_unfinished_message",
+            "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder", "");
 }
 
 TEST(Db3Recording, DamagedCompressionNamesTheFileTheMessageOrTheCut) {
