@@ -81,6 +81,7 @@ void info(const std::string& path) {
     }
     std::cout << "compression: " << (line.empty() ? "no chunks" : line) << "\n";
   }
+  if (!rec->compression().empty()) std::cout << "compression: " << rec->compression() << "\n";
   const char* label = "types:       ";
   for (const std::string& t : types) {
     std::cout << label << t << "\n";

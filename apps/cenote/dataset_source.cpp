@@ -4,6 +4,7 @@
 
 #include "common/error.h"
 #include "common/yaml_section.h"
+#include "io/bag/db3_recording.h"
 #include "pipeline/dataset/recording_dataset.h"
 
 namespace cenote::apps {
@@ -20,13 +21,15 @@ pipeline::RecordingConfig bagConfig(const std::string& config_path) {
   return config;
 }
 
-// A ROS 2 bag folder: metadata.yaml and .db3 files, or .db3 files alone (a recorder that never finished).
+// A ROS 2 bag folder: metadata.yaml (with .db3 files, or .db3.zstd ones when compressed by file), or
+// .db3 / .db3.zstd files alone (a recorder that never finished); as io::openRecording tells them.
 bool isRos2BagFolder(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::is_directory(path, ec)) return false;
+  if (fs::exists(fs::path(path) / "metadata.yaml", ec)) return true;
   for (const fs::directory_entry& e : fs::directory_iterator(path, ec))
-    if (e.path().extension() == ".db3") return true;
+    if (io::isDb3FileName(e.path())) return true;
   return false;
 }
 

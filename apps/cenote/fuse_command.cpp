@@ -3,6 +3,10 @@
 //   DEPTH_DIR/<timestamp>.conf.pfm    confidence (optional; 1 where absent)
 //   COLOR_DIR/<timestamp>.png         left image (optional, with --color-dir)
 //   trajectory                        TUM text, T_world_cam, matched by timestamp
+// or the output folder of `cenote run --write-depth` (OUT or OUT/depth): its depth/frames.csv
+// (pipeline/runner/depth_index.h) names each map and gives its time, intrinsics and pose, and the
+// <name>.jpg beside each map colours the points; --trajectory and --intrinsics are then not given.
+// A run with --fusion-views 1 writes the raw stereo maps, so fusing its folder is the run's fusion.
 // Writes OUT/<timestamp>.depth.pfm and .conf.pfm per fused reference frame (optionally a 16-bit
 // millimetre PNG and a colour-mapped preview) and one merged OUT/points.ply.
 #include <algorithm>
@@ -20,6 +24,7 @@
 #include "common/yaml_section.h"
 #include "common/pose_check.h"
 #include "pipeline/fusion/fusion_window.h"
+#include "pipeline/runner/depth_index.h"
 #include "io/image/image_io.h"
 #include "io/cloud/ply_io.h"
 #include "io/trajectory/tum_trajectory.h"
@@ -43,9 +48,17 @@ struct FuseOptions {
 };
 
 struct InputFrame {
-  std::string stamp;  // the file name's timestamp text, reused for the outputs
+  std::string stamp;  // the file name's timestamp text (a run's frame name), reused for the outputs
   double t_s = 0.0;
   Eigen::Isometry3d T_world_cam;
+};
+
+// The frames of a depth folder, their intrinsics, and where their colour images are.
+struct InputFolder {
+  std::string depth_dir;
+  std::vector<InputFrame> frames;
+  Eigen::Matrix3d K;
+  std::string color_dir, color_ext = ".png";  // color_dir empty: no colours
 };
 
 pipeline::FusionConfig makeConfig(const FuseOptions& o) {
@@ -75,7 +88,6 @@ Eigen::Matrix3d parseIntrinsics(const std::string& text) {
 
 // Every <timestamp>.depth.pfm of the folder, in time order, each with its pose.
 std::vector<InputFrame> listFrames(const FuseOptions& o, const io::TumTrajectory& trajectory) {
-  if (!fs::is_directory(o.depth_dir)) throw Error("--depth-dir " + o.depth_dir + ": not a directory");
   std::vector<InputFrame> frames;
   for (const auto& entry : fs::directory_iterator(o.depth_dir)) {
     const std::string name = entry.path().filename().string();
@@ -115,15 +127,51 @@ std::vector<InputFrame> listFrames(const FuseOptions& o, const io::TumTrajectory
 
 std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
 
-pipeline::DepthFrame loadFrame(const FuseOptions& o, const InputFrame& in, const Eigen::Matrix3d& K) {
+// The frames `cenote run --write-depth` wrote into `dir`, by its frames.csv, in time order.
+InputFolder runFolder(const FuseOptions& o, const std::string& dir) {
+  const std::string index = (fs::path(dir) / "frames.csv").string();
+  if (!o.trajectory.empty() || !o.intrinsics.empty()) {
+    throw Error("--depth-dir " + o.depth_dir + " is a `cenote run --write-depth` output (" + index +
+                " gives each map's pose and intrinsics): give neither --trajectory nor --intrinsics");
+  }
+  InputFolder in{dir, {}, Eigen::Matrix3d::Identity(), dir, ".jpg"};
+  const std::vector<pipeline::DepthIndexRow> rows = pipeline::readDepthIndex(index);
+  if (rows.empty()) throw Error(index + ": no depth maps listed");
+  in.K = rows.front().K;
+  for (const pipeline::DepthIndexRow& row : rows) {
+    if (row.K != in.K) throw Error(index + ": " + row.name + " has other intrinsics than " + rows.front().name);
+    in.frames.push_back({row.name, row.t_s, row.T_world_cam});
+  }
+  std::stable_sort(in.frames.begin(), in.frames.end(),
+                   [](const InputFrame& a, const InputFrame& b) { return a.t_s < b.t_s; });
+  if (!o.color_dir.empty()) in.color_dir = o.color_dir, in.color_ext = ".png";
+  return in;
+}
+
+// The depth folder as given: run's output folder (OUT or OUT/depth) when it holds frames.csv, else
+// <timestamp>.depth.pfm files with --trajectory and --intrinsics.
+InputFolder inputFolder(const FuseOptions& o) {
+  if (!fs::is_directory(o.depth_dir)) throw Error("--depth-dir " + o.depth_dir + ": not a directory");
+  for (const fs::path dir : {fs::path(o.depth_dir), fs::path(o.depth_dir) / "depth"}) {
+    if (fs::exists(dir / "frames.csv")) return runFolder(o, dir.string());
+  }
+  if (o.trajectory.empty() || o.intrinsics.empty()) {
+    throw Error("--depth-dir " + o.depth_dir + ": give --trajectory and --intrinsics (or the output folder of `cenote " +
+                "run --write-depth`, whose depth/frames.csv gives them)");
+  }
+  const io::TumTrajectory trajectory = io::TumTrajectory::read(o.trajectory);
+  return {o.depth_dir, listFrames(o, trajectory), parseIntrinsics(o.intrinsics), o.color_dir, ".png"};
+}
+
+pipeline::DepthFrame loadFrame(const InputFolder& folder, const InputFrame& in) {
   pipeline::DepthFrame frame;
   frame.t_s = in.t_s;
-  frame.K = K;
+  frame.K = folder.K;
   frame.T_world_cam = in.T_world_cam;
-  const std::string depth_path = (fs::path(o.depth_dir) / (in.stamp + kDepthSuffix)).string();
+  const std::string depth_path = (fs::path(folder.depth_dir) / (in.stamp + kDepthSuffix)).string();
   frame.depth = io::readPfm(depth_path);
   if (frame.depth.type() != CV_32FC1) throw Error(depth_path + ": depth must be a single-channel PFM");
-  const std::string conf_path = (fs::path(o.depth_dir) / (in.stamp + kConfidenceSuffix)).string();
+  const std::string conf_path = (fs::path(folder.depth_dir) / (in.stamp + kConfidenceSuffix)).string();
   if (fs::exists(conf_path)) {
     frame.confidence = io::readPfm(conf_path);
     if (frame.confidence.type() != CV_32FC1 || frame.confidence.size() != frame.depth.size()) {
@@ -133,8 +181,8 @@ pipeline::DepthFrame loadFrame(const FuseOptions& o, const InputFrame& in, const
   } else {
     frame.confidence = cv::Mat(frame.depth.size(), CV_32F, cv::Scalar(1.0f));
   }
-  if (!o.color_dir.empty()) {
-    const std::string color_path = (fs::path(o.color_dir) / (in.stamp + ".png")).string();
+  if (!folder.color_dir.empty()) {
+    const std::string color_path = (fs::path(folder.color_dir) / (in.stamp + folder.color_ext)).string();
     frame.color = io::readImage(color_path, cv::IMREAD_COLOR);
     if (frame.color.size() != frame.depth.size()) {
       throw Error(color_path + " is " + sizeText(frame.color) + " but " + depth_path + " is " + sizeText(frame.depth));
@@ -145,9 +193,8 @@ pipeline::DepthFrame loadFrame(const FuseOptions& o, const InputFrame& in, const
 
 void run(const FuseOptions& o) {
   const pipeline::FusionConfig config = makeConfig(o);
-  const Eigen::Matrix3d K = parseIntrinsics(o.intrinsics);
-  const io::TumTrajectory trajectory = io::TumTrajectory::read(o.trajectory);
-  const std::vector<InputFrame> frames = listFrames(o, trajectory);
+  const InputFolder folder = inputFolder(o);
+  const std::vector<InputFrame>& frames = folder.frames;
   if (static_cast<int>(frames.size()) < config.num_views) {
     throw Error("--depth-dir " + o.depth_dir + ": " + std::to_string(frames.size()) + " depth maps (*" + kDepthSuffix +
                 "), fusion of " + std::to_string(config.num_views) + " views needs at least that many");
@@ -162,13 +209,13 @@ void run(const FuseOptions& o) {
   int fused_frames = 0;
   double fusion_ms = 0.0;
   for (size_t i = 0; i < frames.size(); ++i) {
-    const pipeline::DepthFrame frame = loadFrame(o, frames[i], K);
+    const pipeline::DepthFrame frame = loadFrame(folder, frames[i]);
     const auto start = std::chrono::steady_clock::now();
     const pipeline::FusedFrame* fused;
     try {
       fused = window.push(frame);
     } catch (const Error& e) {
-      throw Error(std::string(e.what()) + " (" + o.depth_dir + "/" + frames[i].stamp + kDepthSuffix + ")");
+      throw Error(std::string(e.what()) + " (" + folder.depth_dir + "/" + frames[i].stamp + kDepthSuffix + ")");
     }
     fusion_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (!fused) continue;
@@ -195,10 +242,12 @@ void run(const FuseOptions& o) {
 void registerFuseCommand(CLI::App& app) {
   auto options = std::make_shared<FuseOptions>();
   CLI::App* cmd = app.add_subcommand("fuse", "Fuse a folder of depth maps with poses into cleaner depth and points");
-  cmd->add_option("--depth-dir", options->depth_dir, "Folder of <timestamp>.depth.pfm (+ optional .conf.pfm)")->required();
-  cmd->add_option("--trajectory", options->trajectory, "TUM trajectory (t tx ty tz qx qy qz qw), camera to world")
+  cmd->add_option("--depth-dir", options->depth_dir,
+                  "Folder of <timestamp>.depth.pfm (+ optional .conf.pfm), or a `cenote run --write-depth` output folder")
       ->required();
-  cmd->add_option("--intrinsics", options->intrinsics, "Pinhole intrinsics FX,FY,CX,CY in pixels")->required();
+  cmd->add_option("--trajectory", options->trajectory,
+                  "TUM trajectory (t tx ty tz qx qy qz qw), camera to world (not for a run's folder)");
+  cmd->add_option("--intrinsics", options->intrinsics, "Pinhole intrinsics FX,FY,CX,CY in pixels (not for a run's folder)");
   cmd->add_option("--color-dir", options->color_dir, "Folder of <timestamp>.png left images (colours the points)");
   cmd->add_option("--config", options->config, "YAML file with a `fusion:` section");
   cmd->add_option("--views", options->views, "Views in the window, odd >= 3 (default 3)");

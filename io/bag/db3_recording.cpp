@@ -6,8 +6,9 @@
 #include <regex>
 
 #include "common/error.h"
-#include "common/yaml_section.h"
+#include "io/bag/db3_metadata.h"
 #include "io/bag/mcap_recording.h"
+#include "io/bag/zstd_stream.h"
 
 namespace cenote::io {
 namespace {
@@ -17,9 +18,10 @@ namespace fs = std::filesystem;
 // One .db3 file opened read-only; closes itself.
 class Database {
  public:
-  explicit Database(const fs::path& path) : path_(path.string()) {
+  // Opens `path`; errors name `name` (the bag's file when `path` is its decompressed copy).
+  explicit Database(const fs::path& path, const fs::path& name = {}) : path_(name.empty() ? path.string() : name.string()) {
     if (!fs::exists(path)) throw NotFoundError("cannot read ROS 2 bag file " + path_ + ": no such file");
-    if (sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) fail("cannot open");
+    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) fail("cannot open");
   }
   ~Database() {
     if (stmt_) sqlite3_finalize(stmt_);
@@ -58,9 +60,24 @@ std::string column(sqlite3_stmt* stmt, int i) {
 
 class Db3Recording final : public Recording {
  public:
-  Db3Recording(std::vector<fs::path> files, std::string truncation)
-      : files_(std::move(files)), truncation_(std::move(truncation)) {
-    for (const fs::path& file : files_) readTopics(file);
+  // `topics`: the metadata's topics of a FILE-compressed bag (its files' tables are read as each file
+  // is decompressed for reading); otherwise empty, and every file's tables are read now.
+  // `sniff_messages`: no metadata says how the bag was compressed, so a message that is a zstd frame
+  // is decompressed (compression_mode MESSAGE).
+  Db3Recording(std::vector<fs::path> files, std::string truncation, Db3Compression compression = Db3Compression::kNone,
+               std::vector<TopicInfo> topics = {}, bool sniff_messages = false)
+      : files_(std::move(files)),
+        truncation_(std::move(truncation)),
+        compression_(compression),
+        sniff_messages_(sniff_messages),
+        topics_(std::move(topics)) {
+    topic_of_id_.resize(files_.size());
+    if (compression_ == Db3Compression::kFile) return;  // the topics came from metadata.yaml
+    for (std::size_t i = 0; i < files_.size(); ++i) {
+      const std::unique_ptr<TempFile> copy = decompressedCopy(files_[i]);
+      Database db(copy ? copy->path() : files_[i], files_[i]);
+      readTopics(db, i, true);
+    }
     const std::vector<int> rank = sortTopicsByName(topics_);
     for (auto& ids : topic_of_id_)
       for (auto& [id, topic] : ids)
@@ -69,16 +86,22 @@ class Db3Recording final : public Recording {
 
   const std::vector<TopicInfo>& topics() const override { return topics_; }
   std::string truncation() const override { return truncation_; }
+  std::string compression() const override {
+    if (compression_ == Db3Compression::kMessage) return "zstd by message (compression_mode MESSAGE)";
+    std::error_code ec;
+    if (compression_ == Db3Compression::kFile) {
+      return "zstd by file (compression_mode FILE): each file is decompressed into " +
+             fs::temp_directory_path(ec).string() + " (TMPDIR) while it is read, one at a time";
+    }
+    return "";
+  }
 
   bool next(const std::vector<std::string>& wanted, RecordedMessage& out) override {
     while (true) {
-      if (!db_) {
-        if (file_index_ >= files_.size()) return false;
-        db_ = std::make_unique<Database>(files_[file_index_]);
-        db_->stmt_ = db_->prepare("SELECT topic_id, timestamp, data, id FROM messages ORDER BY timestamp, id");
-      }
+      if (!db_ && !openNextFile()) return false;
       if (db_->step(db_->stmt_) == SQLITE_DONE) {
         db_.reset();
+        copy_.reset();  // the decompressed copy of a FILE-compressed file goes with it
         ++file_index_;
         continue;
       }
@@ -93,36 +116,84 @@ class Db3Recording final : public Recording {
       const int size = sqlite3_column_bytes(db_->stmt_, 2);
       out.data = std::span<const std::uint8_t>(static_cast<const std::uint8_t*>(blob), static_cast<std::size_t>(size));
       out.file_offset = static_cast<std::uint64_t>(sqlite3_column_int64(db_->stmt_, 3));
+      if (compression_ == Db3Compression::kMessage || (sniff_messages_ && isZstd(out.data))) {
+        out.data = decompressed(out, topic);
+      }
       return true;
     }
   }
 
  private:
-  void readTopics(const fs::path& file) {
-    Database db(file);
-    std::map<std::int64_t, int>& ids = topic_of_id_.emplace_back();
+  // Opens files_[file_index_] for its messages (a FILE-compressed one through a decompressed copy in
+  // the temporary folder, and its topics table then); false after the last file.
+  bool openNextFile() {
+    if (file_index_ >= files_.size()) return false;
+    const fs::path& file = files_[file_index_];
+    copy_ = decompressedCopy(file);
+    db_ = std::make_unique<Database>(copy_ ? copy_->path() : file, file);
+    if (compression_ == Db3Compression::kFile) readTopics(*db_, file_index_, false);
+    db_->stmt_ = db_->prepare("SELECT topic_id, timestamp, data, id FROM messages ORDER BY timestamp, id");
+    return true;
+  }
+
+  // A FILE-compressed file's (.zstd) decompressed copy in the temporary folder; null for a plain file.
+  static std::unique_ptr<TempFile> decompressedCopy(const fs::path& file) {
+    if (file.extension() != ".zstd") return nullptr;
+    if (!fs::exists(file)) throw NotFoundError("cannot read ROS 2 bag file " + file.string() + ": no such file");
+    auto copy = std::make_unique<TempFile>(file.stem().string());
+    zstdDecompressFile(file, copy->path());
+    return copy;
+  }
+
+  // A zstd frame's magic number; a CDR message begins with its encapsulation (00 00, 00 01, ...).
+  static bool isZstd(std::span<const std::uint8_t> data) {
+    return data.size() >= 4 && data[0] == 0x28 && data[1] == 0xB5 && data[2] == 0x2F && data[3] == 0xFD;
+  }
+
+  // The bytes of a MESSAGE-compressed message, valid until the next message.
+  std::span<const std::uint8_t> decompressed(const RecordedMessage& m, const TopicInfo& topic) {
+    try {
+      zstdDecompress(m.data, message_);
+    } catch (const IoError& e) {
+      throw IoError("ROS 2 bag file " + db_->path() + ": message (row id " + std::to_string(m.file_offset) + ") on " +
+                    topic.name + " (compression_mode MESSAGE): " + e.what());
+    }
+    return message_;
+  }
+
+  // The topics table of file `index` into topic_of_id_[index]: a topic not yet known is added (and,
+  // when `count`, the messages table's counts and time spans summed) unless topics_ came from the
+  // metadata (FILE compression), where a topic it does not list is not read.
+  void readTopics(Database& db, std::size_t index, bool count) {
+    std::map<std::int64_t, int>& ids = topic_of_id_[index];
     sqlite3_stmt* stmt = db.prepare("SELECT id, name, type, serialization_format FROM topics ORDER BY id");
     while (db.step(stmt) == SQLITE_ROW) {
-      const std::string format = column(stmt, 3);
       const std::int64_t id = sqlite3_column_int64(stmt, 0);
-      if (format != "cdr" && format != "ros1") {
+      MessageEncoding encoding{};
+      if (!db3Encoding(column(stmt, 3), encoding)) {
         ids[id] = -1;
         continue;
       }
       const std::string name = column(stmt, 1);
       const std::string type = ros1TypeName(column(stmt, 2));
-      const MessageEncoding encoding = format == "cdr" ? MessageEncoding::kCdr : MessageEncoding::kRos1;
       auto same = [&](const TopicInfo& t) { return t.name == name && t.type == type && t.encoding == encoding; };
       const auto found = std::find_if(topics_.begin(), topics_.end(), same);
       if (found != topics_.end()) {
         ids[id] = static_cast<int>(found - topics_.begin());
-      } else {
+      } else if (count) {
         topics_.push_back(TopicInfo{name, type, encoding, 0, 0, 0});
         ids[id] = static_cast<int>(topics_.size() - 1);
+      } else {
+        ids[id] = -1;
       }
     }
     sqlite3_finalize(stmt);
-    stmt = db.prepare("SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id");
+    if (count) countMessages(db, ids);
+  }
+
+  void countMessages(Database& db, const std::map<std::int64_t, int>& ids) {
+    sqlite3_stmt* stmt = db.prepare(
+        "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id");
     while (db.step(stmt) == SQLITE_ROW) {
       const auto it = ids.find(sqlite3_column_int64(stmt, 0));
       if (it == ids.end() || it->second < 0) continue;
@@ -138,18 +209,23 @@ class Db3Recording final : public Recording {
 
   std::vector<fs::path> files_;
   std::string truncation_;
+  Db3Compression compression_;
+  bool sniff_messages_;
   std::vector<TopicInfo> topics_;
   std::vector<std::map<std::int64_t, int>> topic_of_id_;  // per file: topics.id -> index in topics_, -1 not read
   std::size_t file_index_ = 0;
+  std::unique_ptr<TempFile> copy_;  // declared before db_: the database closes before its file goes
   std::unique_ptr<Database> db_;
+  std::vector<std::uint8_t> message_;  // a MESSAGE-compressed message's bytes
 };
 
-// The .db3 files of a folder without metadata.yaml, by the number before ".db3" (dive_2 before dive_10).
+// The .db3 (and .db3.zstd) files of a folder without metadata.yaml, by the number before ".db3"
+// (dive_2 before dive_10).
 std::vector<fs::path> db3FilesIn(const fs::path& folder) {
   std::vector<std::pair<long long, fs::path>> found;
-  const std::regex index(R"(_(\d+)\.db3$)");
+  const std::regex index(R"(_(\d+)\.db3(\.zstd)?$)");
   for (const fs::directory_entry& e : fs::directory_iterator(folder)) {
-    if (!e.is_regular_file() || e.path().extension() != ".db3") continue;
+    if (!e.is_regular_file() || !isDb3FileName(e.path())) continue;
     std::smatch m;
     const std::string name = e.path().filename().string();
     found.emplace_back(std::regex_search(name, m, index) ? std::stoll(m[1]) : -1, e.path());
@@ -162,42 +238,30 @@ std::vector<fs::path> db3FilesIn(const fs::path& folder) {
 
 }  // namespace
 
+bool isDb3FileName(const fs::path& path) {
+  const std::string name = path.filename().string();
+  auto endsWith = [&](const std::string& suffix) {
+    return name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  };
+  return endsWith(".db3") || endsWith(".db3.zstd");
+}
+
 std::unique_ptr<Recording> openDb3Recording(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw NotFoundError("cannot read ROS 2 bag " + path.string() + ": no such file or folder");
   if (!fs::is_directory(path, ec)) return std::make_unique<Db3Recording>(std::vector<fs::path>{path}, "");
-  const fs::path metadata = path / "metadata.yaml";
-  if (!fs::exists(metadata, ec)) {
+  if (!fs::exists(path / "metadata.yaml", ec)) {
     std::vector<fs::path> files = db3FilesIn(path);
     if (files.empty())
       throw NotFoundError("cannot read ROS 2 bag " + path.string() + ": no metadata.yaml and no .db3 file in it");
+    const auto zstd = std::count_if(files.begin(), files.end(), [](const fs::path& f) { return f.extension() == ".zstd"; });
     const std::string why = "no metadata.yaml (the recorder did not finish): read the " + std::to_string(files.size()) +
-                            " .db3 file" + (files.size() == 1 ? "" : "s") + " in the folder";
-    return std::make_unique<Db3Recording>(std::move(files), why);
+                            " .db3 file" + (files.size() == 1 ? "" : "s") + " in the folder" +
+                            (zstd > 0 ? " (" + std::to_string(zstd) + " of them .db3.zstd)" : "");
+    return std::make_unique<Db3Recording>(std::move(files), why, Db3Compression::kNone, std::vector<TopicInfo>{}, true);
   }
-  const YAML::Node root = loadYamlFile(metadata.string());
-  const YAML::Node info = root["rosbag2_bagfile_information"];
-  const std::string where = metadata.string() + ": rosbag2_bagfile_information";
-  if (!info || !info.IsMap()) throw IoError(metadata.string() + ": no rosbag2_bagfile_information mapping");
-  try {
-    const std::string storage = info["storage_identifier"] ? info["storage_identifier"].as<std::string>() : "sqlite3";
-    if (storage != "sqlite3")
-      throw IoError(where + ".storage_identifier is '" + storage +
-                    "'; this reader reads sqlite3 (open an mcap "
-                    "bag's .mcap file itself)");
-    const std::string compression = info["compression_mode"] ? info["compression_mode"].as<std::string>() : "";
-    if (!compression.empty() && compression != "NONE")
-      throw IoError(where + ".compression_mode is '" + compression +
-                    "': compressed bags are not read; convert it first (ros2 bag convert)");
-    const YAML::Node paths = info["relative_file_paths"];
-    if (!paths || !paths.IsSequence() || paths.size() == 0)
-      throw IoError(where + ".relative_file_paths: expected a non-empty list of .db3 files");
-    std::vector<fs::path> files;
-    for (const YAML::Node& p : paths) files.push_back(path / p.as<std::string>());
-    return std::make_unique<Db3Recording>(std::move(files), "");
-  } catch (const YAML::Exception& e) {
-    throw IoError(where + ": " + e.what());
-  }
+  Db3Metadata metadata = readDb3Metadata(path);
+  return std::make_unique<Db3Recording>(std::move(metadata.files), "", metadata.compression, std::move(metadata.topics));
 }
 
 }  // namespace cenote::io

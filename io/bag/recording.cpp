@@ -44,7 +44,7 @@ std::unique_ptr<Recording> openRecording(const std::filesystem::path& path) {
   if (std::filesystem::is_directory(path, ec)) {
     if (std::filesystem::exists(path / "metadata.yaml", ec)) return openDb3Recording(path);
     for (const auto& entry : std::filesystem::directory_iterator(path, ec))
-      if (entry.path().extension() == ".db3") return openDb3Recording(path);  // a recording never finished
+      if (isDb3FileName(entry.path())) return openDb3Recording(path);  // a recording never finished
     throw Error("recording " + path.string() + ": a folder, but not a ROS 2 bag (no metadata.yaml, no .db3 file)");
   }
   char head[16] = {};
@@ -55,8 +55,10 @@ std::unique_ptr<Recording> openRecording(const std::filesystem::path& path) {
   if (n >= 9 && std::memcmp(head, "#ROSBAG V", 9) == 0) return std::make_unique<Ros1Bag>(path);
   if (n >= 8 && std::memcmp(head, "\x89MCAP0\r\n", 8) == 0) return openMcapRecording(path);
   if (n >= 16 && std::memcmp(head, "SQLite format 3", 16) == 0) return openDb3Recording(path);
+  if (n >= 4 && std::memcmp(head, "\x28\xB5\x2F\xFD", 4) == 0 && isDb3FileName(path)) return openDb3Recording(path);
   throw IoError("recording " + path.string() +
-                ": not a ROS 1 bag ('#ROSBAG V2.0'), an MCAP file or a ROS 2 bag (.db3, or a folder with metadata.yaml)");
+                ": not a ROS 1 bag ('#ROSBAG V2.0'), an MCAP file or a ROS 2 bag (.db3, .db3.zstd, or a folder with "
+                "metadata.yaml)");
 }
 
 }  // namespace cenote::io

@@ -54,6 +54,10 @@ class Recording {
   /// what was lost ("bag dive.bag, byte 1234 (chunk): bz2 data are corrupt (...); skipped the chunk
   /// (of its 24 messages: 12 on /left, 12 on /right)"). A damaged chunk loses its messages, not the rest.
   virtual std::vector<std::string> skipped() const { return {}; }
+
+  /// How the container as a whole is compressed, for a person, when it says more than its chunks do
+  /// (a rosbag2 bag: "zstd by message", "zstd by file: ..." with where the copies go); empty otherwise.
+  virtual std::string compression() const { return ""; }
 };
 
 /// One line of Recording::skipped(): `damage` ("...; skipped the chunk"), then the messages the

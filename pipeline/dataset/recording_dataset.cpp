@@ -53,7 +53,11 @@ const io::TopicInfo& imageTopic(const io::Recording& rec, const std::string& nam
   return *t;
 }
 
-std::int64_t imageStampNs(const io::RecordedMessage& m) {
+// The stamp of an image message read in the run's pass, its fields parsed (views of its bytes: no
+// pixel is decoded or copied) so that a malformed message fails the pass, where the run reports it.
+// Reading the header stamp alone (io::decodeHeaderStampNs) costs the same within measurement
+// (docs/PERFORMANCE.md) and would defer that failure to the frame's load().
+std::int64_t checkedImageStampNs(const io::RecordedMessage& m) {
   return m.topic->type == kImage ? io::decodeImage(m).stamp_ns : io::decodeCompressedImage(m).stamp_ns;
 }
 
@@ -81,8 +85,12 @@ struct HeldImage {
 
 class RecordingCursor final : public FrameCursor {
  public:
-  RecordingCursor(const std::string& path, const std::string& left, const std::string& right, const RecordingConfig& config)
-      : rec_(io::openRecording(path)),
+  // `hold_images` false: pairs by stamp without keeping the images' bytes (timestamps only; load()
+  // then has nothing to decode).
+  RecordingCursor(const std::string& path, const std::string& left, const std::string& right, const RecordingConfig& config,
+                  bool hold_images = true)
+      : hold_images_(hold_images),
+        rec_(io::openRecording(path)),
         left_(findTopic(*rec_, left)),
         wanted_{left, right},
         pairer_(static_cast<std::int64_t>(std::llround(config.sync_tolerance_s * 1e9)),
@@ -102,9 +110,11 @@ class RecordingCursor final : public FrameCursor {
         ended_ = true;
         continue;
       }
-      const std::int64_t stamp = imageStampNs(m);
-      pairer_.push(m.topic == left_ ? StereoSide::kLeft : StereoSide::kRight, stamp,
-                   HeldImage{m.topic, m.file_offset, std::vector<std::uint8_t>(m.data.begin(), m.data.end())});
+      // A timestamps-only pass reads the header stamp alone.
+      const std::int64_t stamp = hold_images_ ? checkedImageStampNs(m) : io::decodeHeaderStampNs(m);
+      HeldImage image{m.topic, m.file_offset, {}};
+      if (hold_images_) image.bytes.assign(m.data.begin(), m.data.end());
+      pairer_.push(m.topic == left_ ? StereoSide::kLeft : StereoSide::kRight, stamp, std::move(image));
     }
   }
   double timestamp() const override { return seconds(current_.left.stamp_ns); }
@@ -125,6 +135,7 @@ class RecordingCursor final : public FrameCursor {
   std::vector<std::string> skipped() const override { return rec_->skipped(); }
 
  private:
+  bool hold_images_;
   std::unique_ptr<io::Recording> rec_;
   const io::TopicInfo* left_;
   std::vector<std::string> wanted_;
@@ -204,6 +215,7 @@ RecordingDataset::RecordingDataset(const std::string& path, const RecordingTopic
   const io::TopicInfo& l = imageTopic(*rec, left_, path);
   const io::TopicInfo& r = imageTopic(*rec, right_, path);
   expected_ = static_cast<size_t>(std::min(l.message_count, r.message_count));
+  compression_ = rec->compression();
 
   if (!topics.calibration.empty()) {
     calibration_ = readCalibrationFile(topics.calibration);
@@ -258,11 +270,18 @@ StereoFrame RecordingDataset::load(size_t index) const {
 
 std::string RecordingDataset::describe() const {
   return "recording " + path_ + ": " + left_ + " + " + right_ + " (" + std::to_string(expected_) + " pairs expected), " +
-         calibration_source_;
+         calibration_source_ + (compression_.empty() ? "" : "; " + compression_);
 }
 
 std::unique_ptr<FrameCursor> RecordingDataset::frames() const {
   return std::make_unique<RecordingCursor>(path_, left_, right_, config_);
+}
+
+std::vector<double> RecordingDataset::frameTimes() const {
+  RecordingCursor cursor(path_, left_, right_, config_, false);
+  std::vector<double> times;
+  while (cursor.next()) times.push_back(cursor.timestamp());
+  return times;
 }
 
 io::Trajectory readPoseTopic(const std::string& path, const std::string& topic, const std::string& parent,

@@ -56,12 +56,16 @@ class RecordingDataset final : public StereoDataset {
   std::optional<TrajectorySource> defaultTrajectory() const override { return std::nullopt; }
   std::string describe() const override;
   std::unique_ptr<FrameCursor> frames() const override;
+  // The stamps of the pairs frames() gives, from one pass that reads the images' header stamps and
+  // pairs them as frames() does, holding no image. @throws as frames()'s next().
+  std::vector<double> frameTimes() const override;
 
   const std::string& leftTopic() const { return left_; }
   const std::string& rightTopic() const { return right_; }
 
  private:
   std::string path_, left_, right_, calibration_source_;
+  std::string compression_;  // io::Recording::compression(), for describe()
   RecordingConfig config_;
   size_t expected_ = 0;
   StereoCalibration calibration_;

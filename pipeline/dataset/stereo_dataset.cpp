@@ -68,6 +68,12 @@ class IndexCursor final : public FrameCursor {
 
 std::unique_ptr<FrameCursor> StereoDataset::frames() const { return std::make_unique<IndexCursor>(*this); }
 
+std::vector<double> StereoDataset::frameTimes() const {
+  std::vector<double> times(size());
+  for (size_t i = 0; i < times.size(); ++i) times[i] = timestamp(i);
+  return times;
+}
+
 std::unique_ptr<StereoDataset> openDataset(const std::string& path, DatasetFormat format) {
   if (!fs::exists(path)) throw Error("dataset " + path + ": no such folder");
   if (format == DatasetFormat::kAuto) {

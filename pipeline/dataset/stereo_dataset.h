@@ -82,6 +82,10 @@ class StereoDataset {
   virtual std::string describe() const = 0;
   // The frames front to back (the default walks index 0 .. size() - 1).
   virtual std::unique_ptr<FrameCursor> frames() const;
+  // The timestamps of the frames frames() gives, in its order, without loading an image (the default
+  // asks timestamp(i); a recording reads its image topics' header stamps in a pass of their own).
+  // @throws cenote::Error for what reading the frames throws.
+  virtual std::vector<double> frameTimes() const;
 };
 
 enum class DatasetFormat { kAuto, kEuroc, kKitti, kPaper, kRecording };

@@ -19,6 +19,7 @@
 #include "pipeline/calibration/rectifier.h"
 #include "io/image/image_io.h"
 #include "pipeline/fusion/outlier_removal.h"
+#include "pipeline/runner/depth_index.h"
 #include "pipeline/runner/frame_pipeline.h"
 #include "pipeline/frame/frame_admission.h"
 #include "pipeline/runner/point_output.h"
@@ -136,11 +137,16 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
 
   // Output on this thread.
   try {
+    // The maps' camera beside them (depth_index.h), for `cenote fuse` on this folder.
+    std::optional<DepthIndexWriter> depth_index;
+    if (rc.write_depth) depth_index.emplace((fs::path(out_dir) / "depth" / "frames.csv").string());
     while (std::optional<FusedOutput> item = stages.pop()) {
       const auto t0 = Clock::now();
       const double cpu0_ms = threadCpuMs();
       if (rc.write_depth) {
-        const std::string base = (fs::path(out_dir) / "depth" / names.take(item->frame.t_s)).string();
+        const std::string name = names.take(item->frame.t_s);
+        const std::string base = (fs::path(out_dir) / "depth" / name).string();
+        depth_index->add({name, item->frame.t_s, item->frame.K, item->frame.T_world_cam});
         io::writePfm(base + ".depth.pfm", item->frame.depth);
         io::writePfm(base + ".conf.pfm", item->frame.confidence);
         // The rectified left image beside its maps (JPEG: a tenth of a PNG's encoding time).
@@ -347,13 +353,10 @@ CameraTrajectory loadCameraTrajectory(const StereoDataset& dataset, const Trajec
 }
 
 bool isKeyframeTrajectory(const io::Trajectory& trajectory, const StereoDataset& dataset) {
-  std::vector<double> frames(dataset.size());
-  try {
-    for (size_t i = 0; i < frames.size(); ++i) frames[i] = dataset.timestamp(i);
-  } catch (const FailedPreconditionError&) {
-    return false;  // a recording, read front to back only: its frame times are known only in the run
-  }
-  return isKeyframeTrajectory(trajectory, std::move(frames));
+  // The frames a trajectory spans are at most the dataset's size() (a recording's: its expected
+  // pairs): as many poses as 3/4 of that are no keyframes, and a recording need not be read to know.
+  if (trajectory.size() < 2 || 4 * trajectory.size() >= 3 * dataset.size()) return false;
+  return isKeyframeTrajectory(trajectory, dataset.frameTimes());
 }
 
 bool isKeyframeTrajectory(const io::Trajectory& trajectory, std::vector<double> frames) {

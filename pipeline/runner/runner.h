@@ -12,7 +12,9 @@
 // Outputs in the output folder: points.ply (fused coloured points, world frame), and with
 // run.write_depth, depth/<name>.depth.pfm, .conf.pfm and .jpg (the rectified left image) of every
 // fused (or raw) frame, <name>
-// being the dataset's own (StereoDataset::frameName: EuRoC nanoseconds, KITTI 000123).
+// being the dataset's own (StereoDataset::frameName: EuRoC nanoseconds, KITTI 000123), and
+// depth/frames.csv with each map's time, rectified intrinsics and pose (depth_index.h; `cenote fuse
+// --depth-dir OUT` reads it).
 // Threads: run() blocks; it uses four threads plus OpenMP inside stereo and fusion.
 #pragma once
 
@@ -121,8 +123,9 @@ struct CameraTrajectory {
 // True when `trajectory` holds keyframes only, as VIO systems write them (OKVIS / SVIn2 keyframe
 // poses, ORB-SLAM3's KeyFrameTrajectory.txt): at least 2 poses, every pose at the timestamp of one of
 // the dataset's frames (within 1 us), and fewer poses than 3/4 of the frames between its first and
-// last pose. Interpolating between keyframes seconds apart would invent poses. False for a dataset
-// whose frames are known only when read front to back (a recording).
+// last pose. Interpolating between keyframes seconds apart would invent poses. The frame times are
+// dataset.frameTimes(): a recording is read once for its pairs' header stamps (no image held or
+// decoded), unless the pose count alone rules keyframes out. @throws Error from that reading.
 bool isKeyframeTrajectory(const io::Trajectory& trajectory, const StereoDataset& dataset);
 // The same test against frame times (seconds, any order): a recording's, read with its pose topic.
 bool isKeyframeTrajectory(const io::Trajectory& trajectory, std::vector<double> frame_times);

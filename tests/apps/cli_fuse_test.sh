@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# End-to-end test of `cenote fuse`: a generated folder fuses, bad input fails with a clear message.
+# End-to-end test of `cenote fuse`: a generated folder fuses, bad input fails with a clear message; a
+# `cenote run --write-depth` folder of raw maps fuses into the fused run's points.
 #   cli_fuse_test.sh CENOTE MAKE_FUSION_FOLDER
 set -euo pipefail
 cenote=$1
@@ -48,4 +49,36 @@ expect_error 1 "101.500000.conf.pfm is 2x2 (or not single-channel) but" fuse --d
 rm "$work/small/color/101.000000.png"
 expect_error 1 "101.000000.png: no such file" fuse --depth-dir "$work/in/depth" --color-dir "$work/small/color" \
   --intrinsics "$intrinsics" --trajectory "$work/in/traj.txt" --out "$work/o7"
+# A `cenote run --write-depth` folder directly (its depth/frames.csv: names, times, intrinsics, poses):
+# fusing the raw stereo maps of a run without fusion (--fusion-views 1) gives the fused run's points,
+# the same positions bit for bit; the colours come from the run's JPEG images of the rectified left.
+"$cenote" sim --scene reef --frames 8 --width 320 --height 240 --quiet --out "$work/dive" >/dev/null 2>&1 ||
+  fail "cenote sim failed"
+"$cenote" run --dataset "$work/dive" --fusion-views 1 --write-depth --out "$work/raw" >/dev/null 2>&1 || fail "run (raw) failed"
+"$cenote" run --dataset "$work/dive" --out "$work/fused" >/dev/null 2>&1 || fail "run (fused) failed"
+"$cenote" fuse --depth-dir "$work/raw" --out "$work/refused" >"$work/stdout" || fail "fuse on run's folder failed"
+fused=$(/usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['frames_fused'])" "$work/fused/report.json")
+grep -q "fused $fused of 8 frames" "$work/stdout" || fail "fuse on run's folder: $(cat "$work/stdout"), the run fused $fused"
+/usr/bin/python3 - "$work/fused/points.ply" "$work/refused/points.ply" <<'PY' || fail "fuse on run's folder: other points"
+import sys
+import numpy as np
+def read(path):  # a binary little-endian PLY's vertices
+    data = open(path, "rb").read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    lines = data[:end].decode().splitlines()
+    count = int(next(l for l in lines if l.startswith("element vertex")).split()[2])
+    types = {"float": "<f4", "double": "<f8", "uchar": "u1"}
+    dtype = np.dtype([(l.split()[2], types[l.split()[1]]) for l in lines if l.startswith("property")])
+    return np.frombuffer(data, dtype=dtype, count=count, offset=end)
+run, fuse = read(sys.argv[1]), read(sys.argv[2])
+assert len(run) == len(fuse) > 100000, (len(run), len(fuse))
+for axis in "xyz":
+    assert np.array_equal(run[axis], fuse[axis]), axis
+colour = np.mean([np.abs(run[c].astype(int) - fuse[c].astype(int)).mean() for c in ("red", "green", "blue")])
+assert colour < 4.0, colour  # JPEG at the run's quality
+print(f"fuse on run's folder: {len(run)} points at the run's positions, colours {colour:.2f} / 255 apart")
+PY
+expect_error 1 "is a \`cenote run --write-depth\` output" fuse --depth-dir "$work/raw/depth" --intrinsics "$intrinsics" \
+  --out "$work/o8"
+expect_error 1 "give --trajectory and --intrinsics" fuse --depth-dir "$work/in/depth" --out "$work/o9"
 echo "cli_fuse_test: all checks passed"

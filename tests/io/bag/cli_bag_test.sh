@@ -5,8 +5,8 @@
 # or PNG images and uncompressed, bz2 or lz4 chunks, and with the calibration from CameraInfo and
 # poses from TF; with JPEG at quality 95 the points and voxels of OpenCV's decoding of the same bytes,
 # and at least 99 % of the voxels agreeing within one voxel with the folder's (strictly about 92 %). Jittered right stamps with one right image
-# dropped: every other frame paired, one unpaired image counted. A keyframe-only pose topic gives
-# keyframe-only processing. A bag cut mid-chunk runs and says where it stopped; a damaged chunk is
+# dropped: every other frame paired, one unpaired image counted. A keyframe-only pose topic or TUM
+# file gives keyframe-only processing. A bag cut mid-chunk runs and says where it stopped; a damaged chunk is
 # stepped over and named. Memory does not grow with the bag. Bad input: the exact messages.
 # Usage: cli_bag_test.sh <cenote binary> <source dir>
 set -u
@@ -115,6 +115,21 @@ done
 grep -q "note: the poses are keyframes only ($keyframes): only the frames at a keyframe are processed" "$work/keyframes.txt" ||
   fail "keyframe-only pose topic: no note"
 cmp -s "$work/keyframes-folder-out/points.ply" "$work/keyframes-out/points.ply" || fail "keyframes: points differ from the folder's"
+# Keyframes at every 2nd image as a TUM file (ORB-SLAM3's KeyFrameTrajectory.txt) for the bag: its
+# stamp-paired frames are read once for their header stamps to tell, and only the 12 keyframes are
+# processed (interpolating within pose_max_gap_s would pose 23), as in the folder run on the same file.
+awk '!/^#/ { if (k++ % 2 == 0) print }' "$work/dive/groundtruth/cam0.tum" >"$work/keyframes2.tum"
+run keyframes2-folder --dataset "$work/dive" --trajectory "$work/keyframes2.tum" --pose-frame camera
+run keyframes2-bag --dataset "$work/raw-none.bag" --trajectory "$work/keyframes2.tum" --pose-frame camera \
+  --calibration "$calib"
+for name in keyframes2-folder keyframes2-bag; do
+  [ "$(json "$work/$name-out/report.json" 'd.get("pose_keyframes_only")')" = $((frames / 2)) ] ||
+    fail "$name: keyframe-only poses not reported"
+  [ "$(json "$work/$name-out/report.json" 'd["frames_processed"]')" = $((frames / 2)) ] ||
+    fail "$name: $(json "$work/$name-out/report.json" 'd["frames_processed"]') frames processed, not the $((frames / 2)) keyframes"
+done
+cmp -s "$work/keyframes2-folder-out/points.ply" "$work/keyframes2-bag-out/points.ply" ||
+  fail "keyframes2.tum on the bag: points differ from the folder's"
 [ "$(json "$work/raw-none-out/report.json" "'pose_keyframes_only' in d")" = False ] || fail "200 Hz poses taken as keyframes"
 
 # A bag cut mid-chunk (the recorder killed): every complete message before the cut, and where.

@@ -5,7 +5,8 @@
 # byte, and the same voxels as the folder it came from, with raw (sensor_msgs/Image) or PNG
 # (CompressedImage) images and uncompressed, zstd or lz4 chunks; with JPEG images at quality 95 those of
 # OpenCV's decoding of the same bytes, and the folder's voxels within one voxel; so does a ROS 2 sqlite3 bag of the
-# same messages (mcap_to_db3.py), with or without its metadata.yaml. A recording cut short runs to the
+# same messages (mcap_to_db3.py), with or without its metadata.yaml, or compressed by rosbag2's zstd
+# compression of each message or each file. A recording cut short runs to the
 # cut and says where it stopped. A damaged chunk is skipped and named, the other frames as in the folder.
 # Usage: cli_mcap_test.sh <cenote binary> <source dir> <build dir of tests/io/bag/gen (node_modules)>
 set -u
@@ -76,7 +77,23 @@ run db3-unfinished --dataset "$work/dive_db3" --left /cam0/image_raw --right /ca
 cmp -s "$work/euroc-out/points.ply" "$work/db3-unfinished-out/points.ply" || fail "db3 without metadata.yaml: other points"
 grep -q "no metadata.yaml (the recorder did not finish): read the 1 .db3 file in the folder" "$work/db3-unfinished.txt" ||
   fail "a bag without metadata.yaml is not reported: $(grep -i metadata "$work/db3-unfinished.txt")"
-echo "ROS 2 .db3 bag: the folder's points and voxels"
+# rosbag2's zstd compression (mcap_to_db3.py MESSAGE / FILE, python3-zstandard): the uncompressed
+# bag's points byte for byte; FILE's decompressed copy lives in TMPDIR while it is read, then goes.
+for mode in MESSAGE FILE; do
+  $py "$source_dir/tests/io/bag/gen/mcap_to_db3.py" "$work/raw-none.mcap" "$work/db3_$mode" $mode ||
+    fail "mcap_to_db3.py $mode failed"
+  mkdir -p "$work/tmp-$mode"
+  TMPDIR="$work/tmp-$mode" run "db3-$mode" --dataset "$work/db3_$mode" --left /cam0/image_raw --right /cam1/image_raw \
+    --pose-topic /odom --pose-frame body --calibration "$work/dive/mav0/cam0/sensor.yaml"
+  cmp -s "$work/db3-out/points.ply" "$work/db3-$mode-out/points.ply" || fail "db3 $mode: points.ply differs from the plain bag's"
+  [ "$(json "$work/db3-$mode-out/report.json" 'd["frames_processed"]')" = $frames ] || fail "db3 $mode: frames not all processed"
+  [ -z "$(ls -A "$work/tmp-$mode")" ] || fail "db3 $mode: temporary files left: $(ls "$work/tmp-$mode")"
+done
+grep -qF "zstd by message (compression_mode MESSAGE)" "$work/db3-MESSAGE.txt" || fail "the run does not say MESSAGE"
+grep -qF "zstd by file (compression_mode FILE): each file is decompressed into $work/tmp-FILE (TMPDIR) while it is read" \
+  "$work/db3-FILE.txt" || fail "the run does not say where FILE's copies go: $(head -3 "$work/db3-FILE.txt")"
+ls "$work/db3_FILE" | grep -qx "db3_FILE_0.db3.zstd" || fail "the FILE bag has no db3_FILE_0.db3.zstd: $(ls "$work/db3_FILE")"
+echo "ROS 2 .db3 bag: the folder's points and voxels, also zstd-compressed by message and by file"
 
 # `cenote bag info` lists the MCAP's topics with their counts.
 "$cenote" bag info "$work/raw-zstd.mcap" >"$work/info.txt" 2>&1 || fail "cenote bag info failed: $(cat "$work/info.txt")"

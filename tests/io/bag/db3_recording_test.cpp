@@ -1,12 +1,16 @@
 // ROS 2 sqlite3 bags written by Python's sqlite3 in rosbag2's tables (tests/io/bag/gen/gen_db3.py) with
 // the CDR bytes of Foxglove's serialiser: topics, counts, time spans and every message's bytes in
-// timestamp order across the bag's two files; a bag whose recorder never wrote metadata.yaml; the
-// errors for a file that is not a database and for a missing bag.
+// timestamp order across the bag's two files; a bag whose recorder never wrote metadata.yaml; the same
+// bag with rosbag2's zstd compression (python3-zstandard) of each message and of each file; the
+// errors for a file that is not a database, a missing bag, damaged or unknown compression.
 #include "io/bag/db3_recording.h"
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
@@ -31,6 +35,17 @@ void expectMessages(Recording& rec, const nlohmann::json& want, const std::vecto
   EXPECT_FALSE(rec.next(wanted, m)) << "more messages than written after " << i;
 }
 
+// The bag kData/name: expected.json's topics and every message's bytes, with these truncation and
+// compression lines.
+void expectBag(const std::string& name, const std::string& truncation, const std::string& compression) {
+  const nlohmann::json want = expectedJson();
+  const std::unique_ptr<Recording> rec = openDb3Recording(kData / name);
+  expectTopics(*rec, want["topics"]);
+  EXPECT_EQ(rec->truncation(), truncation);
+  EXPECT_EQ(rec->compression(), compression);
+  expectMessages(*rec, want["messages"], {});
+}
+
 TEST(Db3Recording, TopicsCountsAndTimeSpansOfBothFiles) {
   const nlohmann::json want = expectedJson();
   const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3");
@@ -52,11 +67,7 @@ TEST(Db3Recording, OnlyTheWantedTopics) {
 }
 
 TEST(Db3Recording, ABagWithoutMetadataIsReadFromItsFilesAndSaysSo) {
-  const nlohmann::json want = expectedJson();
-  const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_cut");
-  expectTopics(*rec, want["topics"]);
-  EXPECT_EQ(rec->truncation(), "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder");
-  expectMessages(*rec, want["messages"], {});
+  expectBag("dive_db3_cut", "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder", "");
 }
 
 TEST(Db3Recording, OneDb3FileOnItsOwn) {
@@ -97,20 +108,127 @@ TEST(Db3Recording, MissingBagAndMissingListedFile) {
   }
 }
 
-TEST(Db3Recording, CompressedBagIsAClearError) {
-  const fs::path bag = fs::path(::testing::TempDir()) / "compressed_bag";
-  fs::create_directories(bag);
-  std::ofstream(bag / "metadata.yaml") << "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n"
-                                          "  compression_format: zstd\n  compression_mode: FILE\n"
-                                          "  relative_file_paths: [dive_0.db3.zstd]\n";
+TEST(Db3Recording, MessageCompressedBagGivesEveryMessagesBytes) {
+  expectBag("dive_db3_message", "", "zstd by message (compression_mode MESSAGE)");
+}
+
+// A folder of its own as TMPDIR for the test's lifetime, to see the decompressed copies come and go.
+class TempDirScope {
+ public:
+  explicit TempDirScope(const std::string& name) : dir_(fs::path(::testing::TempDir()) / name) {
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    const char* old = std::getenv("TMPDIR");
+    if (old) old_ = old;
+    setenv("TMPDIR", dir_.c_str(), 1);
+  }
+  ~TempDirScope() {
+    if (old_) setenv("TMPDIR", old_->c_str(), 1);
+    else unsetenv("TMPDIR");
+  }
+  const fs::path& path() const { return dir_; }
+  std::size_t files() const { return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir_), {})); }
+
+ private:
+  fs::path dir_;
+  std::optional<std::string> old_;
+};
+
+TEST(Db3Recording, FileCompressedBagGivesEveryMessageThroughOneTemporaryCopyAtATime) {
+  const nlohmann::json want = expectedJson();
+  const TempDirScope tmp("db3_file_tmp");
+  {
+    const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_file");
+    EXPECT_EQ(tmp.files(), 0u) << "nothing is decompressed before reading";
+    EXPECT_EQ(rec->compression(), "zstd by file (compression_mode FILE): each file is decompressed into " +
+                                      tmp.path().string() + " (TMPDIR) while it is read, one at a time");
+    // Topics and counts from metadata.yaml; each topic spans the bag's time span.
+    std::int64_t first = std::numeric_limits<std::int64_t>::max(), last = 0;
+    for (const auto& m : want["messages"]) {
+      first = std::min<std::int64_t>(first, std::stoll(m["log_time_ns"].get<std::string>()));
+      last = std::max<std::int64_t>(last, std::stoll(m["log_time_ns"].get<std::string>()));
+    }
+    nlohmann::json topics = want["topics"];
+    for (auto& t : topics) {
+      t["first_ns"] = std::to_string(first);
+      t["last_ns"] = std::to_string(last);
+    }
+    expectTopics(*rec, topics);
+    RecordedMessage m;
+    ASSERT_TRUE(rec->next({}, m));
+    EXPECT_EQ(tmp.files(), 1u) << "the first file's decompressed copy";
+    EXPECT_EQ(Bytes(m.data.begin(), m.data.end()), fromHex(want["messages"][0]["data"]));
+  }
+  EXPECT_EQ(tmp.files(), 0u) << "the copy is removed with the recording";
+  const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_file");
+  expectMessages(*rec, want["messages"], {});  // the second file streamed, without its content size
+  EXPECT_EQ(tmp.files(), 0u) << "each copy is removed once read";
+}
+
+TEST(Db3Recording, AnUnfinishedCompressedBagIsReadFromItsFilesAndSaysSo) {
+  const TempDirScope tmp("db3_unfinished_tmp");
+  // Topics counted from the compressed file's decompressed copy; nothing says how the bag was compressed.
+  expectBag("dive_db3_unfinished_file",
+            "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder (1 of them .db3.zstd)",
+            "");
+  EXPECT_EQ(tmp.files(), 0u);
+  expectBag("dive_db3_unfinished_message",
+            "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder", "");
+}
+
+TEST(Db3Recording, DamagedCompressionNamesTheFileTheMessageOrTheCut) {
+  const nlohmann::json damaged = nlohmann::json::parse(std::ifstream(kData / "dive_db3_damaged" / "damaged.json"));
+  const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_damaged");
+  RecordedMessage m;
   try {
-    openDb3Recording(bag);
+    while (rec->next({}, m)) {
+    }
     FAIL() << "expected an IoError";
   } catch (const IoError& e) {
-    EXPECT_EQ(std::string(e.what()), (bag / "metadata.yaml").string() +
-                                         ": rosbag2_bagfile_information.compression_mode is 'FILE': compressed bags "
-                                         "are not read; convert it first (ros2 bag convert)");
+    EXPECT_EQ(std::string(e.what()), "ROS 2 bag file " + (kData / "dive_db3_damaged" / damaged["file"]).string() +
+                                         ": message (row id " + std::to_string(damaged["row_id"].get<int>()) + ") on " +
+                                         damaged["topic"].get<std::string>() +
+                                         " (compression_mode MESSAGE): zstd: not a zstd frame");
   }
+  // A FILE-compressed file cut short.
+  const TempDirScope tmp("db3_cut_tmp");
+  const fs::path bag = fs::path(::testing::TempDir()) / "db3_file_cut";
+  fs::remove_all(bag);
+  fs::copy(kData / "dive_db3_file", bag);
+  const fs::path file = bag / "dive_db3_file_0.db3.zstd";
+  fs::resize_file(file, fs::file_size(file) / 2);
+  const std::unique_ptr<Recording> cut = openDb3Recording(bag);
+  try {
+    cut->next({}, m);
+    FAIL() << "expected an IoError";
+  } catch (const IoError& e) {
+    EXPECT_EQ(std::string(e.what()), file.string() + ": zstd: the file ends inside a frame (cut short)");
+  }
+}
+
+TEST(Db3Recording, UnknownCompressionIsAClearErrorNamingIt) {
+  const fs::path bag = fs::path(::testing::TempDir()) / "compressed_bag";
+  fs::create_directories(bag);
+  const std::string where = (bag / "metadata.yaml").string() + ": rosbag2_bagfile_information.";
+  auto error = [&](const std::string& format, const std::string& mode) {
+    std::ofstream(bag / "metadata.yaml") << "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n"
+                                            "  compression_format: "
+                                         << format << "\n  compression_mode: " << mode
+                                         << "\n  relative_file_paths: [dive_0.db3.lz4]\n";
+    try {
+      openDb3Recording(bag);
+    } catch (const IoError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error("lz4", "FILE"), where +
+                                      "compression_format is 'lz4' (compression_mode FILE): this reader decompresses "
+                                      "zstd, the compressor rosbag2 ships; decompress the bag first (ros2 bag convert)");
+  EXPECT_EQ(error("\"\"", "message"),
+            where + "compression_format is '' (compression_mode message): this reader decompresses "
+                    "zstd, the compressor rosbag2 ships; decompress the bag first (ros2 bag convert)");
+  EXPECT_EQ(error("zstd", "CHUNK"), where + "compression_mode is 'CHUNK': rosbag2 writes NONE, FILE or MESSAGE");
 }
 
 }  // namespace

@@ -5,59 +5,111 @@ the CDR bytes Foxglove's serialiser wrote for the MCAP files (OUT_DIR/expected.j
   dive_db3/            metadata.yaml + dive_db3_0.db3, dive_db3_1.db3 (split in time, as rosbag2 splits),
                        rows inserted out of time order, a topic of another serialisation format
   dive_db3_cut/        the same .db3 files without metadata.yaml (a recorder that never finished)
+  dive_db3_message/    the same bag with compression_mode MESSAGE: each message's bytes zstd-compressed
+  dive_db3_file/       the same bag with compression_mode FILE: dive_db3_file_0.db3.zstd, ..._1.db3.zstd
+                       (the second streamed, without its content size)
+  dive_db3_unfinished_file/     no metadata.yaml, dive_db3_0.db3.zstd and dive_db3_1.db3 (a FILE-compressing
+                                recorder stopped with its second file open)
+  dive_db3_unfinished_message/  dive_db3_message's files without metadata.yaml
+  dive_db3_damaged/    dive_db3_message with one message's bytes not zstd (damaged.json: its file, row id, topic)
   not_a_database.db3   text
-The tables are rosbag2's (Humble), written by rosbag2_db3.py.
+The tables are rosbag2's (Humble) and its zstd compression, written by rosbag2_db3.py.
 """
 import json
 import os
 import random
 import shutil
+import sqlite3
 import sys
 
-from rosbag2_db3 import create_db3, metadata_yaml
+from rosbag2_db3 import compress_file, compress_message, create_db3, metadata_yaml
 
 out = sys.argv[1]
 with open(os.path.join(out, "expected.json")) as f:
     expected = json.load(f)
 
-bag = os.path.join(out, "dive_db3")
-shutil.rmtree(bag, ignore_errors=True)
-os.makedirs(bag)
 messages = expected["messages"]
 split = len(messages) // 2  # the first half in file 0, the rest in file 1
-files = ["dive_db3_0.db3", "dive_db3_1.db3"]
-rng = random.Random(15)
-for index, name in enumerate(files):
-    part = messages[:split] if index == 0 else messages[split:]
-    db = create_db3(os.path.join(bag, name))
-    # Topic ids differ between the files (each file numbers its own topics), in another order.
-    topics = expected["topics"] if index == 0 else list(reversed(expected["topics"]))
-    ids = {}
-    for i, t in enumerate(topics):
-        ids[t["name"]] = i + 1 + 10 * index
-        ros2type = t["type"].replace("/", "/msg/", 1)
-        db.execute("INSERT INTO topics VALUES (?, ?, ?, 'cdr', '')", (ids[t["name"]], t["name"], ros2type))
-    db.execute("INSERT INTO topics VALUES (99, '/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'json', '')")
-    rows = [(ids[m["topic"]], int(m["log_time_ns"]), bytes.fromhex(m["data"])) for m in part]
-    rows.append((99, int(part[0]["log_time_ns"]), b'{"level":0}'))
-    order = list(range(len(rows)))
-    rng.shuffle(order)  # row ids out of time order: the reader must sort by timestamp
-    for row_id, k in enumerate(order):
-        db.execute("INSERT INTO messages VALUES (?, ?, ?, ?)", (row_id + 1,) + rows[k])
-    db.commit()
-    db.close()
-
 topics = [(t["name"], t["type"].replace("/", "/msg/", 1), "cdr", t["count"]) for t in expected["topics"]]
 first = min(int(m["log_time_ns"]) for m in messages)
 last = max(int(m["log_time_ns"]) for m in messages)
-with open(os.path.join(bag, "metadata.yaml"), "w") as f:
-    f.write(metadata_yaml(topics, len(messages), files, first, last))
+
+
+def write_bag(name, compression_mode=""):
+    """The bag OUT_DIR/name in two files, compressed as rosbag2's compression_mode says."""
+    bag = os.path.join(out, name)
+    shutil.rmtree(bag, ignore_errors=True)
+    os.makedirs(bag)
+    files = [f"{name}_0.db3", f"{name}_1.db3"]
+    rng = random.Random(15)
+    for index, file in enumerate(files):
+        part = messages[:split] if index == 0 else messages[split:]
+        db = create_db3(os.path.join(bag, file))
+        # Topic ids differ between the files (each file numbers its own topics), in another order.
+        ordered = expected["topics"] if index == 0 else list(reversed(expected["topics"]))
+        ids = {}
+        for i, t in enumerate(ordered):
+            ids[t["name"]] = i + 1 + 10 * index
+            ros2type = t["type"].replace("/", "/msg/", 1)
+            db.execute("INSERT INTO topics VALUES (?, ?, ?, 'cdr', '')", (ids[t["name"]], t["name"], ros2type))
+        db.execute("INSERT INTO topics VALUES (99, '/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'json', '')")
+        rows = [(ids[m["topic"]], int(m["log_time_ns"]), bytes.fromhex(m["data"])) for m in part]
+        rows.append((99, int(part[0]["log_time_ns"]), b'{"level":0}'))
+        if compression_mode == "MESSAGE":
+            rows = [(topic, stamp, compress_message(data)) for topic, stamp, data in rows]
+        order = list(range(len(rows)))
+        rng.shuffle(order)  # row ids out of time order: the reader must sort by timestamp
+        for row_id, k in enumerate(order):
+            db.execute("INSERT INTO messages VALUES (?, ?, ?, ?)", (row_id + 1,) + rows[k])
+        db.commit()
+        db.close()
+        if compression_mode == "FILE":
+            files[index] = compress_file(os.path.join(bag, file), streamed=index == 1)
+    with open(os.path.join(bag, "metadata.yaml"), "w") as f:
+        f.write(metadata_yaml(topics, len(messages), files, first, last, compression_mode))
+    return bag, files
+
+
+bag, files = write_bag("dive_db3")
+write_bag("dive_db3_message", "MESSAGE")
+write_bag("dive_db3_file", "FILE")
+
+# One MESSAGE-compressed message's bytes replaced by bytes that are not zstd.
+damaged = os.path.join(out, "dive_db3_damaged")
+shutil.rmtree(damaged, ignore_errors=True)
+shutil.copytree(os.path.join(out, "dive_db3_message"), damaged)
+os.rename(os.path.join(damaged, "dive_db3_message_1.db3"), os.path.join(damaged, "dive_db3_damaged_1.db3"))
+with open(os.path.join(damaged, "metadata.yaml")) as f:
+    text = f.read().replace("dive_db3_message_1.db3", "dive_db3_damaged_1.db3")
+with open(os.path.join(damaged, "metadata.yaml"), "w") as f:
+    f.write(text)
+db = sqlite3.connect(os.path.join(damaged, "dive_db3_damaged_1.db3"))
+row_id, topic = db.execute("SELECT messages.id, topics.name FROM messages JOIN topics ON topics.id = topic_id "
+                           "WHERE topics.serialization_format = 'cdr' ORDER BY timestamp, messages.id LIMIT 1 OFFSET 3"
+                           ).fetchone()
+db.execute("UPDATE messages SET data = ? WHERE id = ?", (b"\x00\x01\x00\x00not zstd", row_id))
+db.commit()
+db.close()
+with open(os.path.join(damaged, "damaged.json"), "w") as f:
+    json.dump({"file": "dive_db3_damaged_1.db3", "row_id": row_id, "topic": topic}, f)
 
 cut = os.path.join(out, "dive_db3_cut")
 shutil.rmtree(cut, ignore_errors=True)
 os.makedirs(cut)
 for name in files:
     shutil.copy(os.path.join(bag, name), cut)
+# Recorders that never finished, compressing by file (the open file still plain) or by message.
+unfinished = os.path.join(out, "dive_db3_unfinished_file")
+shutil.rmtree(unfinished, ignore_errors=True)
+os.makedirs(unfinished)
+for name in files:
+    shutil.copy(os.path.join(bag, name), unfinished)
+compress_file(os.path.join(unfinished, files[0]))
+unfinished = os.path.join(out, "dive_db3_unfinished_message")
+shutil.rmtree(unfinished, ignore_errors=True)
+shutil.copytree(os.path.join(out, "dive_db3_message"), unfinished)
+os.remove(os.path.join(unfinished, "metadata.yaml"))
+
 with open(os.path.join(out, "not_a_database.db3"), "w") as f:
     f.write("this is not a database, but it is long enough to have a header of a hundred bytes or so, "
             "which sqlite reads first and rejects\n")

@@ -1,15 +1,19 @@
 #!/usr/bin/env python3
-"""mcap_to_db3.py IN.mcap OUT_DIR: an MCAP recording with uncompressed chunks (as euroc_to_mcap.js writes it
-with compression none) rewritten as a ROS 2 sqlite3 bag: OUT_DIR/metadata.yaml and OUT_DIR/<name>_0.db3 in
-rosbag2's tables (Humble), written by Python's own sqlite3, the CDR message bytes unchanged. The MCAP
-records are read as the specification lays them out (mcap.dev/spec): opcode u8, length u64, fields."""
+"""mcap_to_db3.py IN.mcap OUT_DIR [MESSAGE|FILE]: an MCAP recording with uncompressed chunks (as
+euroc_to_mcap.js writes it with compression none) rewritten as a ROS 2 sqlite3 bag: OUT_DIR/metadata.yaml
+and OUT_DIR/<name>_0.db3 in rosbag2's tables (Humble), written by Python's own sqlite3, the CDR message
+bytes unchanged; with MESSAGE each message's bytes zstd-compressed, with FILE the file compressed whole
+(<name>_0.db3.zstd, streamed), as rosbag2's compression_mode does (rosbag2_db3.py). The MCAP records are
+read as the specification lays them out (mcap.dev/spec): opcode u8, length u64, fields."""
 import os
 import struct
 import sys
 
-from rosbag2_db3 import create_db3, metadata_yaml
+from rosbag2_db3 import compress_file, compress_message, create_db3, metadata_yaml
 
 src, out = sys.argv[1:3]
+mode = sys.argv[3] if len(sys.argv) > 3 else ""
+assert mode in ("", "MESSAGE", "FILE"), "compression mode: MESSAGE or FILE"
 data = open(src, "rb").read()
 assert data[:8] == b"\x89MCAP0\r\n", "not an MCAP file"
 
@@ -56,10 +60,14 @@ name = os.path.basename(os.path.normpath(out)) + "_0.db3"
 db = create_db3(os.path.join(out, name))
 for cid, (topic, type_name, encoding) in channels.items():
     db.execute("INSERT INTO topics VALUES (?, ?, ?, ?, '')", (cid, topic, type_name, encoding))
-db.executemany("INSERT INTO messages (topic_id, timestamp, data) VALUES (?, ?, ?)", messages)
+rows = [(cid, t, compress_message(data) if mode == "MESSAGE" else data) for cid, t, data in messages]
+db.executemany("INSERT INTO messages (topic_id, timestamp, data) VALUES (?, ?, ?)", rows)
 db.commit()
 db.close()
+if mode == "FILE":
+    name = compress_file(os.path.join(out, name), streamed=True)
 topics = [(topic, type_name, encoding, sum(1 for m in messages if m[0] == cid))
           for cid, (topic, type_name, encoding) in channels.items()]
 with open(os.path.join(out, "metadata.yaml"), "w") as f:
-    f.write(metadata_yaml(topics, len(messages), [name]))
+    f.write(metadata_yaml(topics, len(messages), [name], min(m[1] for m in messages), max(m[1] for m in messages),
+                          compression_mode=mode))
