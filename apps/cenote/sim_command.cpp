@@ -72,7 +72,7 @@ void run(const SimOptions& o) {
   const sim::SimDatasetSummary summary = sim::writeSimDataset(simulator, o.out, [&](int done) {
     if (!o.quiet) bar.update(static_cast<size_t>(done), total);
   });
-  const sim::PinholeCamera& cam = simulator.rig().camera;
+  const PinholeCamera& cam = simulator.rig().camera;
   std::printf("simulated %d frames of the %s scene (%dx%d, f = %.2f px, baseline %.3f m, %zu triangles) into %s\n",
               summary.frames, sim::toString(config.scene), cam.width, cam.height, cam.fx, config.baseline_m,
               simulator.scene().mesh.numTriangles(), o.out.c_str());

@@ -62,7 +62,7 @@ std::vector<PointBatch> surveyFrames(uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> xy(-3.0, 3.0), r(0.2, 0.8);
   for (int i = 0; i < 8; ++i) scene.spheres.push_back({Eigen::Vector3d(xy(rng) + 4.0, xy(rng), -2.0), r(rng)});
-  const test::PinholeCamera camera{.width = 320, .height = 240, .fx = 240.0, .fy = 240.0, .cx = 159.5, .cy = 119.5};
+  const PinholeCamera camera{.width = 320, .height = 240, .fx = 240.0, .fy = 240.0, .cx = 159.5, .cy = 119.5};
   std::vector<PointBatch> frames;
   for (int f = 0; f < 6; ++f) {
     const Eigen::Vector3d position(0.37 * f + 0.013, 0.21 * f - 0.6, 0.3 + 0.05 * f);

@@ -38,7 +38,7 @@ MapConfig config() {
 // object (at most 1 % of the samples); the floor three voxels below a surface point is unknown.
 TEST(ProjectiveIntegration, OccupiedOnTheSurfaceFreeBeforeItUnknownBehind) {
   const test::Scene scene = floorScene();
-  const test::PinholeCamera camera;
+  const PinholeCamera camera = test::kCamera;
   const DepthFrame frame = test::renderDepth(scene, camera, floorPose(), 12.0);
   OccupancyMap map(config());
   const MapDelta delta = map.integrateDepth(frame);
@@ -75,7 +75,7 @@ TEST(ProjectiveIntegration, OccupiedOnTheSurfaceFreeBeforeItUnknownBehind) {
 }
 
 TEST(ProjectiveIntegration, PixelsWithoutDepthCarveNothing) {
-  const test::PinholeCamera camera;
+  const PinholeCamera camera = test::kCamera;
   DepthFrame frame = test::renderDepth(floorScene(), camera, floorPose(), 12.0);
   // A hole in the middle of the image (a stereo hole): the space in front of it stays unknown.
   for (int v = 40; v < 80; ++v) {
@@ -109,7 +109,7 @@ TEST(ProjectiveIntegration, PixelsWithoutDepthCarveNothing) {
 // just before each surface, which projection leaves alone.
 TEST(ProjectiveIntegration, AgreesWithRayIntegrationOfTheSameView) {
   const test::Scene scene = floorScene();
-  const test::PinholeCamera camera;
+  const PinholeCamera camera = test::kCamera;
   MapConfig c = config();
   c.ray_stop_run = 0;
   OccupancyMap rays(c), projected(c);
@@ -147,7 +147,7 @@ TEST(ProjectiveIntegration, AgreesWithRayIntegrationOfTheSameView) {
 }
 
 TEST(ProjectiveIntegration, SameMapForAnyThreadCount) {
-  const DepthFrame frame = test::renderDepth(floorScene(), test::PinholeCamera{}, floorPose(), 12.0, 0.01);
+  const DepthFrame frame = test::renderDepth(floorScene(), test::kCamera, floorPose(), 12.0, 0.01);
   MapConfig c = config();
   c.num_threads = 1;
   OccupancyMap one(c);
@@ -164,7 +164,7 @@ TEST(ProjectiveIntegration, SameMapForAnyThreadCount) {
 
 TEST(ProjectiveIntegration, BadFramesAreRejectedAndLeaveTheMapUnchanged) {
   OccupancyMap map(config());
-  const DepthFrame good = test::renderDepth(floorScene(), test::PinholeCamera{}, floorPose(), 12.0);
+  const DepthFrame good = test::renderDepth(floorScene(), test::kCamera, floorPose(), 12.0);
   DepthFrame short_depth = good;
   short_depth.depth_m.pop_back();
   DepthFrame bad_focal = good;
