@@ -8,6 +8,7 @@
 #include "mapping/integration/depth_frame.h"
 #include "mapping/occupancy_map.h"
 #include "tests/mapping/support/analytic_scene.h"
+#include "tests/mapping/support/map_configs.h"
 
 namespace cenote::mapping {
 namespace {
@@ -25,12 +26,7 @@ Eigen::Isometry3d floorPose() {
   return test::lookAt(Eigen::Vector3d(0.01, 0.02, 0.03), Eigen::Vector3d(std::cos(0.52), 0.0, -std::sin(0.52)));
 }
 
-MapConfig config() {
-  MapConfig c;
-  c.voxel_size_m = 0.05;
-  c.max_range_m = 8.0;
-  return c;
-}
+MapConfig config() { return test::mapConfig(0.05, 8.0); }
 
 // Sampled pixels away from the image border (a voxel there may have its centre outside the image):
 // every surface point's voxel is occupied; points on its ray more than two voxels before it are
