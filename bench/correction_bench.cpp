@@ -40,7 +40,7 @@ double cpuMs() {
 
 struct Dive {
   test::Scene scene;
-  test::PinholeCamera camera;
+  PinholeCamera camera;
   std::vector<Eigen::Isometry3d> truth, drifted;
 };
 

@@ -64,7 +64,7 @@ constexpr double kPitch = 0.24;  // radians below the horizon
 
 struct BenchView {
   test::Scene scene;
-  test::PinholeCamera camera;
+  PinholeCamera camera;
   std::vector<Eigen::Isometry3d> poses;
 };
 
@@ -75,7 +75,7 @@ BenchView benchView(int count) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> x(0.0, 14.0), y(-5.0, 5.0), r(0.2, 1.0);
   for (int i = 0; i < 40; ++i) scene.spheres.push_back({Eigen::Vector3d(x(rng), y(rng), -2.0), r(rng)});
-  test::PinholeCamera& camera = view.camera;
+  PinholeCamera& camera = view.camera;
   camera.width = 800;
   camera.height = 600;
   camera.fx = camera.fy = 600.0;

@@ -69,7 +69,7 @@ mapping::test::Scene seaFloor() {
 }
 
 cenote::PointBatch renderFrame(const mapping::test::Scene& scene, int width, int height, double f_px, int index) {
-  mapping::test::PinholeCamera camera;
+  PinholeCamera camera;
   camera.width = width;
   camera.height = height;
   camera.fx = camera.fy = f_px;

@@ -19,14 +19,10 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include "common/pinhole_camera.h"
 #include "sim/scene_mesh.h"
 
 namespace cenote::sim {
-
-struct PinholeCamera {
-  double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;  // pixels
-  int width = 0, height = 0;
-};
 
 struct VisibilityBuffer {
   cv::Mat triangle;  // CV_32S index into SceneMesh::triangles, -1 where no surface

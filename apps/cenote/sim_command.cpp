@@ -8,7 +8,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <optional>
+#include <functional>
+#include <string>
+#include <vector>
 
 #include "apps/cenote/commands.h"
 #include "apps/cenote/progress_bar.h"
@@ -23,12 +25,24 @@ namespace {
 
 struct SimOptions {
   std::string scene, out, config;
-  std::optional<int> frames, width, height;
-  std::optional<double> rate, baseline, exposure_ratio, noise, speed, turbidity, k1, k2, hfov;
-  std::optional<int64_t> seed;
+  // One per SimConfig option given (--frames, --width, ...): sets its member over what the defaults
+  // and --config gave.
+  std::vector<std::function<void(sim::SimConfig&)>> overrides;
   bool quiet = false;
   bool drift = false;
 };
+
+// Adds the option `name`, which sets `member` of the run's SimConfig.
+template <typename T>
+void addOverride(CLI::App* cmd, SimOptions* o, const std::string& name, T sim::SimConfig::*member,
+                 const std::string& description) {
+  cmd->add_option_function<T>(
+      name,
+      [o, member](const T& value) {
+        o->overrides.push_back([member, value](sim::SimConfig& config) { config.*member = value; });
+      },
+      description);
+}
 
 sim::SimConfig makeConfig(const SimOptions& o) {
   sim::SimConfig config;
@@ -40,19 +54,7 @@ sim::SimConfig makeConfig(const SimOptions& o) {
       throw Error("--scene " + o.scene + ": must be cave, reef or wreck");
     }
   }
-  if (o.frames) config.num_frames = *o.frames;
-  if (o.width) config.width_px = *o.width;
-  if (o.height) config.height_px = *o.height;
-  if (o.rate) config.rate_hz = *o.rate;
-  if (o.seed) config.seed = *o.seed;
-  if (o.baseline) config.baseline_m = *o.baseline;
-  if (o.exposure_ratio) config.exposure_ratio = *o.exposure_ratio;
-  if (o.noise) config.noise_sigma = *o.noise;
-  if (o.speed) config.speed_m_s = *o.speed;
-  if (o.turbidity) config.turbidity = *o.turbidity;
-  if (o.k1) config.k1 = *o.k1;
-  if (o.k2) config.k2 = *o.k2;
-  if (o.hfov) config.hfov_deg = *o.hfov;
+  for (const auto& set : o.overrides) set(config);
   if (o.drift) config.drift = true;
   throwIfInvalid(config.validate(), "sim");
   return config;
@@ -72,7 +74,7 @@ void run(const SimOptions& o) {
   const sim::SimDatasetSummary summary = sim::writeSimDataset(simulator, o.out, [&](int done) {
     if (!o.quiet) bar.update(static_cast<size_t>(done), total);
   });
-  const sim::PinholeCamera& cam = simulator.rig().camera;
+  const PinholeCamera& cam = simulator.rig().camera;
   std::printf("simulated %d frames of the %s scene (%dx%d, f = %.2f px, baseline %.3f m, %zu triangles) into %s\n",
               summary.frames, sim::toString(config.scene), cam.width, cam.height, cam.fx, config.baseline_m,
               simulator.scene().mesh.numTriangles(), o.out.c_str());
@@ -89,20 +91,22 @@ void registerSimCommand(CLI::App& app) {
   const auto [cmd, o] = addSubcommand<SimOptions>(
       app, "sim", "Simulate an underwater stereo sequence with ground truth (EuRoC layout)", run);
   cmd->add_option("--scene", o->scene, "cave (tunnel, rig light), reef (lawnmower survey) or wreck (circling a hull)");
-  cmd->add_option("--frames", o->frames, "Number of stereo pairs (sim.num_frames, default 100)");
+  addOverride(cmd, o.get(), "--frames", &sim::SimConfig::num_frames,
+              "Number of stereo pairs (sim.num_frames, default 100)");
   cmd->add_option("--out", o->out, "Output folder (EuRoC layout plus groundtruth/)")->required();
-  cmd->add_option("--width", o->width, "Image width, pixels (default 800)");
-  cmd->add_option("--height", o->height, "Image height, pixels (default 600)");
-  cmd->add_option("--rate", o->rate, "Camera rate, Hz (default 15)");
-  cmd->add_option("--seed", o->seed, "Seed of scene shape, texture and noise (default 1)");
-  cmd->add_option("--baseline", o->baseline, "Stereo baseline, metres (default 0.12)");
-  cmd->add_option("--exposure-ratio", o->exposure_ratio, "Right camera gain / left camera gain (default 1)");
-  cmd->add_option("--noise", o->noise, "Sensor noise sigma, grey levels (default 2)");
-  cmd->add_option("--speed", o->speed, "Vehicle speed, m/s (default 0.4)");
-  cmd->add_option("--turbidity", o->turbidity, "Scales attenuation and backscatter (default 1)");
-  cmd->add_option("--hfov", o->hfov, "Horizontal field of view, degrees (default 80)");
-  cmd->add_option("--k1", o->k1, "Radial distortion k1 of both cameras (default 0)");
-  cmd->add_option("--k2", o->k2, "Radial distortion k2 of both cameras (default 0)");
+  addOverride(cmd, o.get(), "--width", &sim::SimConfig::width_px, "Image width, pixels (default 800)");
+  addOverride(cmd, o.get(), "--height", &sim::SimConfig::height_px, "Image height, pixels (default 600)");
+  addOverride(cmd, o.get(), "--rate", &sim::SimConfig::rate_hz, "Camera rate, Hz (default 15)");
+  addOverride(cmd, o.get(), "--seed", &sim::SimConfig::seed, "Seed of scene shape, texture and noise (default 1)");
+  addOverride(cmd, o.get(), "--baseline", &sim::SimConfig::baseline_m, "Stereo baseline, metres (default 0.12)");
+  addOverride(cmd, o.get(), "--exposure-ratio", &sim::SimConfig::exposure_ratio,
+              "Right camera gain / left camera gain (default 1)");
+  addOverride(cmd, o.get(), "--noise", &sim::SimConfig::noise_sigma, "Sensor noise sigma, grey levels (default 2)");
+  addOverride(cmd, o.get(), "--speed", &sim::SimConfig::speed_m_s, "Vehicle speed, m/s (default 0.4)");
+  addOverride(cmd, o.get(), "--turbidity", &sim::SimConfig::turbidity, "Scales attenuation and backscatter (default 1)");
+  addOverride(cmd, o.get(), "--hfov", &sim::SimConfig::hfov_deg, "Horizontal field of view, degrees (default 80)");
+  addOverride(cmd, o.get(), "--k1", &sim::SimConfig::k1, "Radial distortion k1 of both cameras (default 0)");
+  addOverride(cmd, o.get(), "--k2", &sim::SimConfig::k2, "Radial distortion k2 of both cameras (default 0)");
   cmd->add_option("--config", o->config, "YAML file with a `sim:` section (options given here override it)");
   cmd->add_flag("--drift", o->drift,
                 "Also write vio_trajectory.tum (a drifting VIO's live poses) and loop_closures/ (sim.drift)");

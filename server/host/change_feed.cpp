@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "common/locked_copy.h"
+
 namespace cenote::server {
 
 size_t bytesOf(const MapChange& change) {
@@ -28,15 +30,9 @@ void Subscription::setNotify(std::function<void()> notify) {
   notify_ = std::move(notify);
 }
 
-bool Subscription::closed() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return closed_;
-}
+bool Subscription::closed() const { return lockedCopy(mutex_, closed_); }
 
-size_t Subscription::queuedBytes() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return queued_bytes_;
-}
+size_t Subscription::queuedBytes() const { return lockedCopy(mutex_, queued_bytes_); }
 
 std::shared_ptr<Subscription> ChangeFeed::subscribe() {
   auto subscription = std::make_shared<Subscription>();

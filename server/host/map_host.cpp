@@ -3,6 +3,7 @@
 #include <malloc.h>
 
 #include "common/error.h"
+#include "common/locked_copy.h"
 #include "server/cpu/cpu_scheduling.h"
 
 namespace cenote::server {
@@ -143,20 +144,11 @@ mapping::MapDelta MapHost::sealed(mapping::MapDelta delta) {
   return delta;
 }
 
-uint64_t MapHost::batchesIntegrated() const {
-  std::lock_guard<std::mutex> lock(derived_mutex_);
-  return batches_;
-}
+uint64_t MapHost::batchesIntegrated() const { return lockedCopy(derived_mutex_, batches_); }
 
-uint64_t MapHost::derivedUpdates() const {
-  std::lock_guard<std::mutex> lock(derived_mutex_);
-  return derived_updates_;
-}
+uint64_t MapHost::derivedUpdates() const { return lockedCopy(derived_mutex_, derived_updates_); }
 
-uint64_t MapHost::changesSeenWhenDerivedIdled() const {
-  std::lock_guard<std::mutex> lock(derived_mutex_);
-  return idle_changes_;
-}
+uint64_t MapHost::changesSeenWhenDerivedIdled() const { return lockedCopy(derived_mutex_, idle_changes_); }
 
 bool MapHost::waitForDerived(std::chrono::system_clock::time_point deadline) const {
   std::unique_lock<std::mutex> lock(derived_mutex_);

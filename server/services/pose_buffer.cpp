@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/locked_copy.h"
 #include "io/trajectory/trajectory.h"
 #include "server/wire/status_error.h"
 
@@ -53,10 +54,7 @@ std::optional<Eigen::Isometry3d> PoseBuffer::poseAt(double t_s, double max_gap_s
   return io::Trajectory(std::move(bracket), "ingest poses").poseAt(t_s, max_gap_s);
 }
 
-size_t PoseBuffer::received() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return received_;
-}
+size_t PoseBuffer::received() const { return lockedCopy(mutex_, received_); }
 
 size_t PoseBuffer::size() const {
   std::lock_guard<std::mutex> lock(mutex_);

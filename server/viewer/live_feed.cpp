@@ -2,6 +2,8 @@
 
 #include <chrono>
 
+#include "common/locked_copy.h"
+
 namespace cenote::server::viewer {
 namespace {
 
@@ -57,10 +59,7 @@ std::optional<std::pair<Eigen::Isometry3d, uint64_t>> LiveFeed::latest() const {
   return std::make_pair(trajectory_.back(), version_);
 }
 
-uint64_t LiveFeed::version() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return version_;
-}
+uint64_t LiveFeed::version() const { return lockedCopy(mutex_, version_); }
 
 bool LiveFeed::imagesDue() const {
   return image_period_s_ > 0.0 && images_wanted_.load(std::memory_order_relaxed) &&
@@ -75,9 +74,6 @@ void LiveFeed::postImages(double t_s, std::string left_jpeg, std::string dispari
   images_ = {images_.version + 1, t_s, std::move(left), std::move(disparity)};
 }
 
-LiveFeed::Images LiveFeed::images() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return images_;
-}
+LiveFeed::Images LiveFeed::images() const { return lockedCopy(mutex_, images_); }
 
 }  // namespace cenote::server::viewer

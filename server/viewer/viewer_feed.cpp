@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "common/locked_copy.h"
 #include "common/thread_name.h"
 #include "server/viewer/block_sync.h"
 #include "server/viewer/foxglove_schemas.h"
@@ -101,10 +102,7 @@ void FeedWorker::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-size_t FeedWorker::clients() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return clients_;
-}
+size_t FeedWorker::clients() const { return lockedCopy(mutex_, clients_); }
 
 void FeedWorker::loop() {
   std::vector<std::shared_ptr<Client>> clients;

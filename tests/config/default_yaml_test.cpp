@@ -4,7 +4,6 @@
 // (YamlSection::recordDefaults), so a key added later is checked without touching this test.
 #include <gtest/gtest.h>
 
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,46 +13,24 @@
 #include "pipeline/runner/run_config.h"
 #include "server/server_config.h"
 #include "sim/sim_config.h"
+#include "tests/support/config_defaults.h"
 
 namespace cenote {
 namespace {
 
 const std::string kDefaultYaml = std::string(CENOTE_SOURCE_DIR) + "/config/default.yaml";
 
-// Reads the section `key` into a default-constructed Config; `top` records each key's value.
-template <typename Config>
-void recordSection(YamlSection& top, const std::string& key) {
-  Config config;
-  top.readSection(key, config);
-}
-
 // Every key read by each section's read() into a default-constructed config, with its value.
 YamlDefaults codeDefaults() {
   YamlDefaults defaults;
-  YamlSection top(YAML::Node(), "", "code defaults");
-  top.recordDefaults(&defaults);
-  recordSection<pipeline::StereoConfig>(top, "stereo");
-  recordSection<pipeline::FusionConfig>(top, "fusion");
-  recordSection<pipeline::RunConfig>(top, "run");
-  recordSection<pipeline::RecordingConfig>(top, "bag");
-  recordSection<mapping::MapConfig>(top, "map");
-  recordSection<sim::SimConfig>(top, "sim");
-  recordSection<server::ServerConfig>(top, "server");
+  test::recordSectionDefaults<pipeline::StereoConfig>(defaults, "stereo");
+  test::recordSectionDefaults<pipeline::FusionConfig>(defaults, "fusion");
+  test::recordSectionDefaults<pipeline::RunConfig>(defaults, "run");
+  test::recordSectionDefaults<pipeline::RecordingConfig>(defaults, "bag");
+  test::recordSectionDefaults<mapping::MapConfig>(defaults, "map");
+  test::recordSectionDefaults<sim::SimConfig>(defaults, "sim");
+  test::recordSectionDefaults<server::ServerConfig>(defaults, "server");
   return defaults;
-}
-
-// The value at a dotted key of the file ("server.limits.max_batch"), if there is one.
-std::optional<YAML::Node> at(const YAML::Node& root, const std::string& dotted) {
-  YAML::Node node = YAML::Clone(root);
-  size_t begin = 0;
-  while (true) {
-    const size_t dot = dotted.find('.', begin);
-    const std::string key = dotted.substr(begin, dot == std::string::npos ? std::string::npos : dot - begin);
-    if (!node.IsMap() || !node[key]) return std::nullopt;
-    node = node[key];
-    if (dot == std::string::npos) return node;
-    begin = dot + 1;
-  }
 }
 
 void leaves(const YAML::Node& node, const std::string& prefix, std::vector<std::string>& out) {
@@ -70,16 +47,7 @@ void leaves(const YAML::Node& node, const std::string& prefix, std::vector<std::
 TEST(DefaultYaml, EveryKeyOfEverySectionEqualsTheCodeDefault) {
   const YamlDefaults defaults = codeDefaults();
   ASSERT_GT(defaults.entries.size(), 80u);  // stereo, fusion, run, map, sim, server (+ limits)
-  const YAML::Node root = loadYamlFile(kDefaultYaml);
-  for (const auto& [key, entry] : defaults.entries) {
-    const std::optional<YAML::Node> value = at(root, key);
-    if (!value) {
-      ADD_FAILURE() << key << ": missing from config/default.yaml (code default " << entry.shown << ")";
-      continue;
-    }
-    EXPECT_TRUE(entry.equals(*value)) << key << ": config/default.yaml says " << YAML::Dump(*value)
-                                      << ", the code's default is " << entry.shown;
-  }
+  test::expectFileHoldsDefaults(loadYamlFile(kDefaultYaml), "config/default.yaml", defaults);
 }
 
 TEST(DefaultYaml, EveryKeyOfTheFileIsOneTheCodeReads) {

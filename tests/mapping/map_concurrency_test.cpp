@@ -21,7 +21,7 @@ std::vector<PointBatch> frames() {
   std::vector<PointBatch> out;
   for (int i = 0; i < 6; ++i) {
     const Eigen::Vector3d p(0.1 * i, 0.05 * i, 0.0);
-    out.push_back(test::renderBatch(scene, test::PinholeCamera{}, test::lookAt(p, Eigen::Vector3d(3, 0, -1)), 8.0));
+    out.push_back(test::renderBatch(scene, test::kCamera, test::lookAt(p, Eigen::Vector3d(3, 0, -1)), 8.0));
   }
   return out;
 }

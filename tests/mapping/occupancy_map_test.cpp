@@ -12,8 +12,8 @@
 namespace cenote::mapping {
 namespace {
 
+using test::kCamera;
 using test::lookAt;
-using test::PinholeCamera;
 using test::renderBatch;
 using test::Scene;
 
@@ -188,7 +188,7 @@ void checkAnalyticScene(const Scene& scene, const std::vector<Eigen::Isometry3d>
   MapConfig config = smallConfig(voxel_size_m);
   config.ray_stop_run = ray_stop_run;
   OccupancyMap map(config);
-  PinholeCamera camera;
+  PinholeCamera camera = kCamera;
   std::vector<PointBatch> batches;
   for (const auto& T : poses) {
     batches.push_back(renderBatch(scene, camera, T, 8.0));
@@ -317,7 +317,7 @@ TEST(OccupancyMap, ClearBoxSphereCropAndResetForgetVoxels) {
   OccupancyMap map(smallConfig(0.1));
   Scene scene;
   scene.planes.push_back({Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)});
-  map.integrate(renderBatch(scene, PinholeCamera{}, lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(3, 0, 0)), 8.0));
+  map.integrate(renderBatch(scene, kCamera, lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(3, 0, 0)), 8.0));
   const MapStats full = map.stats();
   Aabb box;
   box.min_m = Eigen::Vector3d(0.5, -0.5, -0.5);
@@ -348,7 +348,7 @@ TEST(OccupancyMap, BatchedLookupsAnswerAsSingleOnesAlsoAfterClearing) {
   OccupancyMap map(smallConfig(0.1));
   Scene scene;
   scene.planes.push_back({Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)});
-  map.integrate(renderBatch(scene, PinholeCamera{}, lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(3, 0, 0)), 8.0));
+  map.integrate(renderBatch(scene, kCamera, lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(3, 0, 0)), 8.0));
   std::mt19937 rng(7);
   std::uniform_int_distribution<int> coord(-40, 40);
   std::vector<VoxelIndex> voxels;
@@ -387,8 +387,8 @@ TEST(OccupancyMap, SameMapForAnyThreadCount) {
   Scene scene;
   scene.spheres.push_back({Eigen::Vector3d(2.5, 0.1, -0.2), 1.0});
   scene.planes.push_back({Eigen::Vector3d(0, 0, -1.0), Eigen::Vector3d(0, 0, 1)});
-  const PointBatch batch = renderBatch(scene, PinholeCamera{},
-                                       lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(2.5, 0.1, -0.2)), 8.0);
+  const PointBatch batch = renderBatch(scene, kCamera, lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(2.5, 0.1, -0.2)),
+                                       8.0);
   MapConfig one = smallConfig();
   one.num_threads = 1;
   MapConfig three = smallConfig();

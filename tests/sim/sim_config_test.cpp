@@ -4,6 +4,7 @@
 
 #include "common/error.h"
 #include "common/yaml_section.h"
+#include "tests/support/config_defaults.h"
 #include "tests/support/error_message.h"
 
 namespace cenote::sim {
@@ -44,12 +45,10 @@ TEST(SimConfig, DefaultYamlSectionReadsAndEqualsTheDefaults) {
   SimConfig c;
   readConfigFile(path, "sim", c);
   EXPECT_EQ(errorsOf(c), "");
-  const SimConfig d;
-  EXPECT_EQ(c.scene, d.scene);
-  EXPECT_EQ(c.num_frames, d.num_frames);
-  EXPECT_DOUBLE_EQ(c.baseline_m, d.baseline_m);
-  EXPECT_DOUBLE_EQ(c.mesh_spacing_m, d.mesh_spacing_m);
-  EXPECT_DOUBLE_EQ(c.surface_spacing_m, d.surface_spacing_m);
+  YamlDefaults defaults;
+  test::recordSectionDefaults<SimConfig>(defaults, "sim");
+  ASSERT_GE(defaults.entries.size(), 5u);  // scene, num_frames, baseline_m, mesh_spacing_m, surface_spacing_m, ...
+  test::expectFileHoldsDefaults(loadYamlFile(path), path, defaults);
 }
 
 TEST(SimConfig, UnknownSceneNameIsAnError) {

@@ -107,8 +107,8 @@ TEST(MapLookup, IndexAndColoursFollowTheTreeThroughClearingCroppingAndReset) {
   scene.spheres.push_back({Eigen::Vector3d(3.0, 0.5, -1.2), 0.6});
   for (int f = 0; f < 3; ++f) {
     const Eigen::Vector3d position(0.5 * f, 0.0, 0.0);
-    map.integrate(test::renderBatch(scene, test::PinholeCamera{},
-                                    test::lookAt(position, position + Eigen::Vector3d(1.0, 0.0, -0.6)), 8.0));
+    map.integrate(
+        test::renderBatch(scene, test::kCamera, test::lookAt(position, position + Eigen::Vector3d(1.0, 0.0, -0.6)), 8.0));
   }
   VoxelBox region = map.stats().bounds;
   region.min -= VoxelIndex::Constant(9);
@@ -180,7 +180,7 @@ TEST(MapLookup, IndexAndColoursFollowTheTreeThroughClearingCroppingAndReset) {
       "crop", [&](const Eigen::Vector3d& c) { return c.norm() > 4.0; },
       [&] { map.cropToRadius(Eigen::Vector3d::Zero(), 4.0); });
   // Integrating again after clearing reuses and re-creates leaves and colour blocks.
-  map.integrate(test::renderBatch(scene, test::PinholeCamera{},
+  map.integrate(test::renderBatch(scene, test::kCamera,
                                   test::lookAt(Eigen::Vector3d(0.2, 0.1, 0.0), Eigen::Vector3d(2.0, 0.1, -1.5)), 8.0));
   expectLookupsEqualTree(map, region, "integrated again");
   check(

@@ -16,7 +16,7 @@ namespace {
 
 // Six 90-degree views from one position (a cube map): everything visible from there.
 std::vector<PointBatch> cubeViews(const test::Scene& scene, const Eigen::Vector3d& position) {
-  test::PinholeCamera camera;
+  PinholeCamera camera;
   camera.width = camera.height = 160;
   camera.fx = camera.fy = 80.0;
   camera.cx = camera.cy = 79.5;

@@ -37,7 +37,7 @@ TEST(CorrectionConcurrency, ReadersSeeEachBlockOldOrNewNeverAMix) {
   config.num_threads = 1;     // keeps OpenMP (not built for ThreadSanitizer) out
   const std::string base = (std::filesystem::path(::testing::TempDir()) / "correction-concurrency").string();
   config.history_dir = base + "-drifted";
-  const test::PinholeCamera camera{.width = 80, .height = 60, .fx = 60.0, .fy = 60.0, .cx = 39.5, .cy = 29.5};
+  const PinholeCamera camera{.width = 80, .height = 60, .fx = 60.0, .fy = 60.0, .cx = 39.5, .cy = 29.5};
   const auto frames = test::driftedRoomSweep(12, camera, 0.2, 2.0, config.history_quantum_m);
   OccupancyMap map(config);
   MapHistory history(map);

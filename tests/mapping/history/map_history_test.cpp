@@ -27,7 +27,7 @@ MapConfig historyConfig() {
   return config;
 }
 
-test::PinholeCamera smallCamera() { return {.width = 96, .height = 72, .fx = 70.0, .fy = 70.0, .cx = 47.5, .cy = 35.5}; }
+PinholeCamera smallCamera() { return {.width = 96, .height = 72, .fx = 70.0, .fy = 70.0, .cx = 47.5, .cy = 35.5}; }
 
 // The map under test with its history, and a reference map with a frame store of its own to compare
 // it with block by block.

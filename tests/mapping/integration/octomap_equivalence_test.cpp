@@ -10,6 +10,7 @@
 
 #include "mapping/occupancy_map.h"
 #include "tests/mapping/support/analytic_scene.h"
+#include "tests/mapping/support/map_configs.h"
 #include "tests/mapping/support/voxel_sets.h"
 
 namespace cenote::mapping {
@@ -62,7 +63,7 @@ std::vector<PointBatch> surveyFrames(uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> xy(-3.0, 3.0), r(0.2, 0.8);
   for (int i = 0; i < 8; ++i) scene.spheres.push_back({Eigen::Vector3d(xy(rng) + 4.0, xy(rng), -2.0), r(rng)});
-  const test::PinholeCamera camera{.width = 320, .height = 240, .fx = 240.0, .fy = 240.0, .cx = 159.5, .cy = 119.5};
+  const PinholeCamera camera{.width = 320, .height = 240, .fx = 240.0, .fy = 240.0, .cx = 159.5, .cy = 119.5};
   std::vector<PointBatch> frames;
   for (int f = 0; f < 6; ++f) {
     const Eigen::Vector3d position(0.37 * f + 0.013, 0.21 * f - 0.6, 0.3 + 0.05 * f);
@@ -74,10 +75,8 @@ std::vector<PointBatch> surveyFrames(uint32_t seed) {
 
 // Whole rays (ray_stop_run 0) at 5 cm up to 8 m: the survey's settings.
 MapConfig exactRays() {
-  MapConfig config;
+  MapConfig config = test::mapConfig(0.05, 8.0);
   config.ray_stop_run = 0;
-  config.voxel_size_m = 0.05;
-  config.max_range_m = 8.0;
   return config;
 }
 
@@ -203,12 +202,7 @@ ScanComparison integrateScanIntoBoth(const MapConfig& config) {
   return {voxelSets(map), voxelSets(tree, map)};
 }
 
-MapConfig laserConfig() {
-  MapConfig config;
-  config.voxel_size_m = 0.1;
-  config.max_range_m = 25.0;
-  return config;
-}
+MapConfig laserConfig() { return test::mapConfig(0.1, 25.0); }
 
 // Whole rays (ray_stop_run 0) against OctoMap on the laser scan: the same hits, and the same free
 // voxels up to rounding. OctoMap casts from float coordinates (its point3d origin and voxel centres,

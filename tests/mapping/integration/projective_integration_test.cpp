@@ -8,6 +8,7 @@
 #include "mapping/integration/depth_frame.h"
 #include "mapping/occupancy_map.h"
 #include "tests/mapping/support/analytic_scene.h"
+#include "tests/mapping/support/map_configs.h"
 
 namespace cenote::mapping {
 namespace {
@@ -25,12 +26,7 @@ Eigen::Isometry3d floorPose() {
   return test::lookAt(Eigen::Vector3d(0.01, 0.02, 0.03), Eigen::Vector3d(std::cos(0.52), 0.0, -std::sin(0.52)));
 }
 
-MapConfig config() {
-  MapConfig c;
-  c.voxel_size_m = 0.05;
-  c.max_range_m = 8.0;
-  return c;
-}
+MapConfig config() { return test::mapConfig(0.05, 8.0); }
 
 // Sampled pixels away from the image border (a voxel there may have its centre outside the image):
 // every surface point's voxel is occupied; points on its ray more than two voxels before it are
@@ -38,7 +34,7 @@ MapConfig config() {
 // object (at most 1 % of the samples); the floor three voxels below a surface point is unknown.
 TEST(ProjectiveIntegration, OccupiedOnTheSurfaceFreeBeforeItUnknownBehind) {
   const test::Scene scene = floorScene();
-  const test::PinholeCamera camera;
+  const PinholeCamera camera = test::kCamera;
   const DepthFrame frame = test::renderDepth(scene, camera, floorPose(), 12.0);
   OccupancyMap map(config());
   const MapDelta delta = map.integrateDepth(frame);
@@ -75,7 +71,7 @@ TEST(ProjectiveIntegration, OccupiedOnTheSurfaceFreeBeforeItUnknownBehind) {
 }
 
 TEST(ProjectiveIntegration, PixelsWithoutDepthCarveNothing) {
-  const test::PinholeCamera camera;
+  const PinholeCamera camera = test::kCamera;
   DepthFrame frame = test::renderDepth(floorScene(), camera, floorPose(), 12.0);
   // A hole in the middle of the image (a stereo hole): the space in front of it stays unknown.
   for (int v = 40; v < 80; ++v) {
@@ -109,7 +105,7 @@ TEST(ProjectiveIntegration, PixelsWithoutDepthCarveNothing) {
 // just before each surface, which projection leaves alone.
 TEST(ProjectiveIntegration, AgreesWithRayIntegrationOfTheSameView) {
   const test::Scene scene = floorScene();
-  const test::PinholeCamera camera;
+  const PinholeCamera camera = test::kCamera;
   MapConfig c = config();
   c.ray_stop_run = 0;
   OccupancyMap rays(c), projected(c);
@@ -147,7 +143,7 @@ TEST(ProjectiveIntegration, AgreesWithRayIntegrationOfTheSameView) {
 }
 
 TEST(ProjectiveIntegration, SameMapForAnyThreadCount) {
-  const DepthFrame frame = test::renderDepth(floorScene(), test::PinholeCamera{}, floorPose(), 12.0, 0.01);
+  const DepthFrame frame = test::renderDepth(floorScene(), test::kCamera, floorPose(), 12.0, 0.01);
   MapConfig c = config();
   c.num_threads = 1;
   OccupancyMap one(c);
@@ -164,7 +160,7 @@ TEST(ProjectiveIntegration, SameMapForAnyThreadCount) {
 
 TEST(ProjectiveIntegration, BadFramesAreRejectedAndLeaveTheMapUnchanged) {
   OccupancyMap map(config());
-  const DepthFrame good = test::renderDepth(floorScene(), test::PinholeCamera{}, floorPose(), 12.0);
+  const DepthFrame good = test::renderDepth(floorScene(), test::kCamera, floorPose(), 12.0);
   DepthFrame short_depth = good;
   short_depth.depth_m.pop_back();
   DepthFrame bad_focal = good;

@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
   scene.planes.push_back({Eigen::Vector3d(0, 0, -2.0), Eigen::Vector3d(0.05, 0.02, 1.0).normalized()});
   scene.spheres.push_back({Eigen::Vector3d(4.0, 0.5, -2.0), 0.7});
   scene.spheres.push_back({Eigen::Vector3d(5.0, -1.0, -1.8), 0.5});
-  PinholeCamera camera;
+  cenote::PinholeCamera camera;
   camera.width = 320;
   camera.height = 240;
   camera.fx = camera.fy = 240.0;

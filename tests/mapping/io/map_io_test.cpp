@@ -29,8 +29,8 @@ std::unique_ptr<OccupancyMap> sceneMap() {
   test::Scene scene;
   scene.planes.push_back({Eigen::Vector3d(0, 0, -1.0), Eigen::Vector3d(0, 0, 1)});
   scene.spheres.push_back({Eigen::Vector3d(2.5, 0.0, -0.5), 0.6});
-  map->integrate(test::renderBatch(scene, test::PinholeCamera{},
-                                   test::lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(2.5, 0, -0.8)), 8.0));
+  map->integrate(
+      test::renderBatch(scene, test::kCamera, test::lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(2.5, 0, -0.8)), 8.0));
   return map;
 }
 
@@ -70,8 +70,8 @@ TEST(MapIo, VdbRoundTripKeepsStatesProbabilitiesColoursAndModel) {
   OccupancyMap map(c);
   test::Scene scene;
   scene.planes.push_back({Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)});
-  map.integrate(test::renderBatch(scene, test::PinholeCamera{},
-                                  test::lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(3, 0, 0)), 8.0));
+  map.integrate(
+      test::renderBatch(scene, test::kCamera, test::lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(3, 0, 0)), 8.0));
   saveMap(map, dir.file("map.vdb"), "odom");
   const auto loaded = loadMap(dir.file("map.vdb"));
   EXPECT_EQ(loaded->config().prob_hit, 0.8);

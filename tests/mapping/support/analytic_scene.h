@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include "common/pinhole_camera.h"
 #include "common/point_batch.h"
 #include "mapping/integration/depth_frame.h"
 
@@ -44,14 +45,8 @@ struct Scene {
   double distanceToSurface(const Eigen::Vector3d& p) const;
 };
 
-struct PinholeCamera {
-  int width = 160;
-  int height = 120;
-  double fx = 120.0;
-  double fy = 120.0;
-  double cx = 79.5;
-  double cy = 59.5;
-};
+// The mapping tests' usual camera: 160 x 120 pixels, focal length 120 px, centred.
+inline constexpr PinholeCamera kCamera{.width = 160, .height = 120, .fx = 120.0, .fy = 120.0, .cx = 79.5, .cy = 59.5};
 
 // One point per pixel whose ray hits a surface within max_depth_m (others give none: a hole).
 // Colours encode the pixel (r = u % 256, g = v % 256, b = 128). noise_m adds Gaussian noise along

@@ -7,6 +7,7 @@
 
 #include "common/point_batch.h"
 #include "mapping/occupancy_map.h"
+#include "tests/mapping/support/map_configs.h"
 
 namespace cenote::mapping::test {
 
@@ -21,9 +22,7 @@ inline PointBatch rays(const Eigen::Vector3d& origin, std::vector<Eigen::Vector3
 // A map of `voxel_size_m` voxels (the other settings MapConfig's defaults) with `batches`
 // integrated one after the other.
 inline std::unique_ptr<OccupancyMap> mapOfRays(double voxel_size_m, const std::vector<PointBatch>& batches) {
-  MapConfig c;
-  c.voxel_size_m = voxel_size_m;
-  auto map = std::make_unique<OccupancyMap>(c);
+  auto map = std::make_unique<OccupancyMap>(mapConfig(voxel_size_m));
   for (const PointBatch& b : batches) map->integrate(b);
   return map;
 }

@@ -6,6 +6,7 @@
 
 #include "common/error.h"
 #include "common/yaml_section.h"
+#include "tests/support/config_defaults.h"
 
 namespace cenote::pipeline {
 namespace {
@@ -101,14 +102,11 @@ TEST(FusionConfig, DefaultYamlSectionIsValidAndMatchesTheDefaults) {
   FusionConfig c;
   readConfigFile(path, "fusion", c);
   EXPECT_TRUE(c.validate().empty());
-  const FusionConfig d;
-  EXPECT_EQ(c.num_views, d.num_views);
-  EXPECT_EQ(c.eps, d.eps);
-  EXPECT_EQ(c.support_radius, d.support_radius);
-  EXPECT_EQ(c.min_fused_confidence, d.min_fused_confidence);
-  EXPECT_EQ(c.min_input_confidence, d.min_input_confidence);
-  EXPECT_EQ(c.max_depth_m, d.max_depth_m);
-  EXPECT_EQ(d.max_depth_m, 4.0);
+  YamlDefaults defaults;
+  test::recordSectionDefaults<FusionConfig>(defaults, "fusion");
+  ASSERT_GE(defaults.entries.size(), 6u);  // num_views, eps, support_radius, the confidences, max_depth_m
+  test::expectFileHoldsDefaults(loadYamlFile(path), path, defaults);
+  EXPECT_EQ(FusionConfig().max_depth_m, 4.0);
 }
 
 }  // namespace

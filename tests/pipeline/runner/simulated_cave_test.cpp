@@ -49,7 +49,7 @@ TEST(SimulatedCave, FusedPointsMatchTheSeenSurfaceWithin5cm) {
   for (int i = half; i < simulator.numFrames() - half; ++i) {
     DepthFrame frame;
     const cv::Mat depth = io::readPfm(dir + "/data/groundtruth/depth/" + std::to_string(simulator.frameTimeNs(i)) + ".pfm");
-    const sim::PinholeCamera& c = simulator.rig().camera;
+    const PinholeCamera& c = simulator.rig().camera;
     frame.K << c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0;
     frame.T_world_cam = simulator.T_world_cam0(simulator.frameTimeS(i));
     for (const auto& [limit, cloud] : {std::pair{max_depth, &truth}, std::pair{1.25f * max_depth, &truth_beyond}}) {
