@@ -15,12 +15,10 @@ source_dir=$2
 source "$(dirname "${BASH_SOURCE[0]}")/../../support/cli_test_lib.sh"
 source "$(dirname "${BASH_SOURCE[0]}")/jpeg_map_check.sh"
 py=/usr/bin/python3
-json() { $py -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2], {}, {'d': d}))" "$@"; }
 to_bag() { $py "$source_dir/tests/io/bag/euroc_to_bag.py" "$work/dive" "$@" || fail "euroc_to_bag.py $*"; }
 frames=24
 
-"$cenote" sim --scene reef --frames $frames --width 320 --height 240 --quiet --out "$work/dive" >/dev/null 2>&1 ||
-  fail "cenote sim failed"
+simulate_reef $frames "$work/dive"
 run() {  # run NAME ARGS...: cenote run into $work/NAME-out with a map $work/NAME.vdb
   local name=$1
   shift

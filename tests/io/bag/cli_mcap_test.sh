@@ -16,11 +16,9 @@ gen=$3
 source "$(dirname "${BASH_SOURCE[0]}")/../../support/cli_test_lib.sh"
 source "$(dirname "${BASH_SOURCE[0]}")/jpeg_map_check.sh"
 py=/usr/bin/python3
-json() { $py -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2], {}, {'d': d}))" "$@"; }
 frames=20
 
-"$cenote" sim --scene reef --frames $frames --width 320 --height 240 --quiet --out "$work/dive" >/dev/null 2>&1 ||
-  fail "cenote sim failed"
+simulate_reef $frames "$work/dive"
 $py "$source_dir/tests/io/bag/gen/dump_pixels.py" "$work/dive" "$work/pixels" "$work/jpeg-pixels" || fail "dump_pixels.py failed"
 to_mcap() {  # to_mcap NAME IMAGES COMPRESSION
   node "$gen/euroc_to_mcap.js" "$work/dive" "$work/$1.mcap" "$2" "$3" "$work/pixels" || fail "euroc_to_mcap.js $*"

@@ -9,7 +9,6 @@ set -u
 cenote=$1
 source_dir=$2
 source "$(dirname "${BASH_SOURCE[0]}")/../../support/cli_test_lib.sh"
-json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2], {}, {'d': d}))" "$@"; }
 
 "$cenote" sim --scene reef --frames 20 --width 320 --height 240 --k1 -0.05 --quiet --out "$work/euroc" >/dev/null 2>&1 ||
   fail "cenote sim failed"
