@@ -66,13 +66,18 @@ template <int SX, int SY, int SZ, bool kFromEnd, typename Visit>
 [[gnu::flatten]] bool walkOctant(const RayWalk& w, long steps, BatchUpdates& writer, Visit visit) {
   constexpr double kNever = kFromEnd ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
   const VoxelIndex& start = kFromEnd ? w.key_end : w.key_origin;
-  // The next face on each axis (its index as a double: exact, no conversion in the loop; from the
-  // end, the face behind, which the walk from the origin crossed to get there), the t of crossing
-  // it, and the steps left on the axis.
-  double bx = start.x() + (SX > 0), by = start.y() + (SY > 0), bz = start.z() + (SZ > 0);
-  long nx = w.count[0], ny = w.count[1], nz = w.count[2];
-  double tx = nx > 0 ? w.faceT(0, bx) : kNever, ty = ny > 0 ? w.faceT(1, by) : kNever,
-         tz = nz > 0 ? w.faceT(2, bz) : kNever;
+  // The next face on each axis (from the end, the face behind, which the walk from the origin
+  // crossed to get there) is always the voxel's coordinate + (S > 0): its index, converted exactly
+  // to a double where its t is taken. Then the t of crossing it.
+  constexpr int kx = SX > 0, ky = SY > 0, kz = SZ > 0;
+  const VoxelIndex& s0 = start;
+  const double bx = s0.x() + kx, by = s0.y() + ky, bz = s0.z() + kz;
+  // An axis has no face left once its coordinate reached the other end's: the test against that
+  // (a constant of the ray) takes no register in the loop, as a count of steps left would.
+  const VoxelIndex& last = kFromEnd ? w.key_origin : w.key_end;
+  const int lx = last.x(), ly = last.y(), lz = last.z();
+  double tx = w.count[0] > 0 ? w.faceT(0, bx) : kNever, ty = w.count[1] > 0 ? w.faceT(1, by) : kNever,
+         tz = w.count[2] > 0 ? w.faceT(2, bz) : kNever;
   const double ax = w.a[0], ay = w.a[1], az = w.a[2], cx = w.c[0], cy = w.c[1], cz = w.c[2];
   // The voxel (global coordinates), its word and bit (kept in step within a block, looked up
   // afresh when the walk crosses into another).
@@ -89,21 +94,18 @@ template <int SX, int SY, int SZ, bool kFromEnd, typename Visit>
   auto advance = [&] {
     if (kFromEnd ? (tx >= ty && tx >= tz) : (tx < ty && tx < tz)) {
       x += SX;
-      bx += SX;
-      tx = --nx > 0 ? bx * ax - cx : kNever;
+      tx = x != lx ? static_cast<double>(x + kx) * ax - cx : kNever;
       word += SX * static_cast<int>(sizeof(uint64_t));
       return (x & 7) == (SX > 0 ? 0 : 7);
     }
     if (kFromEnd ? ty >= tz : ty < tz) {
       y += SY;
-      by += SY;
-      ty = --ny > 0 ? by * ay - cy : kNever;
+      ty = y != ly ? static_cast<double>(y + ky) * ay - cy : kNever;
       bit = SY > 0 ? bit << 8 : bit >> 8;
       return (y & 7) == (SY > 0 ? 0 : 7);
     }
     z += SZ;
-    bz += SZ;
-    tz = --nz > 0 ? bz * az - cz : kNever;
+    tz = z != lz ? static_cast<double>(z + kz) * az - cz : kNever;
     bit = SZ > 0 ? bit << 1 : bit >> 1;
     return (z & 7) == (SZ > 0 ? 0 : 7);
   };
@@ -154,7 +156,8 @@ struct CarveUntilRun {
   int stop_run;
   int run = 0;
   bool operator()(uint64_t* word, uint64_t bit) {
-    // Without a branch on "already carved": it alternates irregularly along a ray.
+    // Without a branch on "already carved": it alternates irregularly along a ray. (A conditional
+    // move instead takes 4 % fewer instructions but 8 % more CPU time on the bench.)
     const int carved = (*word & bit) != 0;
     *word |= bit;
     run = (run + 1) & -carved;
