@@ -42,51 +42,53 @@ std::vector<BlockIndex> randomBlocks(uint32_t seed, int n) {
   return blocks;
 }
 
+// A build of `blocks` into `updates` through the window `window`, and its listing.
+std::vector<std::string> buildInWindow(BatchUpdates& updates, const VoxelBox& window,
+                                       const std::vector<BlockIndex>& blocks) {
+  updates.clearMasks();
+  updates.setWindow(window);
+  touch(updates, blocks);
+  return listing(updates);
+}
+
+// The listing of the same build through the hash table alone.
+std::vector<std::string> buildHashed(const std::vector<BlockIndex>& blocks) {
+  BatchUpdates updates;
+  updates.clearMasks();
+  touch(updates, blocks);
+  return listing(updates);
+}
+
+const VoxelBox kAll{BlockIndex(-6, -6, -6), BlockIndex(5, 5, 5)};
+
 TEST(BatchUpdates, WindowFindsTheSameBlocksAsTheHashTable) {
-  const VoxelBox window{BlockIndex(-2, -3, -1), BlockIndex(3, 2, 4)};
+  const VoxelBox part{BlockIndex(-2, -3, -1), BlockIndex(3, 2, 4)};  // blocks outside it too
   for (uint32_t seed = 1; seed <= 5; ++seed) {
     const std::vector<BlockIndex> blocks = randomBlocks(seed, 3000);
-    BatchUpdates hashed, windowed;
-    hashed.clearMasks();
-    windowed.clearMasks();
-    windowed.setWindow(window);
-    touch(hashed, blocks);
-    touch(windowed, blocks);
-    EXPECT_EQ(listing(windowed), listing(hashed)) << "seed " << seed;
+    BatchUpdates windowed;
+    EXPECT_EQ(buildInWindow(windowed, part, blocks), buildHashed(blocks)) << "seed " << seed;
   }
 }
 
 TEST(BatchUpdates, WindowForgetsItsBlocksBetweenBuilds) {
   // The second build reuses the window's memory with another box: a cell left from the first
   // build would hand out a slot of a block that this build does not hold.
-  BatchUpdates windowed, hashed;
-  windowed.clearMasks();
-  windowed.setWindow(VoxelBox{BlockIndex(-6, -6, -6), BlockIndex(5, 5, 5)});
-  touch(windowed, randomBlocks(7, 2000));
-  windowed.clearMasks();
-  windowed.setWindow(VoxelBox{BlockIndex(-4, -5, -6), BlockIndex(5, 3, 2)});
+  BatchUpdates windowed;
+  buildInWindow(windowed, kAll, randomBlocks(7, 2000));
   const std::vector<BlockIndex> second = randomBlocks(8, 500);
-  touch(windowed, second);
-  hashed.clearMasks();
-  touch(hashed, second);
-  EXPECT_EQ(listing(windowed), listing(hashed));
+  EXPECT_EQ(buildInWindow(windowed, VoxelBox{BlockIndex(-4, -5, -6), BlockIndex(5, 3, 2)}, second), buildHashed(second));
 }
 
 TEST(BatchUpdates, SwappedMasksLeaveNoWindowBehind) {
   // RayBatch takes chunk 0's masks over with swapMasks: the chunk's next build must not find the
   // blocks it handed over.
-  BatchUpdates chunk, result, hashed;
+  BatchUpdates chunk, result;
   chunk.clearMasks();
-  chunk.setWindow(VoxelBox{BlockIndex(-6, -6, -6), BlockIndex(5, 5, 5)});
+  chunk.setWindow(kAll);
   touch(chunk, randomBlocks(9, 1000));
   result.swapMasks(chunk);
-  chunk.clearMasks();
-  chunk.setWindow(VoxelBox{BlockIndex(-6, -6, -6), BlockIndex(5, 5, 5)});
   const std::vector<BlockIndex> next = randomBlocks(10, 300);
-  touch(chunk, next);
-  hashed.clearMasks();
-  touch(hashed, next);
-  EXPECT_EQ(listing(chunk), listing(hashed));
+  EXPECT_EQ(buildInWindow(chunk, kAll, next), buildHashed(next));
 }
 
 }  // namespace
