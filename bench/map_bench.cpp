@@ -1,15 +1,19 @@
 // map_bench: cenote's occupancy map beside OctoMap on the same frames, in the same run.
 // Integration: the same ~270k-point frames into OccupancyMap::integrate and into
 // octomap::OcTree::insertPointCloud (discretize on, the fast OctoMap mode) at 5 cm with a 10 m
-// maximum range; ms/frame, ratio and memory of both. Then queries on the resulting maps: single
+// maximum range; CPU and wall ms/frame (bench/integration_peers.h), ratio and memory of both. Then queries on the resulting maps: single
 // voxel lookups per second (one thread), 10 m segment checks, and OctoMap's search() / castRay()
 // beside them. Prints a Markdown table for docs/PERFORMANCE.md, and the two maps' voxel sets
 // compared voxel by voxel (free here but not in OctoMap: free space no exact ray carved).
 //   map_bench [--frames 10] [--threads 2] [--voxel 0.05] [--integrate-only 1] [--updates-only 1]
-//             [--distance 0] [--lookups-only 1] [--clears-only 1]
-// At most one of the four modes (--*-only 1); none: the full comparison. An unknown flag, a missing or
+//             [--distance 0] [--lookups-only 1] [--clears-only 1] [--peers-only 1] [--write-frames DIR]
+// At most one of the five modes (--*-only 1); none: the full comparison.
+// --peers-only: the integration rows alone, with our map's voxel counts and fingerprint (1 and
+// `threads` threads); --write-frames DIR (with it or the full run) also writes the views as depth
+// images for bench/open3d_bench.py, which adds Open3D's TSDF integration of them. An unknown flag, a missing or
 // bad value, or two modes at once is an error (exit status not 0, the reason on stderr; --help lists the flags).
-// --integrate-only: integrates the frames into our map only (for perf / callgrind), prints ms/frame.
+// --integrate-only: integrates the frames into our map only (for perf / callgrind, run with
+// OMP_WAIT_POLICY set: the bench re-executes itself otherwise), prints ms/frame and the map's fingerprint.
 // --lookups-only: integrates the frames, then times the same random lookups as the full run, single
 // calls and batched alternating, five rounds each (medians, wall and thread CPU time), and says
 // where the probes fall (absent block, unknown, free, occupied).
@@ -41,6 +45,9 @@
 #include <ctime>
 #include <vector>
 
+#include "bench/integration_peers.h"
+#include "bench/map_fingerprint.h"
+#include "bench/omp_wait_policy.h"
 #include "common/median.h"
 #include "common/size_format.h"
 #include "mapping/distance/distance_field.h"
@@ -54,6 +61,9 @@
 
 using namespace cenote;
 using namespace cenote::mapping;
+using cenote::bench::fnvMixBytes;
+using cenote::bench::kFnvOffset;
+using cenote::bench::kFnvPrime;
 
 namespace {
 
@@ -130,43 +140,6 @@ struct UpdateTimes {
   uint64_t distance_fingerprint = 0;  // FNV-1a over the field's queries at every voxel centre near the map
 };
 
-// FNV-1a: the fingerprints this bench prints to compare versions of the map code.
-constexpr uint64_t kFnvOffset = 14695981039346656037ull, kFnvPrime = 1099511628211ull;
-// Mixes the 8 bytes of `word` into `h`, lowest first.
-void fnvMixBytes(uint64_t& h, uint64_t word) {
-  for (int i = 0; i < 8; ++i) h = (h ^ ((word >> (8 * i)) & 0xFF)) * kFnvPrime;
-}
-
-// FNV-1a over the exact bits of the distance field's answers (distance and gradient, which names the
-// nearest obstacle) at every voxel centre of the map's known blocks and their 26 neighbour blocks.
-uint64_t distanceFingerprint(const OccupancyMap& map, const DistanceField& field) {
-  std::vector<BlockIndex> blocks;
-  for (const BlockIndex& b : map.constAccessor().knownBlocks())
-    for (int x = -1; x <= 1; ++x)
-      for (int y = -1; y <= 1; ++y)
-        for (int z = -1; z <= 1; ++z) blocks.push_back(b + BlockIndex(x, y, z));
-  auto less = [](const BlockIndex& a, const BlockIndex& b) {
-    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-  };
-  std::sort(blocks.begin(), blocks.end(), less);
-  blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
-  uint64_t h = kFnvOffset;
-  auto mix = [&h](double v) {
-    uint64_t bits;
-    std::memcpy(&bits, &v, 8);
-    fnvMixBytes(h, bits);
-  };
-  std::vector<Eigen::Vector3d> points(kBlockVoxels);
-  for (const BlockIndex& b : blocks) {
-    for (int o = 0; o < kBlockVoxels; ++o) points[o] = voxelCentre(voxelOfOffset(b, o), map.voxelSize());
-    for (const DistanceQuery& q : field.query(points)) {
-      mix(q.distance_m);
-      for (int i = 0; i < 3; ++i) mix(q.gradient[i]);
-    }
-  }
-  return h;
-}
-
 UpdateTimes timeUpdates(const std::vector<PointBatch>& frames, const MapConfig& config, bool with_distance) {
   UpdateTimes out;
   OccupancyMap live(config);
@@ -197,7 +170,7 @@ UpdateTimes timeUpdates(const std::vector<PointBatch>& frames, const MapConfig& 
       mix(c.centroid_m[i]), mix(c.direction[i]), mix(c.bounds_m.min_m[i]), mix(c.bounds_m.max_m[i]);
   }
   out.cluster_fingerprint = h;
-  if (with_distance) out.distance_fingerprint = distanceFingerprint(live, field);
+  if (with_distance) out.distance_fingerprint = bench::distanceFingerprint(live, field);
   return out;
 }
 
@@ -347,8 +320,9 @@ struct Options {
   int num_frames = 10;
   int threads = 2;
   double voxel_m = 0.05;
-  bool integrate_only = false, updates_only = false, lookups_only = false, clears_only = false;
+  bool integrate_only = false, updates_only = false, lookups_only = false, clears_only = false, peers_only = false;
   bool with_distance = true;  // --distance, for --updates-only
+  std::string write_frames;   // --write-frames, for --peers-only and the full run
 };
 
 constexpr double kMaxRangeM = 10.0;
@@ -364,13 +338,9 @@ MapConfig mapConfig(const Options& o, int threads) {
 
 // Integration, ours, on `threads` threads: the frames into a fresh map after one warm-up frame.
 std::unique_ptr<OccupancyMap> integrateOurs(const std::vector<PointBatch>& frames, const Options& o, int threads,
-                                            double& ms_per_frame) {
-  auto map = std::make_unique<OccupancyMap>(mapConfig(o, threads));
-  map->integrate(frames[0]);  // warm-up: scratch allocation, then start again
-  map->reset();
-  const auto t0 = Clock::now();
-  for (const auto& f : frames) map->integrate(f);
-  ms_per_frame = msSince(t0) / frames.size();
+                                            bench::IntegrationTime& time) {
+  std::unique_ptr<OccupancyMap> map;
+  time = bench::timeOurIntegration(frames, mapConfig(o, threads), map);
   return map;
 }
 
@@ -394,26 +364,74 @@ void runUpdatesOnly(const Options& o, const std::vector<PointBatch>& frames) {
   }
 }
 
-// --integrate-only: our integration alone (for perf / callgrind), ms/frame of wall and of CPU time.
+// --integrate-only: our integration alone (for perf / callgrind), ms/frame of wall and of CPU time,
+// and the fingerprint of the map.
 void runIntegrateOnly(const Options& o, const std::vector<PointBatch>& frames) {
-  // CPU time as well: on a machine shared with builds it varies much less than wall time.
-  double ms_per_frame = 0.0;
-  timespec c0, c1;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
-  const auto map = integrateOurs(frames, o, o.threads, ms_per_frame);
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
-  const double cpu_ms = (c1.tv_sec - c0.tv_sec) * 1e3 + (c1.tv_nsec - c0.tv_nsec) / 1e6;
+  bench::IntegrationTime time;
+  const auto map = integrateOurs(frames, o, o.threads, time);
   const MapStats stats = map->stats();
-  std::printf("integration, %d threads: %.1f ms/frame (CPU of all threads, with warm-up frame and reset: %.1f ms/frame); "
-              "%llu occupied, %llu free voxels\n",
-              o.threads, ms_per_frame, cpu_ms / frames.size(), static_cast<unsigned long long>(stats.occupied),
-              static_cast<unsigned long long>(stats.free));
+  std::printf("integration, %d threads: %.1f ms/frame, %.1f ms/frame CPU of all threads; %llu occupied, %llu free "
+              "voxels; map fingerprint %016llx\n",
+              o.threads, time.wall_ms, time.cpu_ms, static_cast<unsigned long long>(stats.occupied),
+              static_cast<unsigned long long>(stats.free), static_cast<unsigned long long>(bench::mapFingerprint(*map)));
 }
 
 // --lookups-only: see the header comment.
 void runLookupsOnly(const Options& o, const std::vector<PointBatch>& frames) {
-  double ms_per_frame = 0.0;
-  reportLookups(*integrateOurs(frames, o, o.threads, ms_per_frame));
+  bench::IntegrationTime time;
+  reportLookups(*integrateOurs(frames, o, o.threads, time));
+}
+
+// The integration rows of the full run and of --peers-only: ours on `threads` threads and on one
+// (their maps' fingerprints must agree), projective integration of the same views as depth images,
+// OctoMap into `tree`; with --write-frames, the depth images written for bench/open3d_bench.py.
+struct IntegrationRows {
+  bench::IntegrationTime ours, ours_1t, projective, octo;
+  std::unique_ptr<OccupancyMap> map;  // ours, `threads` threads
+  uint64_t fingerprint = 0, fingerprint_1t = 0;
+  uint64_t projective_free = 0;
+};
+
+IntegrationRows timeIntegrations(const Options& o, const BenchView& view, const std::vector<PointBatch>& frames,
+                                 octomap::OcTree& tree) {
+  IntegrationRows rows;
+  rows.fingerprint_1t = bench::mapFingerprint(*integrateOurs(frames, o, 1, rows.ours_1t));
+  rows.map = integrateOurs(frames, o, o.threads, rows.ours);
+  rows.fingerprint = bench::mapFingerprint(*rows.map);
+  const std::vector<DepthFrame> depth_frames = makeDepthFrames(view);
+  if (!o.write_frames.empty()) bench::writeDepthFrames(o.write_frames, depth_frames, o.voxel_m, kMaxRangeM);
+  std::unique_ptr<OccupancyMap> projected;
+  rows.projective = bench::timeProjectiveIntegration(depth_frames, mapConfig(o, o.threads), projected);
+  rows.projective_free = projected->stats().free;
+  rows.octo = bench::timeOctomapIntegration(frames, kMaxRangeM, tree);
+  return rows;
+}
+
+// Rows of the Markdown table: CPU time (steadier under load) and wall time, ratio OctoMap / ours.
+void printIntegrationRows(const IntegrationRows& r, int threads) {
+  auto row = [&](const char* what, const bench::IntegrationTime& ours) {
+    std::printf("| %s, CPU ms/frame | %.1f | %.1f | %.1fx |\n", what, ours.cpu_ms, r.octo.cpu_ms,
+                r.octo.cpu_ms / ours.cpu_ms);
+    std::printf("| %s, wall ms/frame | %.1f | %.1f | %.1fx |\n", what, ours.wall_ms, r.octo.wall_ms,
+                r.octo.wall_ms / ours.wall_ms);
+  };
+  const std::string n = std::to_string(threads);
+  row(("integration (" + n + " threads)").c_str(), r.ours);
+  row("integration (1 thread)", r.ours_1t);
+  row(("projective integration of the same views as depth images (" + n + " threads)").c_str(), r.projective);
+}
+
+// --peers-only: the integration rows alone, with the maps' fingerprints.
+void runPeersOnly(const Options& o, const BenchView& view, const std::vector<PointBatch>& frames) {
+  octomap::OcTree tree(o.voxel_m);
+  const IntegrationRows rows = timeIntegrations(o, view, frames, tree);
+  std::printf("| measure | cenote | OctoMap | ratio |\n|---|---|---|---|\n");
+  printIntegrationRows(rows, o.threads);
+  const MapStats stats = rows.map->stats();
+  std::printf("\nknown voxels: %llu (%llu occupied, %llu free); map fingerprint %016llx (%d threads), %016llx (1 thread)\n",
+              static_cast<unsigned long long>(stats.occupied + stats.free), static_cast<unsigned long long>(stats.occupied),
+              static_cast<unsigned long long>(stats.free), static_cast<unsigned long long>(rows.fingerprint), o.threads,
+              static_cast<unsigned long long>(rows.fingerprint_1t));
 }
 
 // No mode: integration, lookups, segment checks and updates, ours beside OctoMap's, as a Markdown table.
@@ -424,38 +442,9 @@ void runFull(const Options& o, const BenchView& view, const std::vector<PointBat
   size_t points = 0;
   for (const auto& f : frames) points += f.size();
 
-  // Integration, ours: `threads` threads and one thread.
-  double ours_ms = 0.0, ours_1t_ms = 0.0;
-  integrateOurs(frames, o, 1, ours_1t_ms);
-  const auto map = integrateOurs(frames, o, threads, ours_ms);
-
-  // Projective integration of the same views as depth images.
-  double projective_ms = 0.0;
-  size_t projective_free = 0;
-  {
-    const std::vector<DepthFrame> depth_frames = makeDepthFrames(view);
-    OccupancyMap projected(live_config);
-    projected.integrateDepth(depth_frames[0]);  // warm-up, as above
-    projected.reset();
-    const auto t0 = Clock::now();
-    for (const auto& f : depth_frames) projected.integrateDepth(f);
-    projective_ms = msSince(t0) / depth_frames.size();
-    projective_free = projected.stats().free;
-  }
-
   octomap::OcTree tree(voxel_m);
-  tree.setProbHit(0.7);
-  tree.setProbMiss(0.4);
-  tree.setClampingThresMin(0.12);
-  tree.setClampingThresMax(0.97);
-  std::vector<octomap::Pointcloud> clouds;
-  for (const auto& f : frames) clouds.push_back(test::toOctomap(f));
-  const auto t0 = Clock::now();
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const auto& o = frames[i].origin;
-    tree.insertPointCloud(clouds[i], octomap::point3d(o.x(), o.y(), o.z()), max_range_m, false, true);
-  }
-  const double octo_ms = msSince(t0) / frames.size();
+  const IntegrationRows rows = timeIntegrations(o, view, frames, tree);
+  const auto& map = rows.map;
 
   const MapStats stats = map->stats();
   const VoxelSetDiff diff = compareVoxelSets(*map, tree);
@@ -521,11 +510,7 @@ void runFull(const Options& o, const BenchView& view, const std::vector<PointBat
               num_frames, formatCount(static_cast<double>(points) / frames.size()).c_str(), voxel_m * 100, max_range_m,
               threads, "1.9.7");
   std::printf("| measure | cenote | OctoMap | ratio |\n|---|---|---|---|\n");
-  std::printf("| integration, ms/frame (%d threads) | %.1f | %.1f | %.1fx |\n", threads, ours_ms, octo_ms,
-              octo_ms / ours_ms);
-  std::printf("| integration, ms/frame (1 thread) | %.1f | %.1f | %.1fx |\n", ours_1t_ms, octo_ms, octo_ms / ours_1t_ms);
-  std::printf("| projective integration of the same views as depth images, ms/frame (%d threads) | %.1f | %.1f | %.1fx |\n",
-              threads, projective_ms, octo_ms, octo_ms / projective_ms);
+  printIntegrationRows(rows, threads);
   std::printf("| memory of the map, MiB | %.1f | %.1f | %.2fx |\n", ours_mib, octo_mib, ours_mib / octo_mib);
   std::printf("| single voxel lookups, M/s (1 thread) | %.1f | %.1f | %.1fx |\n", ours_lookups / 1e6, octo_lookups / 1e6,
               ours_lookups / octo_lookups);
@@ -544,7 +529,7 @@ void runFull(const Options& o, const BenchView& view, const std::vector<PointBat
       "%zu frontier clusters at the end; projective integration: %llu free voxels.\n",
       static_cast<unsigned long long>(stats.occupied), static_cast<unsigned long long>(stats.free), tree.getNumLeafNodes(),
       ours_hits, octo_hits, occupied_seen, occupied_seen_batched, octo_occupied, num_clusters,
-      static_cast<unsigned long long>(projective_free));
+      static_cast<unsigned long long>(rows.projective_free));
   std::printf("Voxel sets against OctoMap's (pruned leaves expanded): OctoMap %zu free, %zu occupied; %zu voxels free "
               "here but not in OctoMap, %zu free in OctoMap but not here, %zu occupied in one map only.\n",
               diff.octo_free, diff.octo_occupied, diff.free_not_octo_free, diff.octo_free_not_free, diff.occupied_differ);
@@ -553,6 +538,8 @@ void runFull(const Options& o, const BenchView& view, const std::vector<PointBat
 }  // namespace
 
 int main(int argc, char** argv) {
+  // CPU time is the figure to compare under load; libgomp's idle threads would spin and count.
+  bench::sleepingOpenMpWaits(argv, "map_bench");
   Options o;
   CLI::App app{"map_bench: cenote's occupancy map beside OctoMap on the same frames, in the same run"};
   app.add_option("--frames", o.num_frames, "frames of ~270k points")->capture_default_str()->check(CLI::Range(1, 1000));
@@ -565,11 +552,16 @@ int main(int argc, char** argv) {
   app.add_option("--distance", o.with_distance, "0: --updates-only without the distance field")->capture_default_str();
   app.add_option("--lookups-only", o.lookups_only, "1: time single and batched lookups alone");
   app.add_option("--clears-only", o.clears_only, "1: time knownBlocks, clearBox and clearSphere alone");
+  app.add_option("--peers-only", o.peers_only, "1: the integration rows alone (ours, projective, OctoMap)");
+  app.add_option("--write-frames", o.write_frames, "directory: write the frames as depth images (bench/open3d_bench.py)");
   try {
     app.parse(argc, argv);
-    if (o.integrate_only + o.updates_only + o.lookups_only + o.clears_only > 1) {
-      throw CLI::ValidationError("--integrate-only, --updates-only, --lookups-only, --clears-only",
+    if (o.integrate_only + o.updates_only + o.lookups_only + o.clears_only + o.peers_only > 1) {
+      throw CLI::ValidationError("--integrate-only, --updates-only, --lookups-only, --clears-only, --peers-only",
                                  "at most one mode at a time");
+    }
+    if (!o.write_frames.empty() && (o.integrate_only || o.updates_only || o.lookups_only || o.clears_only)) {
+      throw CLI::ValidationError("--write-frames", "only with --peers-only 1 or the full run");
     }
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
@@ -581,6 +573,7 @@ int main(int argc, char** argv) {
   else if (o.updates_only) runUpdatesOnly(o, frames);
   else if (o.integrate_only) runIntegrateOnly(o, frames);
   else if (o.lookups_only) runLookupsOnly(o, frames);
+  else if (o.peers_only) runPeersOnly(o, view, frames);
   else runFull(o, view, frames);
   return 0;
 }

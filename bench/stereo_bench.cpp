@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/omp_wait_policy.h"
 #include "common/median.h"
 #include "pipeline/stereo/stereo_matcher.h"
 #include "tests/support/test_data.h"
@@ -72,15 +73,8 @@ cv::Mat grey(const cv::Mat& bgr) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // libgomp's idle threads spin, and the spinning counts as CPU time of whichever matcher runs
-  // then (OpenCV's too), the more so on a loaded machine (measured: 32 vs 18 CPU ms/frame for
-  // the default band under load 5). Sleeping waits measure the work: OMP_WAIT_POLICY=passive
-  // unless the caller chose a policy, set and re-executed since libgomp reads it when loaded.
-  if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
-    setenv("OMP_WAIT_POLICY", "passive", 1);
-    execv("/proc/self/exe", argv);
-    std::perror("stereo_bench: re-executing with OMP_WAIT_POLICY=passive");  // go on with spinning waits
-  }
+  // OpenCV's threads and ours alike: idle OpenMP threads sleep, so that CPU time measures the work.
+  bench::sleepingOpenMpWaits(argv, "stereo_bench");
   int threads = 2, repeat = 15;
   bool only_first = false;    // the 800x600 input alone
   bool skip_slow = false;     // without the 8-path rows and OpenCV's HH4

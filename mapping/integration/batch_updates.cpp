@@ -7,6 +7,44 @@
 
 namespace cenote::mapping {
 
+void BatchUpdates::clearMasks() {
+  releaseWindow();
+  table_.clear();
+  masks_.clear();
+}
+
+void BatchUpdates::releaseWindow() {
+  // Only the window's cells of this build's blocks were set: back to kNone, the rest already is.
+  for (uint32_t b = 0; b < table_.size(); ++b) {
+    const BlockIndex block = detail::unpackIndex(table_.keyOf(b));
+    const uint32_t ix = static_cast<uint32_t>(block.x() - window_min_.x());
+    const uint32_t iy = static_cast<uint32_t>(block.y() - window_min_.y());
+    const uint32_t iz = static_cast<uint32_t>(block.z() - window_min_.z());
+    if (ix < window_size_[0] && iy < window_size_[1] && iz < window_size_[2]) {
+      window_[(static_cast<size_t>(ix) * window_size_[1] + iy) * window_size_[2] + iz] = detail::BlockTable::kNone;
+    }
+  }
+  window_size_ = {0, 0, 0};
+}
+
+void BatchUpdates::setWindow(const VoxelBox& blocks) {
+  releaseWindow();
+  if (blocks.isEmpty()) return;
+  const Eigen::Vector3i extent = blocks.max - blocks.min + Eigen::Vector3i::Ones();
+  const size_t cells = static_cast<size_t>(extent.x()) * extent.y() * extent.z();
+  if (cells > kMaxWindowCells) return;
+  if (window_.size() < cells) window_.resize(cells, detail::BlockTable::kNone);
+  window_min_ = blocks.min;
+  window_size_ = {static_cast<uint32_t>(extent.x()), static_cast<uint32_t>(extent.y()), static_cast<uint32_t>(extent.z())};
+}
+
+uint32_t BatchUpdates::insert(const BlockIndex& b) {
+  bool inserted;
+  const uint32_t slot = table_.findOrInsert(detail::packIndex(b), inserted);
+  if (inserted) masks_.emplace_back();
+  return slot;
+}
+
 void BatchUpdates::unite(const BatchUpdates& other) {
   for (uint32_t b = 0; b < other.table_.size(); ++b) {
     bool inserted;
@@ -20,6 +58,8 @@ void BatchUpdates::unite(const BatchUpdates& other) {
 }
 
 void BatchUpdates::swapMasks(BatchUpdates& other) {
+  releaseWindow();  // each window indexes its own table's blocks
+  other.releaseWindow();
   std::swap(table_, other.table_);
   masks_.swap(other.masks_);
 }

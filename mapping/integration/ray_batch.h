@@ -8,8 +8,10 @@
 //     endpoint voxel is the mean of its points' colours.
 //  2. Rays are marched with a 3D DDA (the voxels of the segment from the origin to the endpoint
 //     voxel's centre, ties as OctoMap's computeRayKeys) into per-block bit masks (8x8x8 voxels =
-//     512 bits per mask, a free mask and a hit mask), found through an open-addressing table only
-//     when the ray crosses into another block (about every 8 steps). The masks are the per-batch
+//     512 bits per mask, a free mask and a hit mask), looked up only when the ray crosses into
+//     another block (about every 8 steps), through a dense index of the blocks in the chunk's box
+//     (BatchUpdates::setWindow; the hash table beyond it). Each ray is walked by the instance of
+//     the walk for its octant (the signs of its steps as constants). The masks are the per-batch
 //     visited set, so each voxel is updated at most once per batch; a voxel both crossed and hit
 //     is a hit (occupied wins: free &= ~hit). The DDA takes the t of each voxel face it crosses
 //     from one formula of the face's index (not a running sum), so walking a ray from its end back
