@@ -11,7 +11,8 @@
 namespace cenote::pipeline {
 namespace {
 
-bool hasPoint(float depth_m) { return depth_m > 0.0f && depth_m < std::numeric_limits<float>::infinity(); }
+// Both comparisons always evaluated (no short circuit), so the counting loop vectorises.
+bool hasPoint(float depth_m) { return (depth_m > 0.0f) & (depth_m < std::numeric_limits<float>::infinity()); }
 
 // Rows [begin, end) of block b out of `blocks` equal blocks.
 int blockStart(int rows, int blocks, int b) { return static_cast<int>(static_cast<long>(rows) * b / blocks); }
@@ -49,20 +50,25 @@ void backProject(const DepthFrame& frame, PointBatch& out) {
   out.points.resize(offset[blocks]);
   out.colors.resize(colored ? offset[blocks] : 0);
 
+  Eigen::Vector3f* const points = out.points.data();
+  std::array<uint8_t, 3>* const colors = out.colors.data();
 #pragma omp parallel for num_threads(blocks) schedule(static, 1)
   for (int b = 0; b < blocks; ++b) {
     size_t i = offset[b];
     for (int y = blockStart(rows, blocks, b); y < blockStart(rows, blocks, b + 1); ++y) {
       const float* depth = frame.depth.ptr<float>(y);
       const uint8_t* bgr = colored ? frame.color.ptr<uint8_t>(y) : nullptr;
+      // Per component: ray = (RK_inv e_y y + RK_inv e_z) + x RK_inv e_x, p = z ray + t, the
+      // operations of the Eigen expressions in this order (no fused multiply-add).
       const Eigen::Vector3f row_ray = RK_inv.col(1) * static_cast<float>(y) + RK_inv.col(2);
-      const Eigen::Vector3f step = RK_inv.col(0);
+      const float r0 = row_ray.x(), r1 = row_ray.y(), r2 = row_ray.z();
+      const float s0 = RK_inv(0, 0), s1 = RK_inv(1, 0), s2 = RK_inv(2, 0);
       for (int x = 0; x < cols; ++x) {
         const float z = depth[x];
         if (!hasPoint(z)) continue;
-        const Eigen::Vector3f ray = row_ray + static_cast<float>(x) * step;
-        out.points[i] = z * ray + t;
-        if (colored) out.colors[i] = {bgr[3 * x + 2], bgr[3 * x + 1], bgr[3 * x]};
+        const float xf = static_cast<float>(x);
+        points[i] = Eigen::Vector3f(z * (r0 + xf * s0) + t.x(), z * (r1 + xf * s1) + t.y(), z * (r2 + xf * s2) + t.z());
+        if (colored) colors[i] = {bgr[3 * x + 2], bgr[3 * x + 1], bgr[3 * x]};
         ++i;
       }
     }
