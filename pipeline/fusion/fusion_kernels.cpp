@@ -76,6 +76,10 @@ void ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float*
     const VF xs = hn::Iota(df, static_cast<float>(x));
     const VF z = hn::LoadU(df, depth + x), c = hn::LoadU(df, conf + x);
     const MF valid = validPixels(df, z, c, limits);
+    if (hn::AllFalse(df, valid)) {  // a hole or the far side of the scene: no point to project
+      hn::StoreU(hn::Set(di, -1), di, out_index + x);
+      continue;
+    }
     const VF z_safe = hn::IfThenElse(valid, z, hn::Set(df, 1.0f));
     const Projected p = project(df, di, z_safe, hn::MulAdd(xs, a0, b0), hn::MulAdd(xs, a3, b1), hn::MulAdd(xs, a6, b2), P,
                                 target_width, target_height, static_cast<size_t>(target_width));
