@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "pipeline/fusion/back_projection_kernels.h"
 
 namespace cenote::pipeline {
 namespace {
@@ -49,28 +50,21 @@ void backProject(const DepthFrame& frame, PointBatch& out) {
   for (int b = 0; b < blocks; ++b) offset[b + 1] += offset[b];
   out.points.resize(offset[blocks]);
   out.colors.resize(colored ? offset[blocks] : 0);
+  if (out.points.empty()) return;
 
-  Eigen::Vector3f* const points = out.points.data();
-  std::array<uint8_t, 3>* const colors = out.colors.data();
+  // Eigen::Vector3f is three contiguous floats, std::array<uint8_t, 3> three bytes.
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float) && sizeof(std::array<uint8_t, 3>) == 3);
+  float* const xyz = out.points.data()->data();
+  uint8_t* const rgb = colored ? out.colors.data()->data() : nullptr;
 #pragma omp parallel for num_threads(blocks) schedule(static, 1)
   for (int b = 0; b < blocks; ++b) {
     size_t i = offset[b];
     for (int y = blockStart(rows, blocks, b); y < blockStart(rows, blocks, b + 1); ++y) {
-      const float* depth = frame.depth.ptr<float>(y);
-      const uint8_t* bgr = colored ? frame.color.ptr<uint8_t>(y) : nullptr;
-      // Per component: ray = (RK_inv e_y y + RK_inv e_z) + x RK_inv e_x, p = z ray + t, the
-      // operations of the Eigen expressions in this order (no fused multiply-add).
       const Eigen::Vector3f row_ray = RK_inv.col(1) * static_cast<float>(y) + RK_inv.col(2);
-      const float r0 = row_ray.x(), r1 = row_ray.y(), r2 = row_ray.z();
-      const float s0 = RK_inv(0, 0), s1 = RK_inv(1, 0), s2 = RK_inv(2, 0);
-      for (int x = 0; x < cols; ++x) {
-        const float z = depth[x];
-        if (!hasPoint(z)) continue;
-        const float xf = static_cast<float>(x);
-        points[i] = Eigen::Vector3f(z * (r0 + xf * s0) + t.x(), z * (r1 + xf * s1) + t.y(), z * (r2 + xf * s2) + t.z());
-        if (colored) colors[i] = {bgr[3 * x + 2], bgr[3 * x + 1], bgr[3 * x]};
-        ++i;
-      }
+      const detail::RowRays rays{
+          {row_ray.x(), row_ray.y(), row_ray.z()}, {RK_inv(0, 0), RK_inv(1, 0), RK_inv(2, 0)}, {t.x(), t.y(), t.z()}};
+      i += detail::backProjectRow(rays, frame.depth.ptr<float>(y), colored ? frame.color.ptr<uint8_t>(y) : nullptr, cols,
+                                  xyz + 3 * i, rgb ? rgb + 3 * i : nullptr);
     }
   }
 }
