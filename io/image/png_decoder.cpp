@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "io/image/big_endian.h"
+#include "io/image/png_unfilter.h"
 
 namespace cenote::io {
 namespace {
@@ -73,7 +74,7 @@ bool unfilterRow(int filter, const uint8_t* in, uint8_t* out, const uint8_t* pre
       return true;
     case 1:
       if (bpp == 1) unfilterSub<1>(in, out, length);
-      if (bpp == 3) unfilterSub<3>(in, out, length);
+      if (bpp == 3) detail::unfilterSubRgb(in, out, length);
       if (bpp == 4) unfilterSub<4>(in, out, length);
       return true;
     case 2:
