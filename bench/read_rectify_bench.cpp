@@ -56,7 +56,7 @@ cv::Mat decodeSpng(const std::vector<uint8_t>& bytes) {
 }
 
 // The three inflaters on one zlib stream into `out` (its exact size); false on failure.
-bool inflateIgzip(const std::vector<uint8_t>& in, std::vector<uint8_t>& out) {
+bool inflateIgzip(std::span<const uint8_t> in, std::vector<uint8_t>& out) {
   static inflate_state state;
   isal_inflate_init(&state);
   state.crc_flag = ISAL_ZLIB;
@@ -67,12 +67,12 @@ bool inflateIgzip(const std::vector<uint8_t>& in, std::vector<uint8_t>& out) {
   return isal_inflate_stateless(&state) == ISAL_DECOMP_OK && state.avail_out == 0;
 }
 
-bool inflateLibdeflate(const std::vector<uint8_t>& in, std::vector<uint8_t>& out) {
+bool inflateLibdeflate(std::span<const uint8_t> in, std::vector<uint8_t>& out) {
   static libdeflate_decompressor* const d = libdeflate_alloc_decompressor();
   return libdeflate_zlib_decompress(d, in.data(), in.size(), out.data(), out.size(), nullptr) == LIBDEFLATE_SUCCESS;
 }
 
-bool inflateZlib(const std::vector<uint8_t>& in, std::vector<uint8_t>& out) {
+bool inflateZlib(std::span<const uint8_t> in, std::vector<uint8_t>& out) {
   uLongf size = out.size();
   return uncompress(out.data(), &size, in.data(), in.size()) == Z_OK && size == out.size();
 }

@@ -30,7 +30,7 @@ bool isIgnorableChunk(std::string_view type) {
 // Inflates the zlib stream `in` into exactly `out_size` bytes at `out`; false for a damaged
 // stream, a wrong Adler-32, or one that holds fewer or more bytes. ISA-L's igzip inflates a
 // noisy 800x600 frame in about 0.63x libdeflate's time (io/image/png_decoder.h).
-bool inflateZlibExactly(const std::vector<uint8_t>& in, uint8_t* out, std::size_t out_size) {
+bool inflateZlibExactly(std::span<const uint8_t> in, uint8_t* out, std::size_t out_size) {
   // One state per thread, kept between calls: it is 87 KB, too large for every thread's stack.
   thread_local const std::unique_ptr<inflate_state> state = std::make_unique<inflate_state>();
   isal_inflate_init(state.get());
@@ -101,7 +101,9 @@ bool unfilterRow(int filter, const uint8_t* in, uint8_t* out, const uint8_t* pre
 bool readPngImageData(const uint8_t* data, std::size_t size, PngImageData& out) {
   if (size < kPngSignature.size() || std::memcmp(data, kPngSignature.data(), kPngSignature.size()) != 0) return false;
   std::size_t pos = kPngSignature.size();
-  out.zlib.clear();
+  out.zlib = {};
+  out.joined.clear();
+  int idat_chunks = 0;
   bool seen_header = false, seen_end = false;
   while (!seen_end) {
     if (size - pos < 12) return false;
@@ -124,7 +126,10 @@ bool readPngImageData(const uint8_t* data, std::size_t size, PngImageData& out) 
       seen_header = true;
     } else if (type == "IDAT") {
       if (!seen_header) return false;
-      out.zlib.insert(out.zlib.end(), body, body + length);
+      // The first chunk is read in place; a second one starts the joined copy.
+      if (++idat_chunks == 1) out.zlib = {body, length};
+      if (idat_chunks == 2) out.joined.assign(out.zlib.begin(), out.zlib.end());
+      if (idat_chunks >= 2) out.joined.insert(out.joined.end(), body, body + length);
     } else if (type == "IEND") {
       seen_end = true;
     } else if (!isIgnorableChunk(type)) {
@@ -132,11 +137,12 @@ bool readPngImageData(const uint8_t* data, std::size_t size, PngImageData& out) 
     }
     pos += 12 + length;
   }
+  if (idat_chunks >= 2) out.zlib = out.joined;
   return seen_header && !out.zlib.empty() && out.zlib.size() <= UINT32_MAX;
 }
 
 cv::Mat decodePngFast(const uint8_t* data, std::size_t size) {
-  thread_local PngImageData png;  // its buffer reused from frame to frame
+  thread_local PngImageData png;  // its buffer for joined chunks reused from frame to frame
   if (!readPngImageData(data, size, png)) return {};
   const int width = png.width, height = png.height, channels = png.channels;
   const std::size_t row_bytes = static_cast<std::size_t>(width) * channels;

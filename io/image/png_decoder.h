@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <span>
 #include <vector>
 
 namespace cenote::io {
@@ -20,14 +21,17 @@ namespace cenote::io {
 cv::Mat decodePngFast(const uint8_t* data, std::size_t size);
 
 // What decodePngFast() reads before inflating: the image's size and channel count, and the zlib
-// stream of its IDAT chunks, concatenated (bench/read_rectify_bench.cpp inflates it with others).
+// stream of its IDAT chunks (bench/read_rectify_bench.cpp inflates it with others). A stream in
+// one chunk is read where it lies in the file; several are joined in `joined`.
 struct PngImageData {
   int width = 0, height = 0, channels = 0;
-  std::vector<uint8_t> zlib;
+  std::span<const uint8_t> zlib;  // into the file's bytes or into `joined`
+  std::vector<uint8_t> joined;
 };
 
 // Reads the chunks of a PNG of a kind decodePngFast() handles into `out` (its buffer reused),
-// checking every chunk's CRC. @return false for any other file (never throws).
+// checking every chunk's CRC; out.zlib may point into `data`. @return false for any other file
+// (never throws).
 bool readPngImageData(const uint8_t* data, std::size_t size, PngImageData& out);
 
 }  // namespace cenote::io
