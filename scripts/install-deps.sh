@@ -8,7 +8,7 @@ PACKAGES=(
   # toolchain
   build-essential cmake ninja-build ccache pkg-config git
   # pipeline: images, calibration, SIMD, threads
-  libopencv-dev libeigen3-dev libhwy-dev libdeflate-dev zlib1g-dev libjpeg-dev
+  libopencv-dev libeigen3-dev libhwy-dev libdeflate-dev libisal-dev zlib1g-dev libjpeg-dev
   # ROS 2 recordings: MCAP chunks (zstd; lz4 below), rosbag2 sqlite3 storage; the tests' compressed
   # rosbag2 bags (compression_mode MESSAGE / FILE) are written with python3-zstandard
   libzstd-dev libsqlite3-dev python3-zstandard

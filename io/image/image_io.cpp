@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <opencv2/imgproc.hpp>
+#include <span>
 #include <sstream>
 
 #include "common/atomic_file.h"
@@ -120,9 +122,12 @@ cv::Mat readDepthPng16(const std::string& path) {
 cv::Mat readImage(const std::string& path, int flags) {
   if (!std::filesystem::exists(path)) throw NotFoundError("cannot read image " + path + ": no such file");
   std::ifstream in(path, std::ios::binary | std::ios::ate);
-  std::vector<uint8_t> bytes(in ? static_cast<std::size_t>(in.tellg()) : 0);
+  const std::size_t size = in ? static_cast<std::size_t>(in.tellg()) : 0;
+  // Not zero-filled first: every byte is read over (a frame's PNG is about 800 KB, twice a frame).
+  const std::unique_ptr<uint8_t[]> buffer = std::make_unique_for_overwrite<uint8_t[]>(size);
+  const std::span<const uint8_t> bytes(buffer.get(), size);
   in.seekg(0);
-  if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()))) {
+  if (!in.read(reinterpret_cast<char*>(buffer.get()), static_cast<std::streamsize>(size))) {
     throw IoError("cannot read image " + path + ": read failed");
   }
   // The size a PNG or JPEG claims, checked against what its data can hold before decoding.
@@ -146,7 +151,7 @@ cv::Mat readImage(const std::string& path, int flags) {
                     " bytes of data can hold");
     }
   }
-  // 8-bit PNGs (what stereo sequences are made of) through libdeflate; everything else, and any
+  // 8-bit PNGs (what stereo sequences are made of) through our decoder; everything else, and any
   // PNG it does not handle, through OpenCV. Both give the same pixels.
   if (flags == cv::IMREAD_UNCHANGED || flags == cv::IMREAD_COLOR) {
     cv::Mat fast = decodePngFast(bytes.data(), bytes.size());

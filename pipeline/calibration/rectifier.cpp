@@ -6,6 +6,24 @@
 #include "common/error.h"
 
 namespace cenote::pipeline {
+namespace {
+
+// Whether a CV_16SC2 + CV_16UC1 map pair (initUndistortRectifyMap's fixed-point form) sends every
+// pixel to itself: integer part (x, y) and fractional table entry 0. cv::remap's bilinear weights
+// for entry 0 are (1, 0, 0, 0) in fixed point, so it would return every pixel unchanged (the
+// neighbours outside the image have weight 0): a copy, bit for bit.
+bool isIdentityMap(const cv::Mat& map_xy, const cv::Mat& map_fraction) {
+  for (int y = 0; y < map_xy.rows; ++y) {
+    const int16_t* xy = map_xy.ptr<int16_t>(y);
+    const uint16_t* fraction = map_fraction.ptr<uint16_t>(y);
+    for (int x = 0; x < map_xy.cols; ++x) {
+      if (xy[2 * x] != x || xy[2 * x + 1] != y || fraction[x] != 0) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
 
 Rectifier::Rectifier(const StereoCalibration& c) : size_(c.image_size) {
   c.validate();
@@ -22,6 +40,9 @@ Rectifier::Rectifier(const StereoCalibration& c) : size_(c.image_size) {
                               map_left_y_);
   cv::initUndistortRectifyMap(cv::Mat(c.right.K), cv::Mat(c.right.distortion, true), R2, P2, size_, CV_16SC2, map_right_x_,
                               map_right_y_);
+  // A rig that needs no resampling (no distortion, parallel cameras of equal K, as simulated)
+  // gets exact identity maps: rectify() then hands the images on as it would a rectified rig's.
+  identity_maps_ = isIdentityMap(map_left_x_, map_left_y_) && isIdentityMap(map_right_x_, map_right_y_);
   R_rect_left_ = cv::Matx33d(R1);
   geometry_.fx = P1.at<double>(0, 0);
   geometry_.fy = P1.at<double>(1, 1);
@@ -48,7 +69,7 @@ RectifiedPair Rectifier::rectify(const StereoFrame& frame) const {
   RectifiedPair pair;
   pair.t_s = frame.t_s;
   pair.geometry = geometry_;
-  if (passthrough_) {
+  if (passthrough_ || identity_maps_) {
     pair.left = frame.left;
     pair.right = frame.right;
     return pair;

@@ -7,11 +7,13 @@
 #include <vector>
 
 #include "common/error.h"
+#include "pipeline/fusion/back_projection_kernels.h"
 
 namespace cenote::pipeline {
 namespace {
 
-bool hasPoint(float depth_m) { return depth_m > 0.0f && depth_m < std::numeric_limits<float>::infinity(); }
+// Both comparisons always evaluated (no short circuit), so the counting loop vectorises.
+bool hasPoint(float depth_m) { return (depth_m > 0.0f) & (depth_m < std::numeric_limits<float>::infinity()); }
 
 // Rows [begin, end) of block b out of `blocks` equal blocks.
 int blockStart(int rows, int blocks, int b) { return static_cast<int>(static_cast<long>(rows) * b / blocks); }
@@ -48,23 +50,21 @@ void backProject(const DepthFrame& frame, PointBatch& out) {
   for (int b = 0; b < blocks; ++b) offset[b + 1] += offset[b];
   out.points.resize(offset[blocks]);
   out.colors.resize(colored ? offset[blocks] : 0);
+  if (out.points.empty()) return;
 
+  // Eigen::Vector3f is three contiguous floats, std::array<uint8_t, 3> three bytes.
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float) && sizeof(std::array<uint8_t, 3>) == 3);
+  float* const xyz = out.points.data()->data();
+  uint8_t* const rgb = colored ? out.colors.data()->data() : nullptr;
 #pragma omp parallel for num_threads(blocks) schedule(static, 1)
   for (int b = 0; b < blocks; ++b) {
     size_t i = offset[b];
     for (int y = blockStart(rows, blocks, b); y < blockStart(rows, blocks, b + 1); ++y) {
-      const float* depth = frame.depth.ptr<float>(y);
-      const uint8_t* bgr = colored ? frame.color.ptr<uint8_t>(y) : nullptr;
       const Eigen::Vector3f row_ray = RK_inv.col(1) * static_cast<float>(y) + RK_inv.col(2);
-      const Eigen::Vector3f step = RK_inv.col(0);
-      for (int x = 0; x < cols; ++x) {
-        const float z = depth[x];
-        if (!hasPoint(z)) continue;
-        const Eigen::Vector3f ray = row_ray + static_cast<float>(x) * step;
-        out.points[i] = z * ray + t;
-        if (colored) out.colors[i] = {bgr[3 * x + 2], bgr[3 * x + 1], bgr[3 * x]};
-        ++i;
-      }
+      const detail::RowRays rays{
+          {row_ray.x(), row_ray.y(), row_ray.z()}, {RK_inv(0, 0), RK_inv(1, 0), RK_inv(2, 0)}, {t.x(), t.y(), t.z()}};
+      i += detail::backProjectRow(rays, frame.depth.ptr<float>(y), colored ? frame.color.ptr<uint8_t>(y) : nullptr, cols,
+                                  xyz + 3 * i, rgb ? rgb + 3 * i : nullptr);
     }
   }
 }

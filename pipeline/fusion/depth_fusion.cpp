@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -78,10 +77,6 @@ void renderView(const DepthFrame& source, const Projector& P, const FusionLimits
   float* c_buffer = out.confidence.ptr<float>(0);
   // Only depths are cleared: a confidence is read only where a depth was written.
   std::fill(z_buffer, z_buffer + static_cast<size_t>(width) * height, kInf);
-  // Dropped points (index -1) go to a sentinel cell past the end, so the loop below has no
-  // unpredictable branch: a write that loses the depth test stores the old values again.
-  const int32_t sentinel = width * height;
-  z_buffer[sentinel] = -kInf;
   int32_t* index = out.row_index.data();
   float* depth = out.row_depth.data();
   for (int y = 0; y < source.depth.rows; ++y) {
@@ -91,13 +86,14 @@ void renderView(const DepthFrame& source, const Projector& P, const FusionLimits
     } else {
       projectRowScalar(P, limits, source.depth.ptr<float>(y), conf, y, source.depth.cols, width, height, index, depth);
     }
+    // Dropped points (index -1) come in runs (holes, the far side of the image), so the branch
+    // is mostly predicted; a point is written only when it is nearer (an equal depth keeps the first).
     for (int x = 0; x < source.depth.cols; ++x) {
-      const int32_t i = index[x] < 0 ? sentinel : index[x];
-      const float z_old = z_buffer[i];
-      const uint32_t take = 0u - static_cast<uint32_t>(depth[x] < z_old);  // all ones when nearer
-      z_buffer[i] = std::min(z_old, depth[x]);                             // an equal depth keeps the first
-      c_buffer[i] = std::bit_cast<float>((std::bit_cast<uint32_t>(conf[x]) & take) |
-                                         (std::bit_cast<uint32_t>(c_buffer[i]) & ~take));
+      const int32_t i = index[x];
+      if (i >= 0 && depth[x] < z_buffer[i]) {
+        z_buffer[i] = depth[x];
+        c_buffer[i] = conf[x];
+      }
     }
   }
 }
@@ -234,10 +230,9 @@ void fuseViews(std::span<const DepthFrame* const> views, const FusionConfig& con
     }
     if (v == r) continue;
     FusionScratch::View& buffers = scratch.views[v];
-    // One float past the image: the sentinel cell of renderView().
-    buffers.storage.resize(2 * (static_cast<size_t>(size.area()) + 1));  // no-op while the size stays
+    buffers.storage.resize(2 * static_cast<size_t>(size.area()));  // no-op while the size stays
     buffers.depth = cv::Mat(size, CV_32FC1, buffers.storage.data());
-    buffers.confidence = cv::Mat(size, CV_32FC1, buffers.storage.data() + size.area() + 1);
+    buffers.confidence = cv::Mat(size, CV_32FC1, buffers.storage.data() + size.area());
     buffers.row_index.resize(size.width);
     buffers.row_depth.resize(size.width);
     s.rendered_depth[v] = buffers.depth.ptr<float>(0);

@@ -60,7 +60,7 @@ struct FusionScratch {
     cv::Mat confidence;              // CV_32F confidence of the rendered point where depth is finite (else stale)
     std::vector<int32_t> row_index;  // one projected source row: target pixel or -1
     std::vector<float> row_depth;    // and its depth in the reference camera
-    std::vector<float> storage;      // pixels of depth and confidence, each followed by a sentinel cell
+    std::vector<float> storage;      // pixels of depth, then of confidence
   };
   std::vector<View> views;  // per view of the window; the reference's is unused
 };

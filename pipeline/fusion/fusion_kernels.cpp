@@ -76,6 +76,10 @@ void ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float*
     const VF xs = hn::Iota(df, static_cast<float>(x));
     const VF z = hn::LoadU(df, depth + x), c = hn::LoadU(df, conf + x);
     const MF valid = validPixels(df, z, c, limits);
+    if (hn::AllFalse(df, valid)) {  // a hole or the far side of the scene: no point to project
+      hn::StoreU(hn::Set(di, -1), di, out_index + x);
+      continue;
+    }
     const VF z_safe = hn::IfThenElse(valid, z, hn::Set(df, 1.0f));
     const Projected p = project(df, di, z_safe, hn::MulAdd(xs, a0, b0), hn::MulAdd(xs, a3, b1), hn::MulAdd(xs, a6, b2), P,
                                 target_width, target_height, static_cast<size_t>(target_width));
@@ -85,11 +89,15 @@ void ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float*
   }
 }
 
-void FuseRowImpl(const FusionRowInput& in, int y, float* out_depth, float* out_conf) {
+// Steps 2-4 for one row. kViews > 0 is N_f known when compiling (3 and 5: the loops over views
+// unroll and the candidates stay in registers); 0 takes in.num_views. Both do the same operations
+// in the same order on every lane, so their results are the same bits.
+template <int kViews>
+HWY_INLINE void fuseRowOf(const FusionRowInput& in, int y, float* out_depth, float* out_conf) {
   const DF df;
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(df));
-  const int n = in.num_views, r = in.ref;
+  const int n = kViews > 0 ? kViews : in.num_views, r = kViews > 0 ? (kViews - 1) / 2 : in.ref;
   const FusionLimits& lim = in.limits;
   const float yf = static_cast<float>(y);
   const VF inf = hn::Set(df, std::numeric_limits<float>::infinity());
@@ -102,8 +110,10 @@ void FuseRowImpl(const FusionRowInput& in, int y, float* out_depth, float* out_c
     const int x = std::min(start, in.width - lanes);
     const VF xs = hn::Iota(df, static_cast<float>(x));
     // Step 2: candidates, +inf / 0 where a view has none.
-    VF z[kMaxFusionViews], c[kMaxFusionViews];
-    MF has[kMaxFusionViews];
+    constexpr int kSlots = kViews > 0 ? kViews : kMaxFusionViews;
+    VF z[kSlots], c[kSlots];
+    MF has[kSlots];
+    MF any = hn::FirstN(df, 0);
     for (int v = 0; v < n; ++v) {
       if (v == r) {
         const VF zr = hn::LoadU(df, ref_depth + x), cr = hn::LoadU(df, ref_conf + x);
@@ -115,9 +125,16 @@ void FuseRowImpl(const FusionRowInput& in, int y, float* out_depth, float* out_c
         c[v] = hn::LoadU(df, in.rendered_conf[v] + row + x);
         has[v] = hn::Lt(z[v], inf);
       }
+      any = hn::Or(any, has[v]);
+    }
+    // No candidate in any lane: every pixel is rejected (what the steps below would give).
+    if (hn::AllFalse(df, any)) {
+      hn::StoreU(inf, df, out_depth + x);
+      hn::StoreU(zero, df, out_conf + x);
+      continue;
     }
     // Rays of the reference pixels in every other view.
-    VF ray[kMaxFusionViews][3];
+    VF ray[kSlots][3];
     for (int l = 0; l < n; ++l) {
       if (l == r) continue;
       const float* a = in.to_view[l].a;
@@ -130,6 +147,8 @@ void FuseRowImpl(const FusionRowInput& in, int y, float* out_depth, float* out_c
     VF best_conf = hn::Set(df, -std::numeric_limits<float>::infinity());
     VF best_weighted = zero, best_support = hn::Set(df, 1.0f);  // depth = weighted / support, once
     for (int j = 0; j < n; ++j) {
+      // No lane has this candidate: none of them would take it.
+      if (hn::AllFalse(df, has[j])) continue;
       const VF zj = hn::IfThenElse(has[j], z[j], hn::Set(df, 1.0f));  // finite in unused lanes
       const VF e = epsAt(df, zj, lim);
       const VF minus_e = hn::Neg(e);
@@ -165,6 +184,14 @@ void FuseRowImpl(const FusionRowInput& in, int y, float* out_depth, float* out_c
     const MF keep = hn::Ge(best_conf, hn::Set(df, lim.min_fused_confidence));
     hn::StoreU(hn::IfThenElse(keep, hn::Div(best_weighted, best_support), inf), df, out_depth + x);
     hn::StoreU(hn::IfThenElseZero(keep, best_conf), df, out_conf + x);
+  }
+}
+
+void FuseRowImpl(const FusionRowInput& in, int y, float* out_depth, float* out_conf) {
+  switch (in.num_views) {
+    case 3: return fuseRowOf<3>(in, y, out_depth, out_conf);
+    case 5: return fuseRowOf<5>(in, y, out_depth, out_conf);
+    default: return fuseRowOf<0>(in, y, out_depth, out_conf);
   }
 }
 

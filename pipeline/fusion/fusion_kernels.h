@@ -45,7 +45,7 @@ struct FusionRowInput {
 
 // Projects row y of a source view into the target image: for each x, out_index[x] = target pixel
 // index (row * target_width + column) or -1 when the pixel is invalid or its point is dropped, and
-// out_depth[x] = its depth in the target camera.
+// out_depth[x] = its depth in the target camera (left unwritten where out_index[x] is -1).
 void projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y, int width,
                 int target_width, int target_height, int32_t* out_index, float* out_depth);
 

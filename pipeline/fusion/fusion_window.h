@@ -1,5 +1,5 @@
 // fusion_window.h: the sliding window of depth frames that feeds depth-map fusion.
-// Keeps the last N_f frames (copies); once full, every push() fuses the window into its middle
+// Keeps the last N_f frames (copies, or the frames themselves when moved in); once full, every push() fuses the window into its middle
 // (reference) frame with fuseViews() (rules in depth_fusion.h) and back-projects the result into
 // coloured world points. The oldest frame leaves as each new one arrives, so memory and latency
 // are constant: frame buffers, z-buffers, the fused maps and the point batch are allocated while
@@ -45,6 +45,10 @@ class FusionWindow {
   //         pose) or its size differs from the frames already in the window. The window is then
   //         unchanged.
   const FusedFrame* push(const DepthFrame& frame);
+  // The same, taking the frame's Mats into the window instead of copying their pixels (the
+  // pipeline's stereo stage makes new maps for every frame): the caller must not write to those
+  // pixels afterwards. On an error the frame is left as it was.
+  const FusedFrame* push(DepthFrame&& frame);
 
   // Hands the last fused frame's points to `out` without copying them (their buffers are
   // swapped: the window's points are then out's old ones, overwritten by the next push()).
@@ -59,6 +63,10 @@ class FusionWindow {
   const FusionWindowTimings& lastTimings() const { return timings_; }
 
  private:
+  // Checks `frame` against the window, then stores it in the next slot with `store(slot)`.
+  template <typename Store>
+  const FusedFrame* pushWith(const DepthFrame& frame, Store store);
+
   FusionConfig config_;
   std::vector<DepthFrame> slots_;           // ring buffer of N_f frames
   std::vector<const DepthFrame*> ordered_;  // the slots, oldest first

@@ -104,7 +104,7 @@ void FramePipeline::fusionStage() {
     const auto t0 = Clock::now();
     FusedOutput out;
     if (window) {
-      const FusedFrame* result = window->push(*frame);
+      const FusedFrame* result = window->push(std::move(*frame));  // its maps are new: no copy
       if (!result) continue;
       out.frame.t_s = result->frame.t_s;
       out.frame.T_world_cam = result->frame.T_world_cam;

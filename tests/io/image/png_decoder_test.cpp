@@ -1,6 +1,7 @@
 #include "io/image/png_decoder.h"
 
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 
 #include <filesystem>
 #include <fstream>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "io/image/image_io.h"
+#include "io/image/png_unfilter.h"
 #include "tests/support/test_data.h"
 
 namespace cenote::io {
@@ -130,6 +132,27 @@ TEST(PngDecoder, EveryFilterTypeGivesOpenCvsPixelsForGreyRgbAndRgba) {
     expectSamePixels(fast, cv::imdecode(png, cv::IMREAD_UNCHANGED), what + " vs OpenCV");
     expectSamePixels(fast, image, what + " vs the encoded image");
   }
+}
+
+// The SIMD Sub filter of RGB rows on every instruction set, against the filter's definition, for
+// rows shorter than a block, with and without a tail, and an 800-pixel row; in place and not.
+TEST(PngDecoder, SubFilterOfRgbRowsIsTheDefinitionOnEveryInstructionSet) {
+  cv::RNG rng(5);
+  for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    for (const std::size_t length : {0, 2, 3, 15, 16, 17, 47, 48, 111, 2400}) {
+      std::vector<uint8_t> in(length);
+      for (uint8_t& b : in) b = static_cast<uint8_t>(rng.uniform(0, 256));
+      std::vector<uint8_t> want(length);
+      for (std::size_t i = 0; i < length; ++i) want[i] = static_cast<uint8_t>(in[i] + (i >= 3 ? want[i - 3] : 0));
+      std::vector<uint8_t> out(length, 0xAB), in_place = in;
+      detail::unfilterSubRgb(in.data(), out.data(), length);
+      detail::unfilterSubRgb(in_place.data(), in_place.data(), length);
+      EXPECT_EQ(out, want) << hwy::TargetName(target) << ", " << length << " bytes";
+      EXPECT_EQ(in_place, want) << hwy::TargetName(target) << ", " << length << " bytes in place";
+    }
+  }
+  hwy::SetSupportedTargetsForTest(0);
 }
 
 TEST(PngDecoder, OpenCvEncodedImagesDecodeToTheSamePixels) {

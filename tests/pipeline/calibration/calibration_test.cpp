@@ -282,5 +282,69 @@ TEST(Rectifier, RectifiedCalibrationPassesImagesThrough) {
   EXPECT_DOUBLE_EQ(pair.geometry.baseline_m, 0.1);
 }
 
+// cv::remap of `frame`'s images with OpenCV's own fixed-point maps of `c` (stereoRectify,
+// initUndistortRectifyMap to CV_16SC2): what Rectifier::rectify must return, pixel for pixel.
+std::pair<cv::Mat, cv::Mat> remapWithOpenCv(const StereoCalibration& c, const StereoFrame& frame) {
+  cv::Mat R1, R2, P1, P2, Q;
+  cv::stereoRectify(cv::Mat(c.left.K), cv::Mat(c.left.distortion), cv::Mat(c.right.K), cv::Mat(c.right.distortion),
+                    c.image_size, cv::Mat(c.R), cv::Mat(c.T), R1, R2, P1, P2, Q, cv::CALIB_ZERO_DISPARITY, 0.0,
+                    c.image_size);
+  std::pair<cv::Mat, cv::Mat> out;
+  for (int side = 0; side < 2; ++side) {
+    const CameraIntrinsics& camera = side == 0 ? c.left : c.right;
+    cv::Mat map1, map2;
+    cv::initUndistortRectifyMap(cv::Mat(camera.K), cv::Mat(camera.distortion), side == 0 ? R1 : R2, side == 0 ? P1 : P2,
+                                c.image_size, CV_16SC2, map1, map2);
+    cv::remap(side == 0 ? frame.left : frame.right, side == 0 ? out.first : out.second, map1, map2, cv::INTER_LINEAR,
+              cv::BORDER_CONSTANT);
+  }
+  return out;
+}
+
+StereoFrame noiseFrame(cv::Size size, int type) {
+  StereoFrame frame;
+  frame.left = cv::Mat(size, type);
+  frame.right = cv::Mat(size, type);
+  cv::randu(frame.left, 0, 256);
+  cv::randu(frame.right, 0, 256);
+  return frame;
+}
+
+TEST(Rectifier, IdealRawRigHandsTheImagesOnAsCvRemapWouldReturnThem) {
+  // No distortion, equal K, parallel cameras: the simulator's rig, given as a raw calibration.
+  const test::RawCamera camera{cv::Matx33d(476.7, 0, 399.5, 0, 476.7, 299.5, 0, 0, 1), {0, 0, 0, 0}};
+  const StereoCalibration c = test::rawRig(cv::Size(800, 600), camera, camera, cv::Vec3d(0, 0, 0), cv::Vec3d(-0.12, 0, 0));
+  const Rectifier rectifier(c);
+  ASSERT_FALSE(rectifier.isPassthrough());
+  EXPECT_TRUE(rectifier.keepsImages());
+  EXPECT_NEAR(rectifier.geometry().baseline_m, 0.12, 1e-12);
+  for (const int type : {CV_8UC1, CV_8UC3}) {
+    const StereoFrame frame = noiseFrame(c.image_size, type);
+    const RectifiedPair pair = rectifier.rectify(frame);
+    const auto [left, right] = remapWithOpenCv(c, frame);
+    EXPECT_EQ(cv::norm(pair.left, left, cv::NORM_INF), 0.0) << "type " << type;
+    EXPECT_EQ(cv::norm(pair.right, right, cv::NORM_INF), 0.0) << "type " << type;
+    EXPECT_EQ(pair.left.data, frame.left.data) << "the left image is copied";
+    EXPECT_EQ(pair.right.data, frame.right.data) << "the right image is copied";
+  }
+}
+
+TEST(Rectifier, RigATenthOfAPixelFromIdealIsStillResampled) {
+  // The right camera's principal point 0.2 px lower: each rectified view moves by 0.1 px (zero
+  // disparity puts both principal points at the mean), so neither map is the identity.
+  const test::RawCamera left{cv::Matx33d(476.7, 0, 399.5, 0, 476.7, 299.5, 0, 0, 1), {0, 0, 0, 0}};
+  const test::RawCamera right{cv::Matx33d(476.7, 0, 399.5, 0, 476.7, 299.7, 0, 0, 1), {0, 0, 0, 0}};
+  const StereoCalibration c = test::rawRig(cv::Size(800, 600), left, right, cv::Vec3d(0, 0, 0), cv::Vec3d(-0.12, 0, 0));
+  const Rectifier rectifier(c);
+  EXPECT_FALSE(rectifier.keepsImages());
+  const StereoFrame frame = noiseFrame(c.image_size, CV_8UC3);
+  const RectifiedPair pair = rectifier.rectify(frame);
+  const auto [want_left, want_right] = remapWithOpenCv(c, frame);
+  EXPECT_EQ(cv::norm(pair.left, want_left, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(pair.right, want_right, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(pair.left, frame.left, cv::NORM_INF), 0.0) << "the left image was not resampled";
+  EXPECT_GT(cv::norm(pair.right, frame.right, cv::NORM_INF), 0.0) << "the right image was not resampled";
+}
+
 }  // namespace
 }  // namespace cenote::pipeline

@@ -1,7 +1,13 @@
 #include "pipeline/fusion/back_projection.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <hwy/targets.h>
 #include <omp.h>
+
+#include <opencv2/core.hpp>
 
 #include "common/error.h"
 
@@ -57,6 +63,46 @@ TEST(BackProject, OrderAndValuesDoNotDependOnThreads) {
   omp_set_num_threads(threads);
   EXPECT_EQ(one.points, two.points);
   EXPECT_GT(one.size(), 97u * 53u / 2);
+}
+
+// Every instruction set gives the bits of the plain float expression (one multiply, one add at a
+// time), evaluated here in scalar code without fused multiply-adds.
+TEST(BackProject, EveryInstructionSetGivesThePlainFloatExpressionsBits) {
+  DepthFrame f;
+  f.depth = cv::Mat(61, 77, CV_32F);  // 77 columns: a tail narrower than a vector on every target
+  cv::randu(f.depth, -1.0f, 5.0f);
+  f.depth.at<float>(3, 5) = std::numeric_limits<float>::infinity();
+  f.color = cv::Mat(61, 77, CV_8UC3);
+  cv::randu(f.color, 0, 256);
+  f.K << 40.0, 0.0, 38.3, 0.0, 41.0, 30.1, 0.0, 0.0, 1.0;
+  f.T_world_cam.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
+  f.T_world_cam.translation() = Eigen::Vector3d(1.25, -0.5, 3.0);
+  const Eigen::Matrix3f RK_inv = (f.T_world_cam.linear() * f.K.inverse()).cast<float>();
+  const Eigen::Vector3f t = f.T_world_cam.translation().cast<float>();
+  std::vector<Eigen::Vector3f> expected;
+  std::vector<std::array<uint8_t, 3>> expected_colours;
+  for (int y = 0; y < f.depth.rows; ++y) {
+    for (int x = 0; x < f.depth.cols; ++x) {
+      const float z = f.depth.at<float>(y, x);
+      if (!(z > 0.0f && std::isfinite(z))) continue;
+      const Eigen::Vector3f ray = (RK_inv.col(1) * static_cast<float>(y) + RK_inv.col(2)) +
+                                  static_cast<float>(x) * RK_inv.col(0);
+      expected.push_back(z * ray + t);
+      const cv::Vec3b bgr = f.color.at<cv::Vec3b>(y, x);
+      expected_colours.push_back({bgr[2], bgr[1], bgr[0]});
+    }
+  }
+  for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    PointBatch batch;
+    backProject(f, batch);
+    ASSERT_EQ(batch.size(), expected.size()) << hwy::TargetName(target);
+    EXPECT_EQ(std::memcmp(batch.points.data(), expected.data(), expected.size() * sizeof(Eigen::Vector3f)), 0)
+        << hwy::TargetName(target);
+    EXPECT_EQ(batch.colors, expected_colours) << hwy::TargetName(target);
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  EXPECT_GT(expected.size(), 61u * 77u / 2);
 }
 
 TEST(BackProject, RejectsColourOfAnotherSize) {

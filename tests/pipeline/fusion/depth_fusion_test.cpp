@@ -1,6 +1,7 @@
 #include "pipeline/fusion/depth_fusion.h"
 
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 #include <omp.h>
 
 #include <cmath>
@@ -233,6 +234,70 @@ TEST(FuseViews, OneAndTwoThreadsAreBitIdentical) {
     EXPECT_EQ(std::memcmp(one.confidence.data, two.confidence.data, bytes), 0) << "confidence differs, N_f = " << n_views;
     EXPECT_GT(cv::countNonZero(one.confidence), static_cast<int>(one.depth.total() / 2));
   }
+}
+
+// Pixels where two fused frames differ in depth or confidence: by any bit (tolerance 0), or by
+// more than `tolerance` of the depth and in confidence.
+int differingPixels(const DepthFrame& a, const DepthFrame& b, float tolerance) {
+  int count = 0;
+  for (int y = 0; y < a.depth.rows; ++y) {
+    for (int x = 0; x < a.depth.cols; ++x) {
+      const float za = a.depth.at<float>(y, x), zb = b.depth.at<float>(y, x);
+      const float ca = a.confidence.at<float>(y, x), cb = b.confidence.at<float>(y, x);
+      if (tolerance == 0.0f) {
+        count += std::memcmp(&za, &zb, sizeof(float)) != 0 || std::memcmp(&ca, &cb, sizeof(float)) != 0;
+      } else {
+        count += !((std::isinf(za) && std::isinf(zb)) ||
+                   (std::abs(za - zb) <= tolerance * zb && std::abs(ca - cb) <= tolerance));
+      }
+    }
+  }
+  return count;
+}
+
+// Every instruction set with fused multiply-add (AVX2, AVX-512, NEON, SVE) gives the same bits
+// (N_f = 3 and 5 have kernels of their own, 7 takes the general one). SSSE3 and SSE4 have no FMA:
+// Highway rounds their MulAdd twice, so every rendered depth may differ in its last bit (about a
+// tenth of the fused pixels do), and a decision that sits on a boundary may flip, as between the
+// float kernels and the double reference below.
+TEST(FuseViews, EveryInstructionSetWithFmaGivesTheSameBits) {
+  constexpr int64_t kNoFma = HWY_SSSE3 | HWY_SSE4 | HWY_EMU128 | HWY_SCALAR;
+  const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();  // before any is forced
+  for (int n_views : {3, 5, 7}) {
+    const auto views = noisyBoxWindow(n_views, 300);
+    FusionConfig config;
+    config.num_views = n_views;
+    DepthFrame first;
+    std::string first_name;
+    int compared = 0;
+    for (const int64_t target : targets) {
+      if (target == HWY_SCALAR) continue;  // never chosen: images narrower than a vector take the scalar path
+      hwy::SetSupportedTargetsForTest(target);
+      const DepthFrame fused = fuseViews(views, config);
+      if (first.depth.empty()) {
+        ASSERT_EQ(target & kNoFma, 0) << "the best instruction set comes first";
+        first = fused;
+        first_name = hwy::TargetName(target);
+        EXPECT_GT(cv::countNonZero(fused.confidence), static_cast<int>(fused.depth.total() / 2));
+        continue;
+      }
+      const bool fma = (target & kNoFma) == 0;
+      const int differ = differingPixels(first, fused, fma ? 0.0f : 1e-4f);
+      std::printf("[fusion %s vs %s] N_f = %d: %d of %zu pixels differ%s\n", hwy::TargetName(target), first_name.c_str(),
+                  n_views, differ, fused.depth.total(), fma ? "" : " by more than 1e-4");
+      if (fma) {
+        EXPECT_EQ(differ, 0) << hwy::TargetName(target) << " vs " << first_name << ", N_f = " << n_views;
+        ++compared;
+      } else {
+        EXPECT_LE(differ, static_cast<int>(fused.depth.total() / 2000))
+            << hwy::TargetName(target) << " vs " << first_name << ", N_f = " << n_views;
+      }
+    }
+    if (first_name == "AVX3") {
+      EXPECT_GE(compared, 1) << "AVX2 was not compared with AVX-512";
+    }
+  }
+  hwy::SetSupportedTargetsForTest(0);
 }
 
 TEST(FuseViews, AgreesWithThePlainReferenceImplementation) {

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
@@ -144,6 +145,32 @@ TEST(FusionWindow, EmitsTheMiddleFrameOnceFullAndSlides) {
   EXPECT_EQ(second->frame.t_s, seq.noisy[2].t_s);
   EXPECT_EQ(second->frame.depth.data, depth_buffer) << "the fused map's buffer is reused, not reallocated";
   EXPECT_EQ(window.size(), 3);
+}
+
+TEST(FusionWindow, FramesMovedInFuseAsCopiesDoWithoutCopyingPixels) {
+  const Sequence seq = makeSequence(test::planeScene(), 4, 4);
+  FusionWindow copying(FusionConfig{}), moving(FusionConfig{});
+  std::vector<const uint8_t*> color_pixels;
+  for (int i = 0; i < 4; ++i) {
+    const FusedFrame* copied = copying.push(seq.noisy[i]);
+    DepthFrame frame = seq.noisy[i];
+    frame.depth = frame.depth.clone();
+    frame.confidence = frame.confidence.clone();
+    frame.color = frame.color.clone();
+    color_pixels.push_back(frame.color.data);
+    const FusedFrame* moved = moving.push(std::move(frame));
+    EXPECT_TRUE(frame.depth.empty() && frame.confidence.empty() && frame.color.empty()) << "frame " << i;
+    ASSERT_EQ(copied == nullptr, moved == nullptr) << "frame " << i;
+    if (!moved) continue;
+    // The middle frame's colour is the one pushed, not a copy of it.
+    EXPECT_EQ(moved->frame.color.data, color_pixels[i - 1]) << "frame " << i;
+    const size_t bytes = copied->frame.depth.total() * sizeof(float);
+    EXPECT_EQ(std::memcmp(copied->frame.depth.data, moved->frame.depth.data, bytes), 0) << "frame " << i;
+    EXPECT_EQ(std::memcmp(copied->frame.confidence.data, moved->frame.confidence.data, bytes), 0) << "frame " << i;
+    ASSERT_EQ(copied->points.size(), moved->points.size()) << "frame " << i;
+    EXPECT_EQ(copied->points.points, moved->points.points) << "frame " << i;
+    EXPECT_EQ(copied->points.colors, moved->points.colors) << "frame " << i;
+  }
 }
 
 TEST(FusionWindow, RejectsAFrameOfAnotherSizeAndStaysUsable) {
