@@ -27,9 +27,11 @@ namespace cenote::pipeline::detail {
 
 inline constexpr int kBandMargin = 2;       // full-size pixels kept beyond the neighbourhood's disparities
 inline constexpr int kEdgeCheckRadius = 2;  // the edge check's SAD window: 5x5
+inline constexpr int kEdgeCheckBorder = 4;  // replicated pixels around EdgeCheckImages, at least
 
-// The full-size image pair that the edge check compares, with a replicated border of at least
-// kEdgeCheckRadius pixels on every side; pointers address pixel (0, 0).
+// The full-size image pair that the edge check compares, with a replicated border of
+// kEdgeCheckBorder pixels on every side (rows contiguous, as the matcher's bordered images);
+// pointers address pixel (0, 0).
 struct EdgeCheckImages {
   const uint8_t* left = nullptr;
   const uint8_t* right = nullptr;

@@ -39,6 +39,8 @@ std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + s
 
 }  // namespace
 
+static_assert(detail::kImageBorder >= detail::kEdgeCheckBorder, "the edge check reads the matcher's bordered images");
+
 // One resolution of the match: its parameters, bordered images and per-strip memory.
 struct MatchLevel {
   detail::SgmParams params;
