@@ -48,37 +48,29 @@ void coarseRowCentres(const cv::Mat& coarse_disparity, int scale, int coarse_y0,
   }
 }
 
-// 5x5 SAD between left pixel (x, y) and right pixel (x - d, y); right columns clamped to the image
-// (as its replicated border). The plain loop serves where the right window leaves the border.
-int windowSadClamped(const EdgeCheckImages& im, int x, int y, int d) {
-  int sum = 0;
-  for (int wy = -kEdgeCheckRadius; wy <= kEdgeCheckRadius; ++wy) {
-    const uint8_t* left = im.left + (y + wy) * im.stride;
-    const uint8_t* right = im.right + (y + wy) * im.stride;
-    for (int wx = -kEdgeCheckRadius; wx <= kEdgeCheckRadius; ++wx) {
-      sum += std::abs(left[x + wx] - right[std::clamp(x + wx - d, 0, im.width - 1)]);
-    }
-  }
-  return sum;
-}
-
-// The same where both windows lie inside the borders (d <= x + kEdgeCheckBorder - kEdgeCheckRadius):
-// on x86 one PSADBW per row, over 8 loaded bytes of which the last 3 are masked out (the rows'
-// borders and the rows below keep those reads inside the image memory).
+// 5x5 SAD between left pixel (x, y) and right pixel (x - d, y), for -kEdgeCheckRadius <= d <= x:
+// both windows lie inside the images' borders. On x86 one PSADBW per row, over 8 loaded bytes of
+// which the last 3 are masked out (the rows' borders and the rows below keep those reads inside
+// the image memory).
 int windowSad(const EdgeCheckImages& im, int x, int y, int d) {
+  const uint8_t* left = im.left + (y - kEdgeCheckRadius) * im.stride + x - kEdgeCheckRadius;
+  const uint8_t* right = left - im.left + im.right - d;
+  constexpr int kSide = 2 * kEdgeCheckRadius + 1;
 #if defined(__SSE2__)
   const __m128i mask = _mm_set_epi32(0, 0, 0x000000FF, -1);  // bytes 0..4
   __m128i sum = _mm_setzero_si128();
-  const uint8_t* left = im.left + (y - kEdgeCheckRadius) * im.stride + x - kEdgeCheckRadius;
-  const uint8_t* right = im.right + (y - kEdgeCheckRadius) * im.stride + x - kEdgeCheckRadius - d;
-  for (int wy = 0; wy < 2 * kEdgeCheckRadius + 1; ++wy, left += im.stride, right += im.stride) {
+  for (int wy = 0; wy < kSide; ++wy, left += im.stride, right += im.stride) {
     const __m128i l = _mm_and_si128(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(left)), mask);
     const __m128i r = _mm_and_si128(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(right)), mask);
     sum = _mm_add_epi64(sum, _mm_sad_epu8(l, r));
   }
   return _mm_cvtsi128_si32(sum);
 #else
-  return windowSadClamped(im, x, y, d);
+  int sum = 0;
+  for (int wy = 0; wy < kSide; ++wy, left += im.stride, right += im.stride) {
+    for (int wx = 0; wx < kSide; ++wx) sum += std::abs(left[wx] - right[wx]);
+  }
+  return sum;
 #endif
 }
 
@@ -88,8 +80,8 @@ int edgeCentre(const EdgeCheckImages& im, int scale, int x, int y, const int16_t
   int winner = values[0], best = INT_MAX;
   for (int i = 0; i < n; ++i) {
     const int centre = scale * values[i];
-    for (int d = centre - scale / 2; d <= centre + scale / 2; ++d) {
-      const int sad = d <= x + kEdgeCheckBorder - kEdgeCheckRadius ? windowSad(im, x, y, d) : windowSadClamped(im, x, y, d);
+    for (int d = centre - scale / 2; d <= std::min(centre + scale / 2, x); ++d) {
+      const int sad = windowSad(im, x, y, d);
       if (sad < best) {
         best = sad;
         winner = values[i];
@@ -126,7 +118,11 @@ void placeBands(const cv::Mat& coarse_disparity, const StereoConfig& config, con
     for (int x = 0; x < width; ++x) {
       const int cx = x / scale;
       int centre = scratch.centres[cx];
-      if (centre == kEdge) {
+      // A band of the first columns holds all their disparities with a right pixel, wherever it is centred.
+      const bool forced = x - config.min_disparity_px + 1 <= kBandDisparities;
+      if (centre == kEdge && forced) {
+        centre = kNoCentre;
+      } else if (centre == kEdge) {
         centre = edgeCentre(images, scale, x, y, scratch.values.data() + static_cast<std::ptrdiff_t>(cx) * kNeighbourhood,
                             scratch.counts[cx]);
       }

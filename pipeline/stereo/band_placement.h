@@ -8,8 +8,9 @@
 //     band covers them all, centred between their extremes.
 //   - Elsewhere (a depth edge: the surfaces are further apart than one band) the pixel checks its
 //     own full-size match: each distinct coarse disparity v of the neighbourhood scores the least
-//     5x5 SAD, on the image the cost compares, over the disparities s v - s / 2 .. s v + s / 2; the
-//     best score wins (the smaller v on ties). The band then covers as many neighbourhood values as
+//     5x5 SAD, on the image the cost compares, over the disparities s v - s / 2 .. s v + s / 2 that
+//     have a right pixel (at most x); the best score wins (the smaller v on ties; the smallest v
+//     where none has a right pixel). The band then covers as many neighbourhood values as
 //     fit beside the winner (the lowest such window on ties). Centring on the pixel's own coarse
 //     disparity instead lost 0.8 points of bad-2 on Motorcycle and 1.4 on Aloe at those edges
 //     (middlebury_test.cpp); this check costs about 1 % of the frame's instructions at 800x600.
@@ -30,8 +31,8 @@ inline constexpr int kEdgeCheckRadius = 2;  // the edge check's SAD window: 5x5
 inline constexpr int kEdgeCheckBorder = 4;  // replicated pixels around EdgeCheckImages, at least
 
 // The full-size image pair that the edge check compares, with a replicated border of
-// kEdgeCheckBorder pixels on every side (rows contiguous, as the matcher's bordered images);
-// pointers address pixel (0, 0).
+// kEdgeCheckBorder pixels on every side (rows contiguous, as the matcher's bordered images, so
+// that a window may read 3 bytes past its row); pointers address pixel (0, 0).
 struct EdgeCheckImages {
   const uint8_t* left = nullptr;
   const uint8_t* right = nullptr;

@@ -127,12 +127,12 @@ int windowSad(const cv::Mat& L, const cv::Mat& R, int x, int y, int d) {
 }
 
 // A band around the coarse disparities `near` (distinct, ascending) of a pixel at a depth edge:
-// the value whose disparities s v - s / 2 .. s v + s / 2 hold the pixel's best 5x5 SAD (the
-// smaller value on ties), and with it as many of `near` as fit (the lowest window on ties).
+// the value whose disparities s v - s / 2 .. s v + s / 2 (those <= x) hold the pixel's best 5x5
+// SAD (the smaller value on ties), and with it as many of `near` as fit (the lowest window on ties).
 int edgeBandCentre(const cv::Mat& L, const cv::Mat& R, const std::vector<int>& near, int s, int x, int y, int span) {
   int winner = near.front(), best = std::numeric_limits<int>::max();
   for (const int v : near) {
-    for (int d = s * v - s / 2; d <= s * v + s / 2; ++d) {
+    for (int d = s * v - s / 2; d <= std::min(s * v + s / 2, x); ++d) {  // disparities with a right pixel
       const int sad = windowSad(L, R, x, y, d);
       if (sad < best) {
         best = sad;
