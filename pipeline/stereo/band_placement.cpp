@@ -16,6 +16,28 @@ constexpr int kNoCentre = INT32_MIN;                       // no finite coarse d
 constexpr int kEdge = INT32_MIN + 1;                       // a depth edge: the centre is chosen per full-size pixel
 constexpr int kNeighbourhood = 9;                          // values of a 3x3 neighbourhood
 constexpr int kSpan = kBandDisparities - 2 * kBandMargin;  // full-size disparities a band covers with margins
+constexpr int kWindow = 2 * kEdgeCheckRadius + 1;
+constexpr int kMaxBlock = 4;  // full-size pixels of one coarse pixel in a row: the largest coarse_scale
+
+// The band centre around `winner`: the window [a, a + kSpan / scale] of `values` (ascending) that
+// holds the winner and the most values (the lowest such window on ties), centred.
+int windowAround(const int16_t* values, int n, int winner, int scale) {
+  int best_count = 0, lo = winner, hi = winner;
+  for (int i = 0; i < n && values[i] <= winner; ++i) {
+    if (scale * (winner - values[i]) > kSpan) continue;
+    int count = 0, top = values[i];
+    for (int j = i; j < n && scale * (values[j] - values[i]) <= kSpan; ++j) {
+      ++count;
+      top = values[j];
+    }
+    if (count > best_count) {
+      best_count = count;
+      lo = values[i];
+      hi = top;
+    }
+  }
+  return scale * (lo + hi) / 2;
+}
 
 // Centres of coarse row cy, and for its edge pixels the neighbourhood's distinct values, ascending.
 void coarseRowCentres(const cv::Mat& coarse_disparity, int scale, int coarse_y0, int coarse_y1, int cy,
@@ -35,75 +57,90 @@ void coarseRowCentres(const cv::Mat& coarse_disparity, int scale, int coarse_y0,
         if (std::isfinite(row[x])) values[n++] = static_cast<int16_t>(row[x]);
       }
     }
-    std::sort(values, values + n);
-    n = static_cast<int>(std::unique(values, values + n) - values);
-    scratch.counts[cx] = static_cast<uint8_t>(n);
     if (n == 0) {
       scratch.centres[cx] = kNoCentre;
-    } else if (scale * (values[n - 1] - values[0]) <= kSpan) {
-      scratch.centres[cx] = scale * (values[0] + values[n - 1]) / 2;
-    } else {
-      scratch.centres[cx] = kEdge;
+      continue;
     }
+    const auto [lo, hi] = std::minmax_element(values, values + n);
+    if (scale * (*hi - *lo) <= kSpan) {
+      scratch.centres[cx] = scale * (*lo + *hi) / 2;
+      continue;
+    }
+    std::sort(values, values + n);  // a depth edge: its distinct values, for edgeCentres()
+    scratch.counts[cx] = static_cast<uint8_t>(std::unique(values, values + n) - values);
+    scratch.centres[cx] = kEdge;
   }
 }
 
 // 5x5 SAD between left pixel (x, y) and right pixel (x - d, y), for -kEdgeCheckRadius <= d <= x:
-// both windows lie inside the images' borders. On x86 one PSADBW per row, over 8 loaded bytes of
-// which the last 3 are masked out (the rows' borders and the rows below keep those reads inside
-// the image memory).
+// both windows lie inside the images' borders.
 int windowSad(const EdgeCheckImages& im, int x, int y, int d) {
   const uint8_t* left = im.left + (y - kEdgeCheckRadius) * im.stride + x - kEdgeCheckRadius;
   const uint8_t* right = left - im.left + im.right - d;
-  constexpr int kSide = 2 * kEdgeCheckRadius + 1;
-#if defined(__SSE2__)
-  const __m128i mask = _mm_set_epi32(0, 0, 0x000000FF, -1);  // bytes 0..4
-  __m128i sum = _mm_setzero_si128();
-  for (int wy = 0; wy < kSide; ++wy, left += im.stride, right += im.stride) {
-    const __m128i l = _mm_and_si128(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(left)), mask);
-    const __m128i r = _mm_and_si128(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(right)), mask);
-    sum = _mm_add_epi64(sum, _mm_sad_epu8(l, r));
-  }
-  return _mm_cvtsi128_si32(sum);
-#else
   int sum = 0;
-  for (int wy = 0; wy < kSide; ++wy, left += im.stride, right += im.stride) {
-    for (int wx = 0; wx < kSide; ++wx) sum += std::abs(left[wx] - right[wx]);
+  for (int wy = 0; wy < kWindow; ++wy, left += im.stride, right += im.stride) {
+    for (int wx = 0; wx < kWindow; ++wx) sum += std::abs(left[wx] - right[wx]);
   }
   return sum;
+}
+
+// The 5x5 SADs at disparity d of the `count` (<= kMaxBlock) pixels x0.. of row y, into `sads`;
+// d <= x0 + kEdgeCheckBorder - kEdgeCheckRadius, so that every window read lies inside the
+// borders (a pixel's own d <= x rule is the caller's). On x86 the pixels share their columns:
+// per window row one 8-byte load of each image (columns x0 - 2 .. x0 + 5; bytes past the row's
+// border are the next row's, never used), absolute differences summed over the rows in 16-bit
+// lanes, then each pixel's 5 columns added by shifts.
+void blockSads(const EdgeCheckImages& im, int x0, int count, int y, int d, int* sads) {
+#if defined(__SSE2__)
+  const uint8_t* left = im.left + (y - kEdgeCheckRadius) * im.stride + x0 - kEdgeCheckRadius;
+  const uint8_t* right = left - im.left + im.right - d;
+  const __m128i zero = _mm_setzero_si128();
+  __m128i columns = zero;
+  for (int wy = 0; wy < kWindow; ++wy, left += im.stride, right += im.stride) {
+    const __m128i l = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(left));
+    const __m128i r = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(right));
+    const __m128i diff = _mm_or_si128(_mm_subs_epu8(l, r), _mm_subs_epu8(r, l));
+    columns = _mm_add_epi16(columns, _mm_unpacklo_epi8(diff, zero));
+  }
+  const __m128i pairs = _mm_add_epi16(columns, _mm_srli_si128(columns, 2));  // columns i, i + 1
+  const __m128i fours = _mm_add_epi16(pairs, _mm_srli_si128(pairs, 4));      // i .. i + 3
+  const __m128i fives = _mm_add_epi16(fours, _mm_srli_si128(columns, 8));    // i .. i + 4
+  alignas(16) uint16_t lanes[8];
+  _mm_store_si128(reinterpret_cast<__m128i*>(lanes), fives);
+  for (int i = 0; i < count; ++i) sads[i] = lanes[i];
+#else
+  for (int i = 0; i < count; ++i) sads[i] = windowSad(im, x0 + i, y, d);
 #endif
 }
 
-// The band centre of full-size pixel (x, y) at a depth edge, from its neighbourhood's distinct
-// coarse disparities `values` (ascending, n > 0): see band_placement.h.
-int edgeCentre(const EdgeCheckImages& im, int scale, int x, int y, const int16_t* values, int n) {
-  int winner = values[0], best = INT_MAX;
-  for (int i = 0; i < n; ++i) {
-    const int centre = scale * values[i];
-    for (int d = centre - scale / 2; d <= std::min(centre + scale / 2, x); ++d) {
-      const int sad = windowSad(im, x, y, d);
-      if (sad < best) {
-        best = sad;
-        winner = values[i];
+// Band centres of the `count` pixels x0.. of row y (one coarse pixel's, at a depth edge), from
+// the neighbourhood's distinct coarse disparities `values` (ascending, n > 0): see
+// band_placement.h.
+void edgeCentres(const EdgeCheckImages& im, int scale, int x0, int count, int y, const int16_t* values, int n,
+                 int* centres) {
+  int winner[kMaxBlock], best[kMaxBlock], sads[kMaxBlock];
+  for (int i = 0; i < count; ++i) {
+    winner[i] = values[0];
+    best[i] = INT_MAX;
+  }
+  const int last_x = x0 + count - 1;
+  for (int k = 0; k < n; ++k) {
+    const int centre = scale * values[k];
+    for (int d = centre - scale / 2; d <= std::min(centre + scale / 2, last_x); ++d) {
+      if (d <= x0 + kEdgeCheckBorder - kEdgeCheckRadius) {
+        blockSads(im, x0, count, y, d, sads);
+      } else {
+        for (int i = 0; i < count; ++i) sads[i] = d <= x0 + i ? windowSad(im, x0 + i, y, d) : INT_MAX;
+      }
+      for (int i = 0; i < count; ++i) {
+        if (d <= x0 + i && sads[i] < best[i]) {
+          best[i] = sads[i];
+          winner[i] = values[k];
+        }
       }
     }
   }
-  // The window [a, a + kSpan / scale] that holds the winner and the most values.
-  int best_count = 0, lo = winner, hi = winner;
-  for (int i = 0; i < n && values[i] <= winner; ++i) {
-    if (scale * (winner - values[i]) > kSpan) continue;
-    int count = 0, top = values[i];
-    for (int j = i; j < n && scale * (values[j] - values[i]) <= kSpan; ++j) {
-      ++count;
-      top = values[j];
-    }
-    if (count > best_count) {
-      best_count = count;
-      lo = values[i];
-      hi = top;
-    }
-  }
-  return scale * (lo + hi) / 2;
+  for (int i = 0; i < count; ++i) centres[i] = windowAround(values, n, winner[i], scale);
 }
 
 }  // namespace
@@ -112,22 +149,27 @@ void placeBands(const cv::Mat& coarse_disparity, const StereoConfig& config, con
                 int coarse_y1, int y0, int y1, BandScratch& scratch, cv::Mat& band_start) {
   const int scale = config.coarse_scale;
   const int width = images.width;
+  int centres[kMaxBlock];
   for (int y = y0; y < y1; ++y) {
     int16_t* out = band_start.ptr<int16_t>(y);
     if (y == y0 || y % scale == 0) coarseRowCentres(coarse_disparity, scale, coarse_y0, coarse_y1, y / scale, scratch);
-    for (int x = 0; x < width; ++x) {
-      const int cx = x / scale;
-      int centre = scratch.centres[cx];
-      // A band of the first columns holds all their disparities with a right pixel, wherever it is centred.
-      const bool forced = x - config.min_disparity_px + 1 <= kBandDisparities;
-      if (centre == kEdge && forced) {
-        centre = kNoCentre;
-      } else if (centre == kEdge) {
-        centre = edgeCentre(images, scale, x, y, scratch.values.data() + static_cast<std::ptrdiff_t>(cx) * kNeighbourhood,
-                            scratch.counts[cx]);
+    for (int cx = 0, x0 = 0; x0 < width; ++cx, x0 += scale) {
+      const int count = std::min(scale, width - x0);
+      std::fill_n(centres, count, scratch.centres[cx]);
+      // Where even the block's last column has a band holding all its disparities with a right
+      // pixel, the centre does not matter (StereoConfig::bandStartAround()): no check.
+      const bool forced = x0 + count - config.min_disparity_px <= kBandDisparities;
+      if (scratch.centres[cx] == kEdge && forced) {
+        std::fill_n(centres, count, kNoCentre);
+      } else if (scratch.centres[cx] == kEdge) {
+        edgeCentres(images, scale, x0, count, y, scratch.values.data() + static_cast<std::ptrdiff_t>(cx) * kNeighbourhood,
+                    scratch.counts[cx], centres);
       }
-      out[x] = static_cast<int16_t>(centre == kNoCentre ? config.bandStart(INFINITY, x)
-                                                        : config.bandStartAround(centre, x));
+      for (int i = 0; i < count; ++i) {
+        const int x = x0 + i;
+        out[x] = static_cast<int16_t>(centres[i] == kNoCentre ? config.bandStart(INFINITY, x)
+                                                              : config.bandStartAround(centres[i], x));
+      }
     }
   }
 }
