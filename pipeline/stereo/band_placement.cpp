@@ -143,27 +143,43 @@ void edgeCentres(const EdgeCheckImages& im, int scale, int x0, int count, int y,
   for (int i = 0; i < count; ++i) centres[i] = windowAround(values, n, winner[i], scale);
 }
 
+// The centres of the `count` pixels x0.. of row y in edge coarse pixel cx (`own` its coarse
+// disparity times the scale), by the rules of band_placement.h.
+void edgeBlockCentres(const EdgeCheckImages& images, const StereoConfig& config, const BandScratch& scratch, int cx, int x0,
+                      int count, int y, int own, int truncated_end, int* centres) {
+  if (x0 + count - config.min_disparity_px <= kBandDisparities) {
+    // Even the block's last column has a band holding all its disparities with a right pixel: the
+    // centre does not matter (StereoConfig::bandStartAround()), no check.
+    std::fill_n(centres, count, kNoCentre);
+    return;
+  }
+  if (x0 + count > truncated_end) {
+    edgeCentres(images, config.coarse_scale, x0, count, y,
+                scratch.values.data() + static_cast<std::ptrdiff_t>(cx) * kNeighbourhood, scratch.counts[cx], centres);
+  }
+  for (int i = 0; i < count && x0 + i < truncated_end; ++i) centres[i] = own;
+}
+
 }  // namespace
 
 void placeBands(const cv::Mat& coarse_disparity, const StereoConfig& config, const EdgeCheckImages& images, int coarse_y0,
                 int coarse_y1, int y0, int y1, BandScratch& scratch, cv::Mat& band_start) {
   const int scale = config.coarse_scale;
   const int width = images.width;
+  // Columns whose output the matcher invalidates (StereoConfig::invalidate_truncated) keep the
+  // pixel's own coarse disparity at edges: their bands only feed the paths.
+  const int truncated_end = config.invalidate_truncated ? config.min_disparity_px + config.num_disparities - 1 : 0;
   int centres[kMaxBlock];
   for (int y = y0; y < y1; ++y) {
     int16_t* out = band_start.ptr<int16_t>(y);
     if (y == y0 || y % scale == 0) coarseRowCentres(coarse_disparity, scale, coarse_y0, coarse_y1, y / scale, scratch);
+    const float* own_row = coarse_disparity.ptr<float>(y / scale);
     for (int cx = 0, x0 = 0; x0 < width; ++cx, x0 += scale) {
       const int count = std::min(scale, width - x0);
       std::fill_n(centres, count, scratch.centres[cx]);
-      // Where even the block's last column has a band holding all its disparities with a right
-      // pixel, the centre does not matter (StereoConfig::bandStartAround()): no check.
-      const bool forced = x0 + count - config.min_disparity_px <= kBandDisparities;
-      if (scratch.centres[cx] == kEdge && forced) {
-        std::fill_n(centres, count, kNoCentre);
-      } else if (scratch.centres[cx] == kEdge) {
-        edgeCentres(images, scale, x0, count, y, scratch.values.data() + static_cast<std::ptrdiff_t>(cx) * kNeighbourhood,
-                    scratch.counts[cx], centres);
+      if (scratch.centres[cx] == kEdge) {
+        const int own = std::isfinite(own_row[cx]) ? scale * static_cast<int>(own_row[cx]) : kNoCentre;
+        edgeBlockCentres(images, config, scratch, cx, x0, count, y, own, truncated_end, centres);
       }
       for (int i = 0; i < count; ++i) {
         const int x = x0 + i;

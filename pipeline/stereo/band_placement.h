@@ -14,6 +14,9 @@
 //     fit beside the winner (the lowest such window on ties). Centring on the pixel's own coarse
 //     disparity instead lost 0.8 points of bad-2 on Motorcycle and 1.4 on Aloe at those edges
 //     (middlebury_test.cpp); this check costs about 1 % of the frame's instructions at 800x600.
+//     In the columns whose output StereoConfig::invalidate_truncated marks invalid (x < min_d + D - 1),
+//     where a band only feeds the paths, an edge pixel's band is centred on its own coarse disparity
+//     instead: on the 800x600x112 bench they hold most edge pixels.
 //   - No finite coarse disparity around: the band starts at 0 (StereoConfig::bandStart).
 #pragma once
 

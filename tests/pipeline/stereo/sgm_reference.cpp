@@ -175,7 +175,8 @@ Bands bandsFromCoarseMatch(const cv::Mat& L, const cv::Mat& R, const StereoConfi
   for (int y = 0; y < L.rows; ++y) {
     for (int x = 0; x < L.cols; ++x) {
       // The band covers the 3x3 coarse neighbourhood's disparities when they fit with 2 px to
-      // spare on each side, else (a depth edge) the candidate that the pixel's own SAD prefers.
+      // spare on each side, else (a depth edge) the candidate that the pixel's own SAD prefers
+      // (its own coarse disparity where the output is invalidated as truncated).
       std::vector<int> near;
       for (int cy = y / s - 1; cy <= y / s + 1; ++cy) {
         for (int cx = x / s - 1; cx <= x / s + 1; ++cx) {
@@ -191,6 +192,8 @@ Bands bandsFromCoarseMatch(const cv::Mat& L, const cv::Mat& R, const StereoConfi
         start = c.bandStart(INFINITY, x);
       } else if (s * (near.back() - near.front()) <= span) {
         start = c.bandStartAround(s * (near.front() + near.back()) / 2, x);
+      } else if (c.invalidate_truncated && x < c.min_disparity_px + c.num_disparities - 1) {
+        start = c.bandStart(coarse_disparity.at<float>(y / s, x / s), x);  // output invalid: own coarse disparity
       } else {
         start = c.bandStartAround(edgeBandCentre(check_left, check_right, near, s, x, y, span), x);
       }
