@@ -46,6 +46,7 @@ void coarseRowCentres(const cv::Mat& coarse_disparity, int scale, int coarse_y0,
   scratch.centres.resize(width);
   scratch.values.resize(static_cast<std::size_t>(width) * kNeighbourhood);
   scratch.counts.resize(width);
+  scratch.edges.clear();
   const float* rows[3];
   for (int dy = -1; dy <= 1; ++dy)
     rows[dy + 1] = coarse_disparity.ptr<float>(std::clamp(cy + dy, coarse_y0, coarse_y1 - 1));
@@ -69,6 +70,7 @@ void coarseRowCentres(const cv::Mat& coarse_disparity, int scale, int coarse_y0,
     std::sort(values, values + n);  // a depth edge: its distinct values, for edgeCentres()
     scratch.counts[cx] = static_cast<uint8_t>(std::unique(values, values + n) - values);
     scratch.centres[cx] = kEdge;
+    scratch.edges.push_back(cx);
   }
 }
 
@@ -170,22 +172,30 @@ void placeBands(const cv::Mat& coarse_disparity, const StereoConfig& config, con
   // pixel's own coarse disparity at edges: their bands only feed the paths.
   const int truncated_end = config.invalidate_truncated ? config.min_disparity_px + config.num_disparities - 1 : 0;
   int centres[kMaxBlock];
+  // The pixels of coarse pixel cx in row y.
+  auto placeBlock = [&](int y, int cx, int16_t* out) {
+    const int x0 = cx * scale, count = std::min(scale, width - x0);
+    std::fill_n(centres, count, scratch.centres[cx]);
+    if (scratch.centres[cx] == kEdge) {
+      const float own = coarse_disparity.ptr<float>(y / scale)[cx];
+      edgeBlockCentres(images, config, scratch, cx, x0, count, y,
+                       std::isfinite(own) ? scale * static_cast<int>(own) : kNoCentre, truncated_end, centres);
+    }
+    for (int i = 0; i < count; ++i) {
+      const int x = x0 + i;
+      out[x] = static_cast<int16_t>(centres[i] == kNoCentre ? config.bandStart(INFINITY, x)
+                                                            : config.bandStartAround(centres[i], x));
+    }
+  };
+  const int coarse_width = coarse_disparity.cols;
   for (int y = y0; y < y1; ++y) {
     int16_t* out = band_start.ptr<int16_t>(y);
-    if (y == y0 || y % scale == 0) coarseRowCentres(coarse_disparity, scale, coarse_y0, coarse_y1, y / scale, scratch);
-    const float* own_row = coarse_disparity.ptr<float>(y / scale);
-    for (int cx = 0, x0 = 0; x0 < width; ++cx, x0 += scale) {
-      const int count = std::min(scale, width - x0);
-      std::fill_n(centres, count, scratch.centres[cx]);
-      if (scratch.centres[cx] == kEdge) {
-        const int own = std::isfinite(own_row[cx]) ? scale * static_cast<int>(own_row[cx]) : kNoCentre;
-        edgeBlockCentres(images, config, scratch, cx, x0, count, y, own, truncated_end, centres);
-      }
-      for (int i = 0; i < count; ++i) {
-        const int x = x0 + i;
-        out[x] = static_cast<int16_t>(centres[i] == kNoCentre ? config.bandStart(INFINITY, x)
-                                                              : config.bandStartAround(centres[i], x));
-      }
+    if (y == y0 || y % scale == 0) {
+      coarseRowCentres(coarse_disparity, scale, coarse_y0, coarse_y1, y / scale, scratch);
+      for (int cx = 0; cx < coarse_width; ++cx) placeBlock(y, cx, out);
+    } else {  // the rows of one coarse row share their bands but at depth edges
+      std::copy_n(band_start.ptr<int16_t>(y - 1), width, out);
+      for (const int cx : scratch.edges) placeBlock(y, cx, out);
     }
   }
 }

@@ -49,6 +49,7 @@ struct BandScratch {
   std::vector<int> centres;     // per coarse column of one coarse row: band centre or a marker
   std::vector<int16_t> values;  // per coarse column: the neighbourhood's distinct values (edges)
   std::vector<uint8_t> counts;  // per coarse column: how many of them
+  std::vector<int> edges;       // the coarse columns at depth edges
 };
 
 // First disparity index of each pixel's band, rows [y0, y1) of `band_start` (CV_16S, full size),
