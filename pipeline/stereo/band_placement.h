@@ -12,8 +12,9 @@
 //     have a right pixel (at most x); the best score wins (the smaller v on ties; the smallest v
 //     where none has a right pixel). The band then covers as many neighbourhood values as
 //     fit beside the winner (the lowest such window on ties). Centring on the pixel's own coarse
-//     disparity instead lost 0.8 points of bad-2 on Motorcycle and 1.4 on Aloe at those edges
-//     (middlebury_test.cpp); this check costs about 1 % of the frame's instructions at 800x600.
+//     disparity instead left band search 0.83 points of bad-2 above full search on Motorcycle and
+//     1.56 on Aloe, against 0.36 and 0.40 with the check (middlebury_test.cpp); the check adds
+//     about 2 % to the instructions of an 800x600x112 frame (docs/PERFORMANCE.md).
 //     In the columns whose output StereoConfig::invalidate_truncated marks invalid (x < min_d + D - 1),
 //     where a band only feeds the paths, an edge pixel's band is centred on its own coarse disparity
 //     instead: on the 800x600x112 bench they hold most edge pixels.
