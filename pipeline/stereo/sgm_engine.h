@@ -9,7 +9,7 @@
 // best instruction set of the machine). The result depends only on the input and the strip
 // boundaries, never on the thread count.
 // With SgmImages::band_start each pixel searches only kBandDisparities disparities (coarse to
-// fine; the caller places the bands from a coarse match): one vector of path costs per pixel, and
+// fine; band_placement.h places the bands from a coarse match): one vector of path costs per pixel, and
 // SAD window sums only over the bands of the pixels whose window holds a column.
 //
 // Threads: matchStrip() may run concurrently for different strips, each with its own workspace.

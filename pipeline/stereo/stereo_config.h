@@ -26,8 +26,9 @@ enum class Prefilter { kNone, kSobelX };
 // Which disparities each pixel searches. kFull: all num_disparities. kBand: coarse to fine (as
 // tSGM): full SGM on the pair shrunk by coarse_scale, then at full size each pixel searches
 // kBandDisparities around coarse_scale times the coarse disparities of its 3x3 coarse
-// neighbourhood, or its own where those do not fit (path costs outside a pixel's band count as
-// infinite). Ranges of at most kBandDisparities are always searched in full.
+// neighbourhood; where those do not fit in one band (a depth edge), around the ones that the
+// pixel's own 5x5 SAD prefers (band_placement.h). Path costs outside a pixel's band count as
+// infinite. Ranges of at most kBandDisparities are always searched in full.
 enum class SearchMode { kFull, kBand };
 inline constexpr int kBandDisparities = 32;
 

@@ -4,7 +4,6 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <climits>
 #include <cmath>
 #include <initializer_list>
 #include <opencv2/imgproc.hpp>
@@ -12,6 +11,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "pipeline/stereo/band_placement.h"
 #include "pipeline/stereo/sgm_engine.h"
 
 namespace cenote::pipeline {
@@ -39,6 +39,8 @@ std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + s
 
 }  // namespace
 
+static_assert(detail::kImageBorder >= detail::kEdgeCheckBorder, "the edge check reads the matcher's bordered images");
+
 // One resolution of the match: its parameters, bordered images and per-strip memory.
 struct MatchLevel {
   detail::SgmParams params;
@@ -54,7 +56,7 @@ struct MatchLevel {
 struct StripBands {
   cv::Mat coarse_disparity, coarse_confidence;  // CV_32F, the coarse size
   cv::Mat band_start;                           // CV_16S: first disparity index searched per pixel
-  std::vector<int> centres;                     // band centres of one coarse row (bandCentres())
+  detail::BandScratch scratch;                  // placeBands()' memory
 };
 
 struct StereoMatcher::Impl {
@@ -168,60 +170,6 @@ detail::SgmOutput outputOf(DisparityMap& map, const detail::SgmParams& p) {
   return output;
 }
 
-// The centre of the band of each full-size pixel of coarse row cy, in full-size pixels, from the
-// coarse match of coarse rows [coarse_y0, coarse_y1). Where the coarse disparities of the 3x3
-// coarse neighbourhood fit in the band with kBandMargin to spare, the band covers them all (centred
-// between their extremes): a pixel near the edge of its coarse pixel may belong to the neighbour's
-// surface, and on Middlebury this loses fewer matches than centring on the pixel's own coarse
-// disparity (middlebury_test.cpp). Elsewhere (a depth edge) the pixel's own coarse disparity.
-// kNoCentre where the neighbourhood has no disparity.
-constexpr int kNoCentre = INT32_MIN;
-constexpr int kBandMargin = 2;  // full-size pixels kept beyond the neighbourhood's disparities
-void bandCentres(const cv::Mat& coarse_disparity, int scale, int coarse_y0, int coarse_y1, int cy,
-                 std::vector<int>& centres) {
-  const int width = coarse_disparity.cols;
-  centres.resize(width);
-  const float* rows[3];
-  for (int dy = -1; dy <= 1; ++dy)
-    rows[dy + 1] = coarse_disparity.ptr<float>(std::clamp(cy + dy, coarse_y0, coarse_y1 - 1));
-  for (int cx = 0; cx < width; ++cx) {
-    int lo = INT32_MAX, hi = INT32_MIN;
-    for (const float* row : rows) {
-      for (int x = std::max(0, cx - 1); x <= std::min(width - 1, cx + 1); ++x) {
-        if (!std::isfinite(row[x])) continue;
-        lo = std::min(lo, static_cast<int>(row[x]));
-        hi = std::max(hi, static_cast<int>(row[x]));
-      }
-    }
-    const float own = rows[1][cx];
-    if (lo <= hi && scale * (hi - lo) <= kBandDisparities - 2 * kBandMargin) {
-      centres[cx] = scale * (lo + hi) / 2;
-    } else {
-      centres[cx] = std::isfinite(own) ? scale * static_cast<int>(own) : kNoCentre;
-    }
-  }
-}
-
-// First disparity index of each pixel's band (StereoConfig::bandStartAround the centres of
-// bandCentres()), rows [y0, y1) of a full-size image `width` pixels wide.
-void placeBands(const cv::Mat& coarse_disparity, const StereoConfig& config, int width, int coarse_y0, int coarse_y1,
-                int y0, int y1, std::vector<int>& centres, cv::Mat& band_start) {
-  const int scale = config.coarse_scale;
-  for (int y = y0; y < y1; ++y) {
-    int16_t* out = band_start.ptr<int16_t>(y);
-    if (y > y0 && y % scale != 0) {  // the rows of one coarse row share their bands
-      std::copy_n(band_start.ptr<int16_t>(y - 1), width, out);
-      continue;
-    }
-    bandCentres(coarse_disparity, scale, coarse_y0, coarse_y1, y / scale, centres);
-    for (int x = 0; x < width; ++x) {
-      const int centre = centres[x / scale];
-      out[x] = static_cast<int16_t>(centre == kNoCentre ? config.bandStart(INFINITY, x)
-                                                        : config.bandStartAround(centre, x));
-    }
-  }
-}
-
 // First rows of `strips` strips of an image `height` rows high, and `height` at the end. Every
 // strip gets the same number of rows to match, its warm-up rows included (`overlap` above every
 // strip but the first, and with 8 paths below every strip but the last), so that a thread with the
@@ -322,8 +270,9 @@ DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_i
         detail::matchStrip(pc, impl.coarse.images, coarse_begin, coarse_end, (overlap + scale - 1) / scale,
                            impl.coarse.workspaces[s], coarse_output);
         sb.band_start.create(p.height, p.width, CV_16SC1);
-        placeBands(sb.coarse_disparity, config_, p.width, coarse_begin, coarse_end, fine_begin, fine_end, sb.centres,
-                   sb.band_start);
+        const detail::EdgeCheckImages edge_images{images.left, images.right, images.image_stride, p.width, p.height};
+        detail::placeBands(sb.coarse_disparity, config_, edge_images, coarse_begin, coarse_end, fine_begin, fine_end,
+                           sb.scratch, sb.band_start);
         images.band_start = sb.band_start.ptr<int16_t>();
         images.band_stride = static_cast<std::ptrdiff_t>(sb.band_start.step[0] / sizeof(int16_t));
       }

@@ -10,8 +10,9 @@
 //                (measured on cones in tests/pipeline/stereo/middlebury_test.cpp)
 //   search:      every disparity of the range, or (SearchMode::kBand) coarse to fine: the pair
 //                shrunk by coarse_scale and matched over the shrunk range, then kBandDisparities
-//                per pixel around coarse_scale times its coarse neighbourhood's disparities (about
-//                2.3x less CPU at 800x600x112; accuracy in tests/pipeline/stereo/middlebury_test.cpp)
+//                per pixel around coarse_scale times its coarse neighbourhood's disparities, checked
+//                at depth edges by the pixel's own SAD (band_placement.h; about 2.3x less CPU at
+//                800x600x112; accuracy in tests/pipeline/stereo/middlebury_test.cpp)
 //   validity:    +inf disparity where the pixel has no right match, fails the optional
 //                left-right check, or falls below min_confidence
 //

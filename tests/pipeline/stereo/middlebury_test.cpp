@@ -230,20 +230,16 @@ TEST(MiddleburyMotorcycle, BandAndFullSearchBad2NoWorseThanOpenCvSgbm) {
 }
 
 // Band against full search on every real pair, SAD 3x3 on 4 paths (the defaults), as a table.
-// Target: band bad-2 within 0.5 points of full search. Half-size coarse level (coarse_scale 2)
-// meets it on all four pairs; the default quarter size meets it on cones and Cloth3, and its
-// larger losses on Motorcycle and Aloe are bounded here so that they cannot grow unnoticed.
+// Target: band bad-2 within 0.5 points of full search, with the default quarter-size coarse level
+// and with the half-size one (coarse_scale 2). The edge check of band_placement.h is what brings
+// the quarter size there on Motorcycle and Aloe (0.83 and 1.56 points above full search without it).
 TEST(MiddleburyPairs, BandSearchBad2NearFullSearch) {
-  struct Row {
-    std::optional<StereoPairWithTruth> (*load)();
-    double quarter_bound;  // points of bad-2 above full search allowed with coarse_scale 4
-  };
-  const Row rows[] = {{test::loadCones, 0.5}, {test::loadCloth3, 0.5}, {test::loadMotorcycle, 1.0}, {test::loadAloe, 1.75}};
+  const auto loads = {test::loadCones, test::loadCloth3, test::loadMotorcycle, test::loadAloe};
   std::ostringstream table;
   table << "| pair | full bad-2 % | band (coarse 1/4) | band (coarse 1/2) |\n|---|---|---|---|\n";
   int pairs = 0;
-  for (const Row& row : rows) {
-    const auto pair = row.load();
+  for (const auto load : loads) {
+    const auto pair = load();
     if (!pair) continue;
     ++pairs;
     const double full = evaluate(*pair, configFor(*pair, MatchingCost::kSad, 3, 4, SearchMode::kFull)).bad2;
@@ -252,7 +248,7 @@ TEST(MiddleburyPairs, BandSearchBad2NearFullSearch) {
     band.coarse_scale = 2;
     const double half = evaluate(*pair, band).bad2;
     table << "| " << pair->name << " | " << full << " | " << quarter << " | " << half << " |\n";
-    EXPECT_LE(quarter, full + row.quarter_bound) << pair->name;
+    EXPECT_LE(quarter, full + 0.5) << pair->name;
     EXPECT_LE(half, full + 0.5) << pair->name;
   }
   std::cout << table.str();

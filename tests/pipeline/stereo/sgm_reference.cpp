@@ -117,6 +117,45 @@ void aggregate(const Volume& cost, const cv::Mat& L, const StereoConfig& c, cons
 
 pipeline::DisparityMap match(const cv::Mat& L, const cv::Mat& R, const StereoConfig& c, const Bands& bands);
 
+// 5x5 SAD of left pixel (x, y) against right pixel (x - d, y), replicated borders.
+int windowSad(const cv::Mat& L, const cv::Mat& R, int x, int y, int d) {
+  int sum = 0;
+  for (int dy = -2; dy <= 2; ++dy) {
+    for (int dx = -2; dx <= 2; ++dx) sum += std::abs(pixel(L, x + dx, y + dy) - pixel(R, x + dx - d, y + dy));
+  }
+  return sum;
+}
+
+// A band around the coarse disparities `near` (distinct, ascending) of a pixel at a depth edge:
+// the value whose disparities s v - s / 2 .. s v + s / 2 (those <= x) hold the pixel's best 5x5
+// SAD (the smaller value on ties), and with it as many of `near` as fit (the lowest window on ties).
+int edgeBandCentre(const cv::Mat& L, const cv::Mat& R, const std::vector<int>& near, int s, int x, int y, int span) {
+  int winner = near.front(), best = std::numeric_limits<int>::max();
+  for (const int v : near) {
+    for (int d = s * v - s / 2; d <= std::min(s * v + s / 2, x); ++d) {  // disparities with a right pixel
+      const int sad = windowSad(L, R, x, y, d);
+      if (sad < best) {
+        best = sad;
+        winner = v;
+      }
+    }
+  }
+  int best_count = 0, lo = winner, hi = winner;
+  for (const int a : near) {
+    if (a > winner || s * (winner - a) > span) continue;
+    std::vector<int> covered;
+    for (const int v : near) {
+      if (v >= a && s * (v - a) <= span) covered.push_back(v);
+    }
+    if (static_cast<int>(covered.size()) > best_count) {
+      best_count = static_cast<int>(covered.size());
+      lo = a;
+      hi = covered.back();
+    }
+  }
+  return s * (lo + hi) / 2;
+}
+
 // Coarse to fine: the match of the shrunk pair (StereoConfig::coarseConfig, shrinkImage) places
 // each pixel's band (StereoConfig::bandStart). These shared helpers are plain scalar code; the
 // coarse match itself is this file's own.
@@ -126,12 +165,18 @@ Bands bandsFromCoarseMatch(const cv::Mat& L, const cv::Mat& R, const StereoConfi
   pipeline::shrinkImage(L, c.coarse_scale, coarse_left);
   pipeline::shrinkImage(R, c.coarse_scale, coarse_right);
   const cv::Mat coarse_disparity = match(coarse_left, coarse_right, coarse, Bands{{}, coarse.num_disparities}).disparity;
+  // The edge check compares what SAD compares (census: the grey images).
+  const bool sad = c.cost == pipeline::MatchingCost::kSad;
+  const cv::Mat check_left = sad ? pipeline::prefilterForSad(L, c.prefilter, c.prefilter_cap) : L;
+  const cv::Mat check_right = sad ? pipeline::prefilterForSad(R, c.prefilter, c.prefilter_cap) : R;
   Bands bands{cv::Mat(L.size(), CV_32S), pipeline::kBandDisparities};
   const int s = c.coarse_scale;
+  const int span = pipeline::kBandDisparities - 4;  // 2 px to spare on each side
   for (int y = 0; y < L.rows; ++y) {
     for (int x = 0; x < L.cols; ++x) {
       // The band covers the 3x3 coarse neighbourhood's disparities when they fit with 2 px to
-      // spare on each side, else it is centred on the pixel's own coarse disparity.
+      // spare on each side, else (a depth edge) the candidate that the pixel's own SAD prefers
+      // (its own coarse disparity where the output is invalidated as truncated).
       std::vector<int> near;
       for (int cy = y / s - 1; cy <= y / s + 1; ++cy) {
         for (int cx = x / s - 1; cx <= x / s + 1; ++cx) {
@@ -140,12 +185,17 @@ Bands bandsFromCoarseMatch(const cv::Mat& L, const cv::Mat& R, const StereoConfi
           if (std::isfinite(d)) near.push_back(static_cast<int>(d));
         }
       }
-      const float own = coarse_disparity.at<float>(y / s, x / s);
+      std::sort(near.begin(), near.end());
+      near.erase(std::unique(near.begin(), near.end()), near.end());
       int& start = bands.start.at<int>(y, x);
-      start = c.bandStart(own, x);
-      if (!near.empty()) {
-        const auto [lo, hi] = std::minmax_element(near.begin(), near.end());
-        if (s * (*hi - *lo) + 4 <= pipeline::kBandDisparities) start = c.bandStartAround(s * (*lo + *hi) / 2, x);
+      if (near.empty()) {
+        start = c.bandStart(INFINITY, x);
+      } else if (s * (near.back() - near.front()) <= span) {
+        start = c.bandStartAround(s * (near.front() + near.back()) / 2, x);
+      } else if (c.invalidate_truncated && x < c.min_disparity_px + c.num_disparities - 1) {
+        start = c.bandStart(coarse_disparity.at<float>(y / s, x / s), x);  // output invalid: own coarse disparity
+      } else {
+        start = c.bandStartAround(edgeBandCentre(check_left, check_right, near, s, x, y, span), x);
       }
     }
   }

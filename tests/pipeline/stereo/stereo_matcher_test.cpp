@@ -62,6 +62,33 @@ SyntheticPair slantedPlane(int width, int height, double d0, double a, double b,
   return pair;
 }
 
+// A depth step: a textured box at disparity `near` over a background at `far` (two textures), so
+// that the coarse neighbourhoods at its edges hold disparities further apart than one band. The
+// right image shows the box where it covers the background; truth NaN where the left pixel is
+// hidden in the right image.
+constexpr int kBoxX0 = 100, kBoxX1 = 180, kBoxY0 = 40, kBoxY1 = 120;
+SyntheticPair depthStep(int width, int height, int far, int near, uint32_t seed) {
+  const cv::Mat background = randomTexture(width + 200, height, seed);
+  const cv::Mat box = randomTexture(width + 200, height, seed + 1);
+  auto inBox = [](int x, int y) { return x >= kBoxX0 && x < kBoxX1 && y >= kBoxY0 && y < kBoxY1; };
+  SyntheticPair pair;
+  pair.left.create(height, width, CV_8U);
+  pair.right.create(height, width, CV_8U);
+  pair.disparity.create(height, width, CV_32F);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const bool in = inBox(x, y);
+      pair.left.at<uint8_t>(y, x) = cv::saturate_cast<uint8_t>((in ? box : background).at<float>(y, x + 100));
+      const bool hidden = !in && inBox(x - far + near, y);  // the box covers its right pixel
+      pair.disparity.at<float>(y, x) = hidden ? NAN : static_cast<float>(in ? near : far);
+      const bool right_in = inBox(x + near, y);
+      pair.right.at<uint8_t>(y, x) = cv::saturate_cast<uint8_t>(right_in ? box.at<float>(y, x + near + 100)
+                                                                         : background.at<float>(y, x + far + 100));
+    }
+  }
+  return pair;
+}
+
 void expectBitIdentical(const DisparityMap& a, const DisparityMap& b, const std::string& what) {
   ASSERT_EQ(a.disparity.size(), b.disparity.size());
   // Premise: two empty maps, or two maps with no valid pixel, would be "identical" too.
@@ -170,45 +197,90 @@ INSTANTIATE_TEST_SUITE_P(
 // The band kernel holds one band in one vector on AVX-512 and in several on narrower
 // instruction sets: every one of them the machine runs must match the reference. Not HWY_SCALAR:
 // the winner search needs at least 3 lanes per vector (see pickWinner()), in both search modes.
+// The depth step's box edges exercise the bands placed at depth edges (band_placement.h).
 TEST(StereoMatcher, BandMatchesTheReferenceOnEveryInstructionSet) {
-  const SyntheticPair pair = slantedPlane(120, 60, 20.0, 0.1, 0.05, 5);
+  const SyntheticPair plane = slantedPlane(120, 60, 20.0, 0.1, 0.05, 5);
+  const SyntheticPair step = depthStep(200, 140, 6, 44, 9);
   for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
     if (target == HWY_SCALAR) continue;
     std::cout << "instruction set " << hwy::TargetName(target) << "\n";
     hwy::SetSupportedTargetsForTest(target);
     for (const MatchingCost cost : {MatchingCost::kSad, MatchingCost::kCensus}) {
-      StereoConfig config;
-      config.cost = cost;
-      config.window_px = cost == MatchingCost::kSad ? 3 : 5;
-      config.num_disparities = 64;
-      config.search = SearchMode::kBand;
-      config.lr_check = true;
-      config.num_strips = 1;
-      StereoMatcher matcher(config);
-      expectBitIdentical(matcher.match(pair.left, pair.right), test::referenceSgm(pair.left, pair.right, config),
-                         std::string(hwy::TargetName(target)) + " " + toString(cost));
+      for (const SyntheticPair* scene : {&plane, &step}) {
+        const SyntheticPair& pair = *scene;
+        StereoConfig config;
+        config.cost = cost;
+        config.window_px = cost == MatchingCost::kSad ? 3 : 5;
+        // The step with 112: its box's left edge (x = 100) lies in the columns invalidated as truncated.
+        config.num_disparities = scene == &step ? 112 : 64;
+        config.search = SearchMode::kBand;
+        config.lr_check = true;
+        config.num_strips = 1;
+        StereoMatcher matcher(config);
+        expectBitIdentical(
+            matcher.match(pair.left, pair.right), test::referenceSgm(pair.left, pair.right, config),
+            std::string(hwy::TargetName(target)) + " " + toString(cost) + (scene == &step ? " depth step" : " plane"));
+      }
     }
   }
   hwy::SetSupportedTargetsForTest(0);
 }
 
+// At a depth step wider than one band, each pixel's band follows its own surface: near the box's
+// edges the band search is as right as the full search (the coarse neighbourhood holds both
+// disparities; the pixel's own coarse disparity is often the other surface's).
+TEST(StereoMatcher, BandFollowsEachSurfaceAtADepthStep) {
+  const SyntheticPair pair = depthStep(320, 200, 6, 44, 11);
+  StereoConfig config;
+  config.num_disparities = 64;
+  config.lr_check = false;
+  config.invalidate_truncated = false;
+  auto wrongNearEdges = [&](SearchMode search) {
+    config.search = search;
+    const cv::Mat d = StereoMatcher(config).match(pair.left, pair.right).disparity;
+    int wrong = 0, counted = 0;
+    for (int y = kBoxY0 - 6; y < kBoxY1 + 6; ++y) {
+      for (int x = kBoxX0 - 6; x < kBoxX1 + 6; ++x) {
+        const bool near_edge = std::min({std::abs(x - kBoxX0), std::abs(x - kBoxX1), std::abs(y - kBoxY0),
+                                         std::abs(y - kBoxY1)}) <= 6;
+        const float truth = pair.disparity.at<float>(y, x);
+        if (!near_edge || std::isnan(truth)) continue;
+        ++counted;
+        wrong += !(std::abs(d.at<float>(y, x) - truth) <= 1.0f);
+      }
+    }
+    std::cout << "search " << toString(search) << ": " << wrong << " of " << counted
+              << " pixels near the box's edges off by more than 1 px\n";
+    return wrong;
+  };
+  const int full = wrongNearEdges(SearchMode::kFull);
+  const int band = wrongNearEdges(SearchMode::kBand);
+  EXPECT_LE(band, full);
+}
+
 TEST(StereoMatcher, OneAndTwoThreadsGiveBitIdenticalResults) {
-  const SyntheticPair pair = slantedPlane(320, 240, 20.0, 0.03, 0.02, 7);
-  for (int paths : {4, 8}) {
-    for (SearchMode search : {SearchMode::kFull, SearchMode::kBand}) {
-      StereoConfig config;
-      config.num_disparities = 64;
-      config.num_paths = paths;
-      config.search = search;
-      config.lr_check = true;
-      StereoMatcher matcher(config);
-      const int saved = omp_get_max_threads();
-      omp_set_num_threads(1);
-      const DisparityMap one = matcher.match(pair.left, pair.right);
-      omp_set_num_threads(2);
-      const DisparityMap two = matcher.match(pair.left, pair.right);
-      omp_set_num_threads(saved);
-      expectBitIdentical(one, two, std::to_string(paths) + " paths, search " + toString(search));
+  const SyntheticPair plane = slantedPlane(320, 240, 20.0, 0.03, 0.02, 7);
+  const SyntheticPair step = depthStep(320, 240, 6, 44, 13);  // bands placed by the edge check too
+  for (const SyntheticPair* scene : {&plane, &step}) {
+    const SyntheticPair& pair = *scene;
+    for (int paths : {4, 8}) {
+      for (SearchMode search : {SearchMode::kFull, SearchMode::kBand}) {
+        StereoConfig config;
+        config.num_disparities = 64;
+        config.num_paths = paths;
+        config.search = search;
+        config.lr_check = true;
+        StereoMatcher matcher(config);
+        const int saved = omp_get_max_threads();
+        omp_set_num_threads(1);
+        const DisparityMap one = matcher.match(pair.left, pair.right);
+        omp_set_num_threads(2);
+        const DisparityMap two = matcher.match(pair.left, pair.right);
+        omp_set_num_threads(saved);
+        expectBitIdentical(
+            one, two,
+            std::to_string(paths) + " paths, search " + toString(search) + (scene == &step ? ", depth step" : ", plane"));
+      }
     }
   }
 }
