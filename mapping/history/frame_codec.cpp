@@ -3,7 +3,7 @@
 #include <libdeflate.h>
 
 #include <cstring>
-#include <functional>
+#include <algorithm>
 #include <memory>
 
 #include "common/error.h"
@@ -107,6 +107,55 @@ std::string inflate(const std::string& packed, const std::string& where) {
   return raw;
 }
 
+// The updates of a raw (inflated) section; keep_all, or only the blocks `keep` lists (ascending:
+// merged with the section's ascending keys). A kept block's colours are those whose voxel lies in
+// it; colours come in endpoint order, mostly several in one block after another, so the last
+// block's answer is reused.
+FrameUpdates decodeRaw(const std::string& raw, const std::string& where, std::span<const uint64_t> keep, bool keep_all) {
+  Reader r(raw, where);
+  FrameUpdates out;
+  const size_t n = r.count(129);
+  if (keep_all) out.keys.reserve(n);
+  uint64_t previous = 0;
+  size_t next_keep = 0;
+  for (size_t b = 0; b < n; ++b) {
+    const uint64_t key = previous + r.varint();
+    if (b > 0 && key <= previous) r.fail("block keys not ascending");
+    previous = key;
+    while (next_keep < keep.size() && keep[next_keep] < key) ++next_keep;
+    const bool kept = keep_all || (next_keep < keep.size() && keep[next_keep] == key);
+    if (!kept) {
+      r.skip(16 * 8);
+      out.others.push_back(key);
+      continue;
+    }
+    out.keys.push_back(key);
+    if (!keep_all) out.kept_at.push_back(static_cast<uint32_t>(next_keep));
+    BlockMasks& masks = out.masks.emplace_back();
+    for (uint64_t& w : masks.free) w = r.word();
+    for (uint64_t& w : masks.hit) w = r.word();
+  }
+  const size_t colors = r.count(6);
+  VoxelIndex last = VoxelIndex::Zero();
+  uint64_t last_block = 0;
+  bool last_kept = false, have_last = false;
+  for (size_t i = 0; i < colors; ++i) {
+    EndpointColor c;
+    for (int k = 0; k < 3; ++k) c.ijk[k] = static_cast<int>(last[k] + unzigzag(r.varint()));
+    last = c.ijk;
+    for (int k = 0; k < 3; ++k) c.rgb[k] = r.byte();
+    const uint64_t block = detail::packIndex(blockOf(c.ijk));
+    if (!have_last || block != last_block) {
+      last_block = block;
+      have_last = true;
+      last_kept = keep_all || std::binary_search(out.keys.begin(), out.keys.end(), block);
+    }
+    if (last_kept) out.colors.push_back(c);
+  }
+  r.finish();
+  return out;
+}
+
 }  // namespace
 
 FrameUpdates FrameUpdates::of(const BatchUpdates& updates) {
@@ -175,40 +224,13 @@ std::string encodeUpdates(const FrameUpdates& updates, int level) {
 }
 
 FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where) {
-  return decodeUpdates(bytes, where, [](uint64_t) { return true; });
+  const std::string raw = inflate(bytes, where);
+  return decodeRaw(raw, where, {}, true);
 }
 
-FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where, const std::function<bool(uint64_t)>& keep) {
+FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where, std::span<const uint64_t> keep) {
   const std::string raw = inflate(bytes, where);
-  Reader r(raw, where);
-  FrameUpdates out;
-  const size_t n = r.count(129);
-  out.keys.reserve(n);
-  uint64_t previous = 0;
-  for (size_t b = 0; b < n; ++b) {
-    const uint64_t key = previous + r.varint();
-    previous = key;
-    if (!keep(key)) {
-      r.skip(16 * 8);
-      out.others.push_back(key);
-      continue;
-    }
-    out.keys.push_back(key);
-    BlockMasks& masks = out.masks.emplace_back();
-    for (uint64_t& w : masks.free) w = r.word();
-    for (uint64_t& w : masks.hit) w = r.word();
-  }
-  const size_t colors = r.count(6);
-  VoxelIndex last = VoxelIndex::Zero();
-  for (size_t i = 0; i < colors; ++i) {
-    EndpointColor c;
-    for (int k = 0; k < 3; ++k) c.ijk[k] = static_cast<int>(last[k] + unzigzag(r.varint()));
-    last = c.ijk;
-    for (int k = 0; k < 3; ++k) c.rgb[k] = r.byte();
-    if (keep(detail::packIndex(blockOf(c.ijk)))) out.colors.push_back(c);
-  }
-  r.finish();
-  return out;
+  return decodeRaw(raw, where, keep, false);
 }
 
 }  // namespace cenote::mapping::history

@@ -12,7 +12,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
-#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -32,6 +32,7 @@ struct FrameUpdates {
   std::vector<BlockMasks> masks;
   std::vector<EndpointColor> colors;  // mean colour of each hit voxel (BatchUpdates::colors order)
   std::vector<uint64_t> others;       // decodeUpdates with `keep`: the touched blocks it left out
+  std::vector<uint32_t> kept_at;      // decodeUpdates with `keep`: each kept block's index in `keep`
 
   // Copies a finished BatchUpdates.
   static FrameUpdates of(const BatchUpdates& updates);
@@ -43,8 +44,9 @@ std::string encodeUpdates(const FrameUpdates& updates, int level);
 // @throws Error naming `where` for bytes that do not decode (a damaged file).
 FramePoints decodePoints(const std::string& bytes, const std::string& where);
 FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where);
-// Only the blocks keep(packed key) accepts, with their masks and colours; the others' keys go to
-// `others` (a replay needs the masks of the blocks it rebuilds only).
-FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where, const std::function<bool(uint64_t)>& keep);
+// Only the blocks whose packed keys `keep` lists (ascending), with their masks and colours; the
+// others' keys go to `others` (a replay needs the masks of the blocks it rebuilds only; an empty
+// `keep`: the keys alone). Both lists are merged in one pass, with no lookup per block.
+FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where, std::span<const uint64_t> keep);
 
 }  // namespace cenote::mapping::history
