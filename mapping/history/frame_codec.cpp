@@ -48,6 +48,19 @@ class Reader {
  public:
   Reader(std::string_view bytes, const std::string& where) : bytes_(bytes), where_(where) {}
   uint64_t varint() {
+    // One or two bytes (most point deltas and keys) without a bounds check per byte.
+    if (bytes_.size() - pos_ >= 2) {
+      const auto b0 = static_cast<uint8_t>(bytes_[pos_]);
+      if ((b0 & 0x80) == 0) {
+        ++pos_;
+        return b0;
+      }
+      const auto b1 = static_cast<uint8_t>(bytes_[pos_ + 1]);
+      if ((b1 & 0x80) == 0) {
+        pos_ += 2;
+        return (b0 & 0x7fu) | (static_cast<uint64_t>(b1) << 7);
+      }
+    }
     uint64_t v = 0;
     for (int shift = 0; shift < 64; shift += 7) {
       const uint8_t b = byte();
@@ -291,9 +304,9 @@ FramePoints decodePoints(const std::string& bytes, const std::string& where) {
     previous = q;
   }
   out.colors.resize(r.count(3));
-  for (auto& rgb : out.colors) {
-    for (int k = 0; k < 3; ++k) rgb[k] = r.byte();
-  }
+  static_assert(sizeof(std::array<uint8_t, 3>) == 3);
+  const std::string_view rgb = r.take(out.colors.size() * 3);
+  if (!rgb.empty()) std::memcpy(out.colors.data(), rgb.data(), rgb.size());
   r.finish();
   return out;
 }

@@ -3,9 +3,13 @@
 // (libdeflate) so that a replay of the updates never inflates the points.
 //   points: quantised camera-frame points q = round(p_cam / quantum) (int32 per axis), as zigzag
 //     LEB128 deltas from the previous point (neighbouring pixels: mostly 1-2 bytes per axis), then RGB.
-//   updates: touched blocks in ascending packed order (BatchUpdates' order) as LEB128 deltas of
-//     their packed keys, each block's free and hit masks (16 words), then the hit voxels' mean
-//     colours (zigzag deltas of their voxel index, RGB).
+//   updates: three kinds of parts, each deflated on its own, so that a reader inflates only what it
+//     needs: the index (touched blocks in ascending packed order, BatchUpdates' order, as LEB128
+//     deltas of their packed keys, and the deflated size of each mask group), the colours (the hit
+//     voxels' mean colours: zigzag deltas of their voxel index, RGB), and the mask groups (the free
+//     and hit masks of 128 consecutive blocks each, every word a tag byte, none / all of its voxels /
+//     literal, the literal's 8 bytes after its tag). A correction's moved frame needs the index
+//     only (its old blocks), a replay the groups and colours of the blocks it rebuilds.
 // Units: voxel indices, metres for poses, `quantum_m` for points. Threads: pure functions.
 #pragma once
 
