@@ -7,32 +7,20 @@
 
 #include <atomic>
 #include <filesystem>
-#include <map>
 #include <set>
 #include <thread>
 
 #include "server/host/map_host.h"
+#include "tests/mapping/support/block_snapshot.h"
 #include "tests/mapping/support/drifted_frames.h"
 
 namespace cenote::server {
 namespace {
 
-using Blocks = std::map<std::array<int, 3>, mapping::BlockView>;
-
-bool sameBlock(const mapping::BlockView& a, const mapping::BlockView& b) {
-  if (a.known != b.known) return false;
-  for (int i = 0; i < mapping::kBlockVoxels; ++i) {
-    if (((a.known[i >> 6] >> (i & 63)) & 1) && a.log_odds[i] != b.log_odds[i]) return false;
-  }
-  return true;
-}
-
-Blocks blocksOf(const mapping::OccupancyMap& map) {
-  Blocks out;
-  auto acc = map.constAccessor();
-  for (const mapping::BlockIndex& b : acc.knownBlocks()) acc.readBlock(b, out[{b.x(), b.y(), b.z()}]);
-  return out;
-}
+using Blocks = mapping::test::BlockSnapshot;
+using mapping::test::blockIn;
+using mapping::test::sameBlock;
+using mapping::test::snapshotBlocks;
 
 // Frame i of the ingest that goes on during the correction: a wall 1 m ahead of a camera 20 m
 // from the room (so it shares no block with it), at t = 10 + 0.1 i s, after every corrected pose.
@@ -76,18 +64,13 @@ TEST(MapHostCorrectionConcurrency, IngestAndReadersGoOnAndSeeEachBlockOldOrNew) 
     truth_history.integrate(f.batchAt(f.T_true), f.T_true);
     poses.push_back({f.t_s, f.T_true});
   }
-  const Blocks before = blocksOf(host.map());
-  const Blocks after = blocksOf(truth);
+  const Blocks before = snapshotBlocks(host.map());
+  const Blocks after = snapshotBlocks(truth);
   std::vector<mapping::BlockIndex> room_blocks;
   for (const auto& [b, view] : before) room_blocks.emplace_back(b[0], b[1], b[2]);
   for (const auto& [b, view] : after) {
     if (before.count(b) == 0) room_blocks.emplace_back(b[0], b[1], b[2]);
   }
-  const mapping::BlockView unknown{};
-  auto stateOf = [&](const Blocks& m, const mapping::BlockIndex& b) -> const mapping::BlockView& {
-    const auto it = m.find({b.x(), b.y(), b.z()});
-    return it == m.end() ? unknown : it->second;
-  };
   const auto subscription = host.feed().subscribe();
 
   std::atomic<bool> done{false};
@@ -100,8 +83,8 @@ TEST(MapHostCorrectionConcurrency, IngestAndReadersGoOnAndSeeEachBlockOldOrNew) 
           auto acc = host.map().constAccessor();
           acc.readBlock(b, view);
         }
-        const bool is_old = sameBlock(view, stateOf(before, b));
-        const bool is_new = sameBlock(view, stateOf(after, b));
+        const bool is_old = sameBlock(view, blockIn(before, b));
+        const bool is_new = sameBlock(view, blockIn(after, b));
         mixed += !is_old && !is_new;
         saw_old += is_old && !is_new;
         saw_new += is_new && !is_old;
@@ -141,12 +124,12 @@ TEST(MapHostCorrectionConcurrency, IngestAndReadersGoOnAndSeeEachBlockOldOrNew) 
   EXPECT_GT(distance_queries.load(), 0u);
   EXPECT_EQ(host.batchesIntegrated(), static_cast<uint64_t>(kRoomFrames + kFarFrames));
   // The map is the one built from scratch, room and far wall, block for block.
-  const Blocks final_blocks = blocksOf(host.map());
-  const Blocks truth_blocks = blocksOf(truth);
+  const Blocks final_blocks = snapshotBlocks(host.map());
+  const Blocks truth_blocks = snapshotBlocks(truth);
   EXPECT_EQ(final_blocks.size(), truth_blocks.size());
   for (const auto& [b, view] : truth_blocks) {
     const mapping::BlockIndex block(b[0], b[1], b[2]);
-    EXPECT_TRUE(sameBlock(stateOf(final_blocks, block), view)) << "block " << block.transpose();
+    EXPECT_TRUE(sameBlock(blockIn(final_blocks, block), view)) << "block " << block.transpose();
   }
   // The feed reported every block the correction changed.
   std::set<std::array<int, 3>> fed;
