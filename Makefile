@@ -48,15 +48,18 @@ asan-test: deps test-data
 	ctest --preset asan -j$(JOBS)
 
 # ThreadSanitizer build of the concurrency tests only (readers during ingest and during a pose
-# correction: each block old or new, never a mix), in build-tsan; not part of `make test`.
+# correction: each block old or new, never a mix; the server's corrections with ingest, block reads
+# and distance queries going on), in build-tsan; not part of `make test`.
 # tests/tsan.supp: reports inside uninstrumented Debian libraries only, each with its reason.
 TSAN_DIR ?= build-tsan
 tsan-test: deps
 	cmake -S . -B $(TSAN_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCENOTE_TSAN=ON -DCENOTE_BUILD_BENCH=OFF \
 	  $(if $(CCACHE),-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
-	cmake --build $(TSAN_DIR) -j$(JOBS) --target mapping_concurrency_test
+	cmake --build $(TSAN_DIR) -j$(JOBS) --target mapping_concurrency_test server_concurrency_test
 	TSAN_OPTIONS="suppressions=$(CURDIR)/tests/tsan.supp halt_on_error=1 second_deadlock_stack=1" \
 	  $(TSAN_DIR)/tests/mapping_concurrency_test
+	TSAN_OPTIONS="suppressions=$(CURDIR)/tests/tsan.supp halt_on_error=1 second_deadlock_stack=1" \
+	  $(TSAN_DIR)/tests/server/server_concurrency_test
 
 # libFuzzer on every harness of tests/fuzz/ (a clang build of its own in build-fuzz): FUZZ_RUNS inputs
 # each from the committed seed corpus; new inputs go to build-fuzz/corpus/, crashes to

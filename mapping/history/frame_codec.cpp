@@ -3,7 +3,8 @@
 #include <libdeflate.h>
 
 #include <cstring>
-#include <functional>
+#include <string_view>
+#include <algorithm>
 #include <memory>
 
 #include "common/error.h"
@@ -11,6 +12,11 @@
 
 namespace cenote::mapping::history {
 namespace {
+
+// The masks of this many consecutive blocks (in key order) are deflated together: a replay
+// inflates only the groups holding a block it rebuilds. Blocks are in x-major order, so the blocks
+// a correction rebuilds are a few runs of a frame's keys; 128 blocks = 16 kB of masks.
+constexpr size_t kBlocksPerGroup = 128;
 
 void putVarint(std::string& out, uint64_t v) {
   while (v >= 0x80) {
@@ -22,17 +28,39 @@ void putVarint(std::string& out, uint64_t v) {
 uint64_t zigzag(int64_t v) { return (static_cast<uint64_t>(v) << 1) ^ static_cast<uint64_t>(v >> 63); }
 int64_t unzigzag(uint64_t v) { return static_cast<int64_t>(v >> 1) ^ -static_cast<int64_t>(v & 1); }
 
-void putWord(std::string& out, uint64_t w) {
-  char bytes[8];
-  std::memcpy(bytes, &w, 8);
-  out.append(bytes, 8);
+// A mask word: one tag byte for the words most masks hold (none or all of their 64 voxels: a
+// ray cone carves whole words, most blocks have no hit), otherwise the tag and the 8 bytes. The
+// masks then take a few times fewer bytes before deflate, which spends its time per input byte.
+enum MaskWordTag : uint8_t { kZeroWord = 0, kFullWord = 1, kLiteralWord = 2 };
+void putMaskWord(std::string& out, uint64_t w) {
+  if (w == 0 || w == ~0ull) {
+    out.push_back(static_cast<char>(w == 0 ? kZeroWord : kFullWord));
+    return;
+  }
+  char bytes[9];
+  bytes[0] = static_cast<char>(kLiteralWord);
+  std::memcpy(bytes + 1, &w, 8);
+  out.append(bytes, 9);
 }
 
 // Reads what put* wrote; every read checks the bounds.
 class Reader {
  public:
-  Reader(const std::string& bytes, const std::string& where) : bytes_(bytes), where_(where) {}
+  Reader(std::string_view bytes, const std::string& where) : bytes_(bytes), where_(where) {}
   uint64_t varint() {
+    // One or two bytes (most point deltas and keys) without a bounds check per byte.
+    if (bytes_.size() - pos_ >= 2) {
+      const auto b0 = static_cast<uint8_t>(bytes_[pos_]);
+      if ((b0 & 0x80) == 0) {
+        ++pos_;
+        return b0;
+      }
+      const auto b1 = static_cast<uint8_t>(bytes_[pos_ + 1]);
+      if ((b1 & 0x80) == 0) {
+        pos_ += 2;
+        return (b0 & 0x7fu) | (static_cast<uint64_t>(b1) << 7);
+      }
+    }
     uint64_t v = 0;
     for (int shift = 0; shift < 64; shift += 7) {
       const uint8_t b = byte();
@@ -61,6 +89,21 @@ class Reader {
     if (n > (bytes_.size() - pos_) / std::max<size_t>(max_bytes_each, 1) + 1) fail("a count larger than its bytes");
     return static_cast<size_t>(n);
   }
+  uint64_t maskWord() {
+    switch (byte()) {
+      case kZeroWord: return 0;
+      case kFullWord: return ~0ull;
+      case kLiteralWord: return word();
+      default: fail("a mask word of an unknown kind");
+    }
+  }
+  size_t pos() const { return pos_; }
+  // The next `n` bytes, skipped.
+  std::string_view take(size_t n) {
+    if (bytes_.size() - pos_ < n) fail("it ends early");
+    pos_ += n;
+    return bytes_.substr(pos_ - n, n);
+  }
   void finish() const {
     if (pos_ != bytes_.size()) fail("bytes are left over");
   }
@@ -69,42 +112,157 @@ class Reader {
   }
 
  private:
-  const std::string& bytes_;
+  std::string_view bytes_;
   const std::string& where_;
   size_t pos_ = 0;
 };
 
-std::string deflate(const std::string& raw, int level) {
-  std::unique_ptr<libdeflate_compressor, decltype(&libdeflate_free_compressor)> c(libdeflate_alloc_compressor(level),
-                                                                                  libdeflate_free_compressor);
+using Compressor = std::unique_ptr<libdeflate_compressor, decltype(&libdeflate_free_compressor)>;
+using Decompressor = std::unique_ptr<libdeflate_decompressor, decltype(&libdeflate_free_decompressor)>;
+
+Compressor compressor(int level) {
+  Compressor c(libdeflate_alloc_compressor(level), libdeflate_free_compressor);
   if (!c) throw ResourceExhaustedError("frame store: cannot allocate a deflate compressor");
-  std::string out;
+  return c;
+}
+
+Decompressor decompressor() {
+  Decompressor d(libdeflate_alloc_decompressor(), libdeflate_free_decompressor);
+  if (!d) throw ResourceExhaustedError("frame store: cannot allocate a deflate decompressor");
+  return d;
+}
+
+// Appends varint(raw size) and raw's deflate stream to `out`.
+void deflateTo(libdeflate_compressor* c, std::string_view raw, std::string& out) {
   putVarint(out, raw.size());
   const size_t header = out.size();
-  out.resize(header + libdeflate_deflate_compress_bound(c.get(), raw.size()));
-  const size_t n = libdeflate_deflate_compress(c.get(), raw.data(), raw.size(), out.data() + header, out.size() - header);
+  out.resize(header + libdeflate_deflate_compress_bound(c, raw.size()));
+  const size_t n = libdeflate_deflate_compress(c, raw.data(), raw.size(), out.data() + header, out.size() - header);
   out.resize(header + n);
+}
+
+std::string deflate(const std::string& raw, int level) {
+  std::string out;
+  deflateTo(compressor(level).get(), raw, out);
   return out;
 }
 
-std::string inflate(const std::string& packed, const std::string& where) {
+// What deflateTo wrote.
+std::string inflate(libdeflate_decompressor* d, std::string_view packed, const std::string& where) {
   Reader r(packed, where);
   const uint64_t raw_size = r.varint();
-  size_t header = 0;
-  while (static_cast<uint8_t>(packed[header]) & 0x80) ++header;
-  ++header;
   if (raw_size > (uint64_t{1} << 34)) r.fail("a section larger than 16 GiB");
-  std::unique_ptr<libdeflate_decompressor, decltype(&libdeflate_free_decompressor)> d(libdeflate_alloc_decompressor(),
-                                                                                      libdeflate_free_decompressor);
-  if (!d) throw ResourceExhaustedError("frame store: cannot allocate a deflate decompressor");
+  const std::string_view stream = packed.substr(r.pos());
   std::string raw(raw_size, '\0');
   size_t actual = 0;
-  if (libdeflate_deflate_decompress(d.get(), packed.data() + header, packed.size() - header, raw.data(), raw.size(),
-                                    &actual) != LIBDEFLATE_SUCCESS ||
+  if (libdeflate_deflate_decompress(d, stream.data(), stream.size(), raw.data(), raw.size(), &actual) !=
+          LIBDEFLATE_SUCCESS ||
       actual != raw_size) {
     r.fail("its deflate stream is broken");
   }
   return raw;
+}
+
+std::string inflate(const std::string& packed, const std::string& where) {
+  return inflate(decompressor().get(), packed, where);
+}
+
+// The keys of a section's blocks, and the byte size of each group of their masks.
+struct SectionIndex {
+  std::vector<uint64_t> keys;
+  std::vector<size_t> group_bytes;
+};
+
+SectionIndex readIndex(libdeflate_decompressor* d, std::string_view packed, const std::string& where) {
+  const std::string raw = inflate(d, packed, where);
+  Reader r(raw, where);
+  SectionIndex index;
+  const size_t n = r.count(1);
+  index.keys.resize(n);
+  uint64_t previous = 0;
+  for (size_t b = 0; b < n; ++b) {
+    const uint64_t key = previous + r.varint();
+    if (b > 0 && key <= previous) r.fail("block keys not ascending");
+    index.keys[b] = previous = key;
+  }
+  index.group_bytes.resize((n + kBlocksPerGroup - 1) / kBlocksPerGroup);
+  for (size_t& bytes : index.group_bytes) bytes = r.varint();
+  r.finish();
+  return index;
+}
+
+// The colours of the hit voxels in the blocks `out.keys` lists (all: keep_all). Colours come in
+// endpoint order, mostly several in one block after another, so the last block's answer is reused.
+void readColors(libdeflate_decompressor* d, std::string_view packed, const std::string& where, bool keep_all,
+                FrameUpdates& out) {
+  const std::string raw = inflate(d, packed, where);
+  Reader r(raw, where);
+  const size_t colors = r.count(6);
+  VoxelIndex last = VoxelIndex::Zero();
+  uint64_t last_block = 0;
+  bool last_kept = false, have_last = false;
+  for (size_t i = 0; i < colors; ++i) {
+    EndpointColor c;
+    for (int k = 0; k < 3; ++k) c.ijk[k] = static_cast<int>(last[k] + unzigzag(r.varint()));
+    last = c.ijk;
+    for (int k = 0; k < 3; ++k) c.rgb[k] = r.byte();
+    const uint64_t block = detail::packIndex(blockOf(c.ijk));
+    if (!have_last || block != last_block) {
+      last_block = block;
+      have_last = true;
+      last_kept = keep_all || std::binary_search(out.keys.begin(), out.keys.end(), block);
+    }
+    if (last_kept) out.colors.push_back(c);
+  }
+  r.finish();
+}
+
+// decodeUpdates: the index first, then only the mask groups holding a kept block, and the colours
+// only when a block is kept. `keep` (ascending) is merged with the section's ascending keys.
+FrameUpdates decodeSection(const std::string& bytes, const std::string& where, std::span<const uint64_t> keep,
+                           bool keep_all) {
+  const Decompressor d = decompressor();
+  Reader r(bytes, where);
+  const std::string_view index_part = r.take(r.varint());
+  const std::string_view colors_part = r.take(r.varint());
+  const SectionIndex index = readIndex(d.get(), index_part, where);
+  FrameUpdates out;
+  std::vector<uint8_t> kept(index.keys.size(), keep_all);
+  size_t next_keep = 0;
+  for (size_t b = 0; b < index.keys.size(); ++b) {
+    const uint64_t key = index.keys[b];
+    if (!keep_all) {
+      while (next_keep < keep.size() && keep[next_keep] < key) ++next_keep;
+      kept[b] = next_keep < keep.size() && keep[next_keep] == key;
+    }
+    if (!kept[b]) {
+      out.others.push_back(key);
+      continue;
+    }
+    out.keys.push_back(key);
+    if (!keep_all) out.kept_at.push_back(static_cast<uint32_t>(next_keep));
+  }
+  out.masks.reserve(out.keys.size());
+  for (size_t g = 0; g < index.group_bytes.size(); ++g) {
+    const std::string_view group = r.take(index.group_bytes[g]);
+    const size_t first = g * kBlocksPerGroup, end = std::min(index.keys.size(), first + kBlocksPerGroup);
+    if (std::find(kept.begin() + first, kept.begin() + end, 1) == kept.begin() + end) continue;
+    const std::string raw = inflate(d.get(), group, where);
+    Reader words(raw, where);
+    for (size_t b = first; b < end; ++b) {
+      if (!kept[b]) {
+        for (int w = 0; w < 16; ++w) words.maskWord();
+        continue;
+      }
+      BlockMasks& masks = out.masks.emplace_back();
+      for (uint64_t& w : masks.free) w = words.maskWord();
+      for (uint64_t& w : masks.hit) w = words.maskWord();
+    }
+    words.finish();
+  }
+  r.finish();
+  if (!out.keys.empty()) readColors(d.get(), colors_part, where, keep_all, out);
+  return out;
 }
 
 }  // namespace
@@ -146,69 +304,63 @@ FramePoints decodePoints(const std::string& bytes, const std::string& where) {
     previous = q;
   }
   out.colors.resize(r.count(3));
-  for (auto& rgb : out.colors) {
-    for (int k = 0; k < 3; ++k) rgb[k] = r.byte();
-  }
+  static_assert(sizeof(std::array<uint8_t, 3>) == 3);
+  const std::string_view rgb = r.take(out.colors.size() * 3);
+  if (!rgb.empty()) std::memcpy(out.colors.data(), rgb.data(), rgb.size());
   r.finish();
   return out;
 }
 
 std::string encodeUpdates(const FrameUpdates& updates, int level) {
-  std::string raw;
-  raw.reserve(updates.keys.size() * 140 + updates.colors.size() * 8 + 16);
-  putVarint(raw, updates.keys.size());
-  uint64_t previous = 0;
-  for (size_t b = 0; b < updates.keys.size(); ++b) {
-    putVarint(raw, updates.keys[b] - previous);
-    previous = updates.keys[b];
-    for (uint64_t w : updates.masks[b].free) putWord(raw, w);
-    for (uint64_t w : updates.masks[b].hit) putWord(raw, w);
+  const Compressor c = compressor(level);
+  const size_t n = updates.keys.size();
+  std::string groups, raw;
+  std::vector<uint64_t> group_bytes;
+  for (size_t first = 0; first < n; first += kBlocksPerGroup) {
+    raw.clear();
+    for (size_t b = first; b < std::min(n, first + kBlocksPerGroup); ++b) {
+      for (uint64_t w : updates.masks[b].free) putMaskWord(raw, w);
+      for (uint64_t w : updates.masks[b].hit) putMaskWord(raw, w);
+    }
+    const size_t before = groups.size();
+    deflateTo(c.get(), raw, groups);
+    group_bytes.push_back(groups.size() - before);
   }
+  raw.clear();
+  putVarint(raw, n);
+  uint64_t previous = 0;
+  for (uint64_t key : updates.keys) {
+    putVarint(raw, key - previous);
+    previous = key;
+  }
+  for (uint64_t bytes : group_bytes) putVarint(raw, bytes);
+  std::string keys_part, colors_part;
+  deflateTo(c.get(), raw, keys_part);
+  raw.clear();
   putVarint(raw, updates.colors.size());
   VoxelIndex last = VoxelIndex::Zero();
-  for (const EndpointColor& c : updates.colors) {
-    for (int k = 0; k < 3; ++k) putVarint(raw, zigzag(static_cast<int64_t>(c.ijk[k]) - last[k]));
-    last = c.ijk;
-    raw.append(reinterpret_cast<const char*>(c.rgb.data()), 3);
+  for (const EndpointColor& e : updates.colors) {
+    for (int k = 0; k < 3; ++k) putVarint(raw, zigzag(static_cast<int64_t>(e.ijk[k]) - last[k]));
+    last = e.ijk;
+    raw.append(reinterpret_cast<const char*>(e.rgb.data()), 3);
   }
-  return deflate(raw, level);
+  deflateTo(c.get(), raw, colors_part);
+  std::string out;
+  out.reserve(keys_part.size() + colors_part.size() + groups.size() + 20);
+  putVarint(out, keys_part.size());
+  out += keys_part;
+  putVarint(out, colors_part.size());
+  out += colors_part;
+  out += groups;
+  return out;
 }
 
 FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where) {
-  return decodeUpdates(bytes, where, [](uint64_t) { return true; });
+  return decodeSection(bytes, where, {}, true);
 }
 
-FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where, const std::function<bool(uint64_t)>& keep) {
-  const std::string raw = inflate(bytes, where);
-  Reader r(raw, where);
-  FrameUpdates out;
-  const size_t n = r.count(129);
-  out.keys.reserve(n);
-  uint64_t previous = 0;
-  for (size_t b = 0; b < n; ++b) {
-    const uint64_t key = previous + r.varint();
-    previous = key;
-    if (!keep(key)) {
-      r.skip(16 * 8);
-      out.others.push_back(key);
-      continue;
-    }
-    out.keys.push_back(key);
-    BlockMasks& masks = out.masks.emplace_back();
-    for (uint64_t& w : masks.free) w = r.word();
-    for (uint64_t& w : masks.hit) w = r.word();
-  }
-  const size_t colors = r.count(6);
-  VoxelIndex last = VoxelIndex::Zero();
-  for (size_t i = 0; i < colors; ++i) {
-    EndpointColor c;
-    for (int k = 0; k < 3; ++k) c.ijk[k] = static_cast<int>(last[k] + unzigzag(r.varint()));
-    last = c.ijk;
-    for (int k = 0; k < 3; ++k) c.rgb[k] = r.byte();
-    if (keep(detail::packIndex(blockOf(c.ijk)))) out.colors.push_back(c);
-  }
-  r.finish();
-  return out;
+FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where, std::span<const uint64_t> keep) {
+  return decodeSection(bytes, where, keep, false);
 }
 
 }  // namespace cenote::mapping::history

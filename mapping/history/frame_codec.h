@@ -3,16 +3,20 @@
 // (libdeflate) so that a replay of the updates never inflates the points.
 //   points: quantised camera-frame points q = round(p_cam / quantum) (int32 per axis), as zigzag
 //     LEB128 deltas from the previous point (neighbouring pixels: mostly 1-2 bytes per axis), then RGB.
-//   updates: touched blocks in ascending packed order (BatchUpdates' order) as LEB128 deltas of
-//     their packed keys, each block's free and hit masks (16 words), then the hit voxels' mean
-//     colours (zigzag deltas of their voxel index, RGB).
+//   updates: three kinds of parts, each deflated on its own, so that a reader inflates only what it
+//     needs: the index (touched blocks in ascending packed order, BatchUpdates' order, as LEB128
+//     deltas of their packed keys, and the deflated size of each mask group), the colours (the hit
+//     voxels' mean colours: zigzag deltas of their voxel index, RGB), and the mask groups (the free
+//     and hit masks of 128 consecutive blocks each, every word a tag byte, none / all of its voxels /
+//     literal, the literal's 8 bytes after its tag). A correction's moved frame needs the index
+//     only (its old blocks), a replay the groups and colours of the blocks it rebuilds.
 // Units: voxel indices, metres for poses, `quantum_m` for points. Threads: pure functions.
 #pragma once
 
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
-#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -32,6 +36,7 @@ struct FrameUpdates {
   std::vector<BlockMasks> masks;
   std::vector<EndpointColor> colors;  // mean colour of each hit voxel (BatchUpdates::colors order)
   std::vector<uint64_t> others;       // decodeUpdates with `keep`: the touched blocks it left out
+  std::vector<uint32_t> kept_at;      // decodeUpdates with `keep`: each kept block's index in `keep`
 
   // Copies a finished BatchUpdates.
   static FrameUpdates of(const BatchUpdates& updates);
@@ -43,8 +48,9 @@ std::string encodeUpdates(const FrameUpdates& updates, int level);
 // @throws Error naming `where` for bytes that do not decode (a damaged file).
 FramePoints decodePoints(const std::string& bytes, const std::string& where);
 FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where);
-// Only the blocks keep(packed key) accepts, with their masks and colours; the others' keys go to
-// `others` (a replay needs the masks of the blocks it rebuilds only).
-FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where, const std::function<bool(uint64_t)>& keep);
+// Only the blocks whose packed keys `keep` lists (ascending), with their masks and colours; the
+// others' keys go to `others` (a replay needs the masks of the blocks it rebuilds only; an empty
+// `keep`: the keys alone). Both lists are merged in one pass, with no lookup per block.
+FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where, std::span<const uint64_t> keep);
 
 }  // namespace cenote::mapping::history

@@ -1,11 +1,14 @@
 #include "mapping/history/map_history.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
+#include <exception>
 
 #include "common/error.h"
 #include "mapping/detail/block_table.h"
-#include "mapping/detail/publish_word.h"
+#include "mapping/history/block_replay.h"
 #include "mapping/history/frame_codec.h"
 
 namespace cenote::mapping {
@@ -81,11 +84,47 @@ void checkPoses(std::span<const CorrectedPose> poses) {
   }
 }
 
-// A block being rebuilt: its voxels and the colours of its hit voxels.
-struct RebuiltBlock {
-  BlockView view;
-  std::unordered_map<int, std::pair<std::array<uint8_t, 3>, int>> colors;  // offset -> mean, count
+// A moved frame marched at its new pose, before the store and the index take it.
+struct MarchedFrame {
+  bool in_store = false;           // false: dropped (budget) or cleared since the plan
+  history::FrameMeta meta;         // with the new pose
+  std::string points_bytes;        // as stored
+  std::string updates_bytes;       // the new updates, encoded
+  std::vector<uint64_t> old_keys;  // the blocks it touched at the old pose
+  std::vector<uint64_t> new_keys;  // ... and at the new one
+  std::exception_ptr error;
 };
+
+// Marches moved frame `seq` at its new pose (reads the store, writes nothing but `out` and `rays`).
+void marchMoved(const history::FrameStore& store, const OccupancyMap& map, uint32_t seq,
+                const Eigen::Isometry3d& T_world_cam, RayBatch& rays, int num_threads, MarchedFrame& out) {
+  try {
+    if (!store.contains(seq)) return;
+    out.in_store = true;
+    const MapConfig& config = map.config();
+    const std::string where = "frame " + std::to_string(seq);
+    out.old_keys = history::decodeUpdates(store.readUpdates(seq), where, {}).others;  // the keys alone
+    out.points_bytes = store.readPoints(seq);
+    const FramePoints points = history::decodePoints(out.points_bytes, where);
+    out.meta = store.meta(seq);
+    out.meta.T_world_cam = T_world_cam;
+    PointBatch batch;
+    batch.t_s = out.meta.t_s;
+    batch.origin = T_world_cam * out.meta.origin_cam;
+    batch.points.resize(points.quantised.size());
+    for (size_t k = 0; k < points.quantised.size(); ++k) {
+      batch.points[k] = toWorld(T_world_cam, points.quantised[k], config.history_quantum_m);
+    }
+    batch.colors = points.colors;
+    map.checkBatch(batch);
+    rays.build(batch, config.voxel_size_m, config.max_range_m, num_threads, config.ray_stop_run);
+    FrameUpdates updates = FrameUpdates::of(rays.updates());
+    out.updates_bytes = history::encodeUpdates(updates, kDeflateLevel);
+    out.new_keys = std::move(updates.keys);
+  } catch (...) {
+    out.error = std::current_exception();
+  }
+}
 
 }  // namespace
 
@@ -151,8 +190,7 @@ void MapHistory::unindex(uint32_t seq, const std::vector<uint64_t>& keys) {
 
 void MapHistory::enforceBudget() {
   for (uint32_t seq : store_.overBudget()) {
-    const FrameUpdates updates = history::decodeUpdates(store_.readUpdates(seq), "frame " + std::to_string(seq),
-                                                        [](uint64_t) { return false; });
+    const FrameUpdates updates = history::decodeUpdates(store_.readUpdates(seq), "frame " + std::to_string(seq), {});
     for (uint64_t key : updates.others) {
       sealed_.insert(key);
       frames_of_block_.erase(key);  // never replayed now
@@ -170,7 +208,10 @@ void MapHistory::seal(std::span<const BlockIndex> blocks) {
   }
 }
 
-void MapHistory::releaseScratch() { rays_ = RayBatch(); }
+void MapHistory::releaseScratch() {
+  rays_ = RayBatch();
+  extra_rays_ = {};
+}
 
 void MapHistory::clear() {
   store_.clear();
@@ -199,38 +240,55 @@ CorrectionPlan MapHistory::planCorrection(std::span<const CorrectedPose> poses) 
   return plan;
 }
 
-void MapHistory::moveFrame(CorrectionPlan& plan, size_t i) {
-  const auto& [seq, T_world_cam] = plan.moved.at(i);
-  if (!store_.contains(seq)) return;  // dropped (budget) or cleared since the plan: its blocks are sealed
-  const MapConfig& config = map_.config();
-  const std::string where = "frame " + std::to_string(seq);
-  // The old blocks' keys only (all in `others`).
-  const FrameUpdates old_updates = history::decodeUpdates(store_.readUpdates(seq), where, [](uint64_t) { return false; });
-  const std::string points_bytes = store_.readPoints(seq);
-  const FramePoints points = history::decodePoints(points_bytes, where);
-  FrameMeta meta = store_.meta(seq);
-  PointBatch batch;
-  batch.t_s = meta.t_s;
-  batch.origin = T_world_cam * meta.origin_cam;
-  batch.points.resize(points.quantised.size());
-  for (size_t k = 0; k < points.quantised.size(); ++k) {
-    batch.points[k] = toWorld(T_world_cam, points.quantised[k], config.history_quantum_m);
+RayBatch& MapHistory::scratch(int slot) {
+  if (slot == 0) return rays_;
+  if (extra_rays_.size() < static_cast<size_t>(slot)) extra_rays_.resize(slot);
+  return extra_rays_[slot - 1];
+}
+
+int MapHistory::numThreads() const {
+  const int n = map_.config().num_threads;
+  return std::max(1, n > 0 ? n : omp_get_max_threads());
+}
+
+size_t MapHistory::movesAtOnce() const { return static_cast<size_t>(numThreads()); }
+
+void MapHistory::moveFrame(CorrectionPlan& plan, size_t i) { moveFrames(plan, i, i + 1); }
+
+void MapHistory::moveFrames(CorrectionPlan& plan, size_t begin, size_t end) {
+  end = std::min(end, plan.moved.size());
+  if (begin >= end) return;
+  const int threads = numThreads();
+  const int n = static_cast<int>(end - begin);
+  // A ray march is independent of the map, and its result of the thread count: frames are marched
+  // side by side, each on its share of the threads (which spends less time in a frame's serial
+  // parts than all threads on one frame after the other).
+  const int side_by_side = std::min(n, threads);
+  const int each = std::max(1, threads / side_by_side);
+  for (int slot = 0; slot < side_by_side; ++slot) scratch(slot);
+  std::vector<MarchedFrame> marched(n);
+#pragma omp parallel for num_threads(side_by_side) schedule(dynamic, 1)
+  for (int k = 0; k < n; ++k) {
+    const auto& [seq, T_world_cam] = plan.moved[begin + k];
+    marchMoved(store_, map_, seq, T_world_cam, scratch(omp_get_thread_num()), each, marched[k]);
   }
-  batch.colors = points.colors;
-  map_.checkBatch(batch);
-  rays_.build(batch, config.voxel_size_m, config.max_range_m, config.num_threads, config.ray_stop_run);
-  const FrameUpdates new_updates = FrameUpdates::of(rays_.updates());
-  meta.T_world_cam = T_world_cam;
-  store_.put(seq, meta, points_bytes, history::encodeUpdates(new_updates, kDeflateLevel));
-  unindex(seq, old_updates.others);
-  index(seq, new_updates.keys);
-  plan.affected.insert(old_updates.others.begin(), old_updates.others.end());
-  plan.affected.insert(new_updates.keys.begin(), new_updates.keys.end());
+  // In plan order, as moveFrame one after the other would.
+  for (int k = 0; k < n; ++k) {
+    MarchedFrame& m = marched[k];
+    if (m.error) std::rethrow_exception(m.error);
+    if (!m.in_store) continue;  // its blocks are sealed
+    const uint32_t seq = plan.moved[begin + k].first;
+    store_.put(seq, m.meta, m.points_bytes, m.updates_bytes);
+    unindex(seq, m.old_keys);
+    index(seq, m.new_keys);
+    plan.affected.insert(m.old_keys.begin(), m.old_keys.end());
+    plan.affected.insert(m.new_keys.begin(), m.new_keys.end());
+  }
 }
 
 CorrectionSummary MapHistory::correct(std::span<const CorrectedPose> poses) {
   CorrectionPlan plan = planCorrection(poses);
-  for (size_t i = 0; i < plan.moved.size(); ++i) moveFrame(plan, i);
+  for (size_t i = 0; i < plan.moved.size(); i += movesAtOnce()) moveFrames(plan, i, i + movesAtOnce());
   return finishCorrection(plan);
 }
 
@@ -252,9 +310,6 @@ CorrectionSummary MapHistory::finishCorrection(CorrectionPlan& plan) {
     }
   }
   std::sort(keys.begin(), keys.end());
-  std::unordered_map<uint64_t, uint32_t> slot_of;
-  slot_of.reserve(keys.size());
-  for (uint32_t i = 0; i < keys.size(); ++i) slot_of.emplace(keys[i], i);
   std::vector<uint32_t> frames;
   for (uint64_t key : keys) {
     const auto it = frames_of_block_.find(key);
@@ -264,47 +319,9 @@ CorrectionSummary MapHistory::finishCorrection(CorrectionPlan& plan) {
   frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
   summary.frames_replayed = frames.size();
 
-  std::vector<RebuiltBlock> rebuilt(keys.size());
-  const LogOddsModel& model = map_.model();
-  for (uint32_t seq : frames) {
-    const FrameUpdates updates = history::decodeUpdates(store_.readUpdates(seq), "frame " + std::to_string(seq),
-                                                        [&](uint64_t key) { return slot_of.count(key) != 0; });
-    for (size_t b = 0; b < updates.keys.size(); ++b) {
-      const auto it = slot_of.find(updates.keys[b]);
-      BlockView& view = rebuilt[it->second].view;
-      const BlockMasks& masks = updates.masks[b];
-      for (int w = 0; w < 8; ++w) {
-        const uint64_t update = masks.free[w] | masks.hit[w];
-        if (update == 0) continue;
-        // The rule OccupancyMap::publish applies, word by word (publish_word.h).
-        view.known[w] |= detail::publishWord(view.log_odds.data() + w * 64, view.known[w], update, masks.hit[w], model);
-      }
-    }
-    for (const EndpointColor& c : updates.colors) {
-      const auto it = slot_of.find(detail::packIndex(blockOf(c.ijk)));
-      if (it == slot_of.end()) continue;
-      auto [entry, inserted] = rebuilt[it->second].colors.try_emplace(offsetInBlock(c.ijk), c.rgb, 1);
-      if (inserted) continue;
-      // OccupancyMap::publish's running mean, saturating at 127 batches.
-      auto& [mean, count] = entry->second;
-      for (int k = 0; k < 3; ++k)
-        mean[k] = static_cast<uint8_t>((mean[k] * count + c.rgb[k] + (count + 1) / 2) / (count + 1));
-      count = std::min(count + 1, 127);
-    }
-  }
-
   // 4. Swap them in.
-  std::vector<BlockState> states(keys.size());
-  for (size_t i = 0; i < keys.size(); ++i) {
-    states[i].block = detail::unpackIndex(keys[i]);
-    states[i].view = rebuilt[i].view;
-    for (const auto& [offset, mean_count] : rebuilt[i].colors) {
-      states[i].colors.push_back(
-          VoxelColor{static_cast<uint16_t>(offset), mean_count.first, static_cast<uint8_t>(mean_count.second)});
-    }
-    std::sort(states[i].colors.begin(), states[i].colors.end(),
-              [](const VoxelColor& a, const VoxelColor& b) { return a.offset < b.offset; });
-  }
+  const std::vector<BlockState> states = history::replayBlocks(store_, frames, keys, map_.model(),
+                                                               map_.config().num_threads);
   summary.blocks_rebuilt = states.size();
   summary.delta = map_.replaceBlocks(states);
   return summary;

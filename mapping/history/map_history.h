@@ -6,7 +6,7 @@
 //     its new pose (its new updates replace its old ones in the store);
 //  2. every block the moved frames touched, at the old pose or the new, is rebuilt from unknown by
 //     replaying the stored updates of every frame that touches it, in the original order,
-//     restricted to those blocks (no ray is marched for a frame that did not move);
+//     restricted to those blocks (no ray is marched for a frame that did not move; block_replay.h);
 //  3. the rebuilt blocks are swapped in (OccupancyMap::replaceBlocks: a reader sees each block old
 //     or new, never a mix).
 // Why this design: log-odds are clamped, so a frame's contribution cannot be subtracted; replaying
@@ -95,9 +95,15 @@ class MapHistory {
   // replay and swap. Frames integrated between the steps are replayed too where they touch the
   // affected blocks, so the result is the same as correct() after them. Steps of one plan run in
   // order on the writer, and no other correction starts before its finishCorrection().
+  // moveFrames marches the moved frames [begin, end) side by side (up to map.num_threads at once,
+  // each on its share of the threads; the same result as moveFrame of each in order); MapHost
+  // takes movesAtOnce() of them per step. @throws IoError from the store, the frames before the
+  // failing one moved.
   CorrectionPlan planCorrection(std::span<const CorrectedPose> poses);
   void moveFrame(CorrectionPlan& plan, size_t i);
+  void moveFrames(CorrectionPlan& plan, size_t begin, size_t end);
   CorrectionSummary finishCorrection(CorrectionPlan& plan);
+  size_t movesAtOnce() const;
 
   // Forgets every stored frame (after OccupancyMap::reset()).
   void clear();
@@ -114,13 +120,17 @@ class MapHistory {
 
  private:
   MapDelta integrateStored(const PointBatch& batch, const history::FrameMeta& meta);
+  // The ray-marching scratch of the slot-th frame marched side by side (0: the one of integrate()).
+  RayBatch& scratch(int slot);
   void index(uint32_t seq, const std::vector<uint64_t>& keys);
   void unindex(uint32_t seq, const std::vector<uint64_t>& keys);
   void enforceBudget();
+  int numThreads() const;
 
   OccupancyMap& map_;
   history::FrameStore store_;
   RayBatch rays_;
+  std::vector<RayBatch> extra_rays_;  // moveFrames' scratch beyond the first frame
   uint32_t next_seq_ = 0;
   std::unordered_map<uint64_t, std::vector<uint32_t>> frames_of_block_;  // ascending seqs
   std::unordered_set<uint64_t> sealed_;                                  // blocks a dropped frame touched

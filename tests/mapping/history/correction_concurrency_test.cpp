@@ -6,29 +6,17 @@
 
 #include <atomic>
 #include <filesystem>
-#include <map>
 #include <thread>
 
 #include "mapping/history/map_history.h"
+#include "tests/mapping/support/block_snapshot.h"
 #include "tests/mapping/support/drifted_frames.h"
 
 namespace cenote::mapping {
 namespace {
 
-bool sameBlock(const BlockView& a, const BlockView& b) {
-  if (a.known != b.known) return false;
-  for (int i = 0; i < kBlockVoxels; ++i) {
-    if (((a.known[i >> 6] >> (i & 63)) & 1) && a.log_odds[i] != b.log_odds[i]) return false;
-  }
-  return true;
-}
-
-std::map<std::array<int, 3>, BlockView> blocksOf(const OccupancyMap& map) {
-  std::map<std::array<int, 3>, BlockView> out;
-  auto acc = map.constAccessor();
-  for (const BlockIndex& b : acc.knownBlocks()) acc.readBlock(b, out[{b.x(), b.y(), b.z()}]);
-  return out;
-}
+using test::blockIn;
+using test::sameBlock;
 
 TEST(CorrectionConcurrency, ReadersSeeEachBlockOldOrNewNeverAMix) {
   MapConfig config;
@@ -51,19 +39,13 @@ TEST(CorrectionConcurrency, ReadersSeeEachBlockOldOrNewNeverAMix) {
     truth_history.integrate(f.batchAt(f.T_true), f.T_true);
     poses.push_back({f.t_s, f.T_true});
   }
-  const auto before = blocksOf(map);
-  const auto after = blocksOf(truth);
+  const auto before = test::snapshotBlocks(map);
+  const auto after = test::snapshotBlocks(truth);
   std::vector<BlockIndex> blocks;
   for (const auto& [b, view] : before) blocks.emplace_back(b[0], b[1], b[2]);
   for (const auto& [b, view] : after) {
     if (before.count(b) == 0) blocks.emplace_back(b[0], b[1], b[2]);
   }
-  const BlockView unknown{};
-  auto stateOf = [&](const std::map<std::array<int, 3>, BlockView>& m, const BlockIndex& b) -> const BlockView& {
-    const auto it = m.find({b.x(), b.y(), b.z()});
-    return it == m.end() ? unknown : it->second;
-  };
-
   std::atomic<bool> done{false};
   std::atomic<size_t> reads{0}, mixed{0}, saw_old{0}, saw_new{0};
   std::vector<std::thread> readers;
@@ -76,8 +58,8 @@ TEST(CorrectionConcurrency, ReadersSeeEachBlockOldOrNewNeverAMix) {
             auto acc = map.constAccessor();
             acc.readBlock(blocks[i], view);
           }
-          const bool is_old = sameBlock(view, stateOf(before, blocks[i]));
-          const bool is_new = sameBlock(view, stateOf(after, blocks[i]));
+          const bool is_old = sameBlock(view, blockIn(before, blocks[i]));
+          const bool is_new = sameBlock(view, blockIn(after, blocks[i]));
           mixed += !is_old && !is_new;
           saw_old += is_old && !is_new;
           saw_new += is_new && !is_old;
@@ -96,9 +78,9 @@ TEST(CorrectionConcurrency, ReadersSeeEachBlockOldOrNewNeverAMix) {
   EXPECT_EQ(mixed.load(), 0u) << "of " << reads.load() << " block reads";
   EXPECT_GT(saw_old.load(), 0u);
   EXPECT_GT(saw_new.load(), 0u);
-  const auto final_blocks = blocksOf(map);
+  const auto final_blocks = test::snapshotBlocks(map);
   for (const BlockIndex& b : blocks) {
-    EXPECT_TRUE(sameBlock(stateOf(final_blocks, b), stateOf(after, b))) << "block " << b.transpose();
+    EXPECT_TRUE(sameBlock(blockIn(final_blocks, b), blockIn(after, b))) << "block " << b.transpose();
   }
 }
 

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 
@@ -96,30 +97,43 @@ TEST(FrameCodec, PointsAndUpdatesDecodeToWhatWasEncoded) {
   EXPECT_EQ(back.quantised, points.quantised);
   EXPECT_EQ(back.colors, points.colors);
 
+  // Three blocks, each hit voxel's colour in one of them (as a ray march makes them).
+  const VoxelIndex coloured(-3, 4, 5), other(100, -4, 5);
+  const uint64_t its_block = detail::packIndex(blockOf(coloured)), other_block = detail::packIndex(blockOf(other));
   history::FrameUpdates updates;
-  updates.keys = {5, 6, 1ull << 60};
+  updates.keys = {5, its_block, other_block};
+  ASSERT_LT(its_block, other_block);
   updates.masks.resize(3);
   updates.masks[0].free[3] = 0xdeadbeefull;
-  updates.masks[2].hit[7] = ~0ull;
-  updates.colors = {{VoxelIndex(-3, 4, 5), {10, 20, 30}}, {VoxelIndex(100, -4, 5), {1, 2, 3}}};
+  updates.masks[1].hit[7] = ~0ull;
+  updates.masks[2].free[1] = 7;
+  updates.colors = {{coloured, {10, 20, 30}}, {other, {1, 2, 3}}};
   const history::FrameUpdates u = history::decodeUpdates(history::encodeUpdates(updates, 1), "test");
   EXPECT_EQ(u.keys, updates.keys);
   ASSERT_EQ(u.masks.size(), 3u);
   EXPECT_EQ(u.masks[0].free, updates.masks[0].free);
-  EXPECT_EQ(u.masks[2].hit, updates.masks[2].hit);
+  EXPECT_EQ(u.masks[1].hit, updates.masks[1].hit);
+  EXPECT_EQ(u.masks[2].free, updates.masks[2].free);
   ASSERT_EQ(u.colors.size(), 2u);
-  EXPECT_EQ(u.colors[1].ijk, VoxelIndex(100, -4, 5));
+  EXPECT_EQ(u.colors[1].ijk, other);
   EXPECT_EQ(u.colors[1].rgb, (std::array<uint8_t, 3>{1, 2, 3}));
 
-  // Only the blocks asked for keep their masks and colours; the others' keys are listed.
-  const VoxelIndex coloured(-3, 4, 5);
-  const uint64_t its_block = detail::packIndex(blockOf(coloured));
-  const history::FrameUpdates some = history::decodeUpdates(history::encodeUpdates(updates, 1), "test",
-                                                            [&](uint64_t key) { return key == 6 || key == its_block; });
-  EXPECT_EQ(some.keys, (std::vector<uint64_t>{6}));
-  EXPECT_EQ(some.others, (std::vector<uint64_t>{5, 1ull << 60}));
+  // Only the blocks asked for keep their masks and colours, each with its index in `keep`; the
+  // others' keys are listed. A key asked for that the frame never touched is no error.
+  const std::vector<uint64_t> keep = {4, 5, its_block};
+  const history::FrameUpdates some = history::decodeUpdates(history::encodeUpdates(updates, 1), "test", keep);
+  EXPECT_EQ(some.keys, (std::vector<uint64_t>{5, its_block}));
+  EXPECT_EQ(some.kept_at, (std::vector<uint32_t>{1, 2}));
+  EXPECT_EQ(some.others, (std::vector<uint64_t>{other_block}));
+  ASSERT_EQ(some.masks.size(), 2u);
+  EXPECT_EQ(some.masks[0].free, updates.masks[0].free);
+  EXPECT_EQ(some.masks[1].hit, updates.masks[1].hit);
   ASSERT_EQ(some.colors.size(), 1u);
   EXPECT_EQ(some.colors[0].ijk, coloured);
+  // An empty `keep`: the keys alone.
+  const history::FrameUpdates keys = history::decodeUpdates(history::encodeUpdates(updates, 1), "test", {});
+  EXPECT_TRUE(keys.keys.empty() && keys.masks.empty() && keys.colors.empty());
+  EXPECT_EQ(keys.others, updates.keys);
 }
 
 TEST(FrameCodec, DamagedBytesAreAnIoErrorNamingTheFrame) {
@@ -161,6 +175,34 @@ TEST(MapHistory, CorrectedMapEqualsTheMapBuiltFromScratchWithTheCorrectedPoses) 
   const CorrectionSummary again = m.history.correct(poses);
   EXPECT_EQ(again.frames_moved, 0u);
   EXPECT_TRUE(again.delta.isEmpty());
+}
+
+// Frames marched side by side (moveFrames) and the replay's parallel rounds give the same bits for
+// any thread count: one thread against three (odd: uneven block ranges and a short last group).
+TEST(MapHistory, CorrectedMapIsTheSameForAnyThreadCount) {
+  MapConfig one = historyConfig();
+  one.num_threads = 1;
+  MapConfig three = one;
+  three.num_threads = 3;
+  three.history_dir += "-three";
+  const auto frames = test::driftedRoomSweep(20, smallCamera(), 0.25, 3.0, one.history_quantum_m);
+  OccupancyMap map_one(one), map_three(three);
+  MapHistory history_one(map_one), history_three(map_three);
+  for (const auto& f : frames) {
+    history_one.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+    history_three.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+  }
+  const auto poses = truePoses(frames);
+  EXPECT_EQ(history_three.movesAtOnce(), 3u);
+  const CorrectionSummary summary_one = history_one.correct(poses);
+  const CorrectionSummary summary_three = history_three.correct(poses);
+  EXPECT_EQ(summary_one.frames_moved, 19u);
+  EXPECT_EQ(summary_three.frames_moved, 19u);
+  EXPECT_EQ(summary_one.blocks_rebuilt, summary_three.blocks_rebuilt);
+  EXPECT_EQ(summary_one.delta.changed_blocks, summary_three.delta.changed_blocks);
+  const MapDifference d = compare(map_one, map_three);
+  EXPECT_EQ(d.blocks, 0u);
+  EXPECT_GT(d.voxels_known, 10000u);
 }
 
 TEST(MapHistory, FramesIntegratedBetweenTheStepsOfACorrectionAreReplayedToo) {
