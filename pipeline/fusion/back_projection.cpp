@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "common/error.h"
-#include "pipeline/fusion/back_projection_kernels.h"
+#include "pipeline/fusion/fusion_kernels.h"
 
 namespace cenote::pipeline {
 namespace {

@@ -2,6 +2,8 @@
 // Every lane is one pixel and sees the same operations whatever the lane count of neighbours, so a
 // pixel's result does not depend on how rows are shared between threads. The last vector of a row
 // is shifted back to end at the last pixel (overlapping the previous one) instead of a scalar tail.
+// Compiled with -ffp-contract=off (pipeline/CMakeLists.txt): a product and a sum are fused only
+// where the code says MulAdd or NegMulAdd, so the bits do not depend on the compiler's choices.
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "pipeline/fusion/fusion_kernels.cpp"
@@ -32,6 +34,18 @@ HWY_INLINE MF validPixels(DF df, VF z, VF c, const FusionLimits& l) {
 
 HWY_INLINE VF epsAt(DF df, VF z, const FusionLimits& l) {
   return l.relative_eps ? hn::Mul(z, hn::Set(df, l.eps)) : hn::Set(df, l.eps);
+}
+
+// a[i] y + a[i + 1], the row's part of a ray: one rounding where the target has fused
+// multiply-add, two elsewhere, as every MulAdd here (the file is compiled with -ffp-contract=off,
+// so no other product and sum are fused behind the code's back).
+HWY_INLINE VF rowTerm(DF df, const float* a, int i, float y) {
+  return hn::MulAdd(hn::Set(df, a[i]), hn::Set(df, y), hn::Set(df, a[i + 1]));
+}
+
+// z - eps(depth): with a relative eps, one multiply-add.
+HWY_INLINE VF belowByEps(DF df, VF z, VF depth, const FusionLimits& l) {
+  return l.relative_eps ? hn::NegMulAdd(depth, hn::Set(df, l.eps), z) : hn::Sub(z, hn::Set(df, l.eps));
 }
 
 // Projection of depth z along ray r = A [x y 1]^T: nearest pixel index (0 where dropped), depth h2,
@@ -68,8 +82,7 @@ void ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float*
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(df));
   const float yf = static_cast<float>(y);
-  const VF b0 = hn::Set(df, P.a[1] * yf + P.a[2]), b1 = hn::Set(df, P.a[4] * yf + P.a[5]);
-  const VF b2 = hn::Set(df, P.a[7] * yf + P.a[8]);
+  const VF b0 = rowTerm(df, P.a, 1, yf), b1 = rowTerm(df, P.a, 4, yf), b2 = rowTerm(df, P.a, 7, yf);
   const VF a0 = hn::Set(df, P.a[0]), a3 = hn::Set(df, P.a[3]), a6 = hn::Set(df, P.a[6]);
   for (int start = 0; start < width; start += lanes) {
     const int x = std::min(start, width - lanes);
@@ -138,9 +151,9 @@ HWY_INLINE void fuseRowOf(const FusionRowInput& in, int y, float* out_depth, flo
     for (int l = 0; l < n; ++l) {
       if (l == r) continue;
       const float* a = in.to_view[l].a;
-      ray[l][0] = hn::MulAdd(xs, hn::Set(df, a[0]), hn::Set(df, a[1] * yf + a[2]));
-      ray[l][1] = hn::MulAdd(xs, hn::Set(df, a[3]), hn::Set(df, a[4] * yf + a[5]));
-      ray[l][2] = hn::MulAdd(xs, hn::Set(df, a[6]), hn::Set(df, a[7] * yf + a[8]));
+      ray[l][0] = hn::MulAdd(xs, hn::Set(df, a[0]), rowTerm(df, a, 1, yf));
+      ray[l][1] = hn::MulAdd(xs, hn::Set(df, a[3]), rowTerm(df, a, 4, yf));
+      ray[l][2] = hn::MulAdd(xs, hn::Set(df, a[6]), rowTerm(df, a, 7, yf));
     }
 
     // Steps 3 and 4: every candidate in full; the first strictly better one wins.
@@ -172,7 +185,7 @@ HWY_INLINE void fuseRowOf(const FusionRowInput& in, int y, float* out_depth, flo
         const VF zl = hn::GatherIndex(df, in.depth[l], p.index);
         const VF cl = hn::GatherIndex(df, in.conf[l], p.index);
         const MF violates = hn::And(hn::And(p.inside, validPixels(df, zl, cl, lim)),
-                                    hn::Lt(p.depth, hn::Sub(zl, epsAt(df, p.depth, lim))));
+                                    hn::Lt(p.depth, belowByEps(df, zl, p.depth, lim)));
         conflict = hn::Add(conflict, hn::IfThenElseZero(violates, cl));
       }
       const VF fused = hn::Sub(support, conflict);
@@ -195,6 +208,51 @@ void FuseRowImpl(const FusionRowInput& in, int y, float* out_depth, float* out_c
   }
 }
 
+// Back-projection of one row (back_projection.cpp): separate multiplies and adds, the plain
+// float expression's bits on every instruction set.
+bool hasPoint(float depth_m) { return depth_m > 0.0f && depth_m < std::numeric_limits<float>::infinity(); }
+
+void writeColour(const uint8_t* bgr, int x, uint8_t* rgb) {
+  rgb[0] = bgr[3 * x + 2];
+  rgb[1] = bgr[3 * x + 1];
+  rgb[2] = bgr[3 * x];
+}
+
+size_t BackProjectRowImpl(const RowRays& r, const float* depth, const uint8_t* bgr, int width, float* xyz, uint8_t* rgb) {
+  const DF df;
+  const int lanes = static_cast<int>(hn::Lanes(df));
+  const hn::Vec<DF> zero = hn::Zero(df), inf = hn::Set(df, std::numeric_limits<float>::infinity());
+  HWY_ALIGN float world[3][hn::MaxLanes(df)];
+  size_t count = 0;
+  int x = 0;
+  for (; x + lanes <= width; x += lanes) {
+    const hn::Vec<DF> z = hn::LoadU(df, depth + x);
+    if (hn::AllFalse(df, hn::And(hn::Gt(z, zero), hn::Lt(z, inf)))) continue;  // a hole, or rejected pixels
+    const hn::Vec<DF> xf = hn::Iota(df, static_cast<float>(x));
+    for (int c = 0; c < 3; ++c) {
+      const hn::Vec<DF> ray = hn::Add(hn::Set(df, r.row_ray[c]), hn::Mul(xf, hn::Set(df, r.step[c])));
+      hn::Store(hn::Add(hn::Mul(z, ray), hn::Set(df, r.t[c])), df, world[c]);
+    }
+    for (int k = 0; k < lanes; ++k) {
+      if (!hasPoint(depth[x + k])) continue;
+      float* p = xyz + 3 * count;
+      p[0] = world[0][k];
+      p[1] = world[1][k];
+      p[2] = world[2][k];
+      if (bgr) writeColour(bgr, x + k, rgb + 3 * count);
+      ++count;
+    }
+  }
+  for (; x < width; ++x) {  // the last pixels, fewer than a vector: the lanes' arithmetic in scalar
+    if (!hasPoint(depth[x])) continue;
+    const float xf = static_cast<float>(x);
+    for (int c = 0; c < 3; ++c) xyz[3 * count + c] = depth[x] * (r.row_ray[c] + xf * r.step[c]) + r.t[c];
+    if (bgr) writeColour(bgr, x, rgb + 3 * count);
+    ++count;
+  }
+  return count;
+}
+
 int FusionLanesImpl() { return static_cast<int>(hn::Lanes(DF())); }
 
 }  // namespace HWY_NAMESPACE
@@ -207,6 +265,7 @@ namespace cenote::pipeline::detail {
 HWY_EXPORT(ProjectRowImpl);
 HWY_EXPORT(FuseRowImpl);
 HWY_EXPORT(FusionLanesImpl);
+HWY_EXPORT(BackProjectRowImpl);
 
 void projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y, int width,
                 int target_width, int target_height, int32_t* out_index, float* out_depth) {
@@ -218,6 +277,10 @@ void fuseRow(const FusionRowInput& in, int y, float* out_depth, float* out_conf)
 }
 
 int fusionLanes() { return HWY_DYNAMIC_DISPATCH(FusionLanesImpl)(); }
+
+size_t backProjectRow(const RowRays& rays, const float* depth, const uint8_t* bgr, int width, float* xyz, uint8_t* rgb) {
+  return HWY_DYNAMIC_DISPATCH(BackProjectRowImpl)(rays, depth, bgr, width, xyz, rgb);
+}
 
 }  // namespace cenote::pipeline::detail
 #endif

@@ -1,5 +1,5 @@
-// fusion_kernels.h: the per-row SIMD kernels of depth_fusion.cpp (Highway, one build per
-// instruction set, chosen at run time). Internal to pipeline/fusion; the rules they implement are
+// fusion_kernels.h: the per-row SIMD kernels of depth_fusion.cpp and back_projection.cpp
+// (Highway, one build per instruction set, chosen at run time). Internal to pipeline/fusion; the rules they implement are
 // documented in depth_fusion.h, and the plain scalar form lives in depth_fusion.cpp (used for
 // images narrower than one vector) and in tests/support/fusion_reference.cpp.
 // Units: metres, pixels. Threads: pure functions of their arguments; each call writes only its
@@ -54,5 +54,21 @@ void fuseRow(const FusionRowInput& in, int y, float* out_depth, float* out_conf)
 
 // Vector width in floats of the instruction set chosen at run time.
 int fusionLanes();
+
+// The world ray of pixel (x, y) is row_ray + x * step (per component, in that order of float
+// operations), its point z * ray + t.
+struct RowRays {
+  float row_ray[3];
+  float step[3];
+  float t[3];
+};
+
+// Writes one point (x, y, z floats) per pixel of row `depth` with 0 < depth < inf, in column
+// order, to `xyz`, and its colour (R, G, B from the BGR row `bgr`) to `rgb` when bgr is not null.
+// Every lane computes z * (row_ray + x * step) + t with separate multiplies and adds (the kernels'
+// file is compiled without contraction into fused multiply-adds), so every instruction set, and
+// the scalar tail, give the bits of the plain float expression.
+// @return the number of points written.
+size_t backProjectRow(const RowRays& rays, const float* depth, const uint8_t* bgr, int width, float* xyz, uint8_t* rgb);
 
 }  // namespace cenote::pipeline::detail
