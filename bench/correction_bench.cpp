@@ -14,11 +14,11 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
-#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 
+#include "common/cpu_clock.h"
 #include "mapping/history/map_history.h"
 #include "mapping/occupancy_map.h"
 #include "tests/mapping/support/analytic_scene.h"
@@ -31,12 +31,6 @@ using namespace cenote::mapping;
 using Clock = std::chrono::steady_clock;
 
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-// CPU time of the whole process (all threads), ms: steadier than the wall clock on a loaded machine.
-double cpuMs() {
-  timespec t;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
 
 struct Dive {
   test::Scene scene;
@@ -135,21 +129,22 @@ int main(int argc, char** argv) {
     const PointBatch batch = frameAt(dive, i, dive.drifted[i]);
     points += batch.size();
     const auto t0 = Clock::now();
-    const double c0 = cpuMs();
+    const double c0 = processCpuMs();
     history.integrate(batch, dive.drifted[i]);
     with_store_ms += msSince(t0);
-    with_store_cpu += cpuMs() - c0;
+    with_store_cpu += processCpuMs() - c0;
   }
   std::vector<CorrectedPose> poses;
   for (int i = 0; i < frames; ++i) poses.push_back({i / 15.0, dive.truth[i]});
   // correct() in its steps, to time the moved frames' ray marches apart from the replay.
   const auto t0 = Clock::now();
-  const double c0 = cpuMs();
+  const double c0 = processCpuMs();
   CorrectionPlan plan = history.planCorrection(poses);
-  for (size_t i = 0; i < plan.moved.size(); ++i) history.moveFrame(plan, i);
-  const double march_ms = msSince(t0), march_cpu = cpuMs() - c0;
+  const size_t step = history.movesAtOnce();  // as correct() and the server step through them
+  for (size_t i = 0; i < plan.moved.size(); i += step) history.moveFrames(plan, i, i + step);
+  const double march_ms = msSince(t0), march_cpu = processCpuMs() - c0;
   const CorrectionSummary summary = history.finishCorrection(plan);
-  const double correction_ms = msSince(t0), correction_cpu = cpuMs() - c0;
+  const double correction_ms = msSince(t0), correction_cpu = processCpuMs() - c0;
 
   // The peer: the map rebuilt from scratch with the corrected poses (no store).
   OccupancyMap rebuilt(config);
@@ -157,11 +152,11 @@ int main(int argc, char** argv) {
   for (int i = 0; i < frames; ++i) {
     const PointBatch batch = frameAt(dive, i, dive.truth[i]);
     const auto t1 = Clock::now();
-    const double c1 = cpuMs();
+    const double c1 = processCpuMs();
     rebuilt.integrate(batch);
     rebuild_ms += msSince(t1);
-    rebuild_cpu += cpuMs() - c1;
-    if (i >= frames - moved) rebuild_moved_cpu += cpuMs() - c1;
+    rebuild_cpu += processCpuMs() - c1;
+    if (i >= frames - moved) rebuild_moved_cpu += processCpuMs() - c1;
   }
   const double agreement = stateAgreement(live, rebuilt);
 

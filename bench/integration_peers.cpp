@@ -2,29 +2,23 @@
 
 #include <chrono>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <string_view>
 
 #include "common/atomic_file.h"
+#include "common/cpu_clock.h"
 #include "tests/mapping/support/voxel_sets.h"
 
 namespace cenote::bench {
 namespace {
 
-double cpuMs(clockid_t clock) {
-  timespec t;
-  clock_gettime(clock, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
-}
-
-// Wall and `clock`'s CPU time of run(), per frame of `frames`.
+// Wall and CPU time of run() (cpuMs: processCpuMs or threadCpuMs), per frame of `frames`.
 template <typename Run>
-IntegrationTime timePerFrame(size_t frames, clockid_t clock, Run&& run) {
+IntegrationTime timePerFrame(size_t frames, double (*cpuMs)(), Run&& run) {
   const auto t0 = std::chrono::steady_clock::now();
-  const double c0 = cpuMs(clock);
+  const double c0 = cpuMs();
   run();
-  const double cpu = cpuMs(clock) - c0;
+  const double cpu = cpuMs() - c0;
   const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return {wall / frames, cpu / frames};
 }
@@ -36,7 +30,7 @@ IntegrationTime timeOurIntegration(const std::vector<PointBatch>& frames, const 
   map = std::make_unique<mapping::OccupancyMap>(config);
   map->integrate(frames[0]);  // warm-up: scratch allocation, then start again
   map->reset();
-  return timePerFrame(frames.size(), CLOCK_PROCESS_CPUTIME_ID, [&] {
+  return timePerFrame(frames.size(), processCpuMs, [&] {
     for (const auto& f : frames) map->integrate(f);
   });
 }
@@ -46,7 +40,7 @@ IntegrationTime timeProjectiveIntegration(const std::vector<mapping::DepthFrame>
   map = std::make_unique<mapping::OccupancyMap>(config);
   map->integrateDepth(frames[0]);  // warm-up, as above
   map->reset();
-  return timePerFrame(frames.size(), CLOCK_PROCESS_CPUTIME_ID, [&] {
+  return timePerFrame(frames.size(), processCpuMs, [&] {
     for (const auto& f : frames) map->integrateDepth(f);
   });
 }
@@ -58,7 +52,7 @@ IntegrationTime timeOctomapIntegration(const std::vector<PointBatch>& frames, do
   tree.setClampingThresMax(0.97);
   std::vector<octomap::Pointcloud> clouds;
   for (const auto& f : frames) clouds.push_back(mapping::test::toOctomap(f));
-  return timePerFrame(frames.size(), CLOCK_THREAD_CPUTIME_ID, [&] {
+  return timePerFrame(frames.size(), threadCpuMs, [&] {
     for (size_t i = 0; i < frames.size(); ++i) {
       const Eigen::Vector3d& o = frames[i].origin;
       tree.insertPointCloud(clouds[i], octomap::point3d(o.x(), o.y(), o.z()), max_range_m, false, true);

@@ -42,12 +42,12 @@
 #include <utility>
 #include <span>
 #include <string>
-#include <ctime>
 #include <vector>
 
 #include "bench/integration_peers.h"
 #include "bench/map_fingerprint.h"
 #include "bench/omp_wait_policy.h"
+#include "common/cpu_clock.h"
 #include "common/median.h"
 #include "common/size_format.h"
 #include "mapping/distance/distance_field.h"
@@ -115,14 +115,6 @@ std::vector<DepthFrame> makeDepthFrames(const BenchView& view) {
   }
   return frames;
 }
-
-// CPU time of `clock` (CLOCK_THREAD_CPUTIME_ID: this thread; CLOCK_PROCESS_CPUTIME_ID: all).
-double cpuMs(clockid_t clock) {
-  timespec t;
-  clock_gettime(clock, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
-}
-double threadCpuMs() { return cpuMs(CLOCK_THREAD_CPUTIME_ID); }
 
 // The first frame starts from an empty map: left out when there are others.
 double medianAfterFirst(std::vector<double> v) {
@@ -258,7 +250,6 @@ void reportLookups(const OccupancyMap& map) {
 
 // --clears-only: see the header comment.
 void reportClears(const std::vector<PointBatch>& frames, const MapConfig& config) {
-  auto processCpuMs = [] { return cpuMs(CLOCK_PROCESS_CPUTIME_ID); };  // any helper thread counted too
   std::vector<double> known_ms, box_ms, sphere_ms;
   uint64_t fingerprint = kFnvOffset;
   for (int round = 0; round < 5; ++round) {

@@ -1,4 +1,4 @@
-#!/usr/bin/python3
+#!/ usr / bin / python3
 """open3d_bench.py: map integration of the same frames by cenote, OctoMap and Open3D, in one run.
 
   /usr/bin/python3 bench/open3d_bench.py build/bench/map_bench [--frames 10] [--threads 2]
@@ -94,6 +94,7 @@ def main():
     parser.add_argument("--threads", type=int, default=2)
     args = parser.parse_args()
     os.environ.setdefault("OMP_WAIT_POLICY", "passive")  # before Open3D's libgomp is loaded
+    os.environ.setdefault("OMP_NUM_THREADS", str(args.threads))  # Open3D on the same threads as ours
     with tempfile.TemporaryDirectory() as folder:
         out = subprocess.run([args.map_bench, "--peers-only", "1", "--frames", str(args.frames), "--threads",
                               str(args.threads), "--write-frames", folder], check=True, capture_output=True,

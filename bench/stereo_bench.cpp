@@ -14,7 +14,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -25,6 +24,7 @@
 #include <vector>
 
 #include "bench/omp_wait_policy.h"
+#include "common/cpu_clock.h"
 #include "common/median.h"
 #include "pipeline/stereo/stereo_matcher.h"
 #include "tests/support/test_data.h"
@@ -44,12 +44,6 @@ struct Timing {
   double cpu_ms = 0.0;        // median CPU time of the process (every thread)
   double best_wall_ms = 0.0;  // fastest run: the least disturbed by other work on the machine
 };
-
-double processCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
 
 Timing medianMs(const std::function<void()>& run, int repeat) {
   run();  // warm-up: allocations, page faults

@@ -78,12 +78,16 @@ OccupancyConfusion compareMaps(const mapping::OccupancyMap& estimate, const mapp
     }
     readRegion(est, ijk, e);
     readRegion(ref, ijk, r);
-    for (int offset = 0; offset < mapping::kBlockVoxels; ++offset) {
-      const int i = at(1 + (offset >> 6), 1 + ((offset >> 3) & 7), 1 + (offset & 7));
-      const int se = static_cast<int>(e.state[i]), sr = static_cast<int>(r.state[i]);
-      if (se == 0 && sr == 0) continue;
-      confusion.add(static_cast<Occupancy>(se), static_cast<Occupancy>(sr));
-      if ((r.near[i] >> se & 1) && (e.near[i] >> sr & 1)) ++confusion.within_voxel;
+    for (int x = 1; x <= mapping::kBlockSide; ++x) {  // the block's own voxels, inside the apron
+      for (int y = 1; y <= mapping::kBlockSide; ++y) {
+        for (int z = 1; z <= mapping::kBlockSide; ++z) {
+          const int i = at(x, y, z);
+          if (e.state[i] == mapping::VoxelState::kUnknown && r.state[i] == mapping::VoxelState::kUnknown) continue;
+          const int se = static_cast<int>(e.state[i]), sr = static_cast<int>(r.state[i]);
+          confusion.add(static_cast<Occupancy>(se), static_cast<Occupancy>(sr));
+          if ((r.near[i] >> se & 1) && (e.near[i] >> sr & 1)) ++confusion.within_voxel;
+        }
+      }
     }
   }
   return confusion;

@@ -17,14 +17,14 @@ using cenote::io::detail::PcdCloud;
 static_assert(pcl::PCLPointField::INT8 == cenote::io::detail::pcd_type::kInt8 &&
               pcl::PCLPointField::FLOAT64 == cenote::io::detail::pcd_type::kFloat64);
 
-void copyCloud(const pcl::PCLPointCloud2& in, PcdCloud& out) {
+void moveCloud(pcl::PCLPointCloud2&& in, PcdCloud& out) {
   out.fields.clear();
   for (const pcl::PCLPointField& f : in.fields) out.fields.push_back({f.name, f.offset, f.count, f.datatype});
   out.width = in.width;
   out.height = in.height;
   out.point_step = in.point_step;
   out.row_step = in.row_step;
-  out.data = in.data;
+  out.data = std::move(in.data);
 }
 
 template <typename Cloud>
@@ -65,7 +65,7 @@ __attribute__((visibility("default"))) int cenote_pcd_read(const char* path, boo
     } else {
       status = reader.read(path, read);
     }
-    copyCloud(read, *cloud);
+    moveCloud(std::move(read), *cloud);
     return status;
   } catch (const std::exception& e) {
     *error = e.what();

@@ -73,10 +73,6 @@ class Reader {
     if (pos_ >= bytes_.size()) fail("it ends early");
     return static_cast<uint8_t>(bytes_[pos_++]);
   }
-  void skip(size_t n) {
-    if (bytes_.size() - pos_ < n) fail("it ends early");
-    pos_ += n;
-  }
   uint64_t word() {
     if (bytes_.size() - pos_ < 8) fail("it ends early");
     uint64_t w;

@@ -2,7 +2,9 @@
 // frame in a folder, holding its two encoded sections (frame_codec.h); in memory only each frame's
 // time, poses and section sizes. Bounded: overBudget() names the oldest frames to drop once the
 // files pass the budget (the caller, MapHistory, drops them with erase()).
-// Units: bytes, seconds, metres. Threads: one owner; not synchronised.
+// Units: bytes, seconds, metres. Threads: one owner writes; the const reads (contains, meta,
+// readPoints, readUpdates: each opens its file and preads) may run on several threads at once
+// while nothing writes.
 #pragma once
 
 #include <Eigen/Geometry>

@@ -261,10 +261,11 @@ void MapHistory::moveFrames(CorrectionPlan& plan, size_t begin, size_t end) {
   const int threads = numThreads();
   const int n = static_cast<int>(end - begin);
   // A ray march is independent of the map, and its result of the thread count: frames are marched
-  // side by side, each on its share of the threads (which spends less time in a frame's serial
-  // parts than all threads on one frame after the other).
+  // side by side, one thread each (which spends less time in a frame's serial parts than all
+  // threads on one frame after the other); a lone frame has all the threads. (Nested OpenMP is
+  // off, so a march inside the parallel loop would run on one thread whatever it was given.)
   const int side_by_side = std::min(n, threads);
-  const int each = std::max(1, threads / side_by_side);
+  const int each = side_by_side > 1 ? 1 : threads;
   for (int slot = 0; slot < side_by_side; ++slot) scratch(slot);
   std::vector<MarchedFrame> marched(n);
 #pragma omp parallel for num_threads(side_by_side) schedule(dynamic, 1)

@@ -13,7 +13,6 @@ namespace cenote::pipeline {
 namespace {
 
 // Both comparisons always evaluated (no short circuit), so the counting loop vectorises.
-bool hasPoint(float depth_m) { return (depth_m > 0.0f) & (depth_m < std::numeric_limits<float>::infinity()); }
 
 // Rows [begin, end) of block b out of `blocks` equal blocks.
 int blockStart(int rows, int blocks, int b) { return static_cast<int>(static_cast<long>(rows) * b / blocks); }
@@ -43,7 +42,7 @@ void backProject(const DepthFrame& frame, PointBatch& out) {
     size_t count = 0;
     for (int y = blockStart(rows, blocks, b); y < blockStart(rows, blocks, b + 1); ++y) {
       const float* depth = frame.depth.ptr<float>(y);
-      for (int x = 0; x < cols; ++x) count += hasPoint(depth[x]);
+      for (int x = 0; x < cols; ++x) count += detail::hasPoint(depth[x]);
     }
     offset[b + 1] = count;
   }

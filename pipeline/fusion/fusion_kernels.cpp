@@ -1,7 +1,9 @@
 // fusion_kernels.cpp: Highway implementation of fusion_kernels.h, compiled once per instruction set.
 // Every lane is one pixel and sees the same operations whatever the lane count of neighbours, so a
 // pixel's result does not depend on how rows are shared between threads. The last vector of a row
-// is shifted back to end at the last pixel (overlapping the previous one) instead of a scalar tail.
+// of the projection and fusion kernels is shifted back to end at the last pixel (overlapping the
+// previous one) instead of a scalar tail; the back-projection, which writes only some pixels, ends
+// with a scalar tail of the same arithmetic.
 // Compiled with -ffp-contract=off (pipeline/CMakeLists.txt): a product and a sum are fused only
 // where the code says MulAdd or NegMulAdd, so the bits do not depend on the compiler's choices.
 
@@ -210,7 +212,6 @@ void FuseRowImpl(const FusionRowInput& in, int y, float* out_depth, float* out_c
 
 // Back-projection of one row (back_projection.cpp): separate multiplies and adds, the plain
 // float expression's bits on every instruction set.
-bool hasPoint(float depth_m) { return depth_m > 0.0f && depth_m < std::numeric_limits<float>::infinity(); }
 
 void writeColour(const uint8_t* bgr, int x, uint8_t* rgb) {
   rgb[0] = bgr[3 * x + 2];

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 
 #include "pipeline/fusion/fusion_config.h"
 
@@ -54,6 +55,9 @@ void fuseRow(const FusionRowInput& in, int y, float* out_depth, float* out_conf)
 
 // Vector width in floats of the instruction set chosen at run time.
 int fusionLanes();
+
+// Whether a depth becomes a point: 0 < depth < inf (NaN does not).
+inline bool hasPoint(float depth_m) { return (depth_m > 0.0f) & (depth_m < std::numeric_limits<float>::infinity()); }
 
 // The world ray of pixel (x, y) is row_ray + x * step (per component, in that order of float
 // operations), its point z * ray + t.

@@ -98,7 +98,8 @@ TEST(MapHostCorrectionConcurrency, IngestAndReadersGoOnAndSeeEachBlockOldOrNew) 
       ++distance_queries;
     }
   });
-  while (reads.load() < room_blocks.size()) std::this_thread::yield();  // the reader is running
+  while (reads.load() < room_blocks.size()) std::this_thread::yield();  // the readers are running
+  while (distance_queries.load() == 0) std::this_thread::yield();
   std::thread ingest([&] {
     for (int i = 0; i < kFarFrames; ++i) {
       Eigen::Isometry3d T_world_cam;
