@@ -4,7 +4,7 @@
 
 #include "common/error.h"
 #include "common/yaml_section.h"
-#include "io/bag/db3_recording.h"
+#include "io/bag/recording.h"
 #include "pipeline/dataset/recording_dataset.h"
 
 namespace cenote::apps {
@@ -21,23 +21,11 @@ pipeline::RecordingConfig bagConfig(const std::string& config_path) {
   return config;
 }
 
-// A ROS 2 bag folder: metadata.yaml (with .db3 files, or .db3.zstd ones when compressed by file), or
-// .db3 / .db3.zstd files alone (a recorder that never finished); as io::openRecording tells them.
-bool isRos2BagFolder(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::is_directory(path, ec)) return false;
-  if (fs::exists(fs::path(path) / "metadata.yaml", ec)) return true;
-  for (const fs::directory_entry& e : fs::directory_iterator(path, ec))
-    if (io::isDb3FileName(e.path())) return true;
-  return false;
-}
-
 }  // namespace
 
 bool isRecording(const DatasetSource& source) {
   return source.format == "bag" ||
-         (source.format == "auto" && (std::filesystem::is_regular_file(source.path) || isRos2BagFolder(source.path)));
+         (source.format == "auto" && (std::filesystem::is_regular_file(source.path) || io::isRos2BagFolder(source.path)));
 }
 
 std::unique_ptr<pipeline::StereoDataset> openDatasetSource(const DatasetSource& source) {

@@ -38,13 +38,20 @@ std::vector<int> sortTopicsByName(std::vector<TopicInfo>& topics) {
   return rank;
 }
 
+bool isRos2BagFolder(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(path, ec)) return false;
+  if (std::filesystem::exists(path / "metadata.yaml", ec)) return true;
+  for (const auto& entry : std::filesystem::directory_iterator(path, ec))
+    if (isDb3FileName(entry.path())) return true;  // a recording never finished
+  return false;
+}
+
 std::unique_ptr<Recording> openRecording(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw NotFoundError("cannot read recording " + path.string() + ": no such file");
   if (std::filesystem::is_directory(path, ec)) {
-    if (std::filesystem::exists(path / "metadata.yaml", ec)) return openDb3Recording(path);
-    for (const auto& entry : std::filesystem::directory_iterator(path, ec))
-      if (isDb3FileName(entry.path())) return openDb3Recording(path);  // a recording never finished
+    if (isRos2BagFolder(path)) return openDb3Recording(path);
     throw Error("recording " + path.string() + ": a folder, but not a ROS 2 bag (no metadata.yaml, no .db3 file)");
   }
   char head[16] = {};

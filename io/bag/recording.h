@@ -69,6 +69,10 @@ std::string describeSkippedChunk(const std::string& damage, const std::vector<st
 /// of the topic that was at index i.
 std::vector<int> sortTopicsByName(std::vector<TopicInfo>& topics);
 
+/// Whether `path` is a ROS 2 bag folder: metadata.yaml (with .db3 files, or .db3.zstd ones when
+/// compressed by file), or .db3 / .db3.zstd files alone (a recorder that never finished).
+bool isRos2BagFolder(const std::filesystem::path& path);
+
 /// Opens a .bag (ROS 1, format 2.0), .mcap or a ROS 2 bag folder / .db3, told apart by their first bytes
 /// (a folder by its metadata.yaml). Throws NotFoundError or IoError with a message naming the path.
 std::unique_ptr<Recording> openRecording(const std::filesystem::path& path);

@@ -305,7 +305,12 @@ io::Trajectory readPoseTopic(const std::string& path, const std::string& topic, 
   }
   std::vector<io::StampedPose> poses;
   io::RecordedMessage m;
-  const bool with_images = image_times != nullptr && !image_topic.empty() && image_topic != topic;
+  // Poses at 3/4 or more of the left images are no keyframes (isKeyframeTrajectory's rule): then the
+  // images are not read for their stamps. TF republishes stamps, so its message count proves nothing.
+  const io::TopicInfo* images = image_topic.empty() ? nullptr : findTopic(*rec, image_topic);
+  const bool full_rate = t->type != "tf2_msgs/TFMessage" && images != nullptr && images->message_count > 0 &&
+                         4 * t->message_count >= 3 * images->message_count;
+  const bool with_images = image_times != nullptr && !image_topic.empty() && image_topic != topic && !full_rate;
   const std::vector<std::string> wanted = with_images ? std::vector<std::string>{topic, image_topic}
                                                       : std::vector<std::string>{topic};
   while (rec->next(wanted, m)) {
