@@ -60,7 +60,14 @@ void zstdDecompress(std::span<const std::uint8_t> in, std::vector<std::uint8_t>&
   out.clear();
   const unsigned long long declared = ZSTD_getFrameContentSize(in.data(), in.size());
   if (declared == ZSTD_CONTENTSIZE_ERROR) throw IoError("zstd: not a zstd frame");
-  if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared <= max_bytes) out.reserve(static_cast<std::size_t>(declared));
+  if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared <= max_bytes) {
+    // One call where the frame says its size (rosbag2's messages do): no stream, buffer or copies.
+    out.resize(static_cast<std::size_t>(declared));
+    const std::size_t n = ZSTD_decompress(out.data(), out.size(), in.data(), in.size());
+    if (!ZSTD_isError(n) && n == out.size()) return;
+    out.clear();  // damaged, cut, or more than one frame: the stream below says which
+    out.reserve(static_cast<std::size_t>(declared));
+  }
   const DStream stream = newStream();
   std::vector<std::uint8_t> buffer(ZSTD_DStreamOutSize());
   ZSTD_inBuffer src{in.data(), in.size(), 0};
