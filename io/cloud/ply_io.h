@@ -6,7 +6,8 @@
 // metres). Colours: RGB.
 // Writes go to a temporary file renamed into place at the end (common/atomic_file.h, durable: the
 // file and its directory are fsynced), so a crash never leaves half a file.
-// A PlyWriter streams: every ~8 MB written is handed to the disk and dropped from the page cache
+// A PlyWriter streams: a batch is packed and written 240 KiB at a time (still in cache when the
+// kernel copies it into the page cache), and every ~8 MB written is handed to the disk and dropped from the page cache
 // once on disk, so a long run neither fills the cache nor pays for ever new cache pages (on this
 // project's virtual machines, writing into fresh page cache cost ~4 ms of kernel time per MB,
 // rewriting recycled pages a tenth of that).
