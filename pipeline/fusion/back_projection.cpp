@@ -12,8 +12,6 @@
 namespace cenote::pipeline {
 namespace {
 
-// Both comparisons always evaluated (no short circuit), so the counting loop vectorises.
-
 // Rows [begin, end) of block b out of `blocks` equal blocks.
 int blockStart(int rows, int blocks, int b) { return static_cast<int>(static_cast<long>(rows) * b / blocks); }
 
@@ -41,14 +39,18 @@ void backProject(const DepthFrame& frame, PointBatch& out) {
   for (int b = 0; b < blocks; ++b) {
     size_t count = 0;
     for (int y = blockStart(rows, blocks, b); y < blockStart(rows, blocks, b + 1); ++y) {
-      const float* depth = frame.depth.ptr<float>(y);
-      for (int x = 0; x < cols; ++x) count += detail::hasPoint(depth[x]);
+      count += detail::countPoints(frame.depth.ptr<float>(y), cols);
     }
     offset[b + 1] = count;
   }
   for (int b = 0; b < blocks; ++b) offset[b + 1] += offset[b];
-  out.points.resize(offset[blocks]);
-  out.colors.resize(colored ? offset[blocks] : 0);
+  // Growing, a batch takes an eighth more than it needs: one reused frame after frame (the
+  // runner's, frame_pipeline.h) then stops reallocating as the number of points varies.
+  const size_t count = offset[blocks];
+  if (out.points.capacity() < count) out.points.reserve(count + count / 8);
+  if (colored && out.colors.capacity() < count) out.colors.reserve(count + count / 8);
+  out.points.resize(count);
+  out.colors.resize(colored ? count : 0);
   if (out.points.empty()) return;
 
   // Eigen::Vector3f is three contiguous floats, std::array<uint8_t, 3> three bytes.
@@ -63,7 +65,7 @@ void backProject(const DepthFrame& frame, PointBatch& out) {
       const detail::RowRays rays{
           {row_ray.x(), row_ray.y(), row_ray.z()}, {RK_inv(0, 0), RK_inv(1, 0), RK_inv(2, 0)}, {t.x(), t.y(), t.z()}};
       i += detail::backProjectRow(rays, frame.depth.ptr<float>(y), colored ? frame.color.ptr<uint8_t>(y) : nullptr, cols,
-                                  xyz + 3 * i, rgb ? rgb + 3 * i : nullptr);
+                                  xyz + 3 * i, rgb ? rgb + 3 * i : nullptr, offset[b + 1] - i);
     }
   }
 }

@@ -48,8 +48,9 @@ std::string describe(const DepthFrame& frame) {
 }
 
 // Scalar form of detail::projectRow(), for rows narrower than one vector.
-void projectRowScalar(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y,
-                      int width, int target_width, int target_height, int32_t* out_index, float* out_depth) {
+int32_t projectRowScalar(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y,
+                         int width, int target_width, int target_height, int32_t* out_index, float* out_depth) {
+  int32_t max_index = -1;
   const float yf = static_cast<float>(y);
   const float b0 = P.a[1] * yf + P.a[2], b1 = P.a[4] * yf + P.a[5], b2 = P.a[7] * yf + P.a[8];
   for (int x = 0; x < width; ++x) {
@@ -65,7 +66,9 @@ void projectRowScalar(const Projector& P, const FusionLimits& limits, const floa
     if (iu >= target_width || iv >= target_height) continue;
     out_index[x] = iv * target_width + iu;
     out_depth[x] = hz;
+    max_index = std::max(max_index, out_index[x]);
   }
+  return max_index;
 }
 
 // Step 1 for one view: z-buffer in the reference view. Rows are projected with SIMD into a row
@@ -75,16 +78,24 @@ void renderView(const DepthFrame& source, const Projector& P, const FusionLimits
   const int width = out.depth.cols, height = out.depth.rows;
   float* z_buffer = out.depth.ptr<float>(0);
   float* c_buffer = out.confidence.ptr<float>(0);
-  // Only depths are cleared: a confidence is read only where a depth was written.
-  std::fill(z_buffer, z_buffer + static_cast<size_t>(width) * height, kInf);
+  // Only depths are cleared (a confidence is read only where a depth was written), whole rows at
+  // a time just before the first point lands in them: a source row lands near its own row, so
+  // the cleared rows are still in cache when its points are written (a clear of the whole buffer
+  // first had left the cache by then).
+  const size_t pixels = static_cast<size_t>(width) * height;
+  size_t cleared = 0;
   int32_t* index = out.row_index.data();
   float* depth = out.row_depth.data();
   for (int y = 0; y < source.depth.rows; ++y) {
     const float* conf = source.confidence.ptr<float>(y);
-    if (simd) {
-      detail::projectRow(P, limits, source.depth.ptr<float>(y), conf, y, source.depth.cols, width, height, index, depth);
-    } else {
-      projectRowScalar(P, limits, source.depth.ptr<float>(y), conf, y, source.depth.cols, width, height, index, depth);
+    const int32_t max_index = simd ? detail::projectRow(P, limits, source.depth.ptr<float>(y), conf, y, source.depth.cols,
+                                                        width, height, index, depth)
+                                   : projectRowScalar(P, limits, source.depth.ptr<float>(y), conf, y, source.depth.cols,
+                                                      width, height, index, depth);
+    if (max_index >= 0 && static_cast<size_t>(max_index) >= cleared) {
+      const size_t end = (static_cast<size_t>(max_index) / width + 1) * width;
+      std::fill(z_buffer + cleared, z_buffer + end, kInf);
+      cleared = end;
     }
     // Dropped points (index -1) come in runs (holes, the far side of the image), so the branch
     // is mostly predicted; a point is written only when it is nearer (an equal depth keeps the first).
@@ -96,6 +107,7 @@ void renderView(const DepthFrame& source, const Projector& P, const FusionLimits
       }
     }
   }
+  std::fill(z_buffer + cleared, z_buffer + pixels, kInf);
 }
 
 // Scalar form of detail::fuseRow() (steps 2-4), for rows narrower than one vector.

@@ -78,14 +78,15 @@ HWY_INLINE Projected project(DF df, DI di, VF z, VF r0, VF r1, VF r2, const Proj
   return {index, hz, inside};
 }
 
-void ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y, int width,
-                    int target_width, int target_height, int32_t* out_index, float* out_depth) {
+int32_t ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y,
+                       int width, int target_width, int target_height, int32_t* out_index, float* out_depth) {
   const DF df;
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(df));
   const float yf = static_cast<float>(y);
   const VF b0 = rowTerm(df, P.a, 1, yf), b1 = rowTerm(df, P.a, 4, yf), b2 = rowTerm(df, P.a, 7, yf);
   const VF a0 = hn::Set(df, P.a[0]), a3 = hn::Set(df, P.a[3]), a6 = hn::Set(df, P.a[6]);
+  VI max_index = hn::Set(di, -1);
   for (int start = 0; start < width; start += lanes) {
     const int x = std::min(start, width - lanes);
     const VF xs = hn::Iota(df, static_cast<float>(x));
@@ -99,9 +100,12 @@ void ProjectRowImpl(const Projector& P, const FusionLimits& limits, const float*
     const Projected p = project(df, di, z_safe, hn::MulAdd(xs, a0, b0), hn::MulAdd(xs, a3, b1), hn::MulAdd(xs, a6, b2), P,
                                 target_width, target_height, static_cast<size_t>(target_width));
     const auto keep = hn::RebindMask(di, hn::And(valid, p.inside));
-    hn::StoreU(hn::IfThenElse(keep, p.index, hn::Set(di, -1)), di, out_index + x);
+    const VI index = hn::IfThenElse(keep, p.index, hn::Set(di, -1));
+    max_index = hn::Max(max_index, index);
+    hn::StoreU(index, di, out_index + x);
     hn::StoreU(p.depth, df, out_depth + x);
   }
+  return hn::GetLane(hn::MaxOfLanes(di, max_index));
 }
 
 // Steps 2-4 for one row. kViews > 0 is N_f known when compiling (3 and 5: the loops over views
@@ -219,30 +223,37 @@ void writeColour(const uint8_t* bgr, int x, uint8_t* rgb) {
   rgb[2] = bgr[3 * x];
 }
 
-size_t BackProjectRowImpl(const RowRays& r, const float* depth, const uint8_t* bgr, int width, float* xyz, uint8_t* rgb) {
+size_t BackProjectRowImpl(const RowRays& r, const float* depth, const uint8_t* bgr, int width, float* xyz, uint8_t* rgb,
+                          size_t capacity) {
   const DF df;
+  const DI di;
   const int lanes = static_cast<int>(hn::Lanes(df));
   const hn::Vec<DF> zero = hn::Zero(df), inf = hn::Set(df, std::numeric_limits<float>::infinity());
-  HWY_ALIGN float world[3][hn::MaxLanes(df)];
+  HWY_ALIGN float packed[3 * hn::MaxLanes(df)];
+  HWY_ALIGN int32_t columns[hn::MaxLanes(di)];
   size_t count = 0;
   int x = 0;
   for (; x + lanes <= width; x += lanes) {
     const hn::Vec<DF> z = hn::LoadU(df, depth + x);
-    if (hn::AllFalse(df, hn::And(hn::Gt(z, zero), hn::Lt(z, inf)))) continue;  // a hole, or rejected pixels
+    const MF has = hn::And(hn::Gt(z, zero), hn::Lt(z, inf));
+    if (hn::AllFalse(df, has)) continue;  // a hole, or rejected pixels
     const hn::Vec<DF> xf = hn::Iota(df, static_cast<float>(x));
+    hn::Vec<DF> world[3];
     for (int c = 0; c < 3; ++c) {
       const hn::Vec<DF> ray = hn::Add(hn::Set(df, r.row_ray[c]), hn::Mul(xf, hn::Set(df, r.step[c])));
-      hn::Store(hn::Add(hn::Mul(z, ray), hn::Set(df, r.t[c])), df, world[c]);
+      world[c] = hn::Compress(hn::Add(hn::Mul(z, ray), hn::Set(df, r.t[c])), has);  // the points first, in order
     }
-    for (int k = 0; k < lanes; ++k) {
-      if (!hasPoint(depth[x + k])) continue;
-      float* p = xyz + 3 * count;
-      p[0] = world[0][k];
-      p[1] = world[1][k];
-      p[2] = world[2][k];
-      if (bgr) writeColour(bgr, x + k, rgb + 3 * count);
-      ++count;
+    const size_t n = hn::CountTrue(df, has);
+    // A whole vector of points is stored where it fits; the lanes past n are overwritten by the
+    // next points. Near the end of the caller's space, through a buffer.
+    float* out = count + lanes <= capacity ? xyz + 3 * count : packed;
+    hn::StoreInterleaved3(world[0], world[1], world[2], df, out);
+    if (out == packed) std::copy(packed, packed + 3 * n, xyz + 3 * count);
+    if (bgr) {
+      hn::Store(hn::Compress(hn::Iota(di, x), hn::RebindMask(di, has)), di, columns);
+      for (size_t k = 0; k < n; ++k) writeColour(bgr, columns[k], rgb + 3 * (count + k));
     }
+    count += n;
   }
   for (; x < width; ++x) {  // the last pixels, fewer than a vector: the lanes' arithmetic in scalar
     if (!hasPoint(depth[x])) continue;
@@ -251,6 +262,20 @@ size_t BackProjectRowImpl(const RowRays& r, const float* depth, const uint8_t* b
     if (bgr) writeColour(bgr, x, rgb + 3 * count);
     ++count;
   }
+  return count;
+}
+
+size_t CountPointsImpl(const float* depth, int width) {
+  const DF df;
+  const int lanes = static_cast<int>(hn::Lanes(df));
+  const VF zero = hn::Zero(df), inf = hn::Set(df, std::numeric_limits<float>::infinity());
+  size_t count = 0;
+  int x = 0;
+  for (; x + lanes <= width; x += lanes) {
+    const VF z = hn::LoadU(df, depth + x);
+    count += hn::CountTrue(df, hn::And(hn::Gt(z, zero), hn::Lt(z, inf)));
+  }
+  for (; x < width; ++x) count += hasPoint(depth[x]);
   return count;
 }
 
@@ -267,10 +292,12 @@ HWY_EXPORT(ProjectRowImpl);
 HWY_EXPORT(FuseRowImpl);
 HWY_EXPORT(FusionLanesImpl);
 HWY_EXPORT(BackProjectRowImpl);
+HWY_EXPORT(CountPointsImpl);
 
-void projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y, int width,
-                int target_width, int target_height, int32_t* out_index, float* out_depth) {
-  HWY_DYNAMIC_DISPATCH(ProjectRowImpl)(P, limits, depth, conf, y, width, target_width, target_height, out_index, out_depth);
+int32_t projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y, int width,
+                   int target_width, int target_height, int32_t* out_index, float* out_depth) {
+  return HWY_DYNAMIC_DISPATCH(ProjectRowImpl)(P, limits, depth, conf, y, width, target_width, target_height, out_index,
+                                              out_depth);
 }
 
 void fuseRow(const FusionRowInput& in, int y, float* out_depth, float* out_conf) {
@@ -279,9 +306,12 @@ void fuseRow(const FusionRowInput& in, int y, float* out_depth, float* out_conf)
 
 int fusionLanes() { return HWY_DYNAMIC_DISPATCH(FusionLanesImpl)(); }
 
-size_t backProjectRow(const RowRays& rays, const float* depth, const uint8_t* bgr, int width, float* xyz, uint8_t* rgb) {
-  return HWY_DYNAMIC_DISPATCH(BackProjectRowImpl)(rays, depth, bgr, width, xyz, rgb);
+size_t backProjectRow(const RowRays& rays, const float* depth, const uint8_t* bgr, int width, float* xyz, uint8_t* rgb,
+                      size_t capacity) {
+  return HWY_DYNAMIC_DISPATCH(BackProjectRowImpl)(rays, depth, bgr, width, xyz, rgb, capacity);
 }
+
+size_t countPoints(const float* depth, int width) { return HWY_DYNAMIC_DISPATCH(CountPointsImpl)(depth, width); }
 
 }  // namespace cenote::pipeline::detail
 #endif

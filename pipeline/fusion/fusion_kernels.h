@@ -47,8 +47,9 @@ struct FusionRowInput {
 // Projects row y of a source view into the target image: for each x, out_index[x] = target pixel
 // index (row * target_width + column) or -1 when the pixel is invalid or its point is dropped, and
 // out_depth[x] = its depth in the target camera (left unwritten where out_index[x] is -1).
-void projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y, int width,
-                int target_width, int target_height, int32_t* out_index, float* out_depth);
+// @return the largest out_index[x] (-1 when every pixel is dropped).
+int32_t projectRow(const Projector& P, const FusionLimits& limits, const float* depth, const float* conf, int y, int width,
+                   int target_width, int target_height, int32_t* out_index, float* out_depth);
 
 // Steps 2-4 of depth_fusion.h for row y of the reference view; width >= fusionLanes().
 void fuseRow(const FusionRowInput& in, int y, float* out_depth, float* out_conf);
@@ -58,6 +59,9 @@ int fusionLanes();
 
 // Whether a depth becomes a point: 0 < depth < inf (NaN does not).
 inline bool hasPoint(float depth_m) { return (depth_m > 0.0f) & (depth_m < std::numeric_limits<float>::infinity()); }
+
+// The number of pixels of the row `depth` with hasPoint().
+size_t countPoints(const float* depth, int width);
 
 // The world ray of pixel (x, y) is row_ray + x * step (per component, in that order of float
 // operations), its point z * ray + t.
@@ -72,7 +76,9 @@ struct RowRays {
 // Every lane computes z * (row_ray + x * step) + t with separate multiplies and adds (the kernels'
 // file is compiled without contraction into fused multiply-adds), so every instruction set, and
 // the scalar tail, give the bits of the plain float expression.
+// `capacity`: points that xyz and rgb have room for (at least the row's); nothing is written past them.
 // @return the number of points written.
-size_t backProjectRow(const RowRays& rays, const float* depth, const uint8_t* bgr, int width, float* xyz, uint8_t* rgb);
+size_t backProjectRow(const RowRays& rays, const float* depth, const uint8_t* bgr, int width, float* xyz, uint8_t* rgb,
+                      size_t capacity);
 
 }  // namespace cenote::pipeline::detail

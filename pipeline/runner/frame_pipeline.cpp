@@ -13,6 +13,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// Batches kept for reuse: the outputs in flight between fusion and the consumer, and one more.
+constexpr size_t kMaxSpare = 4;
+
 cv::Mat toBgr(const cv::Mat& image) {
   if (image.channels() == 3) return image;
   cv::Mat bgr;
@@ -67,6 +70,19 @@ std::optional<FusedOutput> FramePipeline::pop() {
   return out;
 }
 
+void FramePipeline::recycle(PointBatch&& points) {
+  std::lock_guard<std::mutex> lock(spare_mutex_);
+  if (spare_.size() < kMaxSpare) spare_.push_back(std::move(points));
+}
+
+PointBatch FramePipeline::takeSpare() {
+  std::lock_guard<std::mutex> lock(spare_mutex_);
+  if (spare_.empty()) return {};
+  PointBatch batch = std::move(spare_.back());
+  spare_.pop_back();
+  return batch;
+}
+
 void FramePipeline::abort() {
   rectified_.close();
   depths_.close();
@@ -115,8 +131,11 @@ void FramePipeline::fusionStage() {
         out.frame.confidence = result->frame.confidence.clone();
         out.frame.color = result->frame.color.clone();
       }
-      window->takePoints(out.points);  // 270k points: a swap, not a copy
+      // 270k points: a swap, not a copy; the window's next points go into the recycled buffers.
+      out.points = takeSpare();
+      window->takePoints(out.points);
     } else {
+      out.points = takeSpare();
       backProject(*frame, out.points);
       out.frame = std::move(*frame);
     }

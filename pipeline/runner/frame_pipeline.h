@@ -13,8 +13,10 @@
 
 #include <atomic>
 #include <functional>
+#include <mutex>
 #include <optional>
 #include <thread>
+#include <vector>
 
 #include "common/point_batch.h"
 #include "pipeline/frame/frames.h"
@@ -51,6 +53,10 @@ class FramePipeline {
   void close();
   // Blocks until the next output. @return nullopt once closed and drained, or after a failure.
   std::optional<FusedOutput> pop();
+  // Hands back the points of a popped output once they are used (any thread): a later output's
+  // points are written into their buffers instead of new ones (a frame's 4 MB, page-faulted in
+  // afresh each time). Optional; at most a few batches are kept.
+  void recycle(PointBatch&& points);
   // Stops every stage now (after a failure elsewhere); pending frames are dropped.
   void abort();
   // Rethrows the first exception of a stage thread, if any (call after pop() returned nullopt).
@@ -77,6 +83,8 @@ class FramePipeline {
   void runStage(const char* name, void (FramePipeline::*stage)(), Output& output, double& cpu_ms,
                 const std::function<void()>& on_thread_start);
   void join();
+  // A recycled batch (its buffers kept), or an empty one.
+  PointBatch takeSpare();
 
   const PipelineConfig config_;
   std::atomic<bool> keep_maps_;
@@ -87,6 +95,8 @@ class FramePipeline {
   StageTimer stereo_timer_, fusion_timer_;
   double stereo_cpu_ms_ = 0.0, fusion_cpu_ms_ = 0.0;  // written by the stage threads before they close
   std::atomic<size_t> processed_{0}, fused_{0};
+  std::mutex spare_mutex_;
+  std::vector<PointBatch> spare_;  // recycled batches, at most kMaxSpare
   std::thread stereo_thread_, fusion_thread_;
 };
 

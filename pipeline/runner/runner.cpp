@@ -165,6 +165,7 @@ RunReport Runner::run(const StereoDataset& dataset, const io::Trajectory& camera
         sink_timer.add(msSince(t1));
         sink_cpu_ms += threadCpuMs() - cpu1_ms;
       }
+      stages.recycle(std::move(item->points));
       if (progress) progress(read_done.load(), total);
     }
   } catch (...) {

@@ -49,6 +49,29 @@ TEST(BackProject, PointsAreInTheWorldFrameWithRgbColours) {
   EXPECT_EQ(batch.colors[1], (std::array<uint8_t, 3>{3, 2, 1}));
 }
 
+// The runner hands batches back for reuse (frame_pipeline.h): what a batch held before must not
+// show, whether it held more points or fewer.
+TEST(BackProject, AReusedBatchGetsWhatAFreshOneGets) {
+  DepthFrame small, large;
+  small.depth = cv::Mat(31, 67, CV_32F);
+  large.depth = cv::Mat(97, 67, CV_32F);
+  cv::randu(small.depth, -1.0f, 5.0f);
+  cv::randu(large.depth, -1.0f, 5.0f);
+  for (DepthFrame* f : {&small, &large}) {
+    f->color = cv::Mat(f->depth.size(), CV_8UC3);
+    cv::randu(f->color, 0, 256);
+    f->K << 40.0, 0.0, 33.0, 0.0, 40.0, 48.0, 0.0, 0.0, 1.0;
+  }
+  for (const auto& [first, second] : {std::pair{&large, &small}, std::pair{&small, &large}}) {
+    PointBatch fresh, reused;
+    backProject(*first, reused);
+    backProject(*second, reused);
+    backProject(*second, fresh);
+    EXPECT_EQ(reused.points, fresh.points);
+    EXPECT_EQ(reused.colors, fresh.colors);
+  }
+}
+
 TEST(BackProject, OrderAndValuesDoNotDependOnThreads) {
   DepthFrame f;
   f.depth = cv::Mat(97, 53, CV_32F);
