@@ -154,7 +154,8 @@ cv::Mat readImage(const std::string& path, int flags) {
   // 8-bit PNGs (what stereo sequences are made of) through our decoder; everything else, and any
   // PNG it does not handle, through OpenCV. Both give the same pixels.
   if (flags == cv::IMREAD_UNCHANGED || flags == cv::IMREAD_COLOR) {
-    cv::Mat fast = decodePngFast(bytes.data(), bytes.size());
+    cv::Mat fast = decodePngFast(bytes.data(), bytes.size(),
+                                 format == "PNG" ? ChunkCrc::kAlreadyChecked : ChunkCrc::kCheck);
     if (!fast.empty() && (flags == cv::IMREAD_UNCHANGED || fast.channels() == 3)) return fast;
   }
   cv::Mat image = opencvDecode(bytes.data(), bytes.size(), flags);
@@ -177,7 +178,7 @@ cv::Mat decodeImageStrict(const uint8_t* data, std::size_t size, const std::stri
     return decodeJpegStrict(data, size, what, max_pixels);
   }
   checkPngStructure(data, size, what);
-  cv::Mat image = decodePngFast(data, size);
+  cv::Mat image = decodePngFast(data, size, ChunkCrc::kAlreadyChecked);
   if (!image.empty()) return image;
   // Kinds the fast decoder leaves to OpenCV (16-bit, palette, interlaced); libpng checks the zlib
   // stream and the amount of image data.

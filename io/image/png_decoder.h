@@ -15,10 +15,15 @@
 
 namespace cenote::io {
 
+// Whether the chunks' CRCs are to be checked, or were already (checkPngStructure, image_header.h,
+// checks every one: readImage() and decodeImageStrict() call it first, and a frame's 800 KB need
+// not be summed twice).
+enum class ChunkCrc { kCheck, kAlreadyChecked };
+
 // Decodes a whole PNG file held in memory.
 // @return CV_8UC1 (grey), CV_8UC3 (BGR) or CV_8UC4 (BGRA), the channel order of cv::imread; an
 //   empty Mat when the file is not one of the handled kinds or cannot be decoded (never throws).
-cv::Mat decodePngFast(const uint8_t* data, std::size_t size);
+cv::Mat decodePngFast(const uint8_t* data, std::size_t size, ChunkCrc crc = ChunkCrc::kCheck);
 
 // What decodePngFast() reads before inflating: the image's size and channel count, and the zlib
 // stream of its IDAT chunks (bench/read_rectify_bench.cpp inflates it with others). A stream in
@@ -30,8 +35,8 @@ struct PngImageData {
 };
 
 // Reads the chunks of a PNG of a kind decodePngFast() handles into `out` (its buffer reused),
-// checking every chunk's CRC; out.zlib may point into `data`. @return false for any other file
-// (never throws).
-bool readPngImageData(const uint8_t* data, std::size_t size, PngImageData& out);
+// checking every chunk's CRC unless told they were; out.zlib may point into `data`. @return false
+// for any other file (never throws).
+bool readPngImageData(const uint8_t* data, std::size_t size, PngImageData& out, ChunkCrc crc = ChunkCrc::kCheck);
 
 }  // namespace cenote::io
