@@ -223,6 +223,10 @@ void writeColour(const uint8_t* bgr, int x, uint8_t* rgb) {
   rgb[2] = bgr[3 * x];
 }
 
+// AVX-512 compresses a vector in one instruction; elsewhere Highway emulates it at a cost that
+// exceeds the per-lane loop (callgrind, AVX2: three times the instructions).
+constexpr bool kNativeCompress = HWY_TARGET <= HWY_AVX3;
+
 size_t BackProjectRowImpl(const RowRays& r, const float* depth, const uint8_t* bgr, int width, float* xyz, uint8_t* rgb,
                           size_t capacity) {
   const DF df;
@@ -241,19 +245,34 @@ size_t BackProjectRowImpl(const RowRays& r, const float* depth, const uint8_t* b
     hn::Vec<DF> world[3];
     for (int c = 0; c < 3; ++c) {
       const hn::Vec<DF> ray = hn::Add(hn::Set(df, r.row_ray[c]), hn::Mul(xf, hn::Set(df, r.step[c])));
-      world[c] = hn::Compress(hn::Add(hn::Mul(z, ray), hn::Set(df, r.t[c])), has);  // the points first, in order
+      world[c] = hn::Add(hn::Mul(z, ray), hn::Set(df, r.t[c]));
     }
-    const size_t n = hn::CountTrue(df, has);
-    // A whole vector of points is stored where it fits; the lanes past n are overwritten by the
-    // next points. Near the end of the caller's space, through a buffer.
-    float* out = count + lanes <= capacity ? xyz + 3 * count : packed;
-    hn::StoreInterleaved3(world[0], world[1], world[2], df, out);
-    if (out == packed) std::copy(packed, packed + 3 * n, xyz + 3 * count);
-    if (bgr) {
-      hn::Store(hn::Compress(hn::Iota(di, x), hn::RebindMask(di, has)), di, columns);
-      for (size_t k = 0; k < n; ++k) writeColour(bgr, columns[k], rgb + 3 * (count + k));
+    if constexpr (kNativeCompress) {
+      // The points first, in order. A whole vector of them is stored where it fits (the lanes
+      // past n are overwritten by the next points); near the end of the caller's space, through
+      // a buffer.
+      for (int c = 0; c < 3; ++c) world[c] = hn::Compress(world[c], has);
+      const size_t n = hn::CountTrue(df, has);
+      float* out = count + lanes <= capacity ? xyz + 3 * count : packed;
+      hn::StoreInterleaved3(world[0], world[1], world[2], df, out);
+      if (out == packed) std::copy(packed, packed + 3 * n, xyz + 3 * count);
+      if (bgr) {
+        hn::Store(hn::Compress(hn::Iota(di, x), hn::RebindMask(di, has)), di, columns);
+        for (size_t k = 0; k < n; ++k) writeColour(bgr, columns[k], rgb + 3 * (count + k));
+      }
+      count += n;
+    } else {
+      for (int c = 0; c < 3; ++c) hn::Store(world[c], df, packed + c * lanes);
+      for (int k = 0; k < lanes; ++k) {
+        if (!hasPoint(depth[x + k])) continue;
+        float* p = xyz + 3 * count;
+        p[0] = packed[k];
+        p[1] = packed[lanes + k];
+        p[2] = packed[2 * lanes + k];
+        if (bgr) writeColour(bgr, x + k, rgb + 3 * count);
+        ++count;
+      }
     }
-    count += n;
   }
   for (; x < width; ++x) {  // the last pixels, fewer than a vector: the lanes' arithmetic in scalar
     if (!hasPoint(depth[x])) continue;

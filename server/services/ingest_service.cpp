@@ -197,6 +197,7 @@ class FrameStream {
         stages_.abort();
       }
       postImages(out->frame);
+      stages_.recycle(std::move(out->points));  // its buffers hold the next frame's points
     }
   }
 
