@@ -576,18 +576,22 @@ void finishWinners(const SgmParams& p, const WinnerBatch& in, int count, int x0,
 HWY_INLINE void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const uint16_t* sums, int dx,
                                    int first, int count) {
   const DU16 d;
-  const int N = b.lanes;
+  const int N = static_cast<int>(hn::Lanes(d));  // b.lanes, known to the compiler: one vector unrolls
   const std::ptrdiff_t base = p.width - 1 - x + p.min_disparity + first;
+  // In locals: the stores may alias the struct's fields.
+  uint16_t* const right_min = b.right_min + base;
+  uint16_t* const right_arg = b.right_arg + base;
+  const uint16_t* const iota = b.iota;
   const VU16 offset = hn::Set(d, static_cast<uint16_t>(first));
   for (int k = 0; k < count; k += N) {
-    const VU16 m = hn::LoadU(d, b.right_min + base + k);
-    const VU16 a = hn::LoadU(d, b.right_arg + base + k);
+    const VU16 m = hn::LoadU(d, right_min + k);
+    const VU16 a = hn::LoadU(d, right_arg + k);
     const VU16 s = hn::Load(d, sums + k);
     // Left to right, k grows for a fixed right pixel: keep the first. Right to left, k shrinks:
     // an equal sum replaces.
     const auto better = dx > 0 ? hn::Lt(s, m) : hn::Not(hn::Lt(m, s));
-    hn::StoreU(hn::Min(m, s), d, b.right_min + base + k);
-    hn::StoreU(hn::IfThenElse(better, hn::Add(hn::Load(d, b.iota + k), offset), a), d, b.right_arg + base + k);
+    hn::StoreU(hn::Min(m, s), d, right_min + k);
+    hn::StoreU(hn::IfThenElse(better, hn::Add(hn::Load(d, iota + k), offset), a), d, right_arg + k);
   }
 }
 
