@@ -4,6 +4,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -39,7 +40,35 @@ int windowAround(const int16_t* values, int n, int winner, int scale) {
   return scale * (lo + hi) / 2;
 }
 
+// The finite disparities of the three coarse rows at each column: their range and count, in
+// loops the compiler vectorises (most coarse pixels need nothing more).
+void columnRanges(const float* const (&rows)[3], int width, BandScratch& scratch) {
+  scratch.column_lo.resize(width);
+  scratch.column_hi.resize(width);
+  scratch.column_finite.resize(width);
+  float* lo = scratch.column_lo.data();
+  float* hi = scratch.column_hi.data();
+  uint8_t* finite = scratch.column_finite.data();
+  constexpr float kMax = std::numeric_limits<float>::max();
+  for (int x = 0; x < width; ++x) {
+    float l = kMax, h = -kMax;
+    uint8_t n = 0;
+    for (const float* row : rows) {
+      const float v = row[x];
+      const bool ok = std::fabs(v) <= kMax;  // finite (NaN fails)
+      l = ok && v < l ? v : l;
+      h = ok && v > h ? v : h;
+      n = static_cast<uint8_t>(n + (ok ? 1 : 0));
+    }
+    lo[x] = l;
+    hi[x] = h;
+    finite[x] = n;
+  }
+}
+
 // Centres of coarse row cy, and for its edge pixels the neighbourhood's distinct values, ascending.
+// The neighbourhood's range comes from the column ranges (truncation to integers keeps the order,
+// so the range of the truncated values is the truncated range).
 void coarseRowCentres(const cv::Mat& coarse_disparity, int scale, int coarse_y0, int coarse_y1, int cy,
                       BandScratch& scratch) {
   const int width = coarse_disparity.cols;
@@ -50,25 +79,35 @@ void coarseRowCentres(const cv::Mat& coarse_disparity, int scale, int coarse_y0,
   const float* rows[3];
   for (int dy = -1; dy <= 1; ++dy)
     rows[dy + 1] = coarse_disparity.ptr<float>(std::clamp(cy + dy, coarse_y0, coarse_y1 - 1));
+  columnRanges(rows, width, scratch);
   for (int cx = 0; cx < width; ++cx) {
-    int16_t* values = scratch.values.data() + static_cast<std::ptrdiff_t>(cx) * kNeighbourhood;
-    int n = 0;
-    for (const float* row : rows) {
-      for (int x = std::max(0, cx - 1); x <= std::min(width - 1, cx + 1); ++x) {
-        if (std::isfinite(row[x])) values[n++] = static_cast<int16_t>(row[x]);
-      }
+    const int x0 = std::max(0, cx - 1), x1 = std::min(width - 1, cx + 1);
+    float lo_f = scratch.column_lo[x0], hi_f = scratch.column_hi[x0];
+    int n = scratch.column_finite[x0];
+    for (int x = x0 + 1; x <= x1; ++x) {
+      lo_f = std::min(lo_f, scratch.column_lo[x]);
+      hi_f = std::max(hi_f, scratch.column_hi[x]);
+      n += scratch.column_finite[x];
     }
     if (n == 0) {
       scratch.centres[cx] = kNoCentre;
       continue;
     }
-    const auto [lo, hi] = std::minmax_element(values, values + n);
-    if (scale * (*hi - *lo) <= kSpan) {
-      scratch.centres[cx] = scale * (*lo + *hi) / 2;
+    const int lo = static_cast<int16_t>(lo_f), hi = static_cast<int16_t>(hi_f);
+    if (scale * (hi - lo) <= kSpan) {
+      scratch.centres[cx] = scale * (lo + hi) / 2;
       continue;
     }
-    std::sort(values, values + n);  // a depth edge: its distinct values, for edgeCentres()
-    scratch.counts[cx] = static_cast<uint8_t>(std::unique(values, values + n) - values);
+    // A depth edge: the neighbourhood's distinct values, for edgeCentres().
+    int16_t* values = scratch.values.data() + static_cast<std::ptrdiff_t>(cx) * kNeighbourhood;
+    int count = 0;
+    for (const float* row : rows) {
+      for (int x = x0; x <= x1; ++x) {
+        if (std::isfinite(row[x])) values[count++] = static_cast<int16_t>(row[x]);
+      }
+    }
+    std::sort(values, values + count);
+    scratch.counts[cx] = static_cast<uint8_t>(std::unique(values, values + count) - values);
     scratch.centres[cx] = kEdge;
     scratch.edges.push_back(cx);
   }

@@ -51,6 +51,10 @@ struct BandScratch {
   std::vector<int16_t> values;  // per coarse column: the neighbourhood's distinct values (edges)
   std::vector<uint8_t> counts;  // per coarse column: how many of them
   std::vector<int> edges;       // the coarse columns at depth edges
+  // Per coarse column of the three coarse rows around one: smallest and largest finite
+  // disparity (+-FLT_MAX where none) and how many are finite.
+  std::vector<float> column_lo, column_hi;
+  std::vector<uint8_t> column_finite;
 };
 
 // First disparity index of each pixel's band, rows [y0, y1) of `band_start` (CV_16S, full size),

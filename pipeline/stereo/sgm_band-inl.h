@@ -17,6 +17,41 @@ HWY_INLINE int bandShift(int start, int start_prev) {
   return std::clamp(start - start_prev, -(kBandDisparities + 1), kBandDisparities + 1);
 }
 
+// out[x] = bandShift(start[x], start_prev[x + offset]) for the x of [0, width) whose x + offset is in
+// [0, width), 0 for the others (offset -1, 0 or 1): the shifts of one predecessor direction for a
+// whole row, computed before its sweep instead of per pixel.
+void bandShiftRow(const int16_t* start, const int16_t* start_prev, int offset, int width, int16_t* out) {
+  const hn::ScalableTag<int16_t> d;
+  const int N = static_cast<int>(hn::Lanes(d));
+  const auto lo = hn::Set(d, static_cast<int16_t>(-(kBandDisparities + 1)));
+  const auto hi = hn::Set(d, static_cast<int16_t>(kBandDisparities + 1));
+  const int begin = std::max(0, -offset), end = std::min(width, width - offset);
+  std::fill(out, out + begin, 0);
+  std::fill(out + end, out + width, 0);
+  int x = begin;
+  for (; x + N <= end; x += N) {
+    const auto shift = hn::Sub(hn::LoadU(d, start + x), hn::LoadU(d, start_prev + x + offset));
+    hn::StoreU(hn::Min(hn::Max(shift, lo), hi), d, out + x);
+  }
+  for (; x < end; ++x) out[x] = static_cast<int16_t>(bandShift(start[x], start_prev[x + offset]));
+}
+
+// The predecessors' shifts of row y's pixels (StripBuffers::band_shift): along the row from x - dx
+// (0 at the row's first pixel), and from the previous row at x, x - dx and x + dx (0 off the image
+// and on the pass's first row, whose predecessors read zero costs at 0).
+void bandShifts(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y, int dx, bool first_row) {
+  const int16_t* starts = im.band_start + y * im.band_stride;
+  bandShiftRow(starts, starts, -dx, p.width, b.band_shift[0]);
+  if (first_row) {
+    for (int k = 1; k < 4; ++k) std::fill(b.band_shift[k], b.band_shift[k] + p.width, 0);
+    return;
+  }
+  const int16_t* prev_starts = im.band_start + (y - dx) * im.band_stride;
+  bandShiftRow(starts, prev_starts, 0, p.width, b.band_shift[1]);
+  bandShiftRow(starts, prev_starts, -dx, p.width, b.band_shift[2]);
+  bandShiftRow(starts, prev_starts, dx, p.width, b.band_shift[3]);
+}
+
 // The along-row path starts fresh at the first pixel of every row: zero costs in the band.
 void resetAlongBand(const StripBuffers& b, uint16_t sentinel) {
   for (uint16_t* pixel : {b.along[0], b.along[1]}) {
@@ -131,7 +166,11 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   const uint8_t* row = im.guide + y * im.image_stride;
   const uint8_t* prev_row = im.guide + (y - dx) * im.image_stride;  // inside the image border
   const int16_t* starts = im.band_start + y * im.band_stride;
-  const int16_t* prev_starts = first_row ? nullptr : im.band_start + (y - dx) * im.band_stride;
+  bandShifts(p, im, b, y, dx, first_row);
+  const int16_t* const shifts_along = b.band_shift[0];
+  const int16_t* const shifts_vertical = b.band_shift[1];
+  const int16_t* const shifts_back = b.band_shift[2];
+  const int16_t* const shifts_fwd = b.band_shift[3];
   CostSource src;
   if constexpr (kCensus) {
     src = beginCostRow(p, im, b, y, dx, dx, first_row);
@@ -176,12 +215,8 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   for (int i = 0; i < W; ++i) {
     const int x = dx > 0 ? i : W - 1 - i;
     const int start = starts[x];
-    // Shifts of the predecessors; pixels off the image (and the first row) read zero costs at 0.
-    auto shiftFrom = [&](int xp) HWY_ATTR {
-      return (prev_starts == nullptr || xp < 0 || xp >= W) ? 0 : bandShift(start, prev_starts[xp]);
-    };
-    const int shift_along = i == 0 ? 0 : bandShift(start, starts[x - dx]);
-    const int shift_vertical = shiftFrom(x), shift_back = shiftFrom(x - dx), shift_fwd = shiftFrom(x + dx);
+    const int shift_along = shifts_along[x], shift_vertical = shifts_vertical[x];
+    const int shift_back = shifts_back[x], shift_fwd = shifts_fwd[x];
 
     if constexpr (!kCensus) {
       if (start == columns_start) {  // the previous pixel's band: its columns, one further

@@ -158,6 +158,7 @@ struct StripBuffers {
   int16_t* winner = nullptr;          // W: integer winner per pixel of the row (-1 = invalid)
   uint8_t* right_reversed = nullptr;  // SAD: entering right row, reversed and padded
   uint16_t* census_reversed[2] = {};  // census: right row's low and high 16 bits, reversed
+  int16_t* band_shift[4] = {};        // band: W each, the predecessors' shifts of a row (bandShifts())
   int reversed_length = 0;
 
   uint16_t* pathPixel(uint16_t* row, int x) const { return row + lead + static_cast<std::ptrdiff_t>(x + 1) * pixel_stride; }
@@ -183,7 +184,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   const std::size_t sad = p.census ? 0 : band_sad ? p.window * rev : W * Dp + (W * Dp * p.window + 1) / 2;
   // Every piece is rounded up to 64 elements by take(); 32 pieces at most.
   const std::size_t total = 4 * (path_row + W + 2) + 2 * along + sad + 2 * Dp + kWinnerBatch * (Dp + 3 * N) + 2 * rev + W +
-                            (rev / 2 + 32) + 2 * rev + 32 * 64;
+                            (rev / 2 + 32) + 2 * rev + 4 * W + 32 * 64;
   if (ws.buffer_elements < total) {
     ws.buffer = hwy::AllocateAligned<uint16_t>(total);
     ws.buffer_elements = total;
@@ -219,6 +220,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   b.right_reversed = reinterpret_cast<uint8_t*>(take(rev / 2 + 32));
   b.census_reversed[0] = take(rev);
   b.census_reversed[1] = take(rev);
+  for (int16_t*& shift : b.band_shift) shift = reinterpret_cast<int16_t*>(take(W));
   return b;
 }
 
@@ -508,17 +510,16 @@ HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uin
 }
 
 // Disparity, sub-pixel offset and PKRN of batch slots [0, count): pixel j of the batch is image
-// column xs[j]. Writes the outputs and the integer winner per column (-1 where invalid).
-void finishWinners(const SgmParams& p, const WinnerBatch& in, int count, const int* xs, float* disparity, float* confidence,
-                   int16_t* winners) {
+// column x0 + dx j. Writes the outputs and the integer winner per column (-1 where invalid).
+void finishWinners(const SgmParams& p, const WinnerBatch& in, int count, int x0, int dx, float* disparity,
+                   float* confidence, int16_t* winners) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
+  const hn::Rebind<int16_t, decltype(di)> d16;
   const int L = static_cast<int>(hn::Lanes(df));
   const auto one = hn::Set(df, 1.0f), zero = hn::Zero(df), two = hn::Set(df, 2.0f);
   const auto min_confidence = hn::Set(df, p.min_confidence);
   const auto no_cost = hn::Set(di, kNoCost);
-  HWY_ALIGN float out_disparity[kWinnerBatch], out_confidence[kWinnerBatch];
-  HWY_ALIGN int32_t out_winner[kWinnerBatch];
   for (int j0 = 0; j0 < count; j0 += L) {
     const auto winner = hn::Load(di, in.winner + j0);
     const auto c1 = hn::Load(di, in.c1 + j0), c2 = hn::Load(di, in.c2 + j0);
@@ -537,14 +538,34 @@ void finishWinners(const SgmParams& p, const WinnerBatch& in, int count, const i
         hn::RebindMask(df, hn::Gt(denominator, hn::Zero(di))),
         hn::Div(hn::ConvertTo(df, hn::Sub(below, above)), hn::Mul(two, hn::ConvertTo(df, denominator))), zero);
     const auto value = hn::Add(hn::ConvertTo(df, hn::Add(winner, hn::Set(di, p.min_disparity))), offset);
-    hn::Store(hn::IfThenElse(kept, value, hn::Set(df, std::numeric_limits<float>::infinity())), df, out_disparity + j0);
-    hn::Store(hn::IfThenElse(kept, pkrn, zero), df, out_confidence + j0);
-    hn::Store(hn::IfThenElse(hn::RebindMask(di, kept), winner, hn::Set(di, -1)), di, out_winner + j0);
-  }
-  for (int j = 0; j < count; ++j) {
-    disparity[xs[j]] = out_disparity[j];
-    confidence[xs[j]] = out_confidence[j];
-    winners[xs[j]] = static_cast<int16_t>(out_winner[j]);
+    auto out_disparity = hn::IfThenElse(kept, value, hn::Set(df, std::numeric_limits<float>::infinity()));
+    auto out_confidence = hn::IfThenElse(kept, pkrn, zero);
+    auto out_winner = hn::IfThenElse(hn::RebindMask(di, kept), winner, hn::Set(di, -1));
+    // Columns x0 + dx j0 .. x0 + dx (j0 + n - 1): stored from the leftmost, reversed right to left.
+    const int n = std::min(L, count - j0);
+    const int left = dx > 0 ? x0 + j0 : x0 - j0 - (n - 1);
+    if (n == L) {
+      if (dx < 0) {
+        out_disparity = hn::Reverse(df, out_disparity);
+        out_confidence = hn::Reverse(df, out_confidence);
+        out_winner = hn::Reverse(di, out_winner);
+      }
+      hn::StoreU(out_disparity, df, disparity + left);
+      hn::StoreU(out_confidence, df, confidence + left);
+      hn::StoreU(hn::DemoteTo(d16, out_winner), d16, winners + left);
+      continue;
+    }
+    HWY_ALIGN float lanes_disparity[hn::MaxLanes(df)], lanes_confidence[hn::MaxLanes(df)];
+    HWY_ALIGN int32_t lanes_winner[hn::MaxLanes(df)];
+    hn::Store(out_disparity, df, lanes_disparity);
+    hn::Store(out_confidence, df, lanes_confidence);
+    hn::Store(out_winner, di, lanes_winner);
+    for (int j = 0; j < n; ++j) {
+      const int x = x0 + dx * (j0 + j);
+      disparity[x] = lanes_disparity[j];
+      confidence[x] = lanes_confidence[j];
+      winners[x] = static_cast<int16_t>(lanes_winner[j]);
+    }
   }
 }
 
@@ -552,21 +573,25 @@ void finishWinners(const SgmParams& p, const WinnerBatch& in, int count, const i
 // reversed at W - 1 - xr so that one left pixel's disparities are contiguous. Ties keep the
 // smaller k, whichever way the row is swept.
 // `sums` hold disparities [first, first + count).
-void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const uint16_t* sums, int dx, int first,
-                        int count) {
+HWY_INLINE void updateRightMinimum(const SgmParams& p, const StripBuffers& b, int x, const uint16_t* sums, int dx,
+                                   int first, int count) {
   const DU16 d;
-  const int N = b.lanes;
+  const int N = static_cast<int>(hn::Lanes(d));  // b.lanes, known to the compiler: one vector unrolls
   const std::ptrdiff_t base = p.width - 1 - x + p.min_disparity + first;
+  // In locals: the stores may alias the struct's fields.
+  uint16_t* const right_min = b.right_min + base;
+  uint16_t* const right_arg = b.right_arg + base;
+  const uint16_t* const iota = b.iota;
   const VU16 offset = hn::Set(d, static_cast<uint16_t>(first));
   for (int k = 0; k < count; k += N) {
-    const VU16 m = hn::LoadU(d, b.right_min + base + k);
-    const VU16 a = hn::LoadU(d, b.right_arg + base + k);
+    const VU16 m = hn::LoadU(d, right_min + k);
+    const VU16 a = hn::LoadU(d, right_arg + k);
     const VU16 s = hn::Load(d, sums + k);
     // Left to right, k grows for a fixed right pixel: keep the first. Right to left, k shrinks:
     // an equal sum replaces.
     const auto better = dx > 0 ? hn::Lt(s, m) : hn::Not(hn::Lt(m, s));
-    hn::StoreU(hn::Min(m, s), d, b.right_min + base + k);
-    hn::StoreU(hn::IfThenElse(better, hn::Add(hn::Load(d, b.iota + k), offset), a), d, b.right_arg + base + k);
+    hn::StoreU(hn::Min(m, s), d, right_min + k);
+    hn::StoreU(hn::IfThenElse(better, hn::Add(hn::Load(d, iota + k), offset), a), d, right_arg + k);
   }
 }
 
@@ -581,10 +606,9 @@ HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int 
                                  const int32_t* first, int D, int Dp, float* disparity, float* confidence) {
   const DU16 d;
   WinnerBatch batch;
-  int xs[kWinnerBatch];
+  const int x0 = dx > 0 ? i - slot : p.width - 1 - (i - slot);  // the batch's first pixel
   for (int j = 0; j <= slot; ++j) {
-    const int xj = dx > 0 ? i - slot + j : p.width - 1 - (i - slot + j);
-    xs[j] = xj;
+    const int xj = x0 + dx * j;
     uint16_t* sums = b.sums + j * b.padded;
     const int first_j = first != nullptr ? first[j] : 0;
     // The right image's minimum first: pickWinner() masks lanes of the sums.
@@ -595,7 +619,7 @@ HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int 
                             one_vector ? hn::Set(d, kNoCost) : hn::Load(d, b.batch_second + j * N)};
     pickWinner(p, b, xj, sums, lanes, batch, j, first_j, D, Dp);
   }
-  finishWinners(p, batch, slot + 1, xs, disparity, confidence, b.winner);
+  finishWinners(p, batch, slot + 1, x0, dx, disparity, confidence, b.winner);
 }
 
 void leftRightCheck(const SgmParams& p, const StripBuffers& b, float* disparity, float* confidence) {

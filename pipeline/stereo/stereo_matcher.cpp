@@ -12,6 +12,7 @@
 
 #include "common/error.h"
 #include "pipeline/stereo/band_placement.h"
+#include "pipeline/stereo/matcher_kernels.h"
 #include "pipeline/stereo/sgm_engine.h"
 
 namespace cenote::pipeline {
@@ -300,15 +301,10 @@ void shrinkImage(const cv::Mat& grey, int scale, cv::Mat& out) {
 
 void halveImage(const cv::Mat& grey, cv::Mat& half) {
   half.create((grey.rows + 1) / 2, (grey.cols + 1) / 2, CV_8UC1);
-  const int last_row = grey.rows - 1, last_column = grey.cols - 1;
+  const int last_row = grey.rows - 1;
   for (int y = 0; y < half.rows; ++y) {
-    const uint8_t* top = grey.ptr<uint8_t>(2 * y);
-    const uint8_t* bottom = grey.ptr<uint8_t>(std::min(2 * y + 1, last_row));
-    uint8_t* out = half.ptr<uint8_t>(y);
-    for (int x = 0; x < half.cols; ++x) {
-      const int x1 = std::min(2 * x + 1, last_column);
-      out[x] = static_cast<uint8_t>((top[2 * x] + top[x1] + bottom[2 * x] + bottom[x1] + 2) / 4);
-    }
+    detail::halveRow(grey.ptr<uint8_t>(2 * y), grey.ptr<uint8_t>(std::min(2 * y + 1, last_row)), grey.cols, half.cols,
+                     half.ptr<uint8_t>(y));
   }
 }
 
@@ -317,11 +313,8 @@ cv::Mat prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap) {
   cv::Mat derivative;
   cv::Sobel(grey, derivative, CV_16S, 1, 0, 3, 1.0, 0.0, cv::BORDER_REPLICATE);
   cv::Mat out(grey.size(), CV_8UC1);
-  for (int y = 0; y < grey.rows; ++y) {
-    const int16_t* in = derivative.ptr<int16_t>(y);
-    uint8_t* o = out.ptr<uint8_t>(y);
-    for (int x = 0; x < grey.cols; ++x) o[x] = static_cast<uint8_t>(std::clamp<int>(in[x], -cap, cap) + cap);
-  }
+  for (int y = 0; y < grey.rows; ++y)
+    detail::clampDerivativeRow(derivative.ptr<int16_t>(y), grey.cols, cap, out.ptr<uint8_t>(y));
   return out;
 }
 
@@ -330,11 +323,7 @@ cv::Mat disparityToDepth(const cv::Mat& disparity, double focal_px, double basel
   cv::Mat depth(disparity.size(), CV_32FC1);
   const float fb = static_cast<float>(focal_px * baseline_m);
   for (int y = 0; y < disparity.rows; ++y) {
-    const float* d = disparity.ptr<float>(y);
-    float* z = depth.ptr<float>(y);
-    for (int x = 0; x < disparity.cols; ++x) {
-      z[x] = (std::isfinite(d[x]) && d[x] > 0.0f) ? fb / d[x] : std::numeric_limits<float>::infinity();
-    }
+    detail::depthFromDisparityRow(disparity.ptr<float>(y), disparity.cols, fb, depth.ptr<float>(y));
   }
   return depth;
 }
