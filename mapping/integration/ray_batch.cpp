@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "mapping/integration/point_voxels.h"
 #include "mapping/integration/voxel_ray.h"
 
 namespace cenote::mapping {
@@ -184,9 +185,11 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
     Chunk& chunk = chunks_[c];
     chunk.updates.clearMasks();
     chunk.endpoints.clear();
-    for (size_t i = n * c / num_chunks; i < n * (c + 1) / num_chunks; ++i) {
-      chunk.endpoints.add(toVoxel(batch.points[i].cast<double>(), voxel_size_m),
-                          batch.hasColor() ? batch.colors[i].data() : nullptr);
+    const size_t begin = n * c / num_chunks, count = n * (c + 1) / num_chunks - begin;
+    chunk.voxels.resize(count);
+    pointVoxels(batch.points.data() + begin, count, voxel_size_m, chunk.voxels.data());
+    for (size_t i = 0; i < count; ++i) {
+      chunk.endpoints.add(chunk.voxels[i], batch.hasColor() ? batch.colors[begin + i].data() : nullptr);
     }
     BatchUpdates& writer = chunk.updates;
     // Every voxel a ray of the chunk visits lies in the box of the origin's and the endpoints'

@@ -71,8 +71,9 @@ class RayBatch {
  private:
   // Scratch of one chunk of points.
   struct Chunk {
-    EndpointSet endpoints;  // unique endpoint voxels, in point order
-    BatchUpdates updates;   // masks only
+    std::vector<VoxelIndex> voxels;  // the voxel of each point (pointVoxels)
+    EndpointSet endpoints;           // unique endpoint voxels, in point order
+    BatchUpdates updates;            // masks only
   };
 
   BatchUpdates updates_;
