@@ -5,6 +5,7 @@
 #include <openvdb/tree/NodeManager.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <sstream>
 
@@ -134,13 +135,18 @@ void OccupancyMap::checkBatch(const PointBatch& batch) const {
                 std::to_string(batch.points.size()) + " points (must be equal, or no colours)");
   }
   const float limit_f = static_cast<float>(limit_m);
-  // One pass without branches (|x| < limit is false for NaN and infinity too); the message's loop
-  // below runs only for a bad batch.
-  bool all_good = true;
-  for (const Eigen::Vector3f& p : batch.points) {
-    all_good &= (std::fabs(p.x()) < limit_f) & (std::fabs(p.y()) < limit_f) & (std::fabs(p.z()) < limit_f);
+  // |x| < limit_f for every coordinate, in one vectorised pass without branches; the message's
+  // loop below runs only for a bad batch. As integers, the bits of |x| less those of limit_f
+  // (positive, finite) are negative exactly when |x| < limit_f (NaN and infinity have larger
+  // bits), so the AND of all the differences is negative when every coordinate is good. Over
+  // the points as one array of floats: a bool &= per point and axis did not vectorise.
+  const uint32_t limit_bits = std::bit_cast<uint32_t>(limit_f);
+  const float* xyz = batch.points.front().data();
+  uint32_t all_below = ~0u;
+  for (size_t i = 0; i < 3 * batch.points.size(); ++i) {
+    all_below &= (std::bit_cast<uint32_t>(xyz[i]) & 0x7fffffffu) - limit_bits;
   }
-  if (all_good) return;
+  if ((all_below >> 31) != 0) return;
   for (size_t i = 0; i < batch.points.size(); ++i) {
     const Eigen::Vector3f& p = batch.points[i];
     if (!p.allFinite() || (p.array().abs() >= limit_f).any()) {

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <sstream>
+#include <string>
 
 #include "common/error.h"
 #include "tests/mapping/support/analytic_scene.h"
@@ -175,6 +177,32 @@ TEST(OccupancyMap, EndpointsAtTheRangeLimitStayDistinct) {
     }
   }
   EXPECT_THROW(map.integrate(oneRay(batch.origin, Eigen::Vector3f(2.5f, static_cast<float>(edge - 1.0), 0.0f))), Error);
+}
+
+// checkBatch's limit is |x| < kMaxVoxelIndex voxels on each axis, whatever the sign (zero, -0.0
+// and the last float below the limit pass; the limit itself fails, with the point's message).
+TEST(OccupancyMap, PointsUpToTheRangeLimitPassAndTheLimitFails) {
+  OccupancyMap map(smallConfig(1.0));
+  const float limit = static_cast<float>(kMaxVoxelIndex);  // exact in float
+  PointBatch batch;
+  batch.origin = Eigen::Vector3d(0.5, -limit + 3.0, 0.5);
+  batch.points = {Eigen::Vector3f(-0.0f, std::nextafter(-limit, 0.0f), 0.0f),
+                  Eigen::Vector3f(2.5f, std::nextafter(-limit, 0.0f), -0.0f)};
+  EXPECT_NO_THROW(map.integrate(batch));
+  for (const Eigen::Vector3f& bad : {Eigen::Vector3f(2.5f, -limit, 0.0f), Eigen::Vector3f(2.5f, 0.0f, limit)}) {
+    batch.points.push_back(bad);
+    try {
+      map.integrate(batch);
+      ADD_FAILURE() << "accepted " << bad.transpose();
+    } catch (const Error& e) {
+      std::ostringstream point;
+      point << "(" << bad.x() << ", " << bad.y() << ", " << bad.z() << ")";
+      EXPECT_EQ(std::string(e.what()), "map: point 2 of the batch is " + point.str() + ": must be finite and within " +
+                                           std::to_string(static_cast<double>(kMaxVoxelIndex)) +
+                                           " m of 0 (t = " + std::to_string(0.0) + " s)");
+    }
+    batch.points.pop_back();
+  }
 }
 
 // Analytic scenes: occupied voxels within one voxel of the surface; free between camera and
