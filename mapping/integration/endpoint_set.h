@@ -26,21 +26,29 @@ class EndpointSet {
     table_.clear();
     voxels_.clear();
     sums_.clear();
+    recent_.fill({detail::BlockTable::kEmpty, 0});
     last_ = kNoVoxel;
   }
 
   // Adds one point's voxel; rgb: its colour, or null for an uncoloured point. Neighbouring pixels
   // mostly fall into the same voxel (6 pixels per 5 cm voxel at 5 m): the last voxel's slot is
-  // kept, which skips most hash lookups.
+  // kept, which skips most lookups. The next row of pixels mostly falls into the voxels of the
+  // row before: a small direct-mapped cache of recent voxels (4 KiB, in L1) answers most of the
+  // rest, before the table (hundreds of KiB, a cache miss and a longer hash per probe).
   void add(const VoxelIndex& ijk, const uint8_t* rgb) {
     if (ijk != last_) {
-      bool inserted;
-      last_slot_ = table_.findOrInsert(detail::packIndex(ijk), inserted);
       last_ = ijk;
-      if (inserted) {
-        voxels_.push_back(ijk);
-        sums_.push_back({0, 0, 0, 0});
+      const uint64_t key = detail::packIndex(ijk);
+      Recent& recent = recent_[(key * 0x9e3779b97f4a7c15ull) >> (64 - kRecentBits)];  // Fibonacci hashing
+      if (recent.key != key) {
+        bool inserted;
+        recent = {key, table_.findOrInsert(key, inserted)};
+        if (inserted) {
+          voxels_.push_back(ijk);
+          sums_.push_back({0, 0, 0, 0});
+        }
       }
+      last_slot_ = recent.slot;
     }
     if (rgb != nullptr) {
       auto& sum = sums_[last_slot_];
@@ -74,6 +82,17 @@ class EndpointSet {
   }
 
  private:
+  struct Recent {
+    uint64_t key;  // packIndex of a voxel, or BlockTable::kEmpty (no voxel packs to it)
+    uint32_t slot;
+  };
+  static constexpr int kRecentBits = 8;
+  std::array<Recent, size_t{1} << kRecentBits> recent_ = filledRecent();  // voxels' slots, by hash of their key
+  static std::array<Recent, size_t{1} << kRecentBits> filledRecent() {
+    std::array<Recent, size_t{1} << kRecentBits> r;
+    r.fill({detail::BlockTable::kEmpty, 0});
+    return r;
+  }
   detail::BlockTable table_;  // voxel -> index in voxels_
   std::vector<VoxelIndex> voxels_;
   std::vector<std::array<uint32_t, 4>> sums_;                                      // r, g, b, count per voxel
