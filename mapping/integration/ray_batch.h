@@ -5,7 +5,8 @@
 //     neighbouring pixels mostly share one); each ray then goes from the origin to the centre of its
 //     endpoint voxel. 270k stereo points at 5 cm fall into a few tens of thousands of voxels, so
 //     this removes most of the work and changes nothing a 5 cm map can represent. The colour of an
-//     endpoint voxel is the mean of its points' colours.
+//     endpoint voxel is the mean of its points' colours. The points' voxels come from a SIMD kernel
+//     (point_voxels.h) that gives toVoxel's bits at a multiplication's cost.
 //  2. Rays are marched with a 3D DDA (the voxels of the segment from the origin to the endpoint
 //     voxel's centre, ties as OctoMap's computeRayKeys) into per-block bit masks (8x8x8 voxels =
 //     512 bits per mask, a free mask and a hit mask), looked up only when the ray crosses into
