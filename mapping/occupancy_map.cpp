@@ -285,6 +285,7 @@ MapDelta OccupancyMap::integrateDepth(const DepthFrame& frame) {
 MapDelta OccupancyMap::publish(const BatchUpdates& updates, size_t points_used) {
   MapDelta delta;
   delta.points_used = points_used;
+  delta.voxels_updated = updates.numUpdated();
   const double s = voxelSize();
   auto& tree = impl_->log_odds->tree();
   openvdb::tree::ValueAccessor<detail::LogOddsTree, false> acc(tree);
@@ -309,7 +310,6 @@ MapDelta OccupancyMap::publish(const BatchUpdates& updates, size_t points_used) 
         uint64_t& known = known_mask.template getWord<uint64_t>(w);
         const uint64_t hits = masks.hit[w];
         const uint64_t update = masks.free[w] | hits;
-        delta.voxels_updated += static_cast<uint64_t>(__builtin_popcountll(update));
         changed[w] = detail::publishWord(values + w * 64, known, update, hits, model_);
         known |= changed[w];
       }

@@ -6,6 +6,28 @@
 #include <utility>
 
 namespace cenote::mapping {
+namespace {
+
+// Occupied wins in every block's masks (free &= ~hit); returns the set bits of both, i.e. the
+// voxels updated. The x86-64 baseline has no POPCNT instruction (__builtin_popcountll is then a
+// call into libgcc per word): a clone for CPUs with it, chosen once at load time (ifunc).
+#if defined(__x86_64__) && defined(__GNUC__)
+[[gnu::target_clones("popcnt", "default")]]
+#endif
+uint64_t
+resolveMasks(BlockMasks* masks, size_t n) {
+  uint64_t updated = 0;
+  for (size_t b = 0; b < n; ++b) {
+    BlockMasks& m = masks[b];
+    for (int w = 0; w < 8; ++w) {
+      m.free[w] &= ~m.hit[w];
+      updated += static_cast<uint64_t>(__builtin_popcountll(m.free[w] | m.hit[w]));
+    }
+  }
+  return updated;
+}
+
+}  // namespace
 
 void BatchUpdates::clearMasks() {
   releaseWindow();
@@ -71,9 +93,7 @@ void BatchUpdates::finish(const EndpointSet& endpoints, bool colored) {
 }
 
 void BatchUpdates::finishMasks() {
-  for (BlockMasks& m : masks_) {
-    for (int w = 0; w < 8; ++w) m.free[w] &= ~m.hit[w];
-  }
+  num_updated_ = resolveMasks(masks_.data(), masks_.size());
   order_.resize(masks_.size());
   std::iota(order_.begin(), order_.end(), 0u);
   std::sort(order_.begin(), order_.end(), [&](uint32_t a, uint32_t b) { return table_.keyOf(a) < table_.keyOf(b); });

@@ -28,6 +28,8 @@ class BatchUpdates {
   size_t numBlocks() const { return blocks_.size(); }
   const BlockIndex& block(size_t i) const { return blocks_[i]; }
   const BlockMasks& masks(size_t i) const { return masks_[order_[i]]; }
+  // After finish(): the voxels updated (set bits of all free and hit masks).
+  uint64_t numUpdated() const { return num_updated_; }
   // After finish(): mean colour of every hit voxel (empty for an uncoloured batch).
   const std::vector<EndpointColor>& colors() const { return colors_; }
 
@@ -80,6 +82,7 @@ class BatchUpdates {
   std::vector<BlockIndex> blocks_;
   std::vector<uint32_t> order_;  // slots in ascending packed order
   std::vector<EndpointColor> colors_;
+  uint64_t num_updated_ = 0;
   // The window (setWindow): slots of the blocks from window_min_ on, x slowest; kNone where a
   // block has none yet, and everywhere between builds. window_size_ 0: no window.
   std::vector<uint32_t> window_;
