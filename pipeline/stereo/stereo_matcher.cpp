@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <initializer_list>
 #include <opencv2/imgproc.hpp>
 #include <utility>
@@ -53,8 +54,8 @@ struct MatchLevel {
   cv::Mat guide_bordered;                        // grey left image, for the adaptive P2
   cv::Mat left_bordered, right_bordered;         // what the cost compares
   cv::Mat census_left, census_right;
-  cv::Mat derivative[2], prefiltered[2];  // per side (left, right): prefilterForSad()'s memory
-  detail::SgmImages images;               // views of the above
+  cv::Mat derivative[2];     // per side (left, right): prefilterForSad()'s scratch
+  detail::SgmImages images;  // views of the above
 };
 
 // Coarse to fine, per strip: the strip's own coarse match (so that a strip never waits for
@@ -100,6 +101,21 @@ detail::SgmParams paramsOf(const StereoConfig& config) {
   return p;
 }
 
+// Replicates the outermost pixels of `bordered`'s interior (all but `b` pixels on each side) into
+// its border, as cv::copyMakeBorder(BORDER_REPLICATE) would: rows first, then the top and bottom.
+void replicateBorder(cv::Mat& bordered, int b) {
+  const int width = bordered.cols - 2 * b, height = bordered.rows - 2 * b;
+  for (int y = b; y < b + height; ++y) {
+    uint8_t* row = bordered.ptr<uint8_t>(y);
+    std::memset(row, row[b], b);
+    std::memset(row + b + width, row[b + width - 1], b);
+  }
+  for (int y = 0; y < b; ++y) {
+    std::memcpy(bordered.ptr<uint8_t>(y), bordered.ptr<uint8_t>(b), bordered.cols);
+    std::memcpy(bordered.ptr<uint8_t>(b + height + y), bordered.ptr<uint8_t>(b + height - 1), bordered.cols);
+  }
+}
+
 // Borders and prefilters one image of a pair for matching at its size (the left one also as
 // the guide of the adaptive P2). The two sides touch different members: they may run at once.
 void prepareSide(MatchLevel& level, const StereoConfig& config, const cv::Mat& image, bool is_left) {
@@ -108,9 +124,11 @@ void prepareSide(MatchLevel& level, const StereoConfig& config, const cv::Mat& i
   cv::Mat& bordered = is_left ? level.left_bordered : level.right_bordered;
   if (is_left) cv::copyMakeBorder(image, level.guide_bordered, b, b, b, b, cv::BORDER_REPLICATE);
   if (prefiltered) {
-    const int side = is_left ? 0 : 1;
-    prefilterForSad(image, config.prefilter, config.prefilter_cap, level.derivative[side], level.prefiltered[side]);
-    cv::copyMakeBorder(level.prefiltered[side], bordered, b, b, b, b, cv::BORDER_REPLICATE);
+    // Prefiltered straight into the bordered image's interior (no copy of it), then bordered.
+    bordered.create(image.rows + 2 * b, image.cols + 2 * b, CV_8UC1);
+    cv::Mat interior = bordered(cv::Rect(b, b, image.cols, image.rows));
+    prefilterForSad(image, config.prefilter, config.prefilter_cap, level.derivative[is_left ? 0 : 1], interior);
+    replicateBorder(bordered, b);
   } else if (is_left) {
     bordered = level.guide_bordered;
   } else {

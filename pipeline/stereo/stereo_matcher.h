@@ -53,7 +53,7 @@ class StereoMatcher {
 // (3x3 Sobel, replicated border); for kNone the image itself. @param grey CV_8UC1.
 cv::Mat prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap);
 // The same into `out`, with `derivative` (CV_16S) as scratch: both keep their memory when they
-// already have the size (`out` must not share grey's pixels).
+// already have the size (`out` may be a view into a larger image; it must not share grey's pixels).
 void prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap, cv::Mat& derivative, cv::Mat& out);
 
 // The 2x2 mean of `grey` (CV_8UC1), rounded: (a + b + c + d + 2) / 4; an odd last row or column
