@@ -13,10 +13,15 @@
 #include <vector>
 
 #include "io/image/big_endian.h"
+#include "io/image/mat_recycler.h"
 #include "io/image/png_unfilter.h"
 
 namespace cenote::io {
 namespace {
+
+// Decoded images kept for reuse per thread: what `cenote run` holds at once (both images of the
+// frames in its queues, the left ones of the fusion window's views), and a few more.
+constexpr std::size_t kRecycledImages = 16;
 
 // Chunks that do not change the pixels cv::imread returns (it applies no gamma, colour profile
 // or background). Any other chunk sends the file to OpenCV.
@@ -166,7 +171,10 @@ cv::Mat decodePngFast(const uint8_t* data, std::size_t size, ChunkCrc crc) {
     prev = row + 1;
   }
   const cv::Mat unfiltered(height, width, CV_MAKETYPE(CV_8U, channels), raw.data() + 1, stride);
-  cv::Mat image;
+  // A stereo run's frames are all of one size and a pipeline holds a few of them at once (queues,
+  // the fusion window): their memory is reused once they are dropped (mat_recycler.h).
+  thread_local MatRecycler images(kRecycledImages);
+  cv::Mat image = images.take(height, width, unfiltered.type());
   if (channels == 1) unfiltered.copyTo(image);
   if (channels == 3) cv::cvtColor(unfiltered, image, cv::COLOR_RGB2BGR);
   if (channels == 4) cv::cvtColor(unfiltered, image, cv::COLOR_RGBA2BGRA);

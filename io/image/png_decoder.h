@@ -23,6 +23,8 @@ enum class ChunkCrc { kCheck, kAlreadyChecked };
 // Decodes a whole PNG file held in memory.
 // @return CV_8UC1 (grey), CV_8UC3 (BGR) or CV_8UC4 (BGRA), the channel order of cv::imread; an
 //   empty Mat when the file is not one of the handled kinds or cannot be decoded (never throws).
+//   Its memory is that of an image this thread decoded before and everyone has dropped, when
+//   there is one of the size (mat_recycler.h): a stream of frames is not page-faulted in afresh.
 cv::Mat decodePngFast(const uint8_t* data, std::size_t size, ChunkCrc crc = ChunkCrc::kCheck);
 
 // What decodePngFast() reads before inflating: the image's size and channel count, and the zlib

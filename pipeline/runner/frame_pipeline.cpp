@@ -3,6 +3,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/thread_name.h"
+#include "io/image/mat_recycler.h"
 #include "pipeline/fusion/back_projection.h"
 #include "pipeline/fusion/fusion_window.h"
 #include "pipeline/runner/team_cpu.h"
@@ -15,10 +16,13 @@ using Clock = std::chrono::steady_clock;
 
 // Batches kept for reuse: the outputs in flight between fusion and the consumer, and one more.
 constexpr size_t kMaxSpare = 4;
+// The stereo stage's images kept for reuse (depths and converted colours): those in the depth
+// queue and the fusion window at once, and a few more.
+constexpr size_t kRecycledMaps = 12;
 
-cv::Mat toBgr(const cv::Mat& image) {
+cv::Mat toBgr(const cv::Mat& image, io::MatRecycler& images) {
   if (image.channels() == 3) return image;
-  cv::Mat bgr;
+  cv::Mat bgr = images.take(image.rows, image.cols, CV_8UC3);
   cv::cvtColor(image, bgr, image.channels() == 4 ? cv::COLOR_BGRA2BGR : cv::COLOR_GRAY2BGR);
   return bgr;
 }
@@ -96,15 +100,18 @@ void FramePipeline::join() {
 
 void FramePipeline::stereoStage() {
   StereoMatcher matcher(config_.stereo);
+  // Depths and colours live on in the fusion window: their memory is reused once it drops them.
+  io::MatRecycler images(kRecycledMaps);
   while (std::optional<PosedPair> item = rectified_.pop()) {
     const auto t0 = Clock::now();
     const StereoGeometry& g = item->pair.geometry;
     const DisparityMap map = matcher.match(item->pair.left, item->pair.right);
     DepthFrame frame;
     frame.t_s = item->pair.t_s;
-    frame.depth = disparityToDepth(map.disparity, g.fx, g.baseline_m);
+    frame.depth = images.take(map.disparity.rows, map.disparity.cols, CV_32FC1);
+    disparityToDepth(map.disparity, g.fx, g.baseline_m, frame.depth);
     frame.confidence = map.confidence;
-    frame.color = toBgr(item->pair.left);
+    frame.color = toBgr(item->pair.left, images);
     frame.K = g.K();
     frame.T_world_cam = item->T_world_cam;
     ++processed_;

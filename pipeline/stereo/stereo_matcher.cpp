@@ -1,16 +1,17 @@
 #include "pipeline/stereo/stereo_matcher.h"
 
-#include <atomic>
 #include <omp.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <initializer_list>
 #include <opencv2/imgproc.hpp>
 #include <utility>
 #include <vector>
 
 #include "common/error.h"
+#include "io/image/mat_recycler.h"
 #include "pipeline/stereo/band_placement.h"
 #include "pipeline/stereo/matcher_kernels.h"
 #include "pipeline/stereo/sgm_engine.h"
@@ -18,13 +19,17 @@
 namespace cenote::pipeline {
 namespace {
 
-cv::Mat toGrey(const cv::Mat& image, const char* which) {
+// Result images kept for reuse: the disparities and confidences of the frames a pipeline holds
+// at once (its queues, the fusion window), and a few more.
+constexpr std::size_t kRecycledResults = 16;
+
+// `image` as grey: itself, or converted into `grey` (kept by the matcher, so its memory is reused).
+cv::Mat toGrey(const cv::Mat& image, const char* which, cv::Mat& grey) {
   if (image.empty()) throw Error(std::string("stereo: ") + which + " image is empty");
   if (image.depth() != CV_8U) {
     throw Error(std::string("stereo: ") + which + " image must be 8-bit, got depth " + std::to_string(image.depth()));
   }
   if (image.channels() == 1) return image;
-  cv::Mat grey;
   if (image.channels() == 3) {
     cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
   } else if (image.channels() == 4) {
@@ -49,6 +54,7 @@ struct MatchLevel {
   cv::Mat guide_bordered;                        // grey left image, for the adaptive P2
   cv::Mat left_bordered, right_bordered;         // what the cost compares
   cv::Mat census_left, census_right;
+  cv::Mat derivative[2];     // per side (left, right): prefilterForSad()'s scratch
   detail::SgmImages images;  // views of the above
 };
 
@@ -65,7 +71,10 @@ struct StereoMatcher::Impl {
   MatchLevel coarse;  // coarse to fine only: the pair shrunk by coarse_scale
   cv::Mat coarse_left, coarse_right;
   std::vector<StripBands> bands;  // one per strip
-  DisparityMap result;            // the last frame's result, shared with the caller
+  cv::Mat grey_left, grey_right;  // colour inputs converted
+  // The results' images, reused once the caller has dropped them (a frame's confidence lives on
+  // in the fusion window): a fresh 4 MB per frame at 800x600 would be page-faulted in each time.
+  io::MatRecycler results{kRecycledResults};
 };
 
 namespace {
@@ -92,6 +101,21 @@ detail::SgmParams paramsOf(const StereoConfig& config) {
   return p;
 }
 
+// Replicates the outermost pixels of `bordered`'s interior (all but `b` pixels on each side) into
+// its border, as cv::copyMakeBorder(BORDER_REPLICATE) would: rows first, then the top and bottom.
+void replicateBorder(cv::Mat& bordered, int b) {
+  const int width = bordered.cols - 2 * b, height = bordered.rows - 2 * b;
+  for (int y = b; y < b + height; ++y) {
+    uint8_t* row = bordered.ptr<uint8_t>(y);
+    std::memset(row, row[b], b);
+    std::memset(row + b + width, row[b + width - 1], b);
+  }
+  for (int y = 0; y < b; ++y) {
+    std::memcpy(bordered.ptr<uint8_t>(y), bordered.ptr<uint8_t>(b), bordered.cols);
+    std::memcpy(bordered.ptr<uint8_t>(b + height + y), bordered.ptr<uint8_t>(b + height - 1), bordered.cols);
+  }
+}
+
 // Borders and prefilters one image of a pair for matching at its size (the left one also as
 // the guide of the adaptive P2). The two sides touch different members: they may run at once.
 void prepareSide(MatchLevel& level, const StereoConfig& config, const cv::Mat& image, bool is_left) {
@@ -100,8 +124,11 @@ void prepareSide(MatchLevel& level, const StereoConfig& config, const cv::Mat& i
   cv::Mat& bordered = is_left ? level.left_bordered : level.right_bordered;
   if (is_left) cv::copyMakeBorder(image, level.guide_bordered, b, b, b, b, cv::BORDER_REPLICATE);
   if (prefiltered) {
-    cv::copyMakeBorder(prefilterForSad(image, config.prefilter, config.prefilter_cap), bordered, b, b, b, b,
-                       cv::BORDER_REPLICATE);
+    // Prefiltered straight into the bordered image's interior (no copy of it), then bordered.
+    bordered.create(image.rows + 2 * b, image.cols + 2 * b, CV_8UC1);
+    cv::Mat interior = bordered(cv::Rect(b, b, image.cols, image.rows));
+    prefilterForSad(image, config.prefilter, config.prefilter_cap, level.derivative[is_left ? 0 : 1], interior);
+    replicateBorder(bordered, b);
   } else if (is_left) {
     bordered = level.guide_bordered;
   } else {
@@ -149,18 +176,6 @@ void censusTransforms(const std::vector<MatchLevel*>& levels) {
   }
 }
 
-// The memory of this frame's result: the last frame's (`kept`) when the caller no longer holds
-// any of it, so that a frame does not fault in 4 MB of fresh pages at 800x600; else new memory.
-DisparityMap resultBuffers(DisparityMap& kept) {
-  // OpenCV drops references with an atomic decrement, possibly on the caller's consumer thread:
-  // an acquire load orders that thread's last reads of the result before our next writes.
-  auto onlyHere = [](const cv::Mat& m) {
-    return m.u != nullptr && std::atomic_ref<int>(m.u->refcount).load(std::memory_order_acquire) == 1;
-  };
-  if (!onlyHere(kept.disparity) || !onlyHere(kept.confidence)) kept = DisparityMap{};
-  return kept;
-}
-
 detail::SgmOutput outputOf(DisparityMap& map, const detail::SgmParams& p) {
   map.disparity.create(p.height, p.width, CV_32FC1);
   map.confidence.create(p.height, p.width, CV_32FC1);
@@ -204,20 +219,19 @@ StereoMatcher::StereoMatcher(StereoMatcher&&) noexcept = default;
 StereoMatcher& StereoMatcher::operator=(StereoMatcher&&) noexcept = default;
 
 DisparityMap StereoMatcher::match(const cv::Mat& left_in, const cv::Mat& right_in) {
-  const cv::Mat left = toGrey(left_in, "left");
-  const cv::Mat right = toGrey(right_in, "right");
+  Impl& impl = *impl_;
+  const cv::Mat left = toGrey(left_in, "left", impl.grey_left);
+  const cv::Mat right = toGrey(right_in, "right", impl.grey_right);
   if (left.size() != right.size()) {
     throw Error("stereo: right image is " + sizeText(right) + " but left is " + sizeText(left));
   }
-  Impl& impl = *impl_;
   const bool band = config_.usesBand();
   detail::SgmParams& p = impl.full.params;
   const detail::SgmParams& pc = impl.coarse.params;
   p.width = left.cols;
   p.height = left.rows;
-  DisparityMap result = resultBuffers(impl.result);
+  DisparityMap result{impl.results.take(p.height, p.width, CV_32FC1), impl.results.take(p.height, p.width, CV_32FC1)};
   const detail::SgmOutput output = outputOf(result, p);
-  impl.result = result;
   const int strips = std::min(config_.num_strips, p.height);
   const std::vector<int> strip_begin = stripBoundaries(strips, p.height, config_.strip_overlap_px, p.eight_paths);
   const int overlap = config_.strip_overlap_px;
@@ -310,22 +324,37 @@ void halveImage(const cv::Mat& grey, cv::Mat& half) {
 
 cv::Mat prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap) {
   if (prefilter == Prefilter::kNone) return grey;
-  cv::Mat derivative;
-  cv::Sobel(grey, derivative, CV_16S, 1, 0, 3, 1.0, 0.0, cv::BORDER_REPLICATE);
-  cv::Mat out(grey.size(), CV_8UC1);
-  for (int y = 0; y < grey.rows; ++y)
-    detail::clampDerivativeRow(derivative.ptr<int16_t>(y), grey.cols, cap, out.ptr<uint8_t>(y));
+  cv::Mat derivative, out;
+  prefilterForSad(grey, prefilter, cap, derivative, out);
   return out;
 }
 
+void prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap, cv::Mat& derivative, cv::Mat& out) {
+  if (prefilter == Prefilter::kNone) {
+    grey.copyTo(out);
+    return;
+  }
+  cv::Sobel(grey, derivative, CV_16S, 1, 0, 3, 1.0, 0.0, cv::BORDER_REPLICATE);
+  out.create(grey.size(), CV_8UC1);
+  for (int y = 0; y < grey.rows; ++y)
+    detail::clampDerivativeRow(derivative.ptr<int16_t>(y), grey.cols, cap, out.ptr<uint8_t>(y));
+}
+
 cv::Mat disparityToDepth(const cv::Mat& disparity, double focal_px, double baseline_m) {
-  if (disparity.type() != CV_32FC1) throw Error("disparityToDepth: disparity must be CV_32FC1");
   cv::Mat depth(disparity.size(), CV_32FC1);
+  disparityToDepth(disparity, focal_px, baseline_m, depth);
+  return depth;
+}
+
+void disparityToDepth(const cv::Mat& disparity, double focal_px, double baseline_m, cv::Mat& depth) {
+  if (disparity.type() != CV_32FC1) throw Error("disparityToDepth: disparity must be CV_32FC1");
+  if (depth.type() != CV_32FC1 || depth.size() != disparity.size()) {
+    throw Error("disparityToDepth: depth must be CV_32FC1 of the disparity's size");
+  }
   const float fb = static_cast<float>(focal_px * baseline_m);
   for (int y = 0; y < disparity.rows; ++y) {
     detail::depthFromDisparityRow(disparity.ptr<float>(y), disparity.cols, fb, depth.ptr<float>(y));
   }
-  return depth;
 }
 
 }  // namespace cenote::pipeline

@@ -52,6 +52,9 @@ class StereoMatcher {
 // The image SAD compares under `prefilter`: for kSobelX, clamp(dI/dx, -cap, cap) + cap per pixel
 // (3x3 Sobel, replicated border); for kNone the image itself. @param grey CV_8UC1.
 cv::Mat prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap);
+// The same into `out`, with `derivative` (CV_16S) as scratch: both keep their memory when they
+// already have the size (`out` may be a view into a larger image; it must not share grey's pixels).
+void prefilterForSad(const cv::Mat& grey, Prefilter prefilter, int cap, cv::Mat& derivative, cv::Mat& out);
 
 // The 2x2 mean of `grey` (CV_8UC1), rounded: (a + b + c + d + 2) / 4; an odd last row or column
 // averages with itself. Size ((cols + 1) / 2, (rows + 1) / 2).
@@ -62,5 +65,7 @@ void shrinkImage(const cv::Mat& grey, int scale, cv::Mat& out);
 // Z = f * b / d per pixel; +inf where the disparity is invalid or not positive.
 // @param focal_px rectified focal length, @param baseline_m stereo baseline.
 cv::Mat disparityToDepth(const cv::Mat& disparity, double focal_px, double baseline_m);
+// The same into `depth`, which must be CV_32FC1 of the disparity's size (a recycled image).
+void disparityToDepth(const cv::Mat& disparity, double focal_px, double baseline_m, cv::Mat& depth);
 
 }  // namespace cenote::pipeline
