@@ -34,11 +34,13 @@ TEST(MatRecycler, KeepsAtMostMaxKept) {
   cv::Mat extra = recycler.take(4, 4, CV_8UC1);  // the kept one is held: a new one, not kept
   EXPECT_NE(extra.data, kept_memory);
   kept.release();
+  EXPECT_EQ(extra.u->refcount, 1);  // not kept: the recycler is full
   extra.release();
   EXPECT_EQ(recycler.take(4, 4, CV_8UC1).data, kept_memory);
   cv::Mat larger = recycler.take(5, 5, CV_8UC1);  // made while the free 4x4 one exists, then kept in its place
   EXPECT_NE(larger.data, kept_memory);
   const uchar* larger_memory = larger.data;
+  EXPECT_EQ(larger.u->refcount, 2);  // the recycler holds it too: kept (an address alone could be malloc's reuse)
   larger.release();
   EXPECT_EQ(recycler.take(5, 5, CV_8UC1).data, larger_memory);
 }
