@@ -48,18 +48,19 @@ class Reader {
  public:
   Reader(std::string_view bytes, const std::string& where) : bytes_(bytes), where_(where) {}
   uint64_t varint() {
-    // One or two bytes (most point deltas and keys) without a bounds check per byte.
-    if (bytes_.size() - pos_ >= 2) {
-      const auto b0 = static_cast<uint8_t>(bytes_[pos_]);
-      if ((b0 & 0x80) == 0) {
-        ++pos_;
-        return b0;
+    // With the longest varint's 10 bytes left, no bounds check per byte (most point deltas and
+    // keys take one or two).
+    if (bytes_.size() - pos_ >= 10) {
+      const auto* p = reinterpret_cast<const uint8_t*>(bytes_.data()) + pos_;
+      uint64_t v = p[0] & 0x7fu;
+      size_t n = 1;
+      for (int shift = 7; (p[n - 1] & 0x80) != 0; shift += 7) {
+        if (n == 10) fail("a varint longer than 10 bytes");
+        v |= static_cast<uint64_t>(p[n] & 0x7f) << shift;
+        ++n;
       }
-      const auto b1 = static_cast<uint8_t>(bytes_[pos_ + 1]);
-      if ((b1 & 0x80) == 0) {
-        pos_ += 2;
-        return (b0 & 0x7fu) | (static_cast<uint64_t>(b1) << 7);
-      }
+      pos_ += n;
+      return v;
     }
     uint64_t v = 0;
     for (int shift = 0; shift < 64; shift += 7) {
@@ -143,19 +144,24 @@ std::string deflate(const std::string& raw, int level) {
   return out;
 }
 
-// What deflateTo wrote.
-std::string inflate(libdeflate_decompressor* d, std::string_view packed, const std::string& where) {
+// What deflateTo wrote, into `raw` (its capacity reused).
+void inflateTo(libdeflate_decompressor* d, std::string_view packed, const std::string& where, std::string& raw) {
   Reader r(packed, where);
   const uint64_t raw_size = r.varint();
   if (raw_size > (uint64_t{1} << 34)) r.fail("a section larger than 16 GiB");
   const std::string_view stream = packed.substr(r.pos());
-  std::string raw(raw_size, '\0');
+  raw.resize(raw_size);
   size_t actual = 0;
   if (libdeflate_deflate_decompress(d, stream.data(), stream.size(), raw.data(), raw.size(), &actual) !=
           LIBDEFLATE_SUCCESS ||
       actual != raw_size) {
     r.fail("its deflate stream is broken");
   }
+}
+
+std::string inflate(libdeflate_decompressor* d, std::string_view packed, const std::string& where) {
+  std::string raw;
+  inflateTo(d, packed, where, raw);
   return raw;
 }
 
@@ -289,22 +295,52 @@ std::string encodePoints(const FramePoints& points, int level) {
   return deflate(raw, level);
 }
 
+namespace {
+
+// The points section (inflated): visit(i, q) for each stored point in order, its count first
+// (points(n)), then the colours into `colors`.
+template <typename Points, typename Visit>
+void parsePoints(const std::string& raw, const std::string& where, Points points, Visit visit,
+                 std::vector<std::array<uint8_t, 3>>& colors) {
+  Reader r(raw, where);
+  const size_t n = r.count(3);
+  points(n);
+  Eigen::Vector3i q = Eigen::Vector3i::Zero();
+  for (size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) q[k] = static_cast<int>(q[k] + unzigzag(r.varint()));
+    visit(i, q);
+  }
+  colors.resize(r.count(3));
+  static_assert(sizeof(std::array<uint8_t, 3>) == 3);
+  const std::string_view rgb = r.take(colors.size() * 3);
+  if (!rgb.empty()) std::memcpy(colors.data(), rgb.data(), rgb.size());
+  r.finish();
+}
+
+}  // namespace
+
 FramePoints decodePoints(const std::string& bytes, const std::string& where) {
   const std::string raw = inflate(bytes, where);
-  Reader r(raw, where);
   FramePoints out;
-  out.quantised.resize(r.count(3));
-  Eigen::Vector3i previous = Eigen::Vector3i::Zero();
-  for (Eigen::Vector3i& q : out.quantised) {
-    for (int k = 0; k < 3; ++k) q[k] = static_cast<int>(previous[k] + unzigzag(r.varint()));
-    previous = q;
-  }
-  out.colors.resize(r.count(3));
-  static_assert(sizeof(std::array<uint8_t, 3>) == 3);
-  const std::string_view rgb = r.take(out.colors.size() * 3);
-  if (!rgb.empty()) std::memcpy(out.colors.data(), rgb.data(), rgb.size());
-  r.finish();
+  parsePoints(
+      raw, where, [&](size_t n) { out.quantised.resize(n); },
+      [&](size_t i, const Eigen::Vector3i& q) { out.quantised[i] = q; }, out.colors);
   return out;
+}
+
+Eigen::AlignedBox3f decodePointsPosed(const std::string& bytes, const std::string& where,
+                                      const Eigen::Isometry3d& T_world_cam, double quantum_m, std::string& raw,
+                                      PointBatch& out) {
+  inflateTo(decompressor().get(), bytes, where, raw);
+  Eigen::AlignedBox3f box;
+  parsePoints(
+      raw, where, [&](size_t n) { out.points.resize(n); },
+      [&](size_t i, const Eigen::Vector3i& q) {
+        out.points[i] = toWorld(T_world_cam, q, quantum_m);
+        box.extend(out.points[i]);
+      },
+      out.colors);
+  return box;
 }
 
 std::string encodeUpdates(const FrameUpdates& updates, int level) {

@@ -34,6 +34,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -64,6 +65,13 @@ struct CorrectionSummary {
 struct CorrectionPlan {
   std::vector<std::pair<uint32_t, Eigen::Isometry3d>> moved;
   std::unordered_set<uint64_t> affected;  // detail::packIndex of the blocks
+};
+
+// The scratch of one frame moved at a time (MapHistory::moveFrames): its ray march, its points.
+struct MoveScratch {
+  RayBatch rays;
+  PointBatch batch;
+  std::string raw;  // the points' inflated bytes
 };
 
 class MapHistory {
@@ -120,8 +128,8 @@ class MapHistory {
 
  private:
   MapDelta integrateStored(const PointBatch& batch, const history::FrameMeta& meta);
-  // The ray-marching scratch of the slot-th frame marched side by side (0: the one of integrate()).
-  RayBatch& scratch(int slot);
+  // The scratch of the slot-th frame moved side by side; slot 0's rays are also integrate()'s.
+  MoveScratch& scratch(int slot);
   void index(uint32_t seq, const std::vector<uint64_t>& keys);
   void unindex(uint32_t seq, const std::vector<uint64_t>& keys);
   void enforceBudget();
@@ -129,8 +137,7 @@ class MapHistory {
 
   OccupancyMap& map_;
   history::FrameStore store_;
-  RayBatch rays_;
-  std::vector<RayBatch> extra_rays_;  // moveFrames' scratch beyond the first frame
+  std::vector<MoveScratch> moves_;  // moveFrames' (slot 0's ray march also integrate()'s)
   uint32_t next_seq_ = 0;
   std::unordered_map<uint64_t, std::vector<uint32_t>> frames_of_block_;  // ascending seqs
   std::unordered_set<uint64_t> sealed_;                                  // blocks a dropped frame touched
