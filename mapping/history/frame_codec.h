@@ -1,6 +1,6 @@
 // frame_codec.h: the bytes of one stored frame (frame_store.h): the frame's points, rounded in its
 // camera's frame, and the voxel updates its integration made, each section deflated on its own
-// (libdeflate) so that a replay of the updates never inflates the points.
+// (by libdeflate; inflated by ISA-L, io/compression/igzip_inflate.h) so that a replay of the updates never inflates the points.
 //   points: quantised camera-frame points q = round(p_cam / quantum) (int32 per axis), as zigzag
 //     LEB128 deltas from the previous point (neighbouring pixels: mostly 1-2 bytes per axis), then RGB.
 //   updates: three kinds of parts, each deflated on its own, so that a reader inflates only what it
