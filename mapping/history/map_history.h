@@ -104,8 +104,9 @@ class MapHistory {
   // affected blocks, so the result is the same as correct() after them. Steps of one plan run in
   // order on the writer, and no other correction starts before its finishCorrection().
   // moveFrames marches the moved frames [begin, end) side by side (up to map.num_threads at once,
-  // each on its share of the threads; the same result as moveFrame of each in order); MapHost
-  // takes movesAtOnce() of them per step. @throws IoError from the store, the frames before the
+  // each on its share of the threads; the same result as moveFrame of each in order); correct()
+  // takes movesAtOnce() of them per step, MapHost one (moveFrame: an ingest frame then waits for
+  // one frame's march at most). @throws IoError from the store, the frames before the
   // failing one moved.
   CorrectionPlan planCorrection(std::span<const CorrectedPose> poses);
   void moveFrame(CorrectionPlan& plan, size_t i);
