@@ -1,11 +1,9 @@
 // correction_bench: a loop-closure correction (mapping/history/map_history.h) beside the peer's
 // answer to the same correction, rebuilding the map from scratch with the corrected poses, in the
 // same run on the same frames.
-// The dive: a camera flying along a 3 m wide, 2.5 m high tunnel with rocks on its walls, at
-// 0.4 m/s and 15 Hz (2.7 cm a frame), yawing slowly from side to side, ray-cast exactly with 1 cm
-// depth noise (tests/mapping/support/analytic_scene.h). The odometry drifts over the last --moved
-// frames (growing to --drift metres along x and y and --drift-deg of yaw); the correction gives
-// every frame its true pose, so exactly those frames move.
+// The dive: bench/tunnel_dive.h, the odometry drifting over the last --moved frames (growing to
+// --drift metres along x and y and --drift-deg of yaw); the correction gives every frame its true
+// pose, so exactly those frames move.
 // Prints: ms per frame of integration with the frame store and without it, the store's bytes per
 // frame, the correction's time (and per moved frame), the from-scratch rebuild's time and the
 // ratio, and how far the corrected map agrees with the rebuilt one (voxel states).
@@ -18,10 +16,10 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "bench/tunnel_dive.h"
 #include "common/cpu_clock.h"
 #include "mapping/history/map_history.h"
 #include "mapping/occupancy_map.h"
-#include "tests/mapping/support/analytic_scene.h"
 #include "tests/mapping/support/known_blocks.h"
 
 namespace {
@@ -31,51 +29,6 @@ using namespace cenote::mapping;
 using Clock = std::chrono::steady_clock;
 
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
-struct Dive {
-  test::Scene scene;
-  PinholeCamera camera;
-  std::vector<Eigen::Isometry3d> truth, drifted;
-};
-
-Dive makeDive(int frames, int moved, int width, int height, double drift_m, double drift_deg) {
-  Dive d;
-  const double length = 0.4 / 15.0 * frames + 6.0;
-  d.scene.boxes.push_back({Eigen::Vector3d(-2.0, -1.5, -1.25), Eigen::Vector3d(length, 1.5, 1.25)});
-  for (int i = 0; i * 0.7 < length; ++i) {
-    const double side = (i % 2 == 0) ? 1.0 : -1.0;
-    d.scene.spheres.push_back({Eigen::Vector3d(0.7 * i, side * 1.5, -0.6 + 0.25 * (i % 5)), 0.25 + 0.05 * (i % 4)});
-  }
-  d.camera.width = width;
-  d.camera.height = height;
-  d.camera.fx = d.camera.fy = 0.75 * width;
-  d.camera.cx = (width - 1) / 2.0;
-  d.camera.cy = (height - 1) / 2.0;
-  for (int i = 0; i < frames; ++i) {
-    const double x = 0.4 / 15.0 * i;
-    const Eigen::Vector3d position(x, 0.3 * std::sin(0.05 * i), 0.1 * std::sin(0.03 * i));
-    const double yaw = 0.35 * std::sin(0.02 * i);
-    const Eigen::Isometry3d T = test::lookAt(position, position + Eigen::Vector3d(std::cos(yaw), std::sin(yaw), -0.05));
-    d.truth.push_back(T);
-    const int first_moved = frames - moved;
-    const double u = i < first_moved ? 0.0 : (i - first_moved + 1.0) / moved;
-    Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
-    D.linear() = Eigen::AngleAxisd(u * drift_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    D.translation() = Eigen::Vector3d(u * drift_m, u * drift_m, 0.0);
-    d.drifted.push_back(D * T);
-  }
-  return d;
-}
-
-// The frame the camera saw at its true pose, posed where the odometry put it.
-PointBatch frameAt(const Dive& d, int i, const Eigen::Isometry3d& T) {
-  PointBatch seen = test::renderBatch(d.scene, d.camera, d.truth[i], 10.0, 0.01, 1000 + i);
-  seen.t_s = i / 15.0;
-  const Eigen::Isometry3d T_delta = T * d.truth[i].inverse();
-  for (Eigen::Vector3f& p : seen.points) p = (T_delta * p.cast<double>()).cast<float>();
-  seen.origin = T.translation();
-  return seen;
-}
 
 double stateAgreement(const OccupancyMap& a, const OccupancyMap& b) {
   auto acc_a = a.constAccessor();
@@ -114,7 +67,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "--moved %d: must be at most --frames %d\n", moved, frames);
     return 2;
   }
-  const Dive dive = makeDive(frames, moved, width, height, drift_m, drift_deg);
+  const bench::TunnelDive dive = bench::makeTunnelDive(frames, moved, width, height, drift_m, drift_deg);
   MapConfig config;
   config.voxel_size_m = voxel;
   config.num_threads = threads;
@@ -126,7 +79,7 @@ int main(int argc, char** argv) {
   double with_store_ms = 0.0, with_store_cpu = 0.0;
   size_t points = 0;
   for (int i = 0; i < frames; ++i) {
-    const PointBatch batch = frameAt(dive, i, dive.drifted[i]);
+    const PointBatch batch = bench::tunnelFrame(dive, i, dive.drifted[i]);
     points += batch.size();
     const auto t0 = Clock::now();
     const double c0 = processCpuMs();
@@ -134,8 +87,7 @@ int main(int argc, char** argv) {
     with_store_ms += msSince(t0);
     with_store_cpu += processCpuMs() - c0;
   }
-  std::vector<CorrectedPose> poses;
-  for (int i = 0; i < frames; ++i) poses.push_back({i / 15.0, dive.truth[i]});
+  const std::vector<CorrectedPose> poses = bench::trueTunnelPoses(dive);
   // correct() in its steps, to time the moved frames' ray marches apart from the replay.
   const auto t0 = Clock::now();
   const double c0 = processCpuMs();
@@ -150,7 +102,7 @@ int main(int argc, char** argv) {
   OccupancyMap rebuilt(config);
   double rebuild_ms = 0.0, rebuild_cpu = 0.0, rebuild_moved_cpu = 0.0;
   for (int i = 0; i < frames; ++i) {
-    const PointBatch batch = frameAt(dive, i, dive.truth[i]);
+    const PointBatch batch = bench::tunnelFrame(dive, i, dive.truth[i]);
     const auto t1 = Clock::now();
     const double c1 = processCpuMs();
     rebuilt.integrate(batch);

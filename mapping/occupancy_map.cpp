@@ -124,6 +124,11 @@ Eigen::Vector3d OccupancyMap::toPoint(const VoxelIndex& ijk) const { return voxe
 uint64_t OccupancyMap::version() const { return impl_->version.load(); }
 
 void OccupancyMap::checkBatch(const PointBatch& batch) const {
+  checkBatchButPoints(batch);
+  checkPoints(batch);
+}
+
+void OccupancyMap::checkBatchButPoints(const PointBatch& batch) const {
   if (batch.empty()) throw Error("map: empty point batch (t = " + std::to_string(batch.t_s) + " s): nothing to integrate");
   const double limit_m = kMaxVoxelIndex * voxelSize();
   if (!batch.origin.allFinite() || (batch.origin.array().abs() >= limit_m).any()) {
@@ -134,6 +139,19 @@ void OccupancyMap::checkBatch(const PointBatch& batch) const {
     throw Error("map: batch has " + std::to_string(batch.colors.size()) + " colours for " +
                 std::to_string(batch.points.size()) + " points (must be equal, or no colours)");
   }
+}
+
+void OccupancyMap::checkBatch(const PointBatch& batch, const Eigen::AlignedBox3f& points_box) const {
+  if (points_box.isEmpty() || !points_box.min().allFinite() || !points_box.max().allFinite()) return checkBatch(batch);
+  const float limit_f = static_cast<float>(kMaxVoxelIndex * voxelSize());
+  if ((points_box.min().array().abs() >= limit_f).any() || (points_box.max().array().abs() >= limit_f).any()) {
+    return checkBatch(batch);
+  }
+  checkBatchButPoints(batch);
+}
+
+void OccupancyMap::checkPoints(const PointBatch& batch) const {
+  const double limit_m = kMaxVoxelIndex * voxelSize();
   const float limit_f = static_cast<float>(limit_m);
   // |x| < limit_f for every coordinate, in one vectorised pass without branches; the message's
   // loop below runs only for a bad batch. As integers, the bits of |x| less those of limit_f

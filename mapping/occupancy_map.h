@@ -19,6 +19,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -98,6 +99,9 @@ class OccupancyMap {
   MapDelta integrate(const PointBatch& batch);
   // The checks integrate() makes of a batch. @throws Error as integrate() does.
   void checkBatch(const PointBatch& batch) const;
+  // The same, given the box of the batch's points (computed where they were made): the box is
+  // checked instead of every point (each point only when the box fails, to name the bad one).
+  void checkBatch(const PointBatch& batch, const Eigen::AlignedBox3f& points_box) const;
   // The same as integrate(batch), computing the updates in the caller's `rays`, which holds them afterwards (the frame
   // store records them: history/map_history.h).
   MapDelta integrate(const PointBatch& batch, RayBatch& rays);
@@ -176,6 +180,9 @@ class OccupancyMap {
  private:
   friend class detail::MapAccess;
   void checkDepthFrame(const DepthFrame& frame) const;
+  // checkBatch's two halves: everything but the points, and the points one by one.
+  void checkBatchButPoints(const PointBatch& batch) const;
+  void checkPoints(const PointBatch& batch) const;
   // Writes the updates of a computed batch (RayBatch or ProjectiveBatch, from points_used points)
   // into the grids, publish_blocks blocks per exclusive lock. Called with the writer mutex held.
   MapDelta publish(const BatchUpdates& updates, size_t points_used);

@@ -1,6 +1,7 @@
 #include "io/image/png_decoder.h"
 
-#include <isa-l/igzip_lib.h>
+#include "io/compression/igzip_inflate.h"
+
 #include <libdeflate.h>
 
 #include <opencv2/imgproc.hpp>
@@ -30,22 +31,6 @@ bool isIgnorableChunk(std::string_view type) {
     if (type == ok) return true;
   }
   return false;
-}
-
-// Inflates the zlib stream `in` into exactly `out_size` bytes at `out`; false for a damaged
-// stream, a wrong Adler-32, or one that holds fewer or more bytes. ISA-L's igzip inflates a
-// noisy 800x600 frame in about 0.63x libdeflate's time (io/image/png_decoder.h).
-bool inflateZlibExactly(std::span<const uint8_t> in, uint8_t* out, std::size_t out_size) {
-  // One state per thread, kept between calls: it is 87 KB, too large for every thread's stack.
-  thread_local const std::unique_ptr<inflate_state> state = std::make_unique<inflate_state>();
-  isal_inflate_init(state.get());
-  state->crc_flag = ISAL_ZLIB;  // parse the zlib header, check the Adler-32 at the end
-  state->next_in = const_cast<uint8_t*>(in.data());
-  state->avail_in = static_cast<uint32_t>(in.size());
-  state->next_out = out;
-  state->avail_out = static_cast<uint32_t>(out_size);
-  // A longer stream ends in ISAL_OUT_OVERFLOW, a shorter one leaves output space.
-  return isal_inflate_stateless(state.get()) == ISAL_DECOMP_OK && state->avail_out == 0;
 }
 
 uint8_t paeth(int left, int up, int up_left) {
@@ -160,7 +145,7 @@ cv::Mat decodePngFast(const uint8_t* data, std::size_t size, ChunkCrc crc) {
   // Reused per thread: a fresh buffer of this size would be page-faulted in for every frame.
   thread_local std::vector<uint8_t> raw;
   raw.resize(stride * height);
-  if (!inflateZlibExactly(png.zlib, raw.data(), raw.size())) return {};
+  if (!inflateExactly(png.zlib, raw.data(), raw.size(), DeflateWrapper::kZlib)) return {};
   // Rows are unfiltered in place (a row's filter reads only bytes before it, already unfiltered),
   // then copied out once: for colour, by the RGB(A) -> BGR(A) conversion into OpenCV's order.
   const std::vector<uint8_t> zeros(row_bytes, 0);

@@ -1,6 +1,6 @@
 // frame_codec.h: the bytes of one stored frame (frame_store.h): the frame's points, rounded in its
 // camera's frame, and the voxel updates its integration made, each section deflated on its own
-// (libdeflate) so that a replay of the updates never inflates the points.
+// (by libdeflate; inflated by ISA-L, io/compression/igzip_inflate.h) so that a replay of the updates never inflates the points.
 //   points: quantised camera-frame points q = round(p_cam / quantum) (int32 per axis), as zigzag
 //     LEB128 deltas from the previous point (neighbouring pixels: mostly 1-2 bytes per axis), then RGB.
 //   updates: three kinds of parts, each deflated on its own, so that a reader inflates only what it
@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "common/point_batch.h"
 #include "mapping/integration/batch_updates.h"
 
 namespace cenote::mapping::history {
@@ -42,12 +43,26 @@ struct FrameUpdates {
   static FrameUpdates of(const BatchUpdates& updates);
 };
 
+// The world point of stored point `q` seen from T_world_cam: the one rule of the first integration
+// and of every move, so that a moved frame's points are the floats a first integration at its new
+// pose would see.
+inline Eigen::Vector3f toWorld(const Eigen::Isometry3d& T_world_cam, const Eigen::Vector3i& q, double quantum_m) {
+  return (T_world_cam * (q.cast<double>() * quantum_m)).cast<float>();
+}
+
 // Encodes / decodes one section (deflated; `level` 1-12 as libdeflate's).
 std::string encodePoints(const FramePoints& points, int level);
 std::string encodeUpdates(const FrameUpdates& updates, int level);
 // @throws Error naming `where` for bytes that do not decode (a damaged file).
 FramePoints decodePoints(const std::string& bytes, const std::string& where);
 FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where);
+// decodePoints straight to world points (a moved frame): toWorld(T_world_cam, q, quantum_m) of each
+// stored point into out.points and its colour into out.colors, their capacity reused, with no
+// intermediate copy (`raw`: the inflated bytes' scratch, reused too). Returns the points' box.
+// @throws as decodePoints.
+Eigen::AlignedBox3f decodePointsPosed(const std::string& bytes, const std::string& where,
+                                      const Eigen::Isometry3d& T_world_cam, double quantum_m, std::string& raw,
+                                      PointBatch& out);
 // Only the blocks whose packed keys `keep` lists (ascending), with their masks and colours; the
 // others' keys go to `others` (a replay needs the masks of the blocks it rebuilds only; an empty
 // `keep`: the keys alone). Both lists are merged in one pass, with no lookup per block.

@@ -17,6 +17,37 @@ namespace fs = std::filesystem;
 
 std::string systemError() { return std::strerror(errno); }
 
+// The two sections' files: SEQ.points, SEQ.updates.
+constexpr const char* kPoints = "points";
+constexpr const char* kUpdates = "updates";
+
+// Writes `bytes` to `path` through a temporary file renamed over it: a reader sees the old file or
+// the new one. @throws as FrameStore::put, `path` then as it was.
+void writeFile(const std::string& path, const std::string& bytes) {
+  const std::string tmp = path + ".tmp";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw IoError("frame store: cannot create " + tmp + ": " + systemError());
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int error = n == 0 ? EIO : errno;
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      if (error == ENOSPC) throw ResourceExhaustedError("frame store: disk full writing " + tmp);
+      throw IoError("frame store: cannot write " + tmp + ": " + std::strerror(error));
+    }
+    done += static_cast<size_t>(n);
+  }
+  ::close(fd);
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = systemError();
+    ::unlink(tmp.c_str());
+    throw IoError("frame store: cannot rename " + tmp + ": " + why);
+  }
+}
+
 }  // namespace
 
 FrameStore::FrameStore(const std::string& dir, uint64_t max_bytes) : max_bytes_(max_bytes) {
@@ -45,7 +76,9 @@ FrameStore::~FrameStore() {
   }
 }
 
-std::string FrameStore::pathOf(uint32_t seq) const { return dir_ + "/" + std::to_string(seq) + ".frame"; }
+std::string FrameStore::pathOf(uint32_t seq, const char* section) const {
+  return dir_ + "/" + std::to_string(seq) + "." + section;
+}
 
 const FrameStore::Entry& FrameStore::entryOf(uint32_t seq) const {
   const auto it = frames_.find(seq);
@@ -56,50 +89,38 @@ const FrameStore::Entry& FrameStore::entryOf(uint32_t seq) const {
 const FrameMeta& FrameStore::meta(uint32_t seq) const { return entryOf(seq).meta; }
 
 void FrameStore::put(uint32_t seq, const FrameMeta& meta, const std::string& points, const std::string& updates) {
-  const std::string path = pathOf(seq);
-  const std::string tmp = path + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw IoError("frame store: cannot create " + tmp + ": " + systemError());
-  auto writeAll = [&](const std::string& bytes) {
-    size_t done = 0;
-    while (done < bytes.size()) {
-      const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) return false;
-      done += static_cast<size_t>(n);
-    }
-    return true;
-  };
-  if (!writeAll(points) || !writeAll(updates)) {
-    const int error = errno;
-    const std::string why = std::strerror(error);
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    if (error == ENOSPC) throw ResourceExhaustedError("frame store: disk full writing " + tmp);
-    throw IoError("frame store: cannot write " + tmp + ": " + why);
-  }
-  ::close(fd);
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = systemError();
-    ::unlink(tmp.c_str());
-    throw IoError("frame store: cannot rename " + tmp + ": " + why);
+  if (contains(seq)) throw Error("frame store: frame " + std::to_string(seq) + " is already in the store");
+  writeFile(pathOf(seq, kPoints), points);
+  try {
+    writeFile(pathOf(seq, kUpdates), updates);
+  } catch (...) {
+    ::unlink(pathOf(seq, kPoints).c_str());
+    throw;
   }
   Entry& entry = frames_[seq];
-  bytes_ -= entry.points_bytes + entry.updates_bytes;
   entry.meta = meta;
   entry.points_bytes = points.size();
   entry.updates_bytes = updates.size();
   bytes_ += points.size() + updates.size();
 }
 
-std::string FrameStore::readRange(uint32_t seq, uint64_t offset, uint64_t size) const {
-  const std::string path = pathOf(seq);
+void FrameStore::putUpdates(uint32_t seq, const FrameMeta& meta, const std::string& updates) {
+  entryOf(seq);  // @throws NotFoundError
+  writeFile(pathOf(seq, kUpdates), updates);
+  Entry& entry = frames_[seq];
+  bytes_ += updates.size() - entry.updates_bytes;
+  entry.meta = meta;
+  entry.updates_bytes = updates.size();
+}
+
+std::string FrameStore::readSection(uint32_t seq, const char* section, uint64_t size) const {
+  const std::string path = pathOf(seq, section);
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw IoError("frame store: cannot open " + path + ": " + systemError());
   std::string out(size, '\0');
   size_t done = 0;
   while (done < size) {
-    const ssize_t n = ::pread(fd, out.data() + done, size - done, static_cast<off_t>(offset + done));
+    const ssize_t n = ::pread(fd, out.data() + done, size - done, static_cast<off_t>(done));
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
       const std::string why = n == 0 ? "it is shorter than written" : systemError();
@@ -112,26 +133,24 @@ std::string FrameStore::readRange(uint32_t seq, uint64_t offset, uint64_t size) 
   return out;
 }
 
-std::string FrameStore::readPoints(uint32_t seq) const {
-  const Entry& e = entryOf(seq);
-  return readRange(seq, 0, e.points_bytes);
-}
+std::string FrameStore::readPoints(uint32_t seq) const { return readSection(seq, kPoints, entryOf(seq).points_bytes); }
 
-std::string FrameStore::readUpdates(uint32_t seq) const {
-  const Entry& e = entryOf(seq);
-  return readRange(seq, e.points_bytes, e.updates_bytes);
-}
+std::string FrameStore::readUpdates(uint32_t seq) const { return readSection(seq, kUpdates, entryOf(seq).updates_bytes); }
 
 void FrameStore::erase(uint32_t seq) {
   const auto it = frames_.find(seq);
   if (it == frames_.end()) return;
   bytes_ -= it->second.points_bytes + it->second.updates_bytes;
   frames_.erase(it);
-  ::unlink(pathOf(seq).c_str());
+  ::unlink(pathOf(seq, kPoints).c_str());
+  ::unlink(pathOf(seq, kUpdates).c_str());
 }
 
 void FrameStore::clear() {
-  for (const auto& [seq, entry] : frames_) ::unlink(pathOf(seq).c_str());
+  for (const auto& [seq, entry] : frames_) {
+    ::unlink(pathOf(seq, kPoints).c_str());
+    ::unlink(pathOf(seq, kUpdates).c_str());
+  }
   frames_.clear();
   bytes_ = 0;
 }

@@ -1,6 +1,7 @@
-// frame_store.h: the disk-backed store of integrated frames behind pose corrections: one file per
-// frame in a folder, holding its two encoded sections (frame_codec.h); in memory only each frame's
-// time, poses and section sizes. Bounded: overBudget() names the oldest frames to drop once the
+// frame_store.h: the disk-backed store of integrated frames behind pose corrections: two files per
+// frame in a folder, its two encoded sections (frame_codec.h: SEQ.points, SEQ.updates), so that a
+// moved frame rewrites its updates alone (a tenth of its bytes); in memory only each frame's time,
+// poses and section sizes. Bounded: overBudget() names the oldest frames to drop once the
 // files pass the budget (the caller, MapHistory, drops them with erase()).
 // Units: bytes, seconds, metres. Threads: one owner writes; the const reads (contains, meta,
 // readPoints, readUpdates: each opens its file and preads) may run on several threads at once
@@ -33,9 +34,13 @@ class FrameStore {
   FrameStore(const FrameStore&) = delete;
   FrameStore& operator=(const FrameStore&) = delete;
 
-  // Writes (or rewrites) frame `seq`. @throws ResourceExhaustedError (disk full) or IoError,
-  // leaving the frame as it was.
+  // Writes frame `seq`, new to the store. @throws ResourceExhaustedError (disk full) or IoError,
+  // the frame then not in the store; Error when it already is.
   void put(uint32_t seq, const FrameMeta& meta, const std::string& points, const std::string& updates);
+  // Rewrites the metadata and the updates of stored frame `seq` (a moved frame: its points stay).
+  // @throws NotFoundError for a frame not in the store; ResourceExhaustedError or IoError, leaving
+  // the frame as it was.
+  void putUpdates(uint32_t seq, const FrameMeta& meta, const std::string& updates);
   // @throws IoError when the file cannot be read; NotFoundError for a frame not in the store.
   std::string readPoints(uint32_t seq) const;
   std::string readUpdates(uint32_t seq) const;
@@ -62,9 +67,9 @@ class FrameStore {
     uint64_t points_bytes = 0;
     uint64_t updates_bytes = 0;
   };
-  std::string pathOf(uint32_t seq) const;
+  std::string pathOf(uint32_t seq, const char* section) const;
   const Entry& entryOf(uint32_t seq) const;
-  std::string readRange(uint32_t seq, uint64_t offset, uint64_t size) const;
+  std::string readSection(uint32_t seq, const char* section, uint64_t size) const;
 
   std::string dir_;
   bool own_dir_ = false;

@@ -23,10 +23,6 @@ using history::FrameUpdates;
 constexpr int kDeflateLevel = 1;
 constexpr double kSameTime_s = 1e-6;  // a corrected pose at a frame's own time
 
-Eigen::Vector3f toWorld(const Eigen::Isometry3d& T_world_cam, const Eigen::Vector3i& q, double quantum_m) {
-  return (T_world_cam * (q.cast<double>() * quantum_m)).cast<float>();
-}
-
 // The batch's points rounded in the camera frame, and the batch that integrates them.
 void quantise(const PointBatch& batch, const Eigen::Isometry3d& T_world_cam, double quantum_m, FramePoints& points,
               PointBatch& rounded) {
@@ -38,7 +34,7 @@ void quantise(const PointBatch& batch, const Eigen::Isometry3d& T_world_cam, dou
   for (size_t i = 0; i < batch.points.size(); ++i) {
     const Eigen::Vector3d p_cam = T_cam_world * batch.points[i].cast<double>();
     for (int k = 0; k < 3; ++k) points.quantised[i][k] = static_cast<int>(std::llround(p_cam[k] / quantum_m));
-    rounded.points[i] = toWorld(T_world_cam, points.quantised[i], quantum_m);
+    rounded.points[i] = history::toWorld(T_world_cam, points.quantised[i], quantum_m);
   }
   points.colors = batch.colors;
   rounded.colors = batch.colors;
@@ -88,37 +84,33 @@ void checkPoses(std::span<const CorrectedPose> poses) {
 struct MarchedFrame {
   bool in_store = false;           // false: dropped (budget) or cleared since the plan
   history::FrameMeta meta;         // with the new pose
-  std::string points_bytes;        // as stored
   std::string updates_bytes;       // the new updates, encoded
   std::vector<uint64_t> old_keys;  // the blocks it touched at the old pose
   std::vector<uint64_t> new_keys;  // ... and at the new one
   std::exception_ptr error;
 };
 
-// Marches moved frame `seq` at its new pose (reads the store, writes nothing but `out` and `rays`).
+// Marches moved frame `seq` at its new pose (reads the store, writes nothing but `out` and the
+// scratch). Its points go from the store's bytes straight to the world at the new pose, checked by
+// their box (each is an integer point of the camera posed rigidly: no NaN can arise).
 void marchMoved(const history::FrameStore& store, const OccupancyMap& map, uint32_t seq,
-                const Eigen::Isometry3d& T_world_cam, RayBatch& rays, int num_threads, MarchedFrame& out) {
+                const Eigen::Isometry3d& T_world_cam, MoveScratch& scratch, int num_threads, MarchedFrame& out) {
   try {
     if (!store.contains(seq)) return;
     out.in_store = true;
     const MapConfig& config = map.config();
     const std::string where = "frame " + std::to_string(seq);
     out.old_keys = history::decodeUpdates(store.readUpdates(seq), where, {}).others;  // the keys alone
-    out.points_bytes = store.readPoints(seq);
-    const FramePoints points = history::decodePoints(out.points_bytes, where);
     out.meta = store.meta(seq);
     out.meta.T_world_cam = T_world_cam;
-    PointBatch batch;
+    PointBatch& batch = scratch.batch;
     batch.t_s = out.meta.t_s;
     batch.origin = T_world_cam * out.meta.origin_cam;
-    batch.points.resize(points.quantised.size());
-    for (size_t k = 0; k < points.quantised.size(); ++k) {
-      batch.points[k] = toWorld(T_world_cam, points.quantised[k], config.history_quantum_m);
-    }
-    batch.colors = points.colors;
-    map.checkBatch(batch);
-    rays.build(batch, config.voxel_size_m, config.max_range_m, num_threads, config.ray_stop_run);
-    FrameUpdates updates = FrameUpdates::of(rays.updates());
+    const Eigen::AlignedBox3f box = history::decodePointsPosed(store.readPoints(seq), where, T_world_cam,
+                                                               config.history_quantum_m, scratch.raw, batch);
+    map.checkBatch(batch, box);
+    scratch.rays.build(batch, config.voxel_size_m, config.max_range_m, num_threads, config.ray_stop_run);
+    FrameUpdates updates = FrameUpdates::of(scratch.rays.updates());
     out.updates_bytes = history::encodeUpdates(updates, kDeflateLevel);
     out.new_keys = std::move(updates.keys);
   } catch (...) {
@@ -160,8 +152,9 @@ MapDelta MapHistory::integrateStored(const PointBatch& batch, const FrameMeta& g
   FramePoints points;
   PointBatch rounded;
   quantise(batch, meta.T_world_cam, map_.config().history_quantum_m, points, rounded);
-  MapDelta delta = map_.integrate(rounded, rays_);
-  const FrameUpdates updates = FrameUpdates::of(rays_.updates());
+  RayBatch& rays = scratch(0).rays;
+  MapDelta delta = map_.integrate(rounded, rays);
+  const FrameUpdates updates = FrameUpdates::of(rays.updates());
   const uint32_t seq = next_seq_++;
   store_.put(seq, meta, history::encodePoints(points, kDeflateLevel), history::encodeUpdates(updates, kDeflateLevel));
   index(seq, updates.keys);
@@ -208,10 +201,7 @@ void MapHistory::seal(std::span<const BlockIndex> blocks) {
   }
 }
 
-void MapHistory::releaseScratch() {
-  rays_ = RayBatch();
-  extra_rays_ = {};
-}
+void MapHistory::releaseScratch() { moves_ = {}; }
 
 void MapHistory::clear() {
   store_.clear();
@@ -240,10 +230,9 @@ CorrectionPlan MapHistory::planCorrection(std::span<const CorrectedPose> poses) 
   return plan;
 }
 
-RayBatch& MapHistory::scratch(int slot) {
-  if (slot == 0) return rays_;
-  if (extra_rays_.size() < static_cast<size_t>(slot)) extra_rays_.resize(slot);
-  return extra_rays_[slot - 1];
+MoveScratch& MapHistory::scratch(int slot) {
+  if (moves_.size() <= static_cast<size_t>(slot)) moves_.resize(slot + 1);
+  return moves_[slot];
 }
 
 int MapHistory::numThreads() const {
@@ -279,7 +268,7 @@ void MapHistory::moveFrames(CorrectionPlan& plan, size_t begin, size_t end) {
     if (m.error) std::rethrow_exception(m.error);
     if (!m.in_store) continue;  // its blocks are sealed
     const uint32_t seq = plan.moved[begin + k].first;
-    store_.put(seq, m.meta, m.points_bytes, m.updates_bytes);
+    store_.putUpdates(seq, m.meta, m.updates_bytes);
     unindex(seq, m.old_keys);
     index(seq, m.new_keys);
     plan.affected.insert(m.old_keys.begin(), m.old_keys.end());

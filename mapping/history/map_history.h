@@ -34,6 +34,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -66,6 +67,13 @@ struct CorrectionPlan {
   std::unordered_set<uint64_t> affected;  // detail::packIndex of the blocks
 };
 
+// The scratch of one frame moved at a time (MapHistory::moveFrames): its ray march, its points.
+struct MoveScratch {
+  RayBatch rays;
+  PointBatch batch;
+  std::string raw;  // the points' inflated bytes
+};
+
 class MapHistory {
  public:
   // The store follows map.config(): history_max_mb, history_dir, history_quantum_m.
@@ -96,8 +104,9 @@ class MapHistory {
   // affected blocks, so the result is the same as correct() after them. Steps of one plan run in
   // order on the writer, and no other correction starts before its finishCorrection().
   // moveFrames marches the moved frames [begin, end) side by side (up to map.num_threads at once,
-  // each on its share of the threads; the same result as moveFrame of each in order); MapHost
-  // takes movesAtOnce() of them per step. @throws IoError from the store, the frames before the
+  // each on its share of the threads; the same result as moveFrame of each in order); correct()
+  // takes movesAtOnce() of them per step, MapHost one (moveFrame: an ingest frame then waits for
+  // one frame's march at most). @throws IoError from the store, the frames before the
   // failing one moved.
   CorrectionPlan planCorrection(std::span<const CorrectedPose> poses);
   void moveFrame(CorrectionPlan& plan, size_t i);
@@ -120,8 +129,8 @@ class MapHistory {
 
  private:
   MapDelta integrateStored(const PointBatch& batch, const history::FrameMeta& meta);
-  // The ray-marching scratch of the slot-th frame marched side by side (0: the one of integrate()).
-  RayBatch& scratch(int slot);
+  // The scratch of the slot-th frame moved side by side; slot 0's rays are also integrate()'s.
+  MoveScratch& scratch(int slot);
   void index(uint32_t seq, const std::vector<uint64_t>& keys);
   void unindex(uint32_t seq, const std::vector<uint64_t>& keys);
   void enforceBudget();
@@ -129,8 +138,7 @@ class MapHistory {
 
   OccupancyMap& map_;
   history::FrameStore store_;
-  RayBatch rays_;
-  std::vector<RayBatch> extra_rays_;  // moveFrames' scratch beyond the first frame
+  std::vector<MoveScratch> moves_;  // moveFrames' (slot 0's ray march also integrate()'s)
   uint32_t next_seq_ = 0;
   std::unordered_map<uint64_t, std::vector<uint32_t>> frames_of_block_;  // ascending seqs
   std::unordered_set<uint64_t> sealed_;                                  // blocks a dropped frame touched

@@ -55,6 +55,27 @@ TEST(OccupancyMap, UnobservedVoxelIsUnknownNotFree) {
   EXPECT_EQ(acc.probability(VoxelIndex(5, -3, 2)), 0.5);
 }
 
+TEST(OccupancyMap, CheckBatchWithABoxChecksTheBoxAndNamesABadPointWhenItFails) {
+  MapConfig config;
+  config.voxel_size_m = 0.05;
+  const OccupancyMap map(config);
+  PointBatch batch;
+  batch.points = {Eigen::Vector3f(1.0f, 2.0f, 3.0f), Eigen::Vector3f(-1.0f, 0.0f, 1.0f)};
+  Eigen::AlignedBox3f box;
+  for (const Eigen::Vector3f& p : batch.points) box.extend(p);
+  EXPECT_NO_THROW(map.checkBatch(batch, box));
+  batch.points.push_back(Eigen::Vector3f(1e9f, 0.0f, 0.0f));
+  box.extend(batch.points.back());
+  try {
+    map.checkBatch(batch, box);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("map: point 2 of the batch is"), std::string::npos) << e.what();
+  }
+  batch.points.clear();
+  EXPECT_THROW(map.checkBatch(batch, Eigen::AlignedBox3f()), Error);  // empty: the batch's own message
+}
+
 TEST(OccupancyMap, RejectsAbsurdResolution) {
   MapConfig c;
   c.voxel_size_m = 0.0;

@@ -147,6 +147,51 @@ TEST(FrameCodec, DamagedBytesAreAnIoErrorNamingTheFrame) {
   }
 }
 
+TEST(FrameStore, PutUpdatesRewritesTheUpdatesAloneAndKeepsTheBytesCounted) {
+  history::FrameStore store(historyConfig().history_dir, 1 << 20);
+  history::FrameMeta meta;
+  meta.t_s = 1.5;
+  store.put(3, meta, "points", "old updates");
+  EXPECT_EQ(store.bytes(), 6u + 11u);
+  meta.T_world_cam.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
+  store.putUpdates(3, meta, "new");
+  EXPECT_EQ(store.readPoints(3), "points");
+  EXPECT_EQ(store.readUpdates(3), "new");
+  EXPECT_EQ(store.meta(3).T_world_cam.translation(), Eigen::Vector3d(1.0, 2.0, 3.0));
+  EXPECT_EQ(store.bytes(), 6u + 3u);
+  size_t on_disk = 0;
+  for (const auto& e : std::filesystem::directory_iterator(store.dir())) on_disk += e.file_size();
+  EXPECT_EQ(on_disk, store.bytes());  // no temporary file left behind
+  EXPECT_THROW(store.put(3, meta, "p", "u"), Error);
+  EXPECT_THROW(store.putUpdates(4, meta, "u"), NotFoundError);
+  store.erase(3);
+  EXPECT_TRUE(std::filesystem::is_empty(store.dir()));
+}
+
+TEST(FrameCodec, PosedPointsAreTheWorldPointsOfTheStoredOnesWithTheirBox) {
+  history::FramePoints points;
+  points.quantised = {{1000, -2000, 3000}, {1001, -1990, 3005}, {-400, 20, 2500}};
+  points.colors = {{{1, 2, 3}}, {{4, 5, 6}}, {{7, 8, 9}}};
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(4.0, -5.0, 6.0);
+  std::string raw;
+  PointBatch batch;
+  batch.points.assign(7, Eigen::Vector3f::Zero());  // a reused batch: sizes follow the frame
+  const Eigen::AlignedBox3f box = history::decodePointsPosed(history::encodePoints(points, 1), "test", T, 0.001, raw,
+                                                             batch);
+  ASSERT_EQ(batch.points.size(), 3u);
+  Eigen::AlignedBox3f expected;
+  for (size_t i = 0; i < 3; ++i) {
+    const Eigen::Vector3f p = (T * (points.quantised[i].cast<double>() * 0.001)).cast<float>();
+    EXPECT_EQ(batch.points[i], p);
+    expected.extend(p);
+  }
+  EXPECT_EQ(batch.colors, points.colors);
+  EXPECT_EQ(box.min(), expected.min());
+  EXPECT_EQ(box.max(), expected.max());
+}
+
 TEST(MapHistory, CorrectedMapEqualsTheMapBuiltFromScratchWithTheCorrectedPoses) {
   const MapConfig config = historyConfig();
   const auto frames = test::driftedRoomSweep(24, smallCamera(), 0.25, 3.0, config.history_quantum_m);
