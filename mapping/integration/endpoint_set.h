@@ -22,6 +22,8 @@ struct EndpointColor {
 
 class EndpointSet {
  public:
+  EndpointSet() { clear(); }
+
   void clear() {
     table_.clear();
     voxels_.clear();
@@ -87,13 +89,8 @@ class EndpointSet {
     uint32_t slot;
   };
   static constexpr int kRecentBits = 8;
-  std::array<Recent, size_t{1} << kRecentBits> recent_ = filledRecent();  // voxels' slots, by hash of their key
-  static std::array<Recent, size_t{1} << kRecentBits> filledRecent() {
-    std::array<Recent, size_t{1} << kRecentBits> r;
-    r.fill({detail::BlockTable::kEmpty, 0});
-    return r;
-  }
-  detail::BlockTable table_;  // voxel -> index in voxels_
+  std::array<Recent, size_t{1} << kRecentBits> recent_;  // voxels' slots, by hash of their key (emptied by clear())
+  detail::BlockTable table_;                             // voxel -> index in voxels_
   std::vector<VoxelIndex> voxels_;
   std::vector<std::array<uint32_t, 4>> sums_;                                      // r, g, b, count per voxel
   static inline const VoxelIndex kNoVoxel{std::numeric_limits<int>::min(), 0, 0};  // beyond any map
