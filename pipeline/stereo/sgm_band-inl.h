@@ -334,9 +334,14 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     along_min = minLaneBroadcast(d, mins_along);
     storePathMinima(min_row_vertical, min_row_fwd, min_row_back_out, x, mins_vertical, mins_fwd, mins_back);
     if (output == RowOutput::kWinner) {
+      // The LR check's right-image minimum here, not in flushWinnerBatch(): there, each pixel's
+      // load of the minima waited for the previous pixel's store of them, one element apart (a
+      // partial overlap, which store-to-load forwarding cannot serve; 4 % of the CPU time on
+      // AVX-512). A pixel's loop later, that store has left.
+      if (p.lr_check) updateRightMinimum(p, b, x, sums_out, dx, start, kB);
       if constexpr (kVectors > 1) winners.store(b, slot);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
-        flushWinnerBatch(p, b, i, slot, dx, kN, band_first, kB, kB, disparity, confidence);
+        flushWinnerBatch(p, b, i, slot, dx, kN, band_first, kB, kB, false, disparity, confidence);
       }
     }
   }

@@ -601,9 +601,11 @@ HWY_INLINE void updateRightMinimum(const SgmParams& p, const StripBuffers& b, in
 // j's sums are at b.sums + j * b.padded and hold disparities [first[j], first[j] + D) with stride
 // Dp (first null: every pixel from 0). With one vector of sums (Dp == N) the stored vectors are
 // not read (the kernels may skip them): the sums are their own lane-wise minimum, lane k holds
-// disparity k, and no lane has a second value.
+// disparity k, and no lane has a second value. `update_right`: each pixel's sums go into the LR
+// check's right-image minimum first (the band kernel does that in its pixel loop instead).
 HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int i, int slot, int dx, int N,
-                                 const int32_t* first, int D, int Dp, float* disparity, float* confidence) {
+                                 const int32_t* first, int D, int Dp, bool update_right, float* disparity,
+                                 float* confidence) {
   const DU16 d;
   WinnerBatch batch;
   const int x0 = dx > 0 ? i - slot : p.width - 1 - (i - slot);  // the batch's first pixel
@@ -612,7 +614,7 @@ HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int 
     uint16_t* sums = b.sums + j * b.padded;
     const int first_j = first != nullptr ? first[j] : 0;
     // The right image's minimum first: pickWinner() masks lanes of the sums.
-    if (p.lr_check) updateRightMinimum(p, b, xj, sums, dx, first_j, Dp);
+    if (update_right) updateRightMinimum(p, b, xj, sums, dx, first_j, Dp);
     const bool one_vector = Dp == N;
     const LaneWinners lanes{hn::Load(d, one_vector ? sums : b.batch_best + j * N),
                             hn::Load(d, one_vector ? b.iota : b.batch_index + j * N),
@@ -836,7 +838,7 @@ void aggregateRowFull(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     if (output == RowOutput::kWinner) {
       winners.store(b, slot);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
-        flushWinnerBatch(p, b, i, slot, dx, N, nullptr, D, Dp, disparity, confidence);
+        flushWinnerBatch(p, b, i, slot, dx, N, nullptr, D, Dp, p.lr_check, disparity, confidence);
       }
     }
   }
