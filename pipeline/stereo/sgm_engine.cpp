@@ -9,7 +9,8 @@
 //   L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d+-1) + P1, min_k L(p-r, k) + P2) - min_k L(p-r, k)
 // which stays within [0, max_cost + P2]; the sum over all paths is validated to fit 16 bits.
 // Band (coarse to fine): path rows hold [kBandDisparities values][2 kBandDisparities sentinels]
-// per pixel, the values of disparities [band_start, + kBandDisparities); see aggregateRowBand().
+// per pixel, the values of disparities [band_start, + kBandDisparities) less their minimum; see
+// sgm_band-inl.h.
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "pipeline/stereo/sgm_engine.cpp"
@@ -140,7 +141,7 @@ struct StripBuffers {
   int lead = 0;          // sentinel lanes before pixel -1 of a path row: N; band: 2 kBandDisparities
   bool band = false;     // coarse-to-fine band (SgmImages::band_start)
   uint16_t* path[4] = {};
-  uint16_t* path_min[4] = {};      // W + 2 each, pixel x at x + 1
+  uint16_t* path_min[4] = {};      // W + 2 each, pixel x at x + 1 (full search; the band stores paths less their minimum)
   uint16_t* along[2] = {};         // [N sentinels][Dp][N sentinels]: previous and current pixel
   uint16_t* column_sum = nullptr;  // SAD: [x][Dp] sums over the window rows
   uint8_t* ring = nullptr;         // SAD: window rows of [x][Dp] absolute differences
@@ -639,9 +640,6 @@ void leftRightCheck(const SgmParams& p, const StripBuffers& b, float* disparity,
 
 enum class RowOutput { kNone, kStoreSums, kWinner };
 
-// After pixel x: the minima of its three stored paths (vertical, forward and backward diagonal),
-// which the next row's pixels read for their P2 term, into rows b.path_min[0], [2] and [3]
-// (passed as pointers: the band kernel keeps them in locals, see aggregateRowBand).
 // The smaller of a path pixel's costs at disparities d - 1 and d + 1, for the d of each lane at
 // `at` (sentinel lanes pad both ends of the pixel).
 HWY_INLINE VU16 neighbourMin(const uint16_t* at) {
@@ -659,6 +657,8 @@ HWY_INLINE VU16 storePathSum(VU16 l0, VU16 l1, VU16 l2, VU16 l3, const uint16_t*
   return sum;
 }
 
+// After pixel x: the minima of its three stored paths (vertical, forward and backward diagonal),
+// which the next row's pixels read for their P2 term, into rows b.path_min[0], [2] and [3].
 HWY_INLINE void storePathMinima(uint16_t* min_vertical, uint16_t* min_fwd, uint16_t* min_back, int x, VU16 mins_vertical,
                                 VU16 mins_fwd, VU16 mins_back) {
   const DU16 d;
