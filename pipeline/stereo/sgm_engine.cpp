@@ -626,7 +626,28 @@ HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int 
 }
 
 void leftRightCheck(const SgmParams& p, const StripBuffers& b, float* disparity, float* confidence) {
-  for (int x = 0; x < p.width; ++x) {
+  // A vector of pixels at a time, their right winners gathered: a branch per pixel mispredicted.
+  const hn::ScalableTag<int32_t> di;
+  const hn::RebindToFloat<decltype(di)> df;
+  const hn::Rebind<int16_t, decltype(di)> d16;
+  const int L = static_cast<int>(hn::Lanes(di)), W = p.width;
+  // Pixel x's right winner is right_arg[W - 1 - xr], xr = x - min_d - k: the low half of the 32
+  // bits there (the buffer is longer than any index read).
+  const int32_t* const right = reinterpret_cast<const int32_t*>(b.right_arg);
+  const auto lanes = hn::Iota(di, 0), none = hn::Set(di, -1), low = hn::Set(di, 0xFFFF);
+  const auto max_diff = hn::Set(di, p.lr_max_diff);
+  const auto infinity = hn::Set(df, std::numeric_limits<float>::infinity());
+  int x = 0;
+  for (; x + L <= W; x += L) {
+    const auto k = hn::PromoteTo(di, hn::LoadU(d16, b.winner + x));
+    const auto valid = hn::Gt(k, none);
+    const auto at = hn::Add(hn::Sub(hn::Set(di, W - 1 + p.min_disparity - x), lanes), k);
+    const auto right_k = hn::And(hn::GatherOffset(di, right, hn::ShiftLeft<1>(hn::IfThenElseZero(valid, at))), low);
+    const auto rejected = hn::RebindMask(df, hn::And(valid, hn::Gt(hn::Abs(hn::Sub(right_k, k)), max_diff)));
+    hn::StoreU(hn::IfThenElse(rejected, infinity, hn::LoadU(df, disparity + x)), df, disparity + x);
+    hn::StoreU(hn::IfThenZeroElse(rejected, hn::LoadU(df, confidence + x)), df, confidence + x);
+  }
+  for (; x < W; ++x) {
     const int k = b.winner[x];
     if (k < 0) continue;
     const int xr = x - p.min_disparity - k;
