@@ -107,25 +107,28 @@ void beginBandSadRow(const SgmParams& p, const SgmImages& im, const StripBuffers
   const int first = first_row ? y - r : y + dy * r;
   const int last = first_row ? y + r : first;
   for (int yy = first; yy <= last; ++yy) {
-    reverseRow(im.right + clampRow(yy, p.height) * im.image_stride, p.width, b.reversed_length,
-               b.band_rows + static_cast<std::ptrdiff_t>(ringSlot(yy, kWindow)) * b.reversed_length);
+    const std::ptrdiff_t at = clampRow(yy, p.height) * im.image_stride;
+    const int slot = ringSlot(yy, kWindow);
+    reverseRow(im.right + at, p.width, b.reversed_length,
+               b.band_rows + static_cast<std::ptrdiff_t>(slot) * b.reversed_length);
+    std::copy_n(im.left + at, p.width, b.band_left_rows + static_cast<std::ptrdiff_t>(slot) * p.width);
   }
 }
 
-// The rows of the window around row y: left as the cost compares them, right reversed and widened
-// (the ring of beginBandSadRow()).
+// The rows of the window around row y, widened (the ring of beginBandSadRow()): left as the cost
+// compares them, right reversed. Widened, a left pixel is broadcast straight from memory.
 template <int kWindow>
 struct BandSadWindow {
-  const uint8_t* left[kWindow];
+  const int16_t* left[kWindow];
   const int16_t* right[kWindow];
 };
 
 template <int kWindow>
-BandSadWindow<kWindow> bandSadWindow(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y) {
+BandSadWindow<kWindow> bandSadWindow(const SgmParams& p, const StripBuffers& b, int y) {
   BandSadWindow<kWindow> w;
   for (int i = 0; i < kWindow; ++i) {
     const int yy = y - kWindow / 2 + i;
-    w.left[i] = im.left + clampRow(yy, p.height) * im.image_stride;
+    w.left[i] = reinterpret_cast<const int16_t*>(b.band_left_rows) + ringSlot(yy, kWindow) * p.width;
     w.right[i] = reinterpret_cast<const int16_t*>(b.band_rows) + ringSlot(yy, kWindow) * b.reversed_length;
   }
   return w;
@@ -207,7 +210,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   VU16 columns[kColumns][kVectors];
   int columns_start = -1;
   BandSadWindow<kCensus ? 1 : kWindow> window{};
-  if constexpr (!kCensus) window = bandSadWindow<kWindow>(p, im, b, y);
+  if constexpr (!kCensus) window = bandSadWindow<kWindow>(p, b, y);
   uint16_t* const batch_sums = b.sums;
   const uint16_t* const census_right_lo = b.census_reversed[0];
   const uint16_t* const census_right_hi = b.census_reversed[1];

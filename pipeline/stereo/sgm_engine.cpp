@@ -146,8 +146,10 @@ struct StripBuffers {
   uint16_t* column_sum = nullptr;  // SAD: [x][Dp] sums over the window rows
   uint8_t* ring = nullptr;         // SAD: window rows of [x][Dp] absolute differences
   // Band SAD (instead of column_sum and ring): the window's right rows reversed and widened
-  // ([window][reversed_length], slot by image row), see sgm_band-inl.h.
+  // ([window][reversed_length], slot by image row) and its left rows widened ([window][W], the
+  // same slots), see sgm_band-inl.h.
   uint16_t* band_rows = nullptr;
+  uint16_t* band_left_rows = nullptr;
   uint16_t* running = nullptr;       // SAD: Dp, running horizontal window sum
   uint16_t* sums = nullptr;          // [kWinnerBatch][Dp]: path sums of the pixels awaiting their winner
   uint16_t* batch_best = nullptr;    // [kWinnerBatch][N]: lane-wise minimum of each pixel's sums
@@ -182,7 +184,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   const std::size_t path_row = (W + 2) * b.pixel_stride + 2 * b.lead;
   const std::size_t along = std::max<std::size_t>(Dp + 2 * N, 5 * kBandDisparities);
   const bool band_sad = band && !p.census;
-  const std::size_t sad = p.census ? 0 : band_sad ? p.window * rev : W * Dp + (W * Dp * p.window + 1) / 2;
+  const std::size_t sad = p.census ? 0 : band_sad ? p.window * (rev + W) : W * Dp + (W * Dp * p.window + 1) / 2;
   // Every piece is rounded up to 64 elements by take(); 32 pieces at most.
   const std::size_t total = 4 * (path_row + W + 2) + 2 * along + sad + 2 * Dp + kWinnerBatch * (Dp + 3 * N) + 2 * rev + W +
                             (rev / 2 + 32) + 2 * rev + 4 * W + 32 * 64;
@@ -204,6 +206,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   b.along[1] = take(along);
   if (band_sad) {
     b.band_rows = take(p.window * rev);
+    b.band_left_rows = take(p.window * W);
   } else if (!p.census) {
     b.column_sum = take(W * Dp);
     b.ring = reinterpret_cast<uint8_t*>(take((W * Dp * p.window + 1) / 2));  // window rows of bytes
