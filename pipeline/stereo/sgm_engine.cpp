@@ -599,7 +599,6 @@ HWY_INLINE void updateRightMinimum(const SgmParams& p, const StripBuffers& b, in
   }
 }
 
-// Marks pixels whose right-image winner disagrees by more than lr_max_diff.
 // Winners of the pixels whose best / index / second-best vectors are stored in batch slots
 // 0..slot (slot being row position i of the row swept along dx; N lanes per stored vector). Pixel
 // j's sums are at b.sums + j * b.padded and hold disparities [first[j], first[j] + D) with stride
@@ -628,8 +627,10 @@ HWY_INLINE void flushWinnerBatch(const SgmParams& p, const StripBuffers& b, int 
   finishWinners(p, batch, slot + 1, x0, dx, disparity, confidence, b.winner);
 }
 
+// Marks pixels whose right-image winner disagrees by more than lr_max_diff. A vector of pixels at a
+// time, their right winners gathered, without branches (one per pixel mispredicted: 3 % of the band
+// search's CPU time on AVX-512).
 void leftRightCheck(const SgmParams& p, const StripBuffers& b, float* disparity, float* confidence) {
-  // A vector of pixels at a time, their right winners gathered: a branch per pixel mispredicted.
   const hn::ScalableTag<int32_t> di;
   const hn::RebindToFloat<decltype(di)> df;
   const hn::Rebind<int16_t, decltype(di)> d16;
