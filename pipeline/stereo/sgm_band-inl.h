@@ -1,7 +1,8 @@
 // sgm_band-inl.h: the coarse-to-fine band of the SGM engine (aggregateRowBand), compiled once per
 // instruction set as part of sgm_engine.cpp, which includes it inside its Highway namespace after
-// the helpers it shares with the full search (cost columns, path resets, winners, LR check): not a
-// standalone header. Every pixel searches kBandDisparities disparities from its own start.
+// the helpers it shares with the full search (cost columns, path resets, winners, LR check; see
+// sgm_cost-inl.h and sgm_winner-inl.h): not a standalone header. Every pixel searches
+// kBandDisparities disparities from its own start.
 // No include guard: sgm_engine.cpp is compiled once per target (hwy/foreach_target.h) and includes
 // this file each time.
 
