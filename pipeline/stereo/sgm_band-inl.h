@@ -1,7 +1,8 @@
 // sgm_band-inl.h: the coarse-to-fine band of the SGM engine (aggregateRowBand), compiled once per
 // instruction set as part of sgm_engine.cpp, which includes it inside its Highway namespace after
-// the helpers it shares with the full search (cost columns, path resets, winners, LR check): not a
-// standalone header. Every pixel searches kBandDisparities disparities from its own start.
+// the helpers it shares with the full search (cost columns, path resets, winners, LR check; see
+// sgm_cost-inl.h and sgm_winner-inl.h): not a standalone header. Every pixel searches
+// kBandDisparities disparities from its own start.
 // No include guard: sgm_engine.cpp is compiled once per target (hwy/foreach_target.h) and includes
 // this file each time.
 
@@ -10,6 +11,13 @@
 // read at the current pixel's start, shifted by the difference of the two starts; the lanes of a
 // path pixel past its band hold sentinels larger than any path cost plus P2 (so a disparity the
 // predecessor did not search counts as infinite), and a shift beyond the band reads sentinels only.
+// The band's path costs are stored less their minimum over the band, L'(p, d) = L(p, d) - min_k L(p, k)
+// (the along path's too, in registers), so that the recurrence
+//   L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d+-1) + P1, min_k L(p-r, k) + P2) - min_k L(p-r, k)
+// reads C(p, d) + min(L'(p-r, d), L'(p-r, d+-1) + P1, P2): the same values bit for bit (every lane a
+// pixel reads, sentinels included, is at least the pixel's minimum, so no difference wraps), without
+// a row of minima per direction to store, read and broadcast for the next row (the full search keeps
+// StripBuffers::path_min). The sums for the winner add the L themselves.
 
 // Predecessor shift, clamped to where only sentinels are read (the d - 1 / d + 1 loads reach one
 // lane further than the band on either side).
@@ -100,25 +108,28 @@ void beginBandSadRow(const SgmParams& p, const SgmImages& im, const StripBuffers
   const int first = first_row ? y - r : y + dy * r;
   const int last = first_row ? y + r : first;
   for (int yy = first; yy <= last; ++yy) {
-    reverseRow(im.right + clampRow(yy, p.height) * im.image_stride, p.width, b.reversed_length,
-               b.band_rows + static_cast<std::ptrdiff_t>(ringSlot(yy, kWindow)) * b.reversed_length);
+    const std::ptrdiff_t at = clampRow(yy, p.height) * im.image_stride;
+    const int slot = ringSlot(yy, kWindow);
+    reverseRow(im.right + at, p.width, b.reversed_length,
+               b.band_rows + static_cast<std::ptrdiff_t>(slot) * b.reversed_length);
+    std::copy_n(im.left + at, p.width, b.band_left_rows + static_cast<std::ptrdiff_t>(slot) * p.width);
   }
 }
 
-// The rows of the window around row y: left as the cost compares them, right reversed and widened
-// (the ring of beginBandSadRow()).
+// The rows of the window around row y, widened (the ring of beginBandSadRow()): left as the cost
+// compares them, right reversed. Widened, a left pixel is broadcast straight from memory.
 template <int kWindow>
 struct BandSadWindow {
-  const uint8_t* left[kWindow];
+  const int16_t* left[kWindow];
   const int16_t* right[kWindow];
 };
 
 template <int kWindow>
-BandSadWindow<kWindow> bandSadWindow(const SgmParams& p, const SgmImages& im, const StripBuffers& b, int y) {
+BandSadWindow<kWindow> bandSadWindow(const SgmParams& p, const StripBuffers& b, int y) {
   BandSadWindow<kWindow> w;
   for (int i = 0; i < kWindow; ++i) {
     const int yy = y - kWindow / 2 + i;
-    w.left[i] = im.left + clampRow(yy, p.height) * im.image_stride;
+    w.left[i] = reinterpret_cast<const int16_t*>(b.band_left_rows) + ringSlot(yy, kWindow) * p.width;
     w.right[i] = reinterpret_cast<const int16_t*>(b.band_rows) + ringSlot(yy, kWindow) * b.reversed_length;
   }
   return w;
@@ -185,7 +196,6 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   uint16_t* const along_buffer = b.along[0] + 2 * kB;  // the previous pixel's along path, when shifted
   VU16 along[kVectors];
   for (int j = 0; j < kVectors; ++j) along[j] = hn::Zero(d);
-  VU16 along_min = hn::Zero(d);
   HWY_ALIGN int32_t band_first[kWinnerBatch];
   // Everything the pixel loop reads, in locals: Highway's stores may alias anything, and the
   // compiler would otherwise reload struct fields after every store.
@@ -194,10 +204,6 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   const uint16_t* const path_back = b.pathPixel(b.path[1], 0);
   uint16_t* const path_back_out = b.pathPixel(b.path[3], 0);
   uint16_t* const path_fwd = b.pathPixel(b.path[2], 0);
-  uint16_t* const min_row_vertical = b.path_min[0];
-  const uint16_t* const min_row_back = b.path_min[1];
-  uint16_t* const min_row_fwd = b.path_min[2];
-  uint16_t* const min_row_back_out = b.path_min[3];
   const uint16_t* const iota = b.iota;
   // Band SAD: the window's column sums at the band of the pixel that computed them (columns
   // x - r dx .. x + r dx, the last one entering the window), and that band's start.
@@ -205,7 +211,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   VU16 columns[kColumns][kVectors];
   int columns_start = -1;
   BandSadWindow<kCensus ? 1 : kWindow> window{};
-  if constexpr (!kCensus) window = bandSadWindow<kWindow>(p, im, b, y);
+  if constexpr (!kCensus) window = bandSadWindow<kWindow>(p, b, y);
   uint16_t* const batch_sums = b.sums;
   const uint16_t* const census_right_lo = b.census_reversed[0];
   const uint16_t* const census_right_hi = b.census_reversed[1];
@@ -242,17 +248,13 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     uint16_t* const back_out = path_back_out + static_cast<std::ptrdiff_t>(x) * kStride;
     const uint16_t* const fwd = path_fwd + static_cast<std::ptrdiff_t>(x + dx) * kStride + shift_fwd;
     uint16_t* const fwd_out = path_fwd + static_cast<std::ptrdiff_t>(x) * kStride;
-    const uint16_t min_vertical = min_row_vertical[x + 1];
-    const uint16_t min_back = min_row_back[x - dx + 1], min_fwd = min_row_fwd[x + dx + 1];
-    const VU16 min_vertical_v = hn::Set(d, min_vertical);
-    const VU16 min_back_v = hn::Set(d, min_back), min_fwd_v = hn::Set(d, min_fwd);
     // P2 per direction: one constant unless adapted to the intensity step.
     auto penalty = [&](uint8_t a, uint8_t b2)
                        HWY_ATTR { return adaptive ? hn::Set(d, pen.p2[std::abs(a - b2)]) : p2_constant; };
-    const VU16 jump_along = hn::Add(along_min, penalty(row[x], row[x - dx]));
-    const VU16 jump_vertical = hn::Add(min_vertical_v, penalty(row[x], prev_row[x]));
-    const VU16 jump_back = hn::Add(min_back_v, penalty(row[x], prev_row[x - dx]));
-    const VU16 jump_fwd = hn::Add(min_fwd_v, penalty(row[x], prev_row[x + dx]));
+    const VU16 p2_along = penalty(row[x], row[x - dx]);
+    const VU16 p2_vertical = penalty(row[x], prev_row[x]);
+    const VU16 p2_back = penalty(row[x], prev_row[x - dx]);
+    const VU16 p2_fwd = penalty(row[x], prev_row[x + dx]);
     const int slot = i % kWinnerBatch;
     band_first[slot] = start;
     uint16_t* const sums_out = output == RowOutput::kStoreSums ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp
@@ -266,7 +268,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
 
     VU16 mins_along = sentinel_v, mins_vertical = sentinel_v, mins_back = sentinel_v, mins_fwd = sentinel_v;
     LaneWinners winners = noWinners();
-    VU16 along_new[kVectors], vertical_new[kVectors];
+    VU16 along_new[kVectors], vertical_new[kVectors], back_new[kVectors], fwd_new[kVectors];
     for (int j = 0; j < kVectors; ++j) {
       const int k = j * kN;
       VU16 cost;
@@ -285,9 +287,9 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         const auto beyond = valid_max < 0 ? hn::FirstN(d, kN) : hn::Gt(disparity_index, max_valid_k);
         cost = hn::IfThenElse(beyond, worst_cost, cost);
       }
-      auto step = [&](VU16 same, VU16 neighbours, VU16 jump, VU16 min_prev) HWY_ATTR {
-        return hn::Add(cost, hn::Sub(hn::Min(hn::Min(same, hn::Add(neighbours, p1)), jump), min_prev));
-      };
+      // The predecessors are stored less their minimum (see above), so the jump from it costs P2.
+      auto step = [&](VU16 same, VU16 neighbours, VU16 p2)
+                      HWY_ATTR { return hn::Add(cost, hn::Min(hn::Min(same, hn::Add(neighbours, p1)), p2)); };
       VU16 along_same, along_neighbours;
       if (shift_along == 0) {
         const VU16 before = j > 0 ? along[j - 1] : sentinel_v;
@@ -303,14 +305,16 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         along_same = hn::LoadU(d, a);
         along_neighbours = neighbourMin(a);
       }
-      const VU16 l0 = step(along_same, along_neighbours, jump_along, along_min);
-      const VU16 l1 = step(hn::LoadU(d, vertical_in + k), neighbourMin(vertical_in + k), jump_vertical, min_vertical_v);
-      const VU16 l2 = step(hn::LoadU(d, back + k), neighbourMin(back + k), jump_back, min_back_v);
-      const VU16 l3 = step(hn::LoadU(d, fwd + k), neighbourMin(fwd + k), jump_fwd, min_fwd_v);
+      const VU16 l0 = step(along_same, along_neighbours, p2_along);
+      const VU16 l1 = step(hn::LoadU(d, vertical_in + k), neighbourMin(vertical_in + k), p2_vertical);
+      const VU16 l2 = step(hn::LoadU(d, back + k), neighbourMin(back + k), p2_back);
+      const VU16 l3 = step(hn::LoadU(d, fwd + k), neighbourMin(fwd + k), p2_fwd);
+      // Stored once their minima are known (the vertical path after every vector has read the
+      // old values).
       along_new[j] = l0;
-      vertical_new[j] = l1;  // stored after every vector has read the old values
-      hn::Store(l2, d, back_out + k);
-      hn::Store(l3, d, fwd_out + k);
+      vertical_new[j] = l1;
+      back_new[j] = l2;
+      fwd_new[j] = l3;
       if constexpr (kVectors == 1) {  // the path costs themselves (the along path waits for its minimum)
         mins_along = l0;
         mins_vertical = l1;
@@ -327,16 +331,24 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         winners.add(sum, hn::Load(d, iota + k));
       }
     }
+    const VU16 along_min = minLaneBroadcast(d, mins_along);
+    const VU16 vertical_min = minLaneBroadcast(d, mins_vertical);
+    const VU16 back_min = minLaneBroadcast(d, mins_back), fwd_min = minLaneBroadcast(d, mins_fwd);
     for (int j = 0; j < kVectors; ++j) {
-      hn::Store(vertical_new[j], d, vertical + j * kN);
-      along[j] = along_new[j];
+      along[j] = hn::Sub(along_new[j], along_min);
+      hn::Store(hn::Sub(vertical_new[j], vertical_min), d, vertical + j * kN);
+      hn::Store(hn::Sub(back_new[j], back_min), d, back_out + j * kN);
+      hn::Store(hn::Sub(fwd_new[j], fwd_min), d, fwd_out + j * kN);
     }
-    along_min = minLaneBroadcast(d, mins_along);
-    storePathMinima(min_row_vertical, min_row_fwd, min_row_back_out, x, mins_vertical, mins_fwd, mins_back);
     if (output == RowOutput::kWinner) {
+      // The LR check's right-image minimum here, not in flushWinnerBatch(): there, each pixel's
+      // load of the minima waited for the previous pixel's store of them, one element apart (a
+      // partial overlap, which store-to-load forwarding cannot serve; 4 % of the CPU time on
+      // AVX-512). A pixel's loop later, that store has left.
+      if (p.lr_check) updateRightMinimum(p, b, x, sums_out, dx, start, kB);
       if constexpr (kVectors > 1) winners.store(b, slot);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
-        flushWinnerBatch(p, b, i, slot, dx, kN, band_first, kB, kB, disparity, confidence);
+        flushWinnerBatch(p, b, i, slot, dx, kN, band_first, kB, kB, false, disparity, confidence);
       }
     }
   }
