@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include "mapping/integration/point_voxels.h"
 #include "mapping/integration/voxel_ray.h"
@@ -59,12 +60,12 @@ struct RayWalk {
 // increasing t, ties to the highest axis. kFromEnd true: the same voxels in reverse order, from the
 // one before the end's voxel back to the origin's (decreasing t, ties to the lowest axis).
 // visit(word, bit) on each voxel (its word of its block's free mask and its bit in it); false
-// stops the walk. Returns false when the visitor stopped it. A block's masks are looked up (and
+// stops the walk. Returns the voxels visited (`steps` when the visitor did not stop the walk). A block's masks are looked up (and
 // created) only when a voxel of it is about to be visited, after the walk entered it. The visitor
 // is taken by value: its state stays in registers. Flattened: its lambdas and masksOf inline
 // into the loop (16 instances exhaust the compiler's inlining budget otherwise).
 template <int SX, int SY, int SZ, bool kFromEnd, typename Visit>
-[[gnu::flatten]] bool walkOctant(const RayWalk& w, long steps, BatchUpdates& writer, Visit visit) {
+[[gnu::flatten]] long walkOctant(const RayWalk& w, long steps, BatchUpdates& writer, Visit visit) {
   constexpr double kNever = kFromEnd ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
   const VoxelIndex& start = kFromEnd ? w.key_end : w.key_origin;
   // The next face on each axis (from the end, the face behind, which the walk from the origin
@@ -118,20 +119,20 @@ template <int SX, int SY, int SZ, bool kFromEnd, typename Visit>
   // block is looked up only if a voxel of it is visited). Then steps - 1 steps either way.
   if (kFromEnd) advance();
   lookUp();
-  if (!visitHere()) return false;
+  if (!visitHere()) return 1;
   for (long n = steps - 1; n > 0; --n) {
     if (advance()) lookUp();
-    if (!visitHere()) return false;
+    if (!visitHere()) return steps - n + 1;
   }
-  return true;
+  return steps;
 }
 
 // walkOctant for the ray's octant: from the origin (kFromEnd false) or from the end. An axis the
-// ray never steps on takes +1 (its t is never the next).
+// ray never steps on takes +1 (its t is never the next). Returns the voxels visited.
 template <bool kFromEnd, typename Visit>
-bool march(const RayWalk& w, BatchUpdates& writer, Visit visit) {
+long march(const RayWalk& w, BatchUpdates& writer, Visit visit) {
   const long steps = w.steps();
-  if (steps == 0) return true;
+  if (steps == 0) return 0;
   const int sign = kFromEnd ? -1 : 1;
   const int octant = (sign * w.step[0] < 0) << 2 | (sign * w.step[1] < 0) << 1 | (sign * w.step[2] < 0);
   switch (octant) {
@@ -168,6 +169,23 @@ struct CarveUntilRun {
   }
 };
 
+// The stride of the order in which early stopping marches a chunk's n rays: ray i of the order is
+// endpoint (i stride) mod n, stride the integer nearest n / phi (phi the golden ratio) that is
+// coprime to n, so every endpoint comes once (a Weyl sequence: each prefix of the order is spread
+// evenly over the endpoints, which come in image order). In image order a ray's neighbours in the
+// rows above it have carved only the half of its surroundings above it, and it keeps finding
+// voxels they left uncarved, a few steps apart, all the way to the camera (the run of 16 carved
+// voxels that stops it comes late: 97 steps a ray on bench/map_bench's frames, 21 of them new).
+// In a spread order the rays marched before it surround it on all sides, it finds the carved path
+// sooner: for the same voxels left unknown, 8 chunks and a stop run of 32 march 2.41 M steps a
+// frame where image order (16 chunks, a run of 16) marched 3.15 M.
+size_t spreadStride(size_t n) {
+  if (n < 3) return 1;
+  size_t stride = static_cast<size_t>(std::llround(static_cast<double>(n) * 0.6180339887498949));
+  while (std::gcd(stride, n) != 1) ++stride;
+  return stride;
+}
+
 }  // namespace
 
 void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads, int stop_run) {
@@ -199,7 +217,14 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
     VoxelBox window{blockOf(key_origin), blockOf(key_origin)};
     for (const VoxelIndex& endpoint : chunk.endpoints.voxels()) window.extend(blockOf(endpoint));
     writer.setWindow(window);
-    for (const VoxelIndex& endpoint : chunk.endpoints.voxels()) {
+    // Early stop: in a spread order (whole rays: the point order, whose neighbouring rays share blocks).
+    const std::vector<VoxelIndex>& endpoints = chunk.endpoints.voxels();
+    const size_t num_endpoints = endpoints.size();
+    const size_t stride = exact ? 1 : spreadStride(num_endpoints);
+    size_t steps = 0;
+    for (size_t i = 0, e = 0; i < num_endpoints;
+         ++i, e = e + stride < num_endpoints ? e + stride : e + stride - num_endpoints) {
+      const VoxelIndex& endpoint = endpoints[e];
       const Eigen::Vector3d end = voxelCentre(endpoint, voxel_size_m);
       const Eigen::Vector3d ray = end - origin;
       const double range = ray.norm();
@@ -207,16 +232,18 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
       // An endpoint voxel's centre lies in that voxel: toVoxel(end) is the endpoint.
       const Eigen::Vector3d stop = in_range ? end : Eigen::Vector3d(origin + ray * (max_range_m / range));
       const RayWalk walk(origin, key_origin, stop, in_range ? endpoint : toVoxel(stop, voxel_size_m), voxel_size_m);
-      if (exact) {
-        march<false>(walk, writer, CarveAll{});
-      } else {
-        march<true>(walk, writer, CarveUntilRun{stop_run});
-      }
+      steps += static_cast<size_t>(exact ? march<false>(walk, writer, CarveAll{})
+                                         : march<true>(walk, writer, CarveUntilRun{stop_run}));
       if (in_range) writer.setHit(endpoint);
     }
+    chunk.steps = steps;
   }
   num_rays_ = 0;
-  for (int c = 0; c < num_chunks; ++c) num_rays_ += chunks_[c].endpoints.voxels().size();
+  num_steps_ = 0;
+  for (int c = 0; c < num_chunks; ++c) {
+    num_rays_ += chunks_[c].endpoints.voxels().size();
+    num_steps_ += chunks_[c].steps;
+  }
 
   // 2. Union of the chunks' masks, taken over from chunk 0.
   for (int c = 1; c < num_chunks; ++c) chunks_[0].updates.unite(chunks_[c].updates);
