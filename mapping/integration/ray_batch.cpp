@@ -200,6 +200,9 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
   const VoxelIndex key_origin = toVoxel(origin, voxel_size_m);
   const bool limited = max_range_m > 0.0;
   const size_t n = batch.points.size();
+  updates_.clearMasks();
+  endpoints_.clear();
+  bool first_done = false;  // a chunk's masks are in updates_
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
   for (int c = 0; c < num_chunks; ++c) {
     Chunk& chunk = chunks_[c];
@@ -237,6 +240,19 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
       if (in_range) writer.setHit(endpoint);
     }
     chunk.steps = steps;
+    // 2. The union of the chunks' masks, and 3. their endpoints' colour sums, as each chunk ends:
+    // the other threads march on meanwhile. Any order gives the same union and sums (finish()
+    // sorts the blocks). The first chunk's masks are taken over, not copied.
+#pragma omp critical(cenote_ray_batch_union)
+    {
+      if (first_done) {
+        updates_.unite(writer);
+      } else {
+        updates_.swapMasks(writer);
+        first_done = true;
+      }
+      if (batch.hasColor()) endpoints_.merge(chunk.endpoints);
+    }
   }
   num_rays_ = 0;
   num_steps_ = 0;
@@ -245,16 +261,8 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
     num_steps_ += chunks_[c].steps;
   }
 
-  // 2. Union of the chunks' masks, taken over from chunk 0.
-  for (int c = 1; c < num_chunks; ++c) chunks_[0].updates.unite(chunks_[c].updates);
-  updates_.swapMasks(chunks_[0].updates);
-
-  // 3. Mean colours of the hit voxels, over all chunks (an endpoint voxel may span two bands);
+  // Mean colours of the hit voxels, over all chunks (an endpoint voxel may span two bands);
   // finish() keeps those whose hit bit is set, i.e. the endpoints within range.
-  endpoints_.clear();
-  if (batch.hasColor()) {
-    for (int c = 0; c < num_chunks; ++c) endpoints_.merge(chunks_[c].endpoints);
-  }
   updates_.finish(endpoints_, batch.hasColor());
 }
 
