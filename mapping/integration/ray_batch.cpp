@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 
 #include "mapping/integration/point_voxels.h"
 #include "mapping/integration/voxel_ray.h"
@@ -169,22 +168,20 @@ struct CarveUntilRun {
   }
 };
 
-// The stride of the order in which early stopping marches a chunk's n rays: ray i of the order is
-// endpoint (i stride) mod n, stride the integer nearest n / phi (phi the golden ratio) that is
-// coprime to n, so every endpoint comes once (a Weyl sequence: each prefix of the order is spread
-// evenly over the endpoints, which come in image order). In image order a ray's neighbours in the
-// rows above it have carved only the half of its surroundings above it, and it keeps finding
-// voxels they left uncarved, a few steps apart, all the way to the camera (the run of 16 carved
-// voxels that stops it comes late: 97 steps a ray on bench/map_bench's frames, 21 of them new).
-// In a spread order the rays marched before it surround it on all sides, it finds the carved path
-// sooner: for the same voxels left unknown, 8 chunks and a stop run of 32 march 2.41 M steps a
-// frame where image order (16 chunks, a run of 16) marched 3.15 M.
-size_t spreadStride(size_t n) {
-  if (n < 3) return 1;
-  size_t stride = static_cast<size_t>(std::llround(static_cast<double>(n) * 0.6180339887498949));
-  while (std::gcd(stride, n) != 1) ++stride;
-  return stride;
-}
+// The order in which early stopping marches a chunk's rays: kSpreadPasses passes over its
+// endpoints (which come in point order: image rows), pass p taking every kSpreadPasses-th one from
+// offset kSpreadOffsets[p] (the bit reversal of p: 0, 8, 4, 12, 2, ...), so that each pass falls
+// halfway between the rays of the passes before. In image order a ray's neighbours in the rows
+// above it have carved only the half of its surroundings above it, and it keeps finding voxels
+// they left uncarved, a few steps apart, all the way to the camera (the run of 16 carved voxels
+// that stopped it came late: 97 steps a ray on bench/map_bench's frames, 21 of them new). In
+// passes, the rays marched before it lie on all sides of it, and it meets the carved path sooner:
+// with a run of 32, 2.34 M steps a frame where image order with 16 took 3.08 M, for fewer voxels
+// left unknown. Consecutive rays of a pass are 16 endpoints apart, so they cross nearly the same
+// blocks and their walks branch alike: 5 % less CPU time than a Weyl sequence over the whole chunk
+// (i phi mod n), which marches 1 % more steps.
+constexpr size_t kSpreadPasses = 16;
+constexpr std::array<size_t, kSpreadPasses> kSpreadOffsets = {0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15};
 
 }  // namespace
 
@@ -220,24 +217,24 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
     VoxelBox window{blockOf(key_origin), blockOf(key_origin)};
     for (const VoxelIndex& endpoint : chunk.endpoints.voxels()) window.extend(blockOf(endpoint));
     writer.setWindow(window);
-    // Early stop: in a spread order (whole rays: the point order, whose neighbouring rays share blocks).
+    // Early stop: in passes (whole rays: in point order, whose neighbouring rays share blocks).
     const std::vector<VoxelIndex>& endpoints = chunk.endpoints.voxels();
-    const size_t num_endpoints = endpoints.size();
-    const size_t stride = exact ? 1 : spreadStride(num_endpoints);
+    const size_t passes = exact ? 1 : kSpreadPasses;
     size_t steps = 0;
-    for (size_t i = 0, e = 0; i < num_endpoints;
-         ++i, e = e + stride < num_endpoints ? e + stride : e + stride - num_endpoints) {
-      const VoxelIndex& endpoint = endpoints[e];
-      const Eigen::Vector3d end = voxelCentre(endpoint, voxel_size_m);
-      const Eigen::Vector3d ray = end - origin;
-      const double range = ray.norm();
-      const bool in_range = !limited || range <= max_range_m;
-      // An endpoint voxel's centre lies in that voxel: toVoxel(end) is the endpoint.
-      const Eigen::Vector3d stop = in_range ? end : Eigen::Vector3d(origin + ray * (max_range_m / range));
-      const RayWalk walk(origin, key_origin, stop, in_range ? endpoint : toVoxel(stop, voxel_size_m), voxel_size_m);
-      steps += static_cast<size_t>(exact ? march<false>(walk, writer, CarveAll{})
-                                         : march<true>(walk, writer, CarveUntilRun{stop_run}));
-      if (in_range) writer.setHit(endpoint);
+    for (size_t pass = 0; pass < passes; ++pass) {
+      for (size_t e = kSpreadOffsets[pass]; e < endpoints.size(); e += passes) {
+        const VoxelIndex& endpoint = endpoints[e];
+        const Eigen::Vector3d end = voxelCentre(endpoint, voxel_size_m);
+        const Eigen::Vector3d ray = end - origin;
+        const double range = ray.norm();
+        const bool in_range = !limited || range <= max_range_m;
+        // An endpoint voxel's centre lies in that voxel: toVoxel(end) is the endpoint.
+        const Eigen::Vector3d stop = in_range ? end : Eigen::Vector3d(origin + ray * (max_range_m / range));
+        const RayWalk walk(origin, key_origin, stop, in_range ? endpoint : toVoxel(stop, voxel_size_m), voxel_size_m);
+        steps += static_cast<size_t>(exact ? march<false>(walk, writer, CarveAll{})
+                                           : march<true>(walk, writer, CarveUntilRun{stop_run}));
+        if (in_range) writer.setHit(endpoint);
+      }
     }
     chunk.steps = steps;
     // 2. The union of the chunks' masks, and 3. their endpoints' colour sums, as each chunk ends:

@@ -27,12 +27,12 @@
 //     voxel a poor signal: in image order, stop_run 1 lost 13 % of the free voxels, 4 lost 0.8 %
 //     (and left holes inside rooms that become false frontiers,
 //     tests/mapping/frontier/frontier_map_test.cpp), 16 lost 0.04 %. A chunk's rays are marched
-//     in a spread order (a Weyl sequence over its endpoints, ray_batch.cpp): the rays before one
-//     then lie on all sides of it, not only in the image rows above, so it meets the carved path
-//     sooner. The default run of 32 leaves fewer voxels unknown than image order with 16 did
-//     (0.035 % on tests/mapping/integration/octomap_equivalence_test.cpp's survey, 0.074 % on its
-//     laser scan, where 16 in image order left 0.04 % and 0.25 %) in a third of whole rays' steps
-//     (2.4M a frame in bench/map_bench; 16 in image order: 3.15M).
+//     in 16 interleaved passes over its endpoints (ray_batch.cpp): the rays before one then lie on
+//     all sides of it, not only in the image rows above, so it meets the carved path sooner. The
+//     default run of 32 leaves fewer voxels unknown than image order with 16 did (0.032 % on
+//     tests/mapping/integration/octomap_equivalence_test.cpp's survey, 0.11 % on its laser scan,
+//     where 16 in image order left 0.04 % and 0.25 %) in 35 % of whole rays' steps (2.34M a frame
+//     in bench/map_bench; 16 in image order: 3.08M, 46 %).
 //     stop_run 0 marches every ray whole from the origin, like OctoMap's computeRayKeys:
 //     OctoMap's voxel sets (up to rounding: OctoMap casts from float coordinates, 3e-5 of the
 //     free voxels differ on the laser scan of tests/mapping/integration/octomap_equivalence_test.cpp).
