@@ -200,6 +200,8 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
   updates_.clearMasks();
   endpoints_.clear();
   bool first_done = false;  // a chunk's masks are in updates_
+  int next_merge = 0;       // the first chunk whose colours are not yet in endpoints_
+  for (int c = 0; c < num_chunks; ++c) chunks_[c].done = false;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
   for (int c = 0; c < num_chunks; ++c) {
     Chunk& chunk = chunks_[c];
@@ -237,9 +239,12 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
       }
     }
     chunk.steps = steps;
-    // 2. The union of the chunks' masks, and 3. their endpoints' colour sums, as each chunk ends:
-    // the other threads march on meanwhile. Any order gives the same union and sums (finish()
-    // sorts the blocks). The first chunk's masks are taken over, not copied.
+    // 2. The union of the chunks' masks, as each chunk ends: the other threads march on meanwhile.
+    // Any order gives the same union (finish() sorts the blocks). The first chunk's masks are
+    // taken over, not copied. 3. The endpoints' colour sums (an endpoint voxel may span two
+    // bands), merged in chunk order, each chunk as soon as those before it are: the colours' order,
+    // and so the order in which the map's colour store meets their blocks, is the same for any
+    // thread count.
 #pragma omp critical(cenote_ray_batch_union)
     {
       if (first_done) {
@@ -248,7 +253,10 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
         updates_.swapMasks(writer);
         first_done = true;
       }
-      if (batch.hasColor()) endpoints_.merge(chunk.endpoints);
+      chunk.done = true;
+      for (; next_merge < num_chunks && chunks_[next_merge].done; ++next_merge) {
+        if (batch.hasColor()) endpoints_.merge(chunks_[next_merge].endpoints);
+      }
     }
   }
   num_rays_ = 0;
@@ -258,8 +266,8 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
     num_steps_ += chunks_[c].steps;
   }
 
-  // Mean colours of the hit voxels, over all chunks (an endpoint voxel may span two bands);
-  // finish() keeps those whose hit bit is set, i.e. the endpoints within range.
+  // Mean colours of the hit voxels: finish() keeps those whose hit bit is set, i.e. the endpoints
+  // within range.
   updates_.finish(endpoints_, batch.hasColor());
 }
 

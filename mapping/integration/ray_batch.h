@@ -88,6 +88,7 @@ class RayBatch {
     EndpointSet endpoints;           // unique endpoint voxels, in point order
     BatchUpdates updates;            // masks only
     size_t steps = 0;                // voxels its rays visited
+    bool done = false;               // marched and united (this build)
   };
 
   BatchUpdates updates_;
