@@ -41,7 +41,7 @@
 //     for any thread count (early stopping depends only on the chunk's own rays). An endpoint voxel
 //     spanning two bands is marched by both (the union is unchanged); its colour is merged. Each
 //     chunk carves the trunk of its rays near the camera afresh, and its early stops see only its
-//     own rays: 8 chunks march 12 % fewer steps than 16, and still balance 2 threads (the top
+//     own rays: 8 chunks march 10 % fewer steps than 16, and still balance 2 threads (the top
 //     band, the far floor, takes about 40 % of the steps, which bounds 4 threads' speed-up to 2.5).
 // No coarse clearing: carving a ray's far stretch by 2x2x2 cells (all 8 voxels of a cell it
 // crosses made free) takes a third fewer instructions in bench/map_bench, but makes free voxels no
