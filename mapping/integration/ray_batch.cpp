@@ -59,10 +59,11 @@ struct RayWalk {
 // increasing t, ties to the highest axis. kFromEnd true: the same voxels in reverse order, from the
 // one before the end's voxel back to the origin's (decreasing t, ties to the lowest axis).
 // visit(word, bit) on each voxel (its word of its block's free mask and its bit in it); false
-// stops the walk. Returns the voxels visited (`steps` when the visitor did not stop the walk). A block's masks are looked up (and
-// created) only when a voxel of it is about to be visited, after the walk entered it. The visitor
-// is taken by value: its state stays in registers. Flattened: its lambdas and masksOf inline
-// into the loop (16 instances exhaust the compiler's inlining budget otherwise).
+// stops the walk. Returns the voxels visited (`steps` when the visitor did not stop the walk). A
+// block's masks are looked up (and created) only when a voxel of it is about to be visited, after
+// the walk entered it. The visitor is taken by value: its state stays in registers. Flattened: its
+// lambdas and masksOf inline into the loop (16 instances exhaust the compiler's inlining budget
+// otherwise).
 template <int SX, int SY, int SZ, bool kFromEnd, typename Visit>
 [[gnu::flatten]] long walkOctant(const RayWalk& w, long steps, BatchUpdates& writer, Visit visit) {
   constexpr double kNever = kFromEnd ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
