@@ -1,6 +1,7 @@
-// map_kernels_test.cpp: the map's vector kernels (publishWord, occupiedMask: SSE2 on x86) give their
-// portable scalar versions' results (what ARM runs) bit for bit, on random words and on every
-// boundary value; and both follow the rules written in their headers.
+// map_kernels_test.cpp: the map's vector kernels (publishWord: SSE2, and AVX2 where the CPU has
+// it; occupiedMask: SSE2) give their portable scalar versions' results (what ARM runs) bit for
+// bit, on random words and on every boundary value; and both follow the rules written in their
+// headers.
 #include <gtest/gtest.h>
 
 #include <array>
