@@ -17,6 +17,14 @@
 #include "mapping/detail/simd_target.h"
 #include "mapping/log_odds.h"
 
+// The AVX2 kernel: x86-64 with GCC or Clang (target attributes, __builtin_cpu_supports).
+#if CENOTE_MAPPING_SSE2 && defined(__x86_64__) && defined(__GNUC__)
+#define CENOTE_MAPPING_AVX2 1
+#include <immintrin.h>
+#else
+#define CENOTE_MAPPING_AVX2 0
+#endif
+
 namespace cenote::mapping::detail {
 
 // The rule above voxel by voxel: the portable kernel (ARM, CENOTE_FORCE_SCALAR); tests compare
@@ -79,9 +87,7 @@ inline uint64_t publishWordSse2(float* values, uint64_t known, uint64_t update, 
   return changed;
 }
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#define CENOTE_MAPPING_AVX2 1
-#include <immintrin.h>
+#if CENOTE_MAPPING_AVX2
 
 // All-ones lanes for the set bits of an 8-bit group (bit i -> lane i).
 [[gnu::target("avx2")]] inline __m256 laneMask8(unsigned bits8) {
@@ -120,8 +126,6 @@ inline uint64_t publishWordSse2(float* values, uint64_t known, uint64_t update, 
   }
   return changed;
 }
-#else
-#define CENOTE_MAPPING_AVX2 0
 #endif
 
 // Applies the updates of one word to values[0..63] (arguments and result as publishWordSse2):
