@@ -13,7 +13,8 @@
 // images for bench/open3d_bench.py, which adds Open3D's TSDF integration of them. An unknown flag, a missing or
 // bad value, or two modes at once is an error (exit status not 0, the reason on stderr; --help lists the flags).
 // --integrate-only: integrates the frames into our map only (for perf / callgrind, run with
-// OMP_WAIT_POLICY set: the bench re-executes itself otherwise), prints ms/frame and the map's fingerprint.
+// OMP_WAIT_POLICY set: the bench re-executes itself otherwise), prints ms/frame and the map's fingerprint,
+// and the rays' DDA steps per frame (RayBatch::numSteps).
 // --lookups-only: integrates the frames, then times the same random lookups as the full run, single
 // calls and batched alternating, five rounds each (medians, wall and thread CPU time), and says
 // where the probes fall (absent block, unknown, free, occupied).
@@ -53,6 +54,7 @@
 #include "mapping/distance/distance_field.h"
 #include "mapping/frontier/frontier_map.h"
 #include "mapping/integration/depth_frame.h"
+#include "mapping/integration/ray_batch.h"
 #include "mapping/integration/voxel_ray.h"
 #include "mapping/occupancy_map.h"
 #include "mapping/query/map_query.h"
@@ -356,7 +358,8 @@ void runUpdatesOnly(const Options& o, const std::vector<PointBatch>& frames) {
 }
 
 // --integrate-only: our integration alone (for perf / callgrind), ms/frame of wall and of CPU time,
-// and the fingerprint of the map.
+// and the fingerprint of the map; then, untimed (outside OccupancyMap::integrate, so outside
+// callgrind's collection), the rays' DDA steps and the voxels they update, per frame.
 void runIntegrateOnly(const Options& o, const std::vector<PointBatch>& frames) {
   bench::IntegrationTime time;
   const auto map = integrateOurs(frames, o, o.threads, time);
@@ -365,6 +368,19 @@ void runIntegrateOnly(const Options& o, const std::vector<PointBatch>& frames) {
               "voxels; map fingerprint %016llx\n",
               o.threads, time.wall_ms, time.cpu_ms, static_cast<unsigned long long>(stats.occupied),
               static_cast<unsigned long long>(stats.free), static_cast<unsigned long long>(bench::mapFingerprint(*map)));
+  const MapConfig config = mapConfig(o, o.threads);
+  RayBatch rays;
+  size_t steps = 0, rays_cast = 0;
+  uint64_t updated = 0;
+  for (const PointBatch& frame : frames) {
+    rays.build(frame, config.voxel_size_m, config.max_range_m, o.threads, config.ray_stop_run);
+    steps += rays.numSteps();
+    rays_cast += rays.numRays();
+    updated += rays.updates().numUpdated();
+  }
+  const double n = static_cast<double>(frames.size());
+  std::printf("per frame: %.0f rays, %.0f DDA steps, %.0f voxels updated (ray_stop_run %d)\n", rays_cast / n, steps / n,
+              static_cast<double>(updated) / n, config.ray_stop_run);
 }
 
 // --lookups-only: see the header comment.

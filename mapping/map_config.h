@@ -24,7 +24,7 @@ struct MapConfig {
   double clamp_max = 0.97;             //   0 < clamp_min < prob_miss, prob_hit < clamp_max < 1
   double occupied_threshold = 0.5;     // occupied when p >= this; in (clamp_min, clamp_max)
   double max_range_m = 10.0;           // rays longer are carved to this range with no hit; <= 0: unlimited
-  int ray_stop_run = 16;               // a ray, marched from its end, stops after this many voxels in a
+  int ray_stop_run = 32;               // a ray, marched from its end, stops after this many voxels in a
                                        // row already carved this batch (integration/ray_batch.h): it
                                        // may leave voxels of the ray unknown, never makes free one the
                                        // whole ray does not cross; 0: march whole rays, OctoMap's voxel

@@ -59,12 +59,13 @@ struct RayWalk {
 // increasing t, ties to the highest axis. kFromEnd true: the same voxels in reverse order, from the
 // one before the end's voxel back to the origin's (decreasing t, ties to the lowest axis).
 // visit(word, bit) on each voxel (its word of its block's free mask and its bit in it); false
-// stops the walk. Returns false when the visitor stopped it. A block's masks are looked up (and
-// created) only when a voxel of it is about to be visited, after the walk entered it. The visitor
-// is taken by value: its state stays in registers. Flattened: its lambdas and masksOf inline
-// into the loop (16 instances exhaust the compiler's inlining budget otherwise).
+// stops the walk. Returns the voxels visited (`steps` when the visitor did not stop the walk). A
+// block's masks are looked up (and created) only when a voxel of it is about to be visited, after
+// the walk entered it. The visitor is taken by value: its state stays in registers. Flattened: its
+// lambdas and masksOf inline into the loop (16 instances exhaust the compiler's inlining budget
+// otherwise).
 template <int SX, int SY, int SZ, bool kFromEnd, typename Visit>
-[[gnu::flatten]] bool walkOctant(const RayWalk& w, long steps, BatchUpdates& writer, Visit visit) {
+[[gnu::flatten]] long walkOctant(const RayWalk& w, long steps, BatchUpdates& writer, Visit visit) {
   constexpr double kNever = kFromEnd ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
   const VoxelIndex& start = kFromEnd ? w.key_end : w.key_origin;
   // The next face on each axis (from the end, the face behind, which the walk from the origin
@@ -118,20 +119,20 @@ template <int SX, int SY, int SZ, bool kFromEnd, typename Visit>
   // block is looked up only if a voxel of it is visited). Then steps - 1 steps either way.
   if (kFromEnd) advance();
   lookUp();
-  if (!visitHere()) return false;
+  if (!visitHere()) return 1;
   for (long n = steps - 1; n > 0; --n) {
     if (advance()) lookUp();
-    if (!visitHere()) return false;
+    if (!visitHere()) return steps - n + 1;
   }
-  return true;
+  return steps;
 }
 
 // walkOctant for the ray's octant: from the origin (kFromEnd false) or from the end. An axis the
-// ray never steps on takes +1 (its t is never the next).
+// ray never steps on takes +1 (its t is never the next). Returns the voxels visited.
 template <bool kFromEnd, typename Visit>
-bool march(const RayWalk& w, BatchUpdates& writer, Visit visit) {
+long march(const RayWalk& w, BatchUpdates& writer, Visit visit) {
   const long steps = w.steps();
-  if (steps == 0) return true;
+  if (steps == 0) return 0;
   const int sign = kFromEnd ? -1 : 1;
   const int octant = (sign * w.step[0] < 0) << 2 | (sign * w.step[1] < 0) << 1 | (sign * w.step[2] < 0);
   switch (octant) {
@@ -168,6 +169,21 @@ struct CarveUntilRun {
   }
 };
 
+// The order in which early stopping marches a chunk's rays: kSpreadPasses passes over its
+// endpoints (which come in point order: image rows), pass p taking every kSpreadPasses-th one from
+// offset kSpreadOffsets[p] (the bit reversal of p: 0, 8, 4, 12, 2, ...), so that each pass falls
+// halfway between the rays of the passes before. In image order a ray's neighbours in the rows
+// above it have carved only the half of its surroundings above it, and it keeps finding voxels
+// they left uncarved, a few steps apart, all the way to the camera (the run of 16 carved voxels
+// that stopped it came late: 97 steps a ray on bench/map_bench's frames, 21 of them new). In
+// passes, the rays marched before it lie on all sides of it, and it meets the carved path sooner:
+// with a run of 32, 2.34 M steps a frame where image order with 16 took 3.08 M, for fewer voxels
+// left unknown. Consecutive rays of a pass are 16 endpoints apart, so they cross nearly the same
+// blocks and their walks branch alike: 5 % less CPU time than a Weyl sequence over the whole chunk
+// (i phi mod n), which marches 1 % more steps.
+constexpr size_t kSpreadPasses = 16;
+constexpr std::array<size_t, kSpreadPasses> kSpreadOffsets = {0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15};
+
 }  // namespace
 
 void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_range_m, int num_threads, int stop_run) {
@@ -182,6 +198,11 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
   const VoxelIndex key_origin = toVoxel(origin, voxel_size_m);
   const bool limited = max_range_m > 0.0;
   const size_t n = batch.points.size();
+  updates_.clearMasks();
+  endpoints_.clear();
+  bool first_done = false;  // a chunk's masks are in updates_
+  int next_merge = 0;       // the first chunk whose colours are not yet in endpoints_
+  for (int c = 0; c < num_chunks; ++c) chunks_[c].done = false;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
   for (int c = 0; c < num_chunks; ++c) {
     Chunk& chunk = chunks_[c];
@@ -199,35 +220,55 @@ void RayBatch::build(const PointBatch& batch, double voxel_size_m, double max_ra
     VoxelBox window{blockOf(key_origin), blockOf(key_origin)};
     for (const VoxelIndex& endpoint : chunk.endpoints.voxels()) window.extend(blockOf(endpoint));
     writer.setWindow(window);
-    for (const VoxelIndex& endpoint : chunk.endpoints.voxels()) {
-      const Eigen::Vector3d end = voxelCentre(endpoint, voxel_size_m);
-      const Eigen::Vector3d ray = end - origin;
-      const double range = ray.norm();
-      const bool in_range = !limited || range <= max_range_m;
-      // An endpoint voxel's centre lies in that voxel: toVoxel(end) is the endpoint.
-      const Eigen::Vector3d stop = in_range ? end : Eigen::Vector3d(origin + ray * (max_range_m / range));
-      const RayWalk walk(origin, key_origin, stop, in_range ? endpoint : toVoxel(stop, voxel_size_m), voxel_size_m);
-      if (exact) {
-        march<false>(walk, writer, CarveAll{});
-      } else {
-        march<true>(walk, writer, CarveUntilRun{stop_run});
+    // Early stop: in passes (whole rays: in point order, whose neighbouring rays share blocks).
+    const std::vector<VoxelIndex>& endpoints = chunk.endpoints.voxels();
+    const size_t passes = exact ? 1 : kSpreadPasses;
+    size_t steps = 0;
+    for (size_t pass = 0; pass < passes; ++pass) {
+      for (size_t e = kSpreadOffsets[pass]; e < endpoints.size(); e += passes) {
+        const VoxelIndex& endpoint = endpoints[e];
+        const Eigen::Vector3d end = voxelCentre(endpoint, voxel_size_m);
+        const Eigen::Vector3d ray = end - origin;
+        const double range = ray.norm();
+        const bool in_range = !limited || range <= max_range_m;
+        // An endpoint voxel's centre lies in that voxel: toVoxel(end) is the endpoint.
+        const Eigen::Vector3d stop = in_range ? end : Eigen::Vector3d(origin + ray * (max_range_m / range));
+        const RayWalk walk(origin, key_origin, stop, in_range ? endpoint : toVoxel(stop, voxel_size_m), voxel_size_m);
+        steps += static_cast<size_t>(exact ? march<false>(walk, writer, CarveAll{})
+                                           : march<true>(walk, writer, CarveUntilRun{stop_run}));
+        if (in_range) writer.setHit(endpoint);
       }
-      if (in_range) writer.setHit(endpoint);
+    }
+    chunk.steps = steps;
+    // 2. The union of the chunks' masks, as each chunk ends: the other threads march on meanwhile.
+    // Any order gives the same union (finish() sorts the blocks). The first chunk's masks are
+    // taken over, not copied. 3. The endpoints' colour sums (an endpoint voxel may span two
+    // bands), merged in chunk order, each chunk as soon as those before it are: the colours' order,
+    // and so the order in which the map's colour store meets their blocks, is the same for any
+    // thread count.
+#pragma omp critical(cenote_ray_batch_union)
+    {
+      if (first_done) {
+        updates_.unite(writer);
+      } else {
+        updates_.swapMasks(writer);
+        first_done = true;
+      }
+      chunk.done = true;
+      for (; next_merge < num_chunks && chunks_[next_merge].done; ++next_merge) {
+        if (batch.hasColor()) endpoints_.merge(chunks_[next_merge].endpoints);
+      }
     }
   }
   num_rays_ = 0;
-  for (int c = 0; c < num_chunks; ++c) num_rays_ += chunks_[c].endpoints.voxels().size();
-
-  // 2. Union of the chunks' masks, taken over from chunk 0.
-  for (int c = 1; c < num_chunks; ++c) chunks_[0].updates.unite(chunks_[c].updates);
-  updates_.swapMasks(chunks_[0].updates);
-
-  // 3. Mean colours of the hit voxels, over all chunks (an endpoint voxel may span two bands);
-  // finish() keeps those whose hit bit is set, i.e. the endpoints within range.
-  endpoints_.clear();
-  if (batch.hasColor()) {
-    for (int c = 0; c < num_chunks; ++c) endpoints_.merge(chunks_[c].endpoints);
+  num_steps_ = 0;
+  for (int c = 0; c < num_chunks; ++c) {
+    num_rays_ += chunks_[c].endpoints.voxels().size();
+    num_steps_ += chunks_[c].steps;
   }
+
+  // Mean colours of the hit voxels: finish() keeps those whose hit bit is set, i.e. the endpoints
+  // within range.
   updates_.finish(endpoints_, batch.hasColor());
 }
 

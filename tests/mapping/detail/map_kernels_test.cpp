@@ -1,6 +1,7 @@
-// map_kernels_test.cpp: the map's vector kernels (publishWord, occupiedMask: SSE2 on x86) give their
-// portable scalar versions' results (what ARM runs) bit for bit, on random words and on every
-// boundary value; and both follow the rules written in their headers.
+// map_kernels_test.cpp: the map's vector kernels (publishWord: SSE2, and AVX2 where the CPU has
+// it; occupiedMask: SSE2) give their portable scalar versions' results (what ARM runs) bit for
+// bit, on random words and on every boundary value; and both follow the rules written in their
+// headers.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -139,8 +140,8 @@ std::vector<LogOddsModel> testModels() {
   return models;
 }
 
-TEST(MapKernels, PublishWordMatchesScalarBitForBit) {
-  if (!kHasVectorKernels) GTEST_SKIP() << "scalar build: publishWord is publishWordScalar";
+// `kernel` against publishWordScalar on random words of every test model, bit for bit.
+void expectMatchesScalarBitForBit(PublishKernel kernel) {
   std::mt19937_64 rng(42);
   int compared = 0;
   for (const LogOddsModel& model : testModels()) {
@@ -150,7 +151,7 @@ TEST(MapKernels, PublishWordMatchesScalarBitForBit) {
       for (float& v : vector_values) v = randomValue(rng, edges, model);  // stale values where unknown too
       scalar_values = vector_values;
       const uint64_t known = randomMask(rng), update = randomMask(rng), hits = randomMask(rng);
-      const uint64_t vector_changed = detail::publishWord(vector_values.data(), known, update, hits, model);
+      const uint64_t vector_changed = kernel(vector_values.data(), known, update, hits, model);
       const uint64_t scalar_changed = detail::publishWordScalar(scalar_values.data(), known, update, hits, model);
       ASSERT_EQ(vector_changed, scalar_changed) << "trial " << trial << " known " << known << " update " << update;
       for (int i = 0; i < 64; ++i) {
@@ -162,6 +163,24 @@ TEST(MapKernels, PublishWordMatchesScalarBitForBit) {
   }
   EXPECT_EQ(compared, 103 * 1000);
 }
+
+// publishWord: the kernel this CPU runs.
+TEST(MapKernels, PublishWordMatchesScalarBitForBit) {
+  if (!kHasVectorKernels) GTEST_SKIP() << "scalar build: publishWord is publishWordScalar";
+  expectMatchesScalarBitForBit(&detail::publishWord);
+}
+
+#if CENOTE_MAPPING_SSE2
+TEST(MapKernels, PublishWordSse2MatchesScalarBitForBit) { expectMatchesScalarBitForBit(&detail::publishWordSse2); }
+#endif
+
+// The AVX2 kernel (chosen where the CPU has AVX2) gives the SSE2 and scalar kernels' bits.
+#if CENOTE_MAPPING_SSE2 && CENOTE_MAPPING_AVX2
+TEST(MapKernels, PublishWordAvx2MatchesScalarBitForBit) {
+  if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "this CPU has no AVX2";
+  expectMatchesScalarBitForBit(&detail::publishWordAvx2);
+}
+#endif
 
 // One voxel through both kernels: the value after and whether it was reported changed.
 struct VoxelOutcome {
