@@ -16,8 +16,11 @@
 // How close to a march at the new pose: the answers differ only within about a voxel of the
 // boundaries of the old free and hit sets (the free cone's edges, the surface): where the points
 // lay inside their hit voxel is not stored, so a hit lands in the voxel of its old voxel's centre,
-// up to a voxel from the march's; a move by whole voxels without rotation shifts the old updates
-// exactly, and a move of nothing returns them as they were (the guard samples inside the free set).
+// up to a voxel from the march's. A move by whole voxels without rotation (a move of nothing among
+// them) maps voxels onto voxels: it has no guard and shifts the old updates exactly, so a frame
+// moved back to the pose it was marched at gets its marched updates back.
+// Ragged free sets (rays about a voxel apart, holes in the depth) have edges everywhere: there the
+// resampled map errs much more (docs/CORRECTIONS.md).
 // (tests/mapping/history/frame_resample_test.cpp; the map's agreement: map_history_test.cpp.)
 // Units: the updates in voxel indices; poses, the origin and voxel_size_m in metres, world frame.
 // Threads: a pure function.

@@ -24,13 +24,13 @@
 // (tests/mapping/history/map_history_test.cpp). With the resampling a moved frame's updates differ
 // from its march at the new pose only within about a voxel of the boundaries of its free and hit
 // sets, and frames that did not move are replayed exactly: with dense depth (correction_bench's
-// tunnel, 300 of 1500 frames moved) the map agrees with the one built from scratch in 99.7 % of
+// tunnel, 300 of 1500 frames moved) the map agrees with the one built from scratch in 99.8 % of
 // the known voxels (the bar: 99 %), but where free space is ragged (rays about a voxel
 // apart, sparse stereo: the simulated cave of cli_corrections_test at 320x240) in 91 %, which is
-// why the march is the default (docs/CORRECTIONS.md). The cost grows with the frames that moved (a resampling or a ray march
-// each) and the frames touching the affected blocks (an inflate and a mask merge each), not with
-// the length of the dive. Submaps per keyframe were the alternative: no store, but a query would
-// fuse overlapping submaps, and the answer is not the single map's.
+// why the march is the default (docs/CORRECTIONS.md). The cost grows with the frames that moved (a
+// resampling or a ray march each) and the frames touching the affected blocks (an inflate and a
+// mask merge each), not with the length of the dive. Submaps per keyframe were the alternative: no
+// store, but a query would fuse overlapping submaps, and the answer is not the single map's.
 // Limits: frames dropped from the store (its budget, map.history_max_mb) cannot be replayed; a
 // block that one of them touched keeps its state in a correction (counted in blocks_kept). Points
 // are integrated as rounded (map.history_quantum_m, 1 mm by default), so that a replay sees the
