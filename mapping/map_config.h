@@ -19,7 +19,7 @@ namespace cenote::mapping {
 // How a pose correction moves a frame (history/map_history.h): its rays marched again at the new
 // pose (the map then equals the map built from scratch with the corrected poses, bit for bit, at
 // the cost of a frame's integration and more), or its stored voxel updates resampled rigidly to the
-// new pose (history/frame_resample.h: a quarter of the march's time; within a voxel of the march,
+// new pose (history/frame_resample.h: a third of the march's time; within a voxel of the march,
 // which keeps 99.8 % agreement with dense depth but 91 % with the simulated cave's 320x240 stereo,
 // docs/CORRECTIONS.md).
 enum class CorrectionMove { kMarch, kResample };
