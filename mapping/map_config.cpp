@@ -1,5 +1,6 @@
 #include "mapping/map_config.h"
 
+#include "common/enum_names.h"
 #include "common/yaml_section.h"
 
 namespace cenote::mapping {
@@ -61,6 +62,16 @@ void MapConfig::read(YamlSection& section) {
   section.read("correction_min_shift_m", correction_min_shift_m);
   section.read("correction_min_turn_deg", correction_min_turn_deg);
   section.read("correction_max_gap_s", correction_max_gap_s);
+  section.readName("correction_move", correction_move, parseCorrectionMove);
+}
+
+constexpr EnumName<CorrectionMove> kCorrectionMoveNames[] = {{CorrectionMove::kMarch, "march"},
+                                                             {CorrectionMove::kResample, "resample"}};
+
+const char* toString(CorrectionMove move) { return enumName(kCorrectionMoveNames, move); }
+
+CorrectionMove parseCorrectionMove(const std::string& name) {
+  return parseEnumName(kCorrectionMoveNames, name, "map.correction_move = " + name, NameQuotes::kSingle);
 }
 
 }  // namespace cenote::mapping

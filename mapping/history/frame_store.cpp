@@ -17,9 +17,10 @@ namespace fs = std::filesystem;
 
 std::string systemError() { return std::strerror(errno); }
 
-// The two sections' files: SEQ.points, SEQ.updates.
+// The sections' files: SEQ.points, SEQ.updates, and SEQ.marched while the updates are resampled.
 constexpr const char* kPoints = "points";
 constexpr const char* kUpdates = "updates";
+constexpr const char* kMarched = "marched";
 
 // Writes `bytes` to `path` through a temporary file renamed over it: a reader sees the old file or
 // the new one. @throws as FrameStore::put, `path` then as it was.
@@ -108,6 +109,35 @@ void FrameStore::putUpdates(uint32_t seq, const FrameMeta& meta, const std::stri
   entryOf(seq);  // @throws NotFoundError
   writeFile(pathOf(seq, kUpdates), updates);
   Entry& entry = frames_[seq];
+  if (entry.marched_bytes != 0) {
+    ::unlink(pathOf(seq, kMarched).c_str());
+    bytes_ -= entry.marched_bytes;
+    entry.marched_bytes = 0;
+  }
+  bytes_ += updates.size() - entry.updates_bytes;
+  entry.meta = meta;
+  entry.updates_bytes = updates.size();
+}
+
+void FrameStore::putResampled(uint32_t seq, const FrameMeta& meta, const std::string& updates) {
+  entryOf(seq);  // @throws NotFoundError
+  Entry& entry = frames_[seq];
+  const std::string path = pathOf(seq, kUpdates), marched = pathOf(seq, kMarched);
+  // The first resampling keeps the marched updates aside (a rename: no bytes copied).
+  const bool keep_marched = entry.marched_bytes == 0;
+  if (keep_marched && ::rename(path.c_str(), marched.c_str()) != 0) {
+    throw IoError("frame store: cannot rename " + path + ": " + systemError());
+  }
+  try {
+    writeFile(path, updates);
+  } catch (...) {
+    if (keep_marched) ::rename(marched.c_str(), path.c_str());
+    throw;
+  }
+  if (keep_marched) {
+    entry.marched_bytes = entry.updates_bytes;
+    entry.updates_bytes = 0;
+  }
   bytes_ += updates.size() - entry.updates_bytes;
   entry.meta = meta;
   entry.updates_bytes = updates.size();
@@ -137,20 +167,28 @@ std::string FrameStore::readPoints(uint32_t seq) const { return readSection(seq,
 
 std::string FrameStore::readUpdates(uint32_t seq) const { return readSection(seq, kUpdates, entryOf(seq).updates_bytes); }
 
+std::string FrameStore::readMarched(uint32_t seq) const {
+  const Entry& entry = entryOf(seq);
+  return entry.marched_bytes != 0 ? readSection(seq, kMarched, entry.marched_bytes)
+                                  : readSection(seq, kUpdates, entry.updates_bytes);
+}
+
+void FrameStore::unlinkAll(uint32_t seq, const Entry& entry) const {
+  ::unlink(pathOf(seq, kPoints).c_str());
+  ::unlink(pathOf(seq, kUpdates).c_str());
+  if (entry.marched_bytes != 0) ::unlink(pathOf(seq, kMarched).c_str());
+}
+
 void FrameStore::erase(uint32_t seq) {
   const auto it = frames_.find(seq);
   if (it == frames_.end()) return;
-  bytes_ -= it->second.points_bytes + it->second.updates_bytes;
+  bytes_ -= it->second.points_bytes + it->second.updates_bytes + it->second.marched_bytes;
+  unlinkAll(seq, it->second);
   frames_.erase(it);
-  ::unlink(pathOf(seq, kPoints).c_str());
-  ::unlink(pathOf(seq, kUpdates).c_str());
 }
 
 void FrameStore::clear() {
-  for (const auto& [seq, entry] : frames_) {
-    ::unlink(pathOf(seq, kPoints).c_str());
-    ::unlink(pathOf(seq, kUpdates).c_str());
-  }
+  for (const auto& [seq, entry] : frames_) unlinkAll(seq, entry);
   frames_.clear();
   bytes_ = 0;
 }
@@ -160,7 +198,7 @@ std::vector<uint32_t> FrameStore::overBudget() const {
   uint64_t bytes = bytes_;
   for (auto it = frames_.begin(); it != frames_.end() && bytes > max_bytes_; ++it) {
     out.push_back(it->first);
-    bytes -= it->second.points_bytes + it->second.updates_bytes;
+    bytes -= it->second.points_bytes + it->second.updates_bytes + it->second.marched_bytes;
   }
   return out;
 }

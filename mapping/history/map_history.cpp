@@ -10,6 +10,7 @@
 #include "mapping/detail/block_table.h"
 #include "mapping/history/block_replay.h"
 #include "mapping/history/frame_codec.h"
+#include "mapping/history/frame_resample.h"
 
 namespace cenote::mapping {
 namespace {
@@ -80,8 +81,8 @@ void checkPoses(std::span<const CorrectedPose> poses) {
   }
 }
 
-// A moved frame marched at its new pose, before the store and the index take it.
-struct MarchedFrame {
+// A moved frame's updates at its new pose, before the store and the index take them.
+struct MovedFrame {
   bool in_store = false;           // false: dropped (budget) or cleared since the plan
   history::FrameMeta meta;         // with the new pose
   std::string updates_bytes;       // the new updates, encoded
@@ -94,7 +95,7 @@ struct MarchedFrame {
 // scratch). Its points go from the store's bytes straight to the world at the new pose, checked by
 // their box (each is an integer point of the camera posed rigidly: no NaN can arise).
 void marchMoved(const history::FrameStore& store, const OccupancyMap& map, uint32_t seq,
-                const Eigen::Isometry3d& T_world_cam, MoveScratch& scratch, int num_threads, MarchedFrame& out) {
+                const Eigen::Isometry3d& T_world_cam, MoveScratch& scratch, int num_threads, MovedFrame& out) {
   try {
     if (!store.contains(seq)) return;
     out.in_store = true;
@@ -102,7 +103,7 @@ void marchMoved(const history::FrameStore& store, const OccupancyMap& map, uint3
     const std::string where = "frame " + std::to_string(seq);
     out.old_keys = history::decodeUpdates(store.readUpdates(seq), where, {}).others;  // the keys alone
     out.meta = store.meta(seq);
-    out.meta.T_world_cam = T_world_cam;
+    out.meta.T_world_cam = out.meta.T_world_cam_marched = T_world_cam;
     PointBatch& batch = scratch.batch;
     batch.t_s = out.meta.t_s;
     batch.origin = T_world_cam * out.meta.origin_cam;
@@ -111,6 +112,28 @@ void marchMoved(const history::FrameStore& store, const OccupancyMap& map, uint3
     map.checkBatch(batch, box);
     scratch.rays.build(batch, config.voxel_size_m, config.max_range_m, num_threads, config.ray_stop_run);
     FrameUpdates updates = FrameUpdates::of(scratch.rays.updates());
+    out.updates_bytes = history::encodeUpdates(updates, kDeflateLevel);
+    out.new_keys = std::move(updates.keys);
+  } catch (...) {
+    out.error = std::current_exception();
+  }
+}
+
+// Moves frame `seq` by resampling its last march's updates to its new pose (frame_resample.h):
+// always from those and their pose, so that corrections after one another do not pile up
+// resampling errors (reads the store, writes nothing but `out`). Its points are not read.
+void resampleMoved(const history::FrameStore& store, const MapConfig& config, uint32_t seq,
+                   const Eigen::Isometry3d& T_world_cam, MovedFrame& out) {
+  try {
+    if (!store.contains(seq)) return;
+    out.in_store = true;
+    const std::string where = "frame " + std::to_string(seq);
+    const history::FrameUpdates marched = history::decodeUpdates(store.readMarched(seq), where);
+    out.old_keys = store.isResampled(seq) ? history::decodeUpdates(store.readUpdates(seq), where, {}).others : marched.keys;
+    out.meta = store.meta(seq);
+    out.meta.T_world_cam = T_world_cam;
+    history::FrameUpdates updates = history::resampleUpdates(marched, T_world_cam * out.meta.T_world_cam_marched.inverse(),
+                                                             T_world_cam * out.meta.origin_cam, config.voxel_size_m);
     out.updates_bytes = history::encodeUpdates(updates, kDeflateLevel);
     out.new_keys = std::move(updates.keys);
   } catch (...) {
@@ -133,7 +156,7 @@ MapDelta MapHistory::integrate(const PointBatch& batch, const Eigen::Isometry3d&
   FrameMeta meta;
   meta.t_s = batch.t_s;
   meta.correctable = true;
-  meta.T_world_cam = T_world_cam;
+  meta.T_world_cam = meta.T_world_cam_marched = T_world_cam;
   meta.T_pose_cam = T_pose_cam;
   return integrateStored(batch, meta);
 }
@@ -142,6 +165,7 @@ MapDelta MapHistory::integrate(const PointBatch& batch) {
   FrameMeta meta;
   meta.t_s = batch.t_s;
   meta.T_world_cam.translation() = batch.origin;
+  meta.T_world_cam_marched = meta.T_world_cam;
   return integrateStored(batch, meta);
 }
 
@@ -249,26 +273,38 @@ void MapHistory::moveFrames(CorrectionPlan& plan, size_t begin, size_t end) {
   if (begin >= end) return;
   const int threads = numThreads();
   const int n = static_cast<int>(end - begin);
-  // A ray march is independent of the map, and its result of the thread count: frames are marched
-  // side by side, one thread each (which spends less time in a frame's serial parts than all
-  // threads on one frame after the other); a lone frame has all the threads. (Nested OpenMP is
-  // off, so a march inside the parallel loop would run on one thread whatever it was given.)
+  // A move is independent of the map, and its result of the thread count: frames are moved side by
+  // side, one thread each (which spends less time in a march's serial parts than all threads on one
+  // frame after the other); a lone frame's march has all the threads (a resampling is one thread's
+  // work). (Nested OpenMP is off, so a march inside the parallel loop would run on one thread
+  // whatever it was given.)
   const int side_by_side = std::min(n, threads);
   const int each = side_by_side > 1 ? 1 : threads;
-  for (int slot = 0; slot < side_by_side; ++slot) scratch(slot);
-  std::vector<MarchedFrame> marched(n);
+  const bool resample = map_.config().correction_move == CorrectionMove::kResample;
+  if (!resample) {
+    for (int slot = 0; slot < side_by_side; ++slot) scratch(slot);  // a resampling needs none
+  }
+  std::vector<MovedFrame> moved(n);
 #pragma omp parallel for num_threads(side_by_side) schedule(dynamic, 1)
   for (int k = 0; k < n; ++k) {
     const auto& [seq, T_world_cam] = plan.moved[begin + k];
-    marchMoved(store_, map_, seq, T_world_cam, scratch(omp_get_thread_num()), each, marched[k]);
+    if (resample) {
+      resampleMoved(store_, map_.config(), seq, T_world_cam, moved[k]);
+    } else {
+      marchMoved(store_, map_, seq, T_world_cam, scratch(omp_get_thread_num()), each, moved[k]);
+    }
   }
   // In plan order, as moveFrame one after the other would.
   for (int k = 0; k < n; ++k) {
-    MarchedFrame& m = marched[k];
+    MovedFrame& m = moved[k];
     if (m.error) std::rethrow_exception(m.error);
     if (!m.in_store) continue;  // its blocks are sealed
     const uint32_t seq = plan.moved[begin + k].first;
-    store_.putUpdates(seq, m.meta, m.updates_bytes);
+    if (resample) {
+      store_.putResampled(seq, m.meta, m.updates_bytes);
+    } else {
+      store_.putUpdates(seq, m.meta, m.updates_bytes);
+    }
     unindex(seq, m.old_keys);
     index(seq, m.new_keys);
     plan.affected.insert(m.old_keys.begin(), m.old_keys.end());

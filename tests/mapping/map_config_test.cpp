@@ -43,6 +43,26 @@ TEST(MapConfig, ReportsEveryFailedRuleNotJustTheFirst) {
   EXPECT_EQ(errors[1].toString(), "map.prob_miss = 0.6: must be in (0, 0.5)");
 }
 
+TEST(MapConfig, ReadsCorrectionMoveAndRejectsAnUnknownOneNamingTheNamesAllowed) {
+  EXPECT_EQ(MapConfig{}.correction_move, CorrectionMove::kMarch);
+  const YAML::Node node = YAML::Load("correction_move: resample\n");
+  MapConfig c;
+  YamlSection section(node, "map", "test.yaml");
+  c.read(section);
+  section.finish();
+  EXPECT_EQ(c.correction_move, CorrectionMove::kResample);
+
+  const YAML::Node bad = YAML::Load("correction_move: rewind\n");
+  YamlSection bad_section(bad, "map", "test.yaml");
+  MapConfig d;
+  try {
+    d.read(bad_section);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "map.correction_move = rewind: must be 'march' or 'resample'");
+  }
+}
+
 TEST(MapConfig, ReadsKeysAndRejectsUnknownOnes) {
   const YAML::Node node = YAML::Load("voxel_size_m: 0.1\nmax_range_m: 5\n");
   MapConfig c;

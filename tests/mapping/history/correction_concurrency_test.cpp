@@ -1,7 +1,7 @@
-// Readers during a pose correction (mapping/history/map_history.h): every block they read is either
-// its state before the correction or after it, never a mix, and the map ends as the one built from
-// scratch with the corrected poses. Part of mapping_concurrency_test, which ThreadSanitizer builds
-// (-DCENOTE_TSAN=ON) run.
+// Readers during a pose correction (mapping/history/map_history.h), in both of its modes: every
+// block they read is either its state before the correction or after it, never a mix; the map ends
+// as a twin corrected alone ends, which with the march is the one built from scratch with the
+// corrected poses. Part of mapping_concurrency_test, which ThreadSanitizer builds (-DCENOTE_TSAN=ON) run.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -18,12 +18,14 @@ namespace {
 using test::blockIn;
 using test::sameBlock;
 
-TEST(CorrectionConcurrency, ReadersSeeEachBlockOldOrNewNeverAMix) {
+void readersSeeEachBlockOldOrNew(CorrectionMove move) {
   MapConfig config;
   config.voxel_size_m = 0.05;
   config.publish_blocks = 4;  // many short exclusive sections: readers interleave often
   config.num_threads = 1;     // keeps OpenMP (not built for ThreadSanitizer) out
-  const std::string base = (std::filesystem::path(::testing::TempDir()) / "correction-concurrency").string();
+  config.correction_move = move;
+  const std::string base =
+      (std::filesystem::path(::testing::TempDir()) / (std::string("correction-concurrency-") + toString(move))).string();
   config.history_dir = base + "-drifted";
   const PinholeCamera camera{.width = 80, .height = 60, .fx = 60.0, .fy = 60.0, .cx = 39.5, .cy = 29.5};
   const auto frames = test::driftedRoomSweep(12, camera, 0.2, 2.0, config.history_quantum_m);
@@ -33,14 +35,21 @@ TEST(CorrectionConcurrency, ReadersSeeEachBlockOldOrNewNeverAMix) {
   truth_config.history_dir = base + "-truth";
   OccupancyMap truth(truth_config);
   MapHistory truth_history(truth);
+  MapConfig twin_config = config;
+  twin_config.history_dir = base + "-twin";
+  OccupancyMap twin(twin_config);
+  MapHistory twin_history(twin);
   std::vector<CorrectedPose> poses;
   for (const auto& f : frames) {
     history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
+    twin_history.integrate(f.batchAt(f.T_drifted), f.T_drifted);
     truth_history.integrate(f.batchAt(f.T_true), f.T_true);
     poses.push_back({f.t_s, f.T_true});
   }
+  twin_history.correct(poses);
   const auto before = test::snapshotBlocks(map);
-  const auto after = test::snapshotBlocks(truth);
+  const auto after = test::snapshotBlocks(twin);
+  const auto from_scratch = test::snapshotBlocks(truth);
   std::vector<BlockIndex> blocks;
   for (const auto& [b, view] : before) blocks.emplace_back(b[0], b[1], b[2]);
   for (const auto& [b, view] : after) {
@@ -81,7 +90,16 @@ TEST(CorrectionConcurrency, ReadersSeeEachBlockOldOrNewNeverAMix) {
   const auto final_blocks = test::snapshotBlocks(map);
   for (const BlockIndex& b : blocks) {
     EXPECT_TRUE(sameBlock(blockIn(final_blocks, b), blockIn(after, b))) << "block " << b.transpose();
+    if (move == CorrectionMove::kMarch) {
+      EXPECT_TRUE(sameBlock(blockIn(final_blocks, b), blockIn(from_scratch, b))) << "block " << b.transpose();
+    }
   }
+}
+
+TEST(CorrectionConcurrency, ReadersSeeEachBlockOldOrNewNeverAMix) { readersSeeEachBlockOldOrNew(CorrectionMove::kMarch); }
+
+TEST(CorrectionConcurrency, ReadersSeeEachResampledBlockOldOrNewNeverAMix) {
+  readersSeeEachBlockOldOrNew(CorrectionMove::kResample);
 }
 
 }  // namespace

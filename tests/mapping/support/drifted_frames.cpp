@@ -14,12 +14,17 @@ PointBatch DriftedFrame::batchAt(const Eigen::Isometry3d& T) const {
   return batch;
 }
 
-std::vector<DriftedFrame> driftedRoomSweep(int frames, const PinholeCamera& camera, double drift_m, double drift_deg,
-                                           double quantum_m) {
+Scene driftedRoom() {
   Scene scene;
   scene.boxes.push_back({Eigen::Vector3d(-3, -2, -1.5), Eigen::Vector3d(3, 2, 1.5)});
   scene.spheres.push_back({Eigen::Vector3d(1.5, 0.8, -0.7), 0.5});
   scene.spheres.push_back({Eigen::Vector3d(-1.2, -0.9, 0.2), 0.4});
+  return scene;
+}
+
+std::vector<DriftedFrame> driftedRoomSweep(int frames, const PinholeCamera& camera, double drift_m, double drift_deg,
+                                           double quantum_m) {
+  const Scene scene = driftedRoom();
   std::vector<DriftedFrame> out(frames);
   for (int i = 0; i < frames; ++i) {
     const double u = frames > 1 ? static_cast<double>(i) / (frames - 1) : 0.0;

@@ -24,6 +24,9 @@ struct DriftedFrame {
   PointBatch batchAt(const Eigen::Isometry3d& T) const;
 };
 
+// The room the sweep sees (its true surfaces).
+Scene driftedRoom();
+
 // `frames` frames of `camera` moving through a 6 x 4 x 3 m room with two spheres; the drift grows
 // linearly from 0 at frame 0 to drift_m (along x and y) and drift_deg (yaw) at the last frame.
 std::vector<DriftedFrame> driftedRoomSweep(int frames, const PinholeCamera& camera, double drift_m, double drift_deg,

@@ -40,8 +40,9 @@ PointBatch farWall(int i, Eigen::Isometry3d& T_world_cam) {
 mapping::MapConfig configIn(const std::string& dir) {
   mapping::MapConfig config;
   config.voxel_size_m = 0.05;
-  config.publish_blocks = 4;  // many short exclusive sections: readers interleave often
-  config.num_threads = 1;     // keeps OpenMP (not built for ThreadSanitizer) out
+  config.publish_blocks = 4;                                 // many short exclusive sections: readers interleave often
+  config.num_threads = 1;                                    // keeps OpenMP (not built for ThreadSanitizer) out
+  config.correction_move = mapping::CorrectionMove::kMarch;  // the map from scratch, bit for bit
   config.history_dir = (std::filesystem::path(::testing::TempDir()) / dir).string();
   return config;
 }

@@ -31,11 +31,12 @@ PointBatch wallSeenFrom(const Eigen::Isometry3d& T_world_cam) {
   return batch;
 }
 
-std::unique_ptr<MapHost> makeHost(bool frame_history) {
+std::unique_ptr<MapHost> makeHost(bool frame_history, mapping::CorrectionMove move = mapping::CorrectionMove::kMarch) {
   MapHostOptions options;
   options.frame_history = frame_history;
   options.derived_period_s = 0.0;
   mapping::MapConfig config;
+  config.correction_move = move;
   config.num_threads = 1;  // keeps OpenMP (libgomp is not built for ThreadSanitizer) out: `make tsan-test` runs these
   config.history_dir = (std::filesystem::path(::testing::TempDir()) /
                         ("host-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name())))
@@ -48,8 +49,8 @@ double distanceAt(MapHost& host, const Eigen::Vector3d& p_m) {
   return host.distanceField().query({p_m}).front().distance_m;
 }
 
-TEST(MapHostCorrections, TheMovedWallReachesTheFeedAndTheDistanceField) {
-  auto host = makeHost(true);
+void movedWallReachesTheFeedAndTheDistanceField(mapping::CorrectionMove move) {
+  auto host = makeHost(true, move);
   const Eigen::Isometry3d T_true = lookingAlongX();
   Eigen::Isometry3d T_drifted = T_true;
   T_drifted.translation().x() += 0.5;  // the odometry put the camera 0.5 m ahead: the wall at x = 1.5 m
@@ -69,6 +70,15 @@ TEST(MapHostCorrections, TheMovedWallReachesTheFeedAndTheDistanceField) {
   auto acc = host->map().constAccessor();
   EXPECT_EQ(acc.state(host->map().toIndex(Eigen::Vector3d(1.51, 0.02, 0.02))), mapping::VoxelState::kUnknown);
   EXPECT_EQ(acc.state(host->map().toIndex(Eigen::Vector3d(1.01, 0.02, 0.02))), mapping::VoxelState::kOccupied);
+}
+
+TEST(MapHostCorrections, TheMovedWallReachesTheFeedAndTheDistanceField) {
+  movedWallReachesTheFeedAndTheDistanceField(mapping::CorrectionMove::kMarch);
+}
+
+// Resampled (its moves taken movesAtOnce() a step): a move by whole voxels, the same wall.
+TEST(MapHostCorrections, TheResampledWallReachesTheFeedAndTheDistanceField) {
+  movedWallReachesTheFeedAndTheDistanceField(mapping::CorrectionMove::kResample);
 }
 
 TEST(MapHostCorrections, WithoutFrameHistoryACorrectionIsAFailedPrecondition) {
