@@ -16,7 +16,7 @@
 // ingest's CPU is in the second figure).
 //   correction_ingest_bench [--frames 1500] [--moved 300] [--width 800] [--height 600]
 //                           [--ingest-width W] [--ingest-height H] [--hz 15] [--baseline-s 10]
-//                           [--ring 30] [--voxel 0.05] [--threads 2]
+//                           [--ring 30] [--voxel 0.05] [--threads 2] [--move march|resample]
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -24,11 +24,13 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <string>
 #include <thread>
 #include <vector>
 
 #include "bench/tunnel_dive.h"
 #include "common/cpu_clock.h"
+#include "common/error.h"
 #include "server/host/map_host.h"
 
 namespace {
@@ -100,7 +102,16 @@ int main(int argc, char** argv) {
   app.add_option("--ring", ring, "distinct frames ingested, over and over")->check(CLI::Range(1, 1000));
   app.add_option("--voxel", voxel)->check(CLI::Range(0.01, 1.0));
   app.add_option("--threads", threads)->check(CLI::Range(1, 256));
+  std::string move = "march";
+  app.add_option("--move", move, "how a moved frame moves (map.correction_move): march or resample");
   CLI11_PARSE(app, argc, argv);
+  mapping::CorrectionMove correction_move;
+  try {
+    correction_move = mapping::parseCorrectionMove(move);
+  } catch (const Error& e) {
+    std::fprintf(stderr, "--move: %s\n", e.what());
+    return 2;
+  }
   if (moved > frames) {
     std::fprintf(stderr, "--moved %d: must be at most --frames %d\n", moved, frames);
     return 2;
@@ -125,6 +136,7 @@ int main(int argc, char** argv) {
   config.voxel_size_m = voxel;
   config.num_threads = threads;
   config.history_max_mb = 1 << 16;
+  config.correction_move = correction_move;
   server::MapHostOptions options;
   options.frame_history = true;
   server::MapHost host(std::make_unique<mapping::OccupancyMap>(config), options);
@@ -151,6 +163,7 @@ int main(int argc, char** argv) {
   const IngestRun during = ingest(host, ring_frames, ring_poses, hz, t_ring_s + baseline_s + 1.0, 0.0, &corrected);
   correction.join();
 
+  std::printf("correction_move: %s; ", move.c_str());
   std::printf("dive: %d frames of %dx%d, %.2f m voxels, %d threads; ingest: %dx%d frames (%.0f points) at %.1f Hz\n",
               frames, width, height, voxel, threads, ingest_width, ingest_height, double(ring_points) / ring, hz);
   std::printf("correction: %zu frames moved, %zu replayed, %zu blocks rebuilt in %.1f s wall, %.1f s CPU of the "

@@ -1,37 +1,41 @@
 #include "mapping/history/frame_codec.h"
 
-#include <libdeflate.h>
-
 #include <cstring>
 #include <string_view>
 #include <algorithm>
 #include <memory>
 
 #include "common/error.h"
-#include "io/compression/igzip_inflate.h"
+#include "io/compression/zstd_block.h"
 #include "mapping/detail/block_table.h"
 
 namespace cenote::mapping::history {
 namespace {
 
-// The masks of this many consecutive blocks (in key order) are deflated together: a replay
-// inflates only the groups holding a block it rebuilds. Blocks are in x-major order, so the blocks
+// The masks of this many consecutive blocks (in key order) are compressed together: a replay
+// decompresses only the groups holding a block it rebuilds. Blocks are in x-major order, so the blocks
 // a correction rebuilds are a few runs of a frame's keys; 128 blocks = 16 kB of masks.
 constexpr size_t kBlocksPerGroup = 128;
 
-void putVarint(std::string& out, uint64_t v) {
+// Writes v as a varint at `at` (at most 10 bytes) and returns the byte after it.
+char* writeVarint(char* at, uint64_t v) {
   while (v >= 0x80) {
-    out.push_back(static_cast<char>((v & 0x7f) | 0x80));
+    *at++ = static_cast<char>((v & 0x7f) | 0x80);
     v >>= 7;
   }
-  out.push_back(static_cast<char>(v));
+  *at++ = static_cast<char>(v);
+  return at;
+}
+void putVarint(std::string& out, uint64_t v) {
+  char bytes[10];
+  out.append(bytes, writeVarint(bytes, v) - bytes);
 }
 uint64_t zigzag(int64_t v) { return (static_cast<uint64_t>(v) << 1) ^ static_cast<uint64_t>(v >> 63); }
 int64_t unzigzag(uint64_t v) { return static_cast<int64_t>(v >> 1) ^ -static_cast<int64_t>(v & 1); }
 
 // A mask word: one tag byte for the words most masks hold (none or all of their 64 voxels: a
 // ray cone carves whole words, most blocks have no hit), otherwise the tag and the 8 bytes. The
-// masks then take a few times fewer bytes before deflate, which spends its time per input byte.
+// masks then take a few times fewer bytes before compression, which spends its time per input byte.
 enum MaskWordTag : uint8_t { kZeroWord = 0, kFullWord = 1, kLiteralWord = 2 };
 void putMaskWord(std::string& out, uint64_t w) {
   if (w == 0 || w == ~0ull) {
@@ -115,47 +119,34 @@ class Reader {
   size_t pos_ = 0;
 };
 
-using Compressor = std::unique_ptr<libdeflate_compressor, decltype(&libdeflate_free_compressor)>;
-
-Compressor compressor(int level) {
-  Compressor c(libdeflate_alloc_compressor(level), libdeflate_free_compressor);
-  if (!c) throw ResourceExhaustedError("frame store: cannot allocate a deflate compressor");
-  return c;
-}
-
-// Appends varint(raw size) and raw's deflate stream to `out`.
-void deflateTo(libdeflate_compressor* c, std::string_view raw, std::string& out) {
+// Appends varint(raw size) and raw's zstd frame to `out`.
+void compressTo(std::string_view raw, int level, std::string& out) {
   putVarint(out, raw.size());
-  const size_t header = out.size();
-  out.resize(header + libdeflate_deflate_compress_bound(c, raw.size()));
-  const size_t n = libdeflate_deflate_compress(c, raw.data(), raw.size(), out.data() + header, out.size() - header);
-  out.resize(header + n);
+  io::zstdCompressAppend({reinterpret_cast<const uint8_t*>(raw.data()), raw.size()}, level, out);
 }
 
-std::string deflate(const std::string& raw, int level) {
+std::string compress(std::string_view raw, int level) {
   std::string out;
-  deflateTo(compressor(level).get(), raw, out);
+  compressTo(raw, level, out);
   return out;
 }
 
-// What deflateTo wrote, into `raw` (its capacity reused). Through ISA-L's igzip: a moved frame's
-// points inflate in about half libdeflate's time.
-void inflateTo(std::string_view packed, const std::string& where, std::string& raw) {
+// What compressTo wrote, into `raw` (its capacity reused).
+void decompressTo(std::string_view packed, const std::string& where, std::string& raw) {
   Reader r(packed, where);
   const uint64_t raw_size = r.varint();
   if (raw_size > (uint64_t{1} << 32) - 1) r.fail("a section larger than 4 GiB");
-  const std::string_view stream = packed.substr(r.pos());
+  const std::string_view frame = packed.substr(r.pos());
   raw.resize(raw_size);
-  if (stream.size() > UINT32_MAX ||
-      !io::inflateExactly({reinterpret_cast<const uint8_t*>(stream.data()), stream.size()},
-                          reinterpret_cast<uint8_t*>(raw.data()), raw.size(), io::DeflateWrapper::kRaw)) {
-    r.fail("its deflate stream is broken");
+  if (!io::zstdDecompressExactly({reinterpret_cast<const uint8_t*>(frame.data()), frame.size()},
+                                 reinterpret_cast<uint8_t*>(raw.data()), raw.size())) {
+    r.fail("its zstd frame is broken");
   }
 }
 
-std::string inflate(std::string_view packed, const std::string& where) {
+std::string decompress(std::string_view packed, const std::string& where) {
   std::string raw;
-  inflateTo(packed, where, raw);
+  decompressTo(packed, where, raw);
   return raw;
 }
 
@@ -166,7 +157,7 @@ struct SectionIndex {
 };
 
 SectionIndex readIndex(std::string_view packed, const std::string& where) {
-  const std::string raw = inflate(packed, where);
+  const std::string raw = decompress(packed, where);
   Reader r(raw, where);
   SectionIndex index;
   const size_t n = r.count(1);
@@ -186,7 +177,7 @@ SectionIndex readIndex(std::string_view packed, const std::string& where) {
 // The colours of the hit voxels in the blocks `out.keys` lists (all: keep_all). Colours come in
 // endpoint order, mostly several in one block after another, so the last block's answer is reused.
 void readColors(std::string_view packed, const std::string& where, bool keep_all, FrameUpdates& out) {
-  const std::string raw = inflate(packed, where);
+  const std::string raw = decompress(packed, where);
   Reader r(raw, where);
   const size_t colors = r.count(6);
   VoxelIndex last = VoxelIndex::Zero();
@@ -237,7 +228,7 @@ FrameUpdates decodeSection(const std::string& bytes, const std::string& where, s
     const std::string_view group = r.take(index.group_bytes[g]);
     const size_t first = g * kBlocksPerGroup, end = std::min(index.keys.size(), first + kBlocksPerGroup);
     if (std::find(kept.begin() + first, kept.begin() + end, 1) == kept.begin() + end) continue;
-    const std::string raw = inflate(group, where);
+    const std::string raw = decompress(group, where);
     Reader words(raw, where);
     for (size_t b = first; b < end; ++b) {
       if (!kept[b]) {
@@ -270,22 +261,32 @@ FrameUpdates FrameUpdates::of(const BatchUpdates& updates) {
 }
 
 std::string encodePoints(const FramePoints& points, int level) {
-  std::string raw;
-  raw.reserve(points.quantised.size() * 5 + points.colors.size() * 3 + 16);
-  putVarint(raw, points.quantised.size());
+  // Written through a pointer into a buffer sized for the longest varints (a string appended to
+  // byte by byte cost more than the compression after it): the zigzag delta of two int32 takes at
+  // most 5 bytes. The buffer is the thread's, kept at its largest size: zero-filling 7 MB for
+  // every frame cost more than writing it.
+  const size_t n = points.quantised.size();
+  thread_local std::string raw;
+  const size_t longest = 10 + 15 * n + 10 + 3 * points.colors.size();
+  if (raw.size() < longest) raw.resize(longest);
+  char* at = writeVarint(raw.data(), n);
   Eigen::Vector3i previous = Eigen::Vector3i::Zero();
   for (const Eigen::Vector3i& q : points.quantised) {
-    for (int k = 0; k < 3; ++k) putVarint(raw, zigzag(static_cast<int64_t>(q[k]) - previous[k]));
+    for (int k = 0; k < 3; ++k) at = writeVarint(at, zigzag(static_cast<int64_t>(q[k]) - previous[k]));
     previous = q;
   }
-  putVarint(raw, points.colors.size());
-  for (const auto& rgb : points.colors) raw.append(reinterpret_cast<const char*>(rgb.data()), 3);
-  return deflate(raw, level);
+  at = writeVarint(at, points.colors.size());
+  static_assert(sizeof(points.colors[0]) == 3, "colours are packed RGB triples");
+  if (!points.colors.empty()) {
+    std::memcpy(at, points.colors.data(), 3 * points.colors.size());
+    at += 3 * points.colors.size();
+  }
+  return compress(std::string_view(raw.data(), at - raw.data()), level);
 }
 
 namespace {
 
-// The points section (inflated): visit(i, q) for each stored point in order, its count first
+// The points section (decompressed): visit(i, q) for each stored point in order, its count first
 // (points(n)), then the colours into `colors`.
 template <typename Points, typename Visit>
 void parsePoints(const std::string& raw, const std::string& where, Points points, Visit visit,
@@ -308,7 +309,7 @@ void parsePoints(const std::string& raw, const std::string& where, Points points
 }  // namespace
 
 FramePoints decodePoints(const std::string& bytes, const std::string& where) {
-  const std::string raw = inflate(bytes, where);
+  const std::string raw = decompress(bytes, where);
   FramePoints out;
   parsePoints(
       raw, where, [&](size_t n) { out.quantised.resize(n); },
@@ -319,7 +320,7 @@ FramePoints decodePoints(const std::string& bytes, const std::string& where) {
 Eigen::AlignedBox3f decodePointsPosed(const std::string& bytes, const std::string& where,
                                       const Eigen::Isometry3d& T_world_cam, double quantum_m, std::string& raw,
                                       PointBatch& out) {
-  inflateTo(bytes, where, raw);
+  decompressTo(bytes, where, raw);
   Eigen::AlignedBox3f box;
   parsePoints(
       raw, where, [&](size_t n) { out.points.resize(n); },
@@ -332,7 +333,6 @@ Eigen::AlignedBox3f decodePointsPosed(const std::string& bytes, const std::strin
 }
 
 std::string encodeUpdates(const FrameUpdates& updates, int level) {
-  const Compressor c = compressor(level);
   const size_t n = updates.keys.size();
   std::string groups, raw;
   std::vector<uint64_t> group_bytes;
@@ -343,7 +343,7 @@ std::string encodeUpdates(const FrameUpdates& updates, int level) {
       for (uint64_t w : updates.masks[b].hit) putMaskWord(raw, w);
     }
     const size_t before = groups.size();
-    deflateTo(c.get(), raw, groups);
+    compressTo(raw, level, groups);
     group_bytes.push_back(groups.size() - before);
   }
   raw.clear();
@@ -355,7 +355,7 @@ std::string encodeUpdates(const FrameUpdates& updates, int level) {
   }
   for (uint64_t bytes : group_bytes) putVarint(raw, bytes);
   std::string keys_part, colors_part;
-  deflateTo(c.get(), raw, keys_part);
+  compressTo(raw, level, keys_part);
   raw.clear();
   putVarint(raw, updates.colors.size());
   VoxelIndex last = VoxelIndex::Zero();
@@ -364,7 +364,7 @@ std::string encodeUpdates(const FrameUpdates& updates, int level) {
     last = e.ijk;
     raw.append(reinterpret_cast<const char*>(e.rgb.data()), 3);
   }
-  deflateTo(c.get(), raw, colors_part);
+  compressTo(raw, level, colors_part);
   std::string out;
   out.reserve(keys_part.size() + colors_part.size() + groups.size() + 20);
   putVarint(out, keys_part.size());

@@ -1,11 +1,11 @@
 // frame_codec.h: the bytes of one stored frame (frame_store.h): the frame's points, rounded in its
-// camera's frame, and the voxel updates its integration made, each section deflated on its own
-// (by libdeflate; inflated by ISA-L, io/compression/igzip_inflate.h) so that a replay of the updates never inflates the points.
+// camera's frame, and the voxel updates its integration made, each section a zstd frame of its
+// own (io/compression/zstd_block.h) so that a replay of the updates never decompresses the points.
 //   points: quantised camera-frame points q = round(p_cam / quantum) (int32 per axis), as zigzag
 //     LEB128 deltas from the previous point (neighbouring pixels: mostly 1-2 bytes per axis), then RGB.
-//   updates: three kinds of parts, each deflated on its own, so that a reader inflates only what it
+//   updates: three kinds of parts, each compressed on its own, so that a reader decompresses only what it
 //     needs: the index (touched blocks in ascending packed order, BatchUpdates' order, as LEB128
-//     deltas of their packed keys, and the deflated size of each mask group), the colours (the hit
+//     deltas of their packed keys, and the compressed size of each mask group), the colours (the hit
 //     voxels' mean colours: zigzag deltas of their voxel index, RGB), and the mask groups (the free
 //     and hit masks of 128 consecutive blocks each, every word a tag byte, none / all of its voxels /
 //     literal, the literal's 8 bytes after its tag). A correction's moved frame needs the index
@@ -15,6 +15,7 @@
 
 #include <Eigen/Geometry>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -43,6 +44,18 @@ struct FrameUpdates {
   static FrameUpdates of(const BatchUpdates& updates);
 };
 
+// The stored coordinate of p_m: llround(p_m / quantum_m), halves away from zero, without
+// llround's library call (it was a tenth of storing a frame). The conversion truncates, the
+// remainder x - trunc(x) is exact (Sterbenz), and a remainder of at least one half rounds away
+// from zero; quotients of 2^52 or more are integers already and take llround itself.
+inline int quantisedCoordinate(double p_m, double quantum_m) {
+  const double x = p_m / quantum_m;
+  if (!(std::fabs(x) < 0x1p52)) return static_cast<int>(std::llround(x));
+  const int64_t t = static_cast<int64_t>(x);
+  const double rest = x - static_cast<double>(t);
+  return static_cast<int>(t + (rest >= 0.5) - (rest <= -0.5));
+}
+
 // The world point of stored point `q` seen from T_world_cam: the one rule of the first integration
 // and of every move, so that a moved frame's points are the floats a first integration at its new
 // pose would see.
@@ -50,7 +63,7 @@ inline Eigen::Vector3f toWorld(const Eigen::Isometry3d& T_world_cam, const Eigen
   return (T_world_cam * (q.cast<double>() * quantum_m)).cast<float>();
 }
 
-// Encodes / decodes one section (deflated; `level` 1-12 as libdeflate's).
+// Encodes / decodes one section (a zstd frame at zstd's `level`; the store uses io::kZstdFastLevel).
 std::string encodePoints(const FramePoints& points, int level);
 std::string encodeUpdates(const FrameUpdates& updates, int level);
 // @throws Error naming `where` for bytes that do not decode (a damaged file).
@@ -58,7 +71,7 @@ FramePoints decodePoints(const std::string& bytes, const std::string& where);
 FrameUpdates decodeUpdates(const std::string& bytes, const std::string& where);
 // decodePoints straight to world points (a moved frame): toWorld(T_world_cam, q, quantum_m) of each
 // stored point into out.points and its colour into out.colors, their capacity reused, with no
-// intermediate copy (`raw`: the inflated bytes' scratch, reused too). Returns the points' box.
+// intermediate copy (`raw`: the decompressed bytes' scratch, reused too). Returns the points' box.
 // @throws as decodePoints.
 Eigen::AlignedBox3f decodePointsPosed(const std::string& bytes, const std::string& where,
                                       const Eigen::Isometry3d& T_world_cam, double quantum_m, std::string& raw,

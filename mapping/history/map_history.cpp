@@ -9,6 +9,7 @@
 #include "common/error.h"
 #include "mapping/detail/block_table.h"
 #include "mapping/history/block_replay.h"
+#include "io/compression/zstd_block.h"
 #include "mapping/history/frame_codec.h"
 #include "mapping/history/frame_resample.h"
 
@@ -19,9 +20,8 @@ using history::FrameMeta;
 using history::FramePoints;
 using history::FrameUpdates;
 
-// Fast deflate: a frame is stored on the ingest path (level 1 is within 10 % of level 6's size
-// on the masks, which are most of a frame's bytes, at a third of the time).
-constexpr int kDeflateLevel = 1;
+// Fast compression: a frame is stored on the ingest path (zstd_block.h says what it costs).
+constexpr int kCompressionLevel = io::kZstdFastLevel;
 constexpr double kSameTime_s = 1e-6;  // a corrected pose at a frame's own time
 
 // The batch's points rounded in the camera frame, and the batch that integrates them.
@@ -34,7 +34,7 @@ void quantise(const PointBatch& batch, const Eigen::Isometry3d& T_world_cam, dou
   rounded.points.resize(batch.points.size());
   for (size_t i = 0; i < batch.points.size(); ++i) {
     const Eigen::Vector3d p_cam = T_cam_world * batch.points[i].cast<double>();
-    for (int k = 0; k < 3; ++k) points.quantised[i][k] = static_cast<int>(std::llround(p_cam[k] / quantum_m));
+    for (int k = 0; k < 3; ++k) points.quantised[i][k] = history::quantisedCoordinate(p_cam[k], quantum_m);
     rounded.points[i] = history::toWorld(T_world_cam, points.quantised[i], quantum_m);
   }
   points.colors = batch.colors;
@@ -112,7 +112,7 @@ void marchMoved(const history::FrameStore& store, const OccupancyMap& map, uint3
     map.checkBatch(batch, box);
     scratch.rays.build(batch, config.voxel_size_m, config.max_range_m, num_threads, config.ray_stop_run);
     FrameUpdates updates = FrameUpdates::of(scratch.rays.updates());
-    out.updates_bytes = history::encodeUpdates(updates, kDeflateLevel);
+    out.updates_bytes = history::encodeUpdates(updates, kCompressionLevel);
     out.new_keys = std::move(updates.keys);
   } catch (...) {
     out.error = std::current_exception();
@@ -134,7 +134,7 @@ void resampleMoved(const history::FrameStore& store, const MapConfig& config, ui
     out.meta.T_world_cam = T_world_cam;
     history::FrameUpdates updates = history::resampleUpdates(marched, T_world_cam * out.meta.T_world_cam_marched.inverse(),
                                                              T_world_cam * out.meta.origin_cam, config.voxel_size_m);
-    out.updates_bytes = history::encodeUpdates(updates, kDeflateLevel);
+    out.updates_bytes = history::encodeUpdates(updates, kCompressionLevel);
     out.new_keys = std::move(updates.keys);
   } catch (...) {
     out.error = std::current_exception();
@@ -180,7 +180,8 @@ MapDelta MapHistory::integrateStored(const PointBatch& batch, const FrameMeta& g
   MapDelta delta = map_.integrate(rounded, rays);
   const FrameUpdates updates = FrameUpdates::of(rays.updates());
   const uint32_t seq = next_seq_++;
-  store_.put(seq, meta, history::encodePoints(points, kDeflateLevel), history::encodeUpdates(updates, kDeflateLevel));
+  store_.put(seq, meta, history::encodePoints(points, kCompressionLevel),
+             history::encodeUpdates(updates, kCompressionLevel));
   index(seq, updates.keys);
   enforceBudget();
   return delta;

@@ -28,7 +28,7 @@
 // the known voxels (the bar: 99 %), but where free space is ragged (rays about a voxel
 // apart, sparse stereo: the simulated cave of cli_corrections_test at 320x240) in 91 %, which is
 // why the march is the default (docs/CORRECTIONS.md). The cost grows with the frames that moved (a
-// resampling or a ray march each) and the frames touching the affected blocks (an inflate and a
+// resampling or a ray march each) and the frames touching the affected blocks (a decompression and a
 // mask merge each), not with the length of the dive. Submaps per keyframe were the alternative: no
 // store, but a query would fuse overlapping submaps, and the answer is not the single map's.
 // Limits: frames dropped from the store (its budget, map.history_max_mb) cannot be replayed; a
@@ -84,7 +84,7 @@ struct CorrectionPlan {
 struct MoveScratch {
   RayBatch rays;
   PointBatch batch;
-  std::string raw;  // the points' inflated bytes
+  std::string raw;  // the points' decompressed bytes
 };
 
 class MapHistory {

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <cmath>
 #include <map>
+#include <random>
 
 #include "common/error.h"
 #include "mapping/detail/block_table.h"
@@ -137,6 +139,29 @@ TEST(FrameCodec, PointsAndUpdatesDecodeToWhatWasEncoded) {
   const history::FrameUpdates keys = history::decodeUpdates(history::encodeUpdates(updates, 1), "test", {});
   EXPECT_TRUE(keys.keys.empty() && keys.masks.empty() && keys.colors.empty());
   EXPECT_EQ(keys.others, updates.keys);
+}
+
+TEST(FrameCodec, QuantisedCoordinateRoundsAsLlroundDoes) {
+  // Halves (away from zero), their neighbours on either side, the classic floor(x + 0.5) trap
+  // (0.49999999999999994), the ends of an int, and random quotients.
+  std::vector<double> xs = {
+      0.0,       -0.0,       0.5,          -0.5,         1.5, -1.5, 2.5, -2.5, 0.49999999999999994, -0.49999999999999994,
+      1e6 + 0.5, -1e6 - 0.5, 2147483646.5, -2147483647.5};
+  for (double half : {0.5, 1.5, 12345.5, -7.5}) {
+    xs.push_back(std::nextafter(half, 0.0));
+    xs.push_back(std::nextafter(half, 1e9));
+    xs.push_back(std::nextafter(half, -1e9));
+  }
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> metres(-50.0, 50.0);
+  for (int i = 0; i < 100000; ++i) xs.push_back(metres(rng) / 0.001);
+  for (double x : xs) {  // quantum 1: the quotient is x itself
+    EXPECT_EQ(history::quantisedCoordinate(x, 1.0), static_cast<int>(std::llround(x))) << "x = " << x;
+  }
+  for (int i = 0; i < 100000; ++i) {
+    const double p = metres(rng);
+    EXPECT_EQ(history::quantisedCoordinate(p, 0.001), static_cast<int>(std::llround(p / 0.001))) << "p = " << p;
+  }
 }
 
 TEST(FrameCodec, DamagedBytesAreAnIoErrorNamingTheFrame) {
