@@ -250,10 +250,10 @@ TEST(MapHistory, CorrectedMapEqualsTheMapBuiltFromScratchWithTheCorrectedPoses) 
   EXPECT_TRUE(again.delta.isEmpty());
 }
 
-// Frames marched side by side (moveFrames) and the replay's parallel rounds give the same bits for
-// any thread count: one thread against three (odd: uneven block ranges and a short last group).
-TEST(MapHistory, CorrectedMapIsTheSameForAnyThreadCount) {
-  MapConfig one = historyConfig();
+// A correction of a 20-frame sweep on one thread and on three (odd: uneven block ranges and a short
+// last group of frames moved side by side) gives the same bits.
+void expectTheSameCorrectedMapForOneAndThreeThreads(CorrectionMove move) {
+  MapConfig one = historyConfig(move);
   one.num_threads = 1;
   MapConfig three = one;
   three.num_threads = 3;
@@ -276,6 +276,12 @@ TEST(MapHistory, CorrectedMapIsTheSameForAnyThreadCount) {
   const MapDifference d = compare(map_one, map_three);
   EXPECT_EQ(d.blocks, 0u);
   EXPECT_GT(d.voxels_known, 10000u);
+}
+
+// Frames marched side by side (moveFrames) and the replay's parallel rounds give the same bits for
+// any thread count.
+TEST(MapHistory, CorrectedMapIsTheSameForAnyThreadCount) {
+  expectTheSameCorrectedMapForOneAndThreeThreads(CorrectionMove::kMarch);
 }
 
 TEST(MapHistory, FramesIntegratedBetweenTheStepsOfACorrectionAreReplayedToo) {
@@ -515,28 +521,7 @@ TEST(MapHistory, RepeatedResampledCorrectionsStartFromTheMarchedUpdates) {
 
 // Frames resampled side by side give the same bits for any thread count.
 TEST(MapHistory, ResampledCorrectionIsTheSameForAnyThreadCount) {
-  MapConfig one = historyConfig(CorrectionMove::kResample);
-  one.num_threads = 1;
-  MapConfig three = one;
-  three.num_threads = 3;
-  three.history_dir += "-three";
-  const auto frames = test::driftedRoomSweep(20, smallCamera(), 0.25, 3.0, one.history_quantum_m);
-  OccupancyMap map_one(one), map_three(three);
-  MapHistory history_one(map_one), history_three(map_three);
-  for (const auto& f : frames) {
-    history_one.integrate(f.batchAt(f.T_drifted), f.T_drifted);
-    history_three.integrate(f.batchAt(f.T_drifted), f.T_drifted);
-  }
-  const auto poses = truePoses(frames);
-  const CorrectionSummary summary_one = history_one.correct(poses);
-  const CorrectionSummary summary_three = history_three.correct(poses);
-  EXPECT_EQ(summary_one.frames_moved, 19u);
-  EXPECT_EQ(summary_three.frames_moved, 19u);
-  EXPECT_EQ(summary_one.blocks_rebuilt, summary_three.blocks_rebuilt);
-  EXPECT_EQ(summary_one.delta.changed_blocks, summary_three.delta.changed_blocks);
-  const MapDifference d = compare(map_one, map_three);
-  EXPECT_EQ(d.blocks, 0u);
-  EXPECT_GT(d.voxels_known, 10000u);
+  expectTheSameCorrectedMapForOneAndThreeThreads(CorrectionMove::kResample);
 }
 
 }  // namespace
