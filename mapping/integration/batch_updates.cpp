@@ -10,8 +10,10 @@ namespace {
 
 // Occupied wins in every block's masks (free &= ~hit); returns the set bits of both, i.e. the
 // voxels updated. The x86-64 baseline has no POPCNT instruction (__builtin_popcountll is then a
-// call into libgcc per word): a clone for CPUs with it, chosen once at load time (ifunc).
-#if defined(__x86_64__) && defined(__GNUC__)
+// call into libgcc per word): a clone for CPUs with it, chosen once at load time (ifunc). Not
+// under ThreadSanitizer: the loader runs the ifunc's resolver before the sanitizer's runtime is
+// up, and the instrumented resolver crashes the program at start (make tsan-test).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__SANITIZE_THREAD__)
 [[gnu::target_clones("popcnt", "default")]]
 #endif
 uint64_t
