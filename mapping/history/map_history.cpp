@@ -156,7 +156,7 @@ MapDelta MapHistory::integrate(const PointBatch& batch, const Eigen::Isometry3d&
   FrameMeta meta;
   meta.t_s = batch.t_s;
   meta.correctable = true;
-  meta.T_world_cam = meta.T_world_cam_marched = T_world_cam;
+  meta.T_world_cam = T_world_cam;
   meta.T_pose_cam = T_pose_cam;
   return integrateStored(batch, meta);
 }
@@ -165,13 +165,13 @@ MapDelta MapHistory::integrate(const PointBatch& batch) {
   FrameMeta meta;
   meta.t_s = batch.t_s;
   meta.T_world_cam.translation() = batch.origin;
-  meta.T_world_cam_marched = meta.T_world_cam;
   return integrateStored(batch, meta);
 }
 
 MapDelta MapHistory::integrateStored(const PointBatch& batch, const FrameMeta& given) {
   map_.checkBatch(batch);
   FrameMeta meta = given;
+  meta.T_world_cam_marched = meta.T_world_cam;  // a frame is first stored as marched at its pose
   meta.origin_cam = meta.T_world_cam.inverse() * batch.origin;
   FramePoints points;
   PointBatch rounded;
