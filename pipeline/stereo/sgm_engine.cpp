@@ -17,6 +17,7 @@
 //   sgm_winner-inl.h       winner search and LR check (LaneWinners, flushWinnerBatch, leftRightCheck)
 //   sgm_full_search-inl.h  full-search row kernel (aggregateRowFull)
 //   sgm_band-inl.h         coarse-to-fine band row kernel (aggregateRowBand)
+//   sgm_band_bytes-inl.h   the band kernel in byte lanes, for census costs that fit a byte
 // This file: the buffers, the helpers the parts share, the strip driver (MatchStripImpl), the
 // census transform and the dispatch.
 
@@ -169,6 +170,7 @@ struct StripBuffers {
   int16_t* winner = nullptr;          // W: integer winner per pixel of the row (-1 = invalid)
   uint8_t* right_reversed = nullptr;  // SAD: entering right row, reversed and padded
   uint16_t* census_reversed[2] = {};  // census: right row's low and high 16 bits, reversed
+  uint8_t* census_bytes[3] = {};      // census, band in bytes: right row's bytes 0, 1, 2, reversed
   int16_t* band_shift[4] = {};        // band: W each, the predecessors' shifts of a row (bandShifts())
   int reversed_length = 0;
 
@@ -195,7 +197,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   const std::size_t sad = p.census ? 0 : band_sad ? p.window * (rev + W) : W * Dp + (W * Dp * p.window + 1) / 2;
   // Every piece is rounded up to 64 elements by take(); 32 pieces at most.
   const std::size_t total = 4 * (path_row + W + 2) + 2 * along + sad + 2 * Dp + kWinnerBatch * (Dp + 3 * N) + 2 * rev + W +
-                            (rev / 2 + 32) + 2 * rev + 4 * W + 32 * 64;
+                            (rev / 2 + 32) + 2 * rev + 4 * W + 3 * (rev / 2 + 32) + 32 * 64;
   if (ws.buffer_elements < total) {
     ws.buffer = hwy::AllocateAligned<uint16_t>(total);
     ws.buffer_elements = total;
@@ -233,6 +235,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   b.census_reversed[0] = take(rev);
   b.census_reversed[1] = take(rev);
   for (int16_t*& shift : b.band_shift) shift = reinterpret_cast<int16_t*>(take(W));
+  for (uint8_t*& plane : b.census_bytes) plane = reinterpret_cast<uint8_t*>(take(rev / 2 + 32));
   return b;
 }
 
@@ -336,6 +339,9 @@ void finishRow(const SgmParams& p, StripBuffers& b, RowOutput output, float* dis
 // Coarse-to-fine band search: aggregateRowBand().
 #include "pipeline/stereo/sgm_band-inl.h"
 
+// The band kernel in byte lanes: aggregateRowBandBytes(), bandFitsBytes().
+#include "pipeline/stereo/sgm_band_bytes-inl.h"
+
 void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int row_end, int overlap, SgmWorkspace& ws,
                     const SgmOutput& out) {
   const bool band = im.band_start != nullptr;
@@ -343,7 +349,10 @@ void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int 
   const PenaltyTable pen = makePenaltyTable(p);
   const uint16_t sentinel = pathSentinel(p, band);
   auto aggregateRow = &aggregateRowFull;
-  if (band) {
+  const bool bytes = band && bandFitsBytes(p);
+  if (bytes) {
+    aggregateRow = censusBytePlanes(p) == 1 ? &aggregateRowBandBytes<1> : &aggregateRowBandBytes<3>;
+  } else if (band) {
     switch (p.census ? 0 : p.window) {
       case 0: aggregateRow = &aggregateRowBand<0>; break;
       case 1: aggregateRow = &aggregateRowBand<1>; break;
@@ -364,9 +373,16 @@ void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int 
   }
   auto volumeRow = [&](int y) { return volume + static_cast<std::size_t>(y - row_begin) * p.width * b.padded; };
   auto outRow = [&](float* base, int y) { return base + y * out.stride; };
+  auto reset = [&] {
+    if (bytes) {
+      resetBytePaths(b, static_cast<uint8_t>(sentinel));
+    } else {
+      resetPaths(p, b, sentinel);
+    }
+  };
 
   // Pass 1: top-down, left to right.
-  resetPaths(p, b, sentinel);
+  reset();
   const int top = std::max(0, row_begin - overlap);
   for (int y = top; y < row_end; ++y) {
     const bool first = y == top;
@@ -382,7 +398,7 @@ void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int 
   if (!p.eight_paths) return;
 
   // Pass 2: bottom-up, right to left; adds the first pass's sums and takes the winner.
-  resetPaths(p, b, sentinel);
+  reset();
   const int bottom = std::min(p.height, row_end + overlap) - 1;
   for (int y = bottom; y >= row_begin; --y) {
     const bool first = y == bottom;

@@ -124,6 +124,7 @@ struct ReferenceCase {
   SearchMode search = SearchMode::kFull;
   int disparities = 48;
   int coarse_scale = StereoConfig().coarse_scale;
+  int p2 = -1;  // -1: the cost's default
 };
 
 class MatchesScalarReference : public ::testing::TestWithParam<ReferenceCase> {};
@@ -148,6 +149,7 @@ TEST_P(MatchesScalarReference, BitForBitWithOneStrip) {
   config.coarse_scale = rc.coarse_scale;
   config.min_disparity_px = rc.min_disparity;
   config.adaptive_p2 = rc.adaptive;
+  config.p2 = rc.p2;
   config.lr_check = rc.lr;
   config.pkrn_exclude_neighbours = !rc.naive_pkrn;
   config.prefilter = rc.prefilter;
@@ -182,8 +184,16 @@ INSTANTIATE_TEST_SUITE_P(
                                     Prefilter::kSobelX, SearchMode::kBand, 80, 2},
                       ReferenceCase{"band_sad3_half_size_coarse_min_disparity", MatchingCost::kSad, 3, 8, 9, false, true,
                                     false, Prefilter::kSobelX, SearchMode::kBand, 48, 2},
+                      // Census bands run in byte lanes where the path costs fit a byte (the default
+                      // penalties), in 16-bit lanes otherwise (P2 = 120).
                       ReferenceCase{"band_census5_4paths", MatchingCost::kCensus, 5, 4, 0, false, false, false,
                                     Prefilter::kSobelX, SearchMode::kBand},
+                      ReferenceCase{"band_census3_8paths", MatchingCost::kCensus, 3, 8, 0, false, false, false,
+                                    Prefilter::kSobelX, SearchMode::kBand},
+                      ReferenceCase{"band_census5_adaptive_lr_min_disparity", MatchingCost::kCensus, 5, 4, 9, true, true,
+                                    false, Prefilter::kSobelX, SearchMode::kBand, 80},
+                      ReferenceCase{"band_census5_sixteen_bit_penalties", MatchingCost::kCensus, 5, 4, 0, false, true,
+                                    false, Prefilter::kSobelX, SearchMode::kBand, 48, 4, 120},
                       ReferenceCase{"band_sad5_8paths", MatchingCost::kSad, 5, 8, 0, false, false, false,
                                     Prefilter::kSobelX, SearchMode::kBand},
                       ReferenceCase{"band_sad3_min_disparity", MatchingCost::kSad, 3, 4, 9, false, false, false,
