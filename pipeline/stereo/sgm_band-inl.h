@@ -60,11 +60,13 @@ void bandShifts(const SgmParams& p, const SgmImages& im, const StripBuffers& b, 
   bandShiftRow(starts, prev_starts, dx, p.width, b.band_shift[3]);
 }
 
-// The along-row path starts fresh at the first pixel of every row: zero costs in the band.
-void resetAlongBand(const StripBuffers& b, uint16_t sentinel) {
-  for (uint16_t* pixel : {b.along[0], b.along[1]}) {
+// The along-row path starts fresh at the first pixel of every row: zero costs in the band (lanes
+// of type T: 16 bits or bytes).
+template <class T>
+void resetAlongBand(const StripBuffers& b, T sentinel) {
+  for (T* pixel : {reinterpret_cast<T*>(b.along[0]), reinterpret_cast<T*>(b.along[1])}) {
     std::fill(pixel, pixel + 5 * kBandDisparities, sentinel);
-    std::fill(pixel + 2 * kBandDisparities, pixel + 3 * kBandDisparities, 0);
+    std::fill(pixel + 2 * kBandDisparities, pixel + 3 * kBandDisparities, T{0});
   }
 }
 
@@ -74,9 +76,10 @@ void resetAlongBand(const StripBuffers& b, uint16_t sentinel) {
 // another alignment would miss store-to-load forwarding.
 template <int kOffset, class V>
 HWY_INLINE V shiftedBand(V prev, V sentinel, int shift, const uint16_t* iota) {
-  constexpr size_t kLanes = sizeof(V) / sizeof(uint16_t);
+  using T = hn::TFromV<V>;
+  constexpr int kLanes = static_cast<int>(hn::MaxLanes(hn::DFromV<V>()));
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
-  if constexpr (kLanes == 32) {
+  if constexpr (kLanes == 32 && sizeof(T) == 2) {
     const __m512i index = _mm512_add_epi16(_mm512_load_si512(iota),
                                            _mm512_set1_epi16(static_cast<int16_t>(shift + kOffset)));
     // Lanes whose source index is outside [0, 32) (as unsigned) keep the sentinel.
@@ -84,14 +87,56 @@ HWY_INLINE V shiftedBand(V prev, V sentinel, int shift, const uint16_t* iota) {
     return V{_mm512_mask_permutexvar_epi16(sentinel.raw, inside, index, prev.raw)};
   }
 #endif
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3_DL
+  if constexpr (kLanes == 32 && sizeof(T) == 1) {  // VBMI: bytes permuted across the whole vector
+    const __m256i index = _mm256_add_epi8(hn::Iota(hn::DFromV<V>(), 0).raw,
+                                          _mm256_set1_epi8(static_cast<char>(shift + kOffset)));
+    const __mmask32 inside = _mm256_cmplt_epu8_mask(index, _mm256_set1_epi8(32));
+    return V{_mm256_mask_permutexvar_epi8(sentinel.raw, inside, index, prev.raw)};
+  }
+#endif
   (void)iota;
-  const DU16 d;
-  HWY_ALIGN uint16_t lanes[3 * kLanes];
+  const hn::DFromV<V> d;
+  HWY_ALIGN T lanes[3 * kLanes];
   hn::Store(sentinel, d, lanes);
   hn::Store(prev, d, lanes + kLanes);
   hn::Store(sentinel, d, lanes + 2 * kLanes);
-  const int at = std::clamp(shift + kOffset, -static_cast<int>(kLanes), static_cast<int>(kLanes));
+  const int at = std::clamp(shift + kOffset, -kLanes, kLanes);
   return hn::LoadU(d, lanes + kLanes + at);
+}
+
+// A band's path row pixel x (lanes of type T): the rows' memory holds the band's layout (lead
+// 2 kBandDisparities, stride 3 kBandDisparities) counted in T.
+template <class T>
+HWY_INLINE T* bandPathPixel(uint16_t* row, int x) {
+  constexpr int kStride = 3 * kBandDisparities, kLead = 2 * kBandDisparities;
+  return reinterpret_cast<T*>(row) + kLead + static_cast<std::ptrdiff_t>(x + 1) * kStride;
+}
+
+// The four paths' sums of the pixel's vector k of path costs (plus the first pass's sums when
+// `sums_in`), stored as 16 bits in `sums_out`; fed to `winners` when the band takes several 16-bit
+// vectors (flushWinnerBatch() takes one from the sums). Byte lanes: summed in bytes (they fit,
+// bandFitsBytes()), then widened.
+template <class V>
+HWY_INLINE void storeBandSums(V l0, V l1, V l2, V l3, const uint16_t* sums_in, uint16_t* sums_out, int k,
+                              const uint16_t* iota, LaneWinners& winners) {
+  const DU16 d16;
+  constexpr int kN16 = static_cast<int>(hn::MaxLanes(DU16()));
+  constexpr bool kFeedWinners = kBandDisparities > kN16;
+  if constexpr (sizeof(hn::TFromV<V>) == 2) {
+    const VU16 sum = storePathSum(l0, l1, l2, l3, sums_in, sums_out, k);
+    if constexpr (kFeedWinners) winners.add(sum, hn::Load(d16, iota + k));
+  } else {
+    constexpr int kParts = static_cast<int>(hn::MaxLanes(hn::DFromV<V>())) / kN16;
+    VU16 sums[kParts];
+    widenBytes(d16, hn::Add(hn::Add(l0, l1), hn::Add(l2, l3)), sums);
+    for (int h = 0; h < kParts; ++h) {
+      const int k16 = k + h * kN16;
+      if (sums_in) sums[h] = hn::Add(sums[h], hn::Load(d16, sums_in + k16));
+      hn::Store(sums[h], d16, sums_out + k16);
+      if constexpr (kFeedWinners) winners.add(sums[h], hn::Load(d16, iota + k16));
+    }
+  }
 }
 
 // Band SAD. The full search keeps running column sums over the whole range; here each pixel
@@ -157,23 +202,29 @@ HWY_INLINE void bandColumn(const SgmParams& p, const BandSadWindow<kWindow>& win
 }
 
 // One row of one pass, as aggregateRowFull(), over each pixel's band. kWindow: the SAD window
-// side, 0 for census.
-template <int kWindow>
+// side, 0 for census. DP: the path costs' lanes, DU16, or DU8 for census costs that fit a byte
+// (bandFitsBytes(); kPlanes: censusBytePlanes()), which give the same sums bit for bit.
+template <int kWindow, class DP, int kPlanes = 0>
 void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, const PenaltyTable& pen, int y, int dx,
                       bool first_row, RowOutput output, uint16_t* stored_sums, bool add_stored, float* disparity,
                       float* confidence) {
-  const DU16 d;
+  using T = hn::TFromD<DP>;
+  using V = hn::Vec<DP>;
+  const DP d;
   constexpr bool kCensus = kWindow == 0;
-  constexpr int kN = static_cast<int>(hn::MaxLanes(DU16()));
+  constexpr bool kBytes = sizeof(T) == 1;
+  static_assert(!kBytes || (kCensus && kPlanes > 0), "byte lanes are for census costs");
+  constexpr int kN = static_cast<int>(hn::MaxLanes(DP()));
+  constexpr int kN16 = static_cast<int>(hn::MaxLanes(DU16()));
   constexpr int kB = kBandDisparities;
   constexpr int kVectors = kB / kN;
-  static_assert(kB % kN == 0, "the band must be a whole number of vectors");
+  static_assert(kB % kN == 0 && kB % kN16 == 0, "the band must be a whole number of vectors");
   const int Dp = b.padded, W = p.width;
   constexpr int r = kWindow / 2;
-  const VU16 p1 = hn::Set(d, static_cast<uint16_t>(p.p1));
-  const uint16_t sentinel = pathSentinel(p, true);
-  const VU16 sentinel_v = hn::Set(d, sentinel);
-  const VU16 worst_cost = hn::Set(d, static_cast<uint16_t>(p.max_cost));
+  const V p1 = hn::Set(d, static_cast<T>(p.p1));
+  const T sentinel = static_cast<T>(pathSentinel(p, true));
+  const V sentinel_v = hn::Set(d, sentinel);
+  const V worst_cost = hn::Set(d, static_cast<T>(p.max_cost));
   const uint8_t* row = im.guide + y * im.image_stride;
   const uint8_t* prev_row = im.guide + (y - dx) * im.image_stride;  // inside the image border
   const int16_t* starts = im.band_start + y * im.band_stride;
@@ -183,41 +234,45 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   const int16_t* const shifts_back = b.band_shift[2];
   const int16_t* const shifts_fwd = b.band_shift[3];
   CostSource src;
-  if constexpr (kCensus) {
+  if constexpr (kBytes) {
+    beginCensusByteRow(p, im, b, y);
+  } else if constexpr (kCensus) {
     src = beginCostRow(p, im, b, y, dx, dx, first_row);
   } else {
     beginBandSadRow<kWindow>(p, im, b, y, dx, first_row);
   }
+  const uint32_t* const census_left = im.census_left ? im.census_left + clampRow(y, p.height) * im.census_stride : nullptr;
   if (output == RowOutput::kWinner && p.lr_check) {
     std::fill(b.right_min, b.right_min + b.reversed_length, kNoCost);
     std::fill(b.right_arg, b.right_arg + b.reversed_length, 0);
   }
   resetAlongBand(b, sentinel);
-  uint16_t* const along_buffer = b.along[0] + 2 * kB;  // the previous pixel's along path, when shifted
-  VU16 along[kVectors];
+  T* const along_buffer = reinterpret_cast<T*>(b.along[0]) + 2 * kB;  // the previous pixel's along path, when shifted
+  V along[kVectors];
   for (int j = 0; j < kVectors; ++j) along[j] = hn::Zero(d);
   HWY_ALIGN int32_t band_first[kWinnerBatch];
   // Everything the pixel loop reads, in locals: Highway's stores may alias anything, and the
   // compiler would otherwise reload struct fields after every store.
   constexpr int kStride = 3 * kB;  // StripBuffers::pixel_stride of the band
-  uint16_t* const path_vertical = b.pathPixel(b.path[0], 0);
-  const uint16_t* const path_back = b.pathPixel(b.path[1], 0);
-  uint16_t* const path_back_out = b.pathPixel(b.path[3], 0);
-  uint16_t* const path_fwd = b.pathPixel(b.path[2], 0);
+  T* const path_vertical = bandPathPixel<T>(b.path[0], 0);
+  const T* const path_back = bandPathPixel<T>(b.path[1], 0);
+  T* const path_back_out = bandPathPixel<T>(b.path[3], 0);
+  T* const path_fwd = bandPathPixel<T>(b.path[2], 0);
   const uint16_t* const iota = b.iota;
   // Band SAD: the window's column sums at the band of the pixel that computed them (columns
   // x - r dx .. x + r dx, the last one entering the window), and that band's start.
   constexpr int kColumns = kCensus ? 1 : kWindow;
-  VU16 columns[kColumns][kVectors];
+  VU16 columns[kColumns][kB / kN16];
   int columns_start = -1;
   BandSadWindow<kCensus ? 1 : kWindow> window{};
   if constexpr (!kCensus) window = bandSadWindow<kWindow>(p, b, y);
   uint16_t* const batch_sums = b.sums;
   const uint16_t* const census_right_lo = b.census_reversed[0];
   const uint16_t* const census_right_hi = b.census_reversed[1];
+  const uint8_t* const census_right_bytes[3] = {b.census_bytes[0], b.census_bytes[1], b.census_bytes[2]};
   const int sad_shift = p.sad_shift;
   const bool adaptive = p.adaptive_p2;
-  const VU16 p2_constant = hn::Set(d, static_cast<uint16_t>(p.p2));
+  const V p2_constant = hn::Set(d, static_cast<T>(p.p2));
   for (int i = 0; i < W; ++i) {
     const int x = dx > 0 ? i : W - 1 - i;
     const int start = starts[x];
@@ -235,26 +290,25 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         columns_start = start;
       }
     }
-    const int valid_max = x - p.min_disparity;  // largest disparity index with a right pixel
-    const bool border = start + kB - 1 > valid_max;
-    const VU16 max_valid_k = hn::Set(d, static_cast<uint16_t>(valid_max < 0 ? 0 : valid_max));
-    const uint16_t census_lo = kCensus ? static_cast<uint16_t>(src.census_left[x] & 0xFFFF) : 0;
-    const uint16_t census_hi = kCensus ? static_cast<uint16_t>(src.census_left[x] >> 16) : 0;
+    // Lanes from `limit` + 1 on have no right pixel (start + lane > x - min_d): largest cost.
+    const int limit = x - p.min_disparity - start;
+    const bool border = limit < kB - 1;
+    const uint32_t census = kCensus ? census_left[x] : 0;
     const std::ptrdiff_t census_base = W - 1 - x + p.min_disparity + start;
 
-    uint16_t* const vertical = path_vertical + static_cast<std::ptrdiff_t>(x) * kStride;
-    const uint16_t* const vertical_in = vertical + shift_vertical;
-    const uint16_t* const back = path_back + static_cast<std::ptrdiff_t>(x - dx) * kStride + shift_back;
-    uint16_t* const back_out = path_back_out + static_cast<std::ptrdiff_t>(x) * kStride;
-    const uint16_t* const fwd = path_fwd + static_cast<std::ptrdiff_t>(x + dx) * kStride + shift_fwd;
-    uint16_t* const fwd_out = path_fwd + static_cast<std::ptrdiff_t>(x) * kStride;
+    T* const vertical = path_vertical + static_cast<std::ptrdiff_t>(x) * kStride;
+    const T* const vertical_in = vertical + shift_vertical;
+    const T* const back = path_back + static_cast<std::ptrdiff_t>(x - dx) * kStride + shift_back;
+    T* const back_out = path_back_out + static_cast<std::ptrdiff_t>(x) * kStride;
+    const T* const fwd = path_fwd + static_cast<std::ptrdiff_t>(x + dx) * kStride + shift_fwd;
+    T* const fwd_out = path_fwd + static_cast<std::ptrdiff_t>(x) * kStride;
     // P2 per direction: one constant unless adapted to the intensity step.
     auto penalty = [&](uint8_t a, uint8_t b2)
-                       HWY_ATTR { return adaptive ? hn::Set(d, pen.p2[std::abs(a - b2)]) : p2_constant; };
-    const VU16 p2_along = penalty(row[x], row[x - dx]);
-    const VU16 p2_vertical = penalty(row[x], prev_row[x]);
-    const VU16 p2_back = penalty(row[x], prev_row[x - dx]);
-    const VU16 p2_fwd = penalty(row[x], prev_row[x + dx]);
+                       HWY_ATTR { return adaptive ? hn::Set(d, static_cast<T>(pen.p2[std::abs(a - b2)])) : p2_constant; };
+    const V p2_along = penalty(row[x], row[x - dx]);
+    const V p2_vertical = penalty(row[x], prev_row[x]);
+    const V p2_back = penalty(row[x], prev_row[x - dx]);
+    const V p2_fwd = penalty(row[x], prev_row[x + dx]);
     const int slot = i % kWinnerBatch;
     band_first[slot] = start;
     uint16_t* const sums_out = output == RowOutput::kStoreSums ? stored_sums + static_cast<std::ptrdiff_t>(x) * Dp
@@ -266,15 +320,22 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       for (int j = 0; j < kVectors; ++j) hn::Store(along[j], d, along_buffer + j * kN);
     }
 
-    VU16 mins_along = sentinel_v, mins_vertical = sentinel_v, mins_back = sentinel_v, mins_fwd = sentinel_v;
+    V mins_along = sentinel_v, mins_vertical = sentinel_v, mins_back = sentinel_v, mins_fwd = sentinel_v;
     LaneWinners winners = noWinners();
-    VU16 along_new[kVectors], vertical_new[kVectors], back_new[kVectors], fwd_new[kVectors];
+    V along_new[kVectors], vertical_new[kVectors], back_new[kVectors], fwd_new[kVectors];
     for (int j = 0; j < kVectors; ++j) {
       const int k = j * kN;
-      VU16 cost;
-      if constexpr (kCensus) {
-        const VU16 lo = hn::Xor(hn::Set(d, census_lo), hn::LoadU(d, census_right_lo + census_base + k));
-        const VU16 hi = hn::Xor(hn::Set(d, census_hi), hn::LoadU(d, census_right_hi + census_base + k));
+      V cost;
+      if constexpr (kBytes) {  // Hamming distance as the popcounts of the descriptors' bytes
+        cost = hn::Zero(d);
+        for (int plane = 0; plane < kPlanes; ++plane) {
+          const V left = hn::Set(d, static_cast<T>(census >> (8 * plane)));
+          cost = hn::Add(cost,
+                         hn::PopulationCount(hn::Xor(left, hn::LoadU(d, census_right_bytes[plane] + census_base + k))));
+        }
+      } else if constexpr (kCensus) {
+        const V lo = hn::Xor(hn::Set(d, static_cast<T>(census & 0xFFFF)), hn::LoadU(d, census_right_lo + census_base + k));
+        const V hi = hn::Xor(hn::Set(d, static_cast<T>(census >> 16)), hn::LoadU(d, census_right_hi + census_base + k));
         cost = hn::Add(hn::PopulationCount(lo), hn::PopulationCount(hi));
       } else {
         VU16 acc = columns[0][j];
@@ -282,18 +343,17 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         cost = hn::ShiftRightSame(acc, sad_shift);
       }
       if (border) {
-        // start + k + lane > x - min_d: no right pixel, largest cost.
-        const VU16 disparity_index = hn::Add(hn::Load(d, iota + k), hn::Set(d, static_cast<uint16_t>(start)));
-        const auto beyond = valid_max < 0 ? hn::FirstN(d, kN) : hn::Gt(disparity_index, max_valid_k);
+        const auto beyond = limit < 0 ? hn::FirstN(d, kN)
+                                      : hn::Gt(hn::Iota(d, static_cast<T>(k)), hn::Set(d, static_cast<T>(limit)));
         cost = hn::IfThenElse(beyond, worst_cost, cost);
       }
       // The predecessors are stored less their minimum (see above), so the jump from it costs P2.
-      auto step = [&](VU16 same, VU16 neighbours, VU16 p2)
+      auto step = [&](V same, V neighbours, V p2)
                       HWY_ATTR { return hn::Add(cost, hn::Min(hn::Min(same, hn::Add(neighbours, p1)), p2)); };
-      VU16 along_same, along_neighbours;
+      V along_same, along_neighbours;
       if (shift_along == 0) {
-        const VU16 before = j > 0 ? along[j - 1] : sentinel_v;
-        const VU16 after = j + 1 < kVectors ? along[j + 1] : sentinel_v;
+        const V before = j > 0 ? along[j - 1] : sentinel_v;
+        const V after = j + 1 < kVectors ? along[j + 1] : sentinel_v;
         along_same = along[j];
         along_neighbours = hn::Min(shiftInPrevious(before, along[j]), shiftInNext(along[j], after));
       } else if constexpr (kVectors == 1) {
@@ -301,14 +361,14 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         along_neighbours = hn::Min(shiftedBand<-1>(along[0], sentinel_v, shift_along, iota),
                                    shiftedBand<1>(along[0], sentinel_v, shift_along, iota));
       } else {
-        const uint16_t* a = along_buffer + shift_along + k;
+        const T* a = along_buffer + shift_along + k;
         along_same = hn::LoadU(d, a);
         along_neighbours = neighbourMin(a);
       }
-      const VU16 l0 = step(along_same, along_neighbours, p2_along);
-      const VU16 l1 = step(hn::LoadU(d, vertical_in + k), neighbourMin(vertical_in + k), p2_vertical);
-      const VU16 l2 = step(hn::LoadU(d, back + k), neighbourMin(back + k), p2_back);
-      const VU16 l3 = step(hn::LoadU(d, fwd + k), neighbourMin(fwd + k), p2_fwd);
+      const V l0 = step(along_same, along_neighbours, p2_along);
+      const V l1 = step(hn::LoadU(d, vertical_in + k), neighbourMin(vertical_in + k), p2_vertical);
+      const V l2 = step(hn::LoadU(d, back + k), neighbourMin(back + k), p2_back);
+      const V l3 = step(hn::LoadU(d, fwd + k), neighbourMin(fwd + k), p2_fwd);
       // Stored once their minima are known (the vertical path after every vector has read the
       // old values).
       along_new[j] = l0;
@@ -326,14 +386,11 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         mins_back = hn::Min(mins_back, l2);
         mins_fwd = hn::Min(mins_fwd, l3);
       }
-      const VU16 sum = storePathSum(l0, l1, l2, l3, sums_in, sums_out, k);
-      if constexpr (kVectors > 1) {  // one vector: flushWinnerBatch() takes them from the sums
-        winners.add(sum, hn::Load(d, iota + k));
-      }
+      storeBandSums(l0, l1, l2, l3, sums_in, sums_out, k, iota, winners);
     }
-    const VU16 along_min = minLaneBroadcast(d, mins_along);
-    const VU16 vertical_min = minLaneBroadcast(d, mins_vertical);
-    const VU16 back_min = minLaneBroadcast(d, mins_back), fwd_min = minLaneBroadcast(d, mins_fwd);
+    const V along_min = minLaneBroadcast(d, mins_along);
+    const V vertical_min = minLaneBroadcast(d, mins_vertical);
+    const V back_min = minLaneBroadcast(d, mins_back), fwd_min = minLaneBroadcast(d, mins_fwd);
     for (int j = 0; j < kVectors; ++j) {
       along[j] = hn::Sub(along_new[j], along_min);
       hn::Store(hn::Sub(vertical_new[j], vertical_min), d, vertical + j * kN);
@@ -346,9 +403,9 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       // partial overlap, which store-to-load forwarding cannot serve; 4 % of the CPU time on
       // AVX-512). A pixel's loop later, that store has left.
       if (p.lr_check) updateRightMinimum(p, b, x, sums_out, dx, start, kB);
-      if constexpr (kVectors > 1) winners.store(b, slot);
+      if constexpr (kB > kN16) winners.store(b, slot);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
-        flushWinnerBatch(p, b, i, slot, dx, kN, band_first, kB, kB, false, disparity, confidence);
+        flushWinnerBatch(p, b, i, slot, dx, kN16, band_first, kB, kB, false, disparity, confidence);
       }
     }
   }

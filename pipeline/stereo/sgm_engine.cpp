@@ -16,8 +16,8 @@
 //   sgm_cost-inl.h         matching cost built on the fly (cost rows, column sums, beginCostRow)
 //   sgm_winner-inl.h       winner search and LR check (LaneWinners, flushWinnerBatch, leftRightCheck)
 //   sgm_full_search-inl.h  full-search row kernel (aggregateRowFull)
-//   sgm_band-inl.h         coarse-to-fine band row kernel (aggregateRowBand)
-//   sgm_band_bytes-inl.h   the band kernel in byte lanes, for census costs that fit a byte
+//   sgm_band_bytes-inl.h   what the band kernel needs in byte lanes (census costs that fit a byte)
+//   sgm_band-inl.h         coarse-to-fine band row kernel (aggregateRowBand), 16-bit or byte lanes
 // This file: the buffers, the helpers the parts share, the strip driver (MatchStripImpl), the
 // census transform and the dispatch.
 
@@ -45,6 +45,12 @@ namespace hn = hwy::HWY_NAMESPACE;
 #endif
 using DU16 = hn::CappedTag<uint16_t, CENOTE_SGM_MAX_LANES>;
 using VU16 = hn::Vec<DU16>;
+// The band's path costs in byte lanes (census costs that fit a byte, sgm_band_bytes-inl.h): one
+// band per vector of 256 bits.
+using DU8 = hn::CappedTag<uint8_t, kBandDisparities>;
+// The vectors of path costs of lane type T.
+template <class T>
+using PathTag = std::conditional_t<sizeof(T) == 1, DU8, DU16>;
 
 constexpr uint16_t kNoCost = 0xFFFF;  // masks lanes out of the winner search
 
@@ -69,10 +75,34 @@ HWY_INLINE uint16_t minLane(D d, hn::Vec<D> v) {
 #endif
 }
 
+// The smallest byte lane in every lane. x86: the bytes of each word to their minimum, then one
+// PHMINPOSUW.
+template <class V>
+HWY_INLINE V minByteBroadcast(V v) {
+  const hn::DFromV<V> d;
+  constexpr int kLanes = static_cast<int>(hn::MaxLanes(hn::DFromV<V>()));
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
+  if constexpr (kLanes == 32) {
+    __m128i m = _mm_min_epu8(_mm256_castsi256_si128(v.raw), _mm256_extracti128_si256(v.raw, 1));
+    m = _mm_min_epu8(m, _mm_srli_epi16(m, 8));  // each word: the smaller of its two bytes
+    return V{_mm256_broadcastb_epi8(_mm_minpos_epu16(m))};
+  }
+#endif
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSE4
+  if constexpr (kLanes == 16) {
+    const __m128i m = _mm_min_epu8(v.raw, _mm_srli_epi16(v.raw, 8));
+    return V{_mm_shuffle_epi8(_mm_minpos_epu16(m), _mm_setzero_si128())};
+  }
+#endif
+  HWY_ALIGN uint8_t lanes[kLanes];
+  hn::Store(v, d, lanes);
+  return hn::Set(d, *std::min_element(lanes, lanes + kLanes));
+}
+
 // minLane() in every lane. On AVX-512 the minimum stays in vector registers (no round trip
 // through a general register): the along-row path waits for it at every pixel.
 template <class D>
-HWY_INLINE hn::Vec<D> minLaneBroadcast(D d, hn::Vec<D> v) {
+HWY_INLINE hn::Vec<D> minWordBroadcast(D d, hn::Vec<D> v) {
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
   if constexpr (hn::MaxLanes(D()) == 32) {
     const __m256i m256 = _mm256_min_epu16(_mm512_castsi512_si256(v.raw), _mm512_extracti64x4_epi64(v.raw, 1));
@@ -83,13 +113,26 @@ HWY_INLINE hn::Vec<D> minLaneBroadcast(D d, hn::Vec<D> v) {
   return hn::Set(d, minLane(d, v));
 }
 
+// The smallest lane of a vector of path costs (bytes or words) in every lane.
+template <class D>
+HWY_INLINE hn::Vec<D> minLaneBroadcast(D d, hn::Vec<D> v) {
+  if constexpr (sizeof(hn::TFromD<D>) == 1) {
+    return minByteBroadcast(v);
+  } else {
+    return minWordBroadcast(d, v);
+  }
+}
+
 // The lanes of the concatenation [lo, hi] from lane kOffset on (0 <= kOffset <= lanes): one vector
-// out of two adjacent ones, in registers.
+// out of two adjacent ones, in registers. Lanes of 16 bits, or of 8 (the band in bytes).
 template <int kOffset, class V>
 HWY_INLINE V lanesFrom(V lo, V hi) {
-  constexpr int kLanes = sizeof(V) / sizeof(uint16_t);
+  using T = hn::TFromV<V>;
+  constexpr int kLanes = static_cast<int>(hn::MaxLanes(hn::DFromV<V>()));
+  constexpr int kBytes = kLanes * static_cast<int>(sizeof(T));
+  constexpr int kShift = kOffset * static_cast<int>(sizeof(T));  // in bytes
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
-  if constexpr (kLanes == 32) {
+  if constexpr (kBytes == 64 && sizeof(T) == 2) {
     alignas(64) static constexpr std::array<uint16_t, 32> kIndex = [] {
       std::array<uint16_t, 32> index{};
       for (int i = 0; i < 32; ++i) index[i] = static_cast<uint16_t>(kOffset + i);  // >= 32: from hi
@@ -99,20 +142,20 @@ HWY_INLINE V lanesFrom(V lo, V hi) {
   }
 #endif
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
-  if constexpr (kLanes == 16) {
+  if constexpr (kBytes == 32) {
     // alignr shifts within each 128-bit half: pair every half with the one that follows it.
     const __m256i middle = _mm256_permute2x128_si256(lo.raw, hi.raw, 0x21);  // [upper half of lo, lower of hi]
-    if constexpr (kOffset < 8) return V{_mm256_alignr_epi8(middle, lo.raw, 2 * kOffset)};
-    return V{_mm256_alignr_epi8(hi.raw, middle, 2 * (kOffset - 8))};
+    if constexpr (kShift < 16) return V{_mm256_alignr_epi8(middle, lo.raw, kShift)};
+    return V{_mm256_alignr_epi8(hi.raw, middle, kShift - 16)};
   }
 #endif
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSSE3
-  if constexpr (kLanes == 8) return V{_mm_alignr_epi8(hi.raw, lo.raw, 2 * kOffset)};
+  if constexpr (kBytes == 16) return V{_mm_alignr_epi8(hi.raw, lo.raw, kShift)};
 #endif
-  const DU16 d;
-  HWY_ALIGN uint16_t lanes[2 * kLanes];
+  const hn::DFromV<V> d;
+  HWY_ALIGN T lanes[2 * kLanes];
   hn::Store(lo, d, lanes);
-  hn::Store(hi, d, lanes + hn::Lanes(d));
+  hn::Store(hi, d, lanes + kLanes);
   return hn::LoadU(d, lanes + kOffset);
 }
 
@@ -122,7 +165,7 @@ HWY_INLINE V lanesFrom(V lo, V hi) {
 // store-to-load forwarding on every vector (it dominated the profile).
 template <class V>
 HWY_INLINE V shiftInPrevious(V prev, V cur) {
-  return lanesFrom<sizeof(V) / sizeof(uint16_t) - 1>(prev, cur);
+  return lanesFrom<static_cast<int>(hn::MaxLanes(hn::DFromV<V>())) - 1>(prev, cur);
 }
 
 template <class V>
@@ -256,19 +299,21 @@ uint16_t pathSentinel(const SgmParams& p, bool band) {
 
 // Every path row to "no predecessor": zero costs (so that a path starts with L = C), sentinels in
 // the lanes past D.
-// Band: each pixel's kBandDisparities values, the rest of its stride sentinels.
-void resetPaths(const SgmParams& p, const StripBuffers& b, uint16_t sentinel) {
+// Band: each pixel's kBandDisparities values, the rest of its stride sentinels; in bytes (T =
+// uint8_t, the band only) the rows' memory holds the same layout counted in bytes.
+template <class T>
+void resetPaths(const SgmParams& p, const StripBuffers& b, T sentinel) {
   const int D = b.band ? kBandDisparities : p.num_disparities;
   const std::size_t pixels = static_cast<std::size_t>(b.width) + 2;
   for (int i = 0; i < 4; ++i) {
-    uint16_t* row = b.path[i];
+    T* row = reinterpret_cast<T*>(b.path[i]);
     std::fill(row, row + b.lead, sentinel);
     for (std::size_t px = 0; px < pixels; ++px) {
-      uint16_t* pixel = row + b.lead + px * b.pixel_stride;
-      std::fill(pixel, pixel + D, 0);
+      T* pixel = row + b.lead + px * b.pixel_stride;
+      std::fill(pixel, pixel + D, T{0});
       std::fill(pixel + D, pixel + b.pixel_stride, sentinel);
     }
-    uint16_t* end = row + b.lead + pixels * b.pixel_stride;
+    T* end = row + b.lead + pixels * b.pixel_stride;
     std::fill(end, end + b.lead, sentinel);
     std::fill(b.path_min[i], b.path_min[i] + pixels, 0);
   }
@@ -309,8 +354,9 @@ enum class RowOutput { kNone, kStoreSums, kWinner };
 
 // The smaller of a path pixel's costs at disparities d - 1 and d + 1, for the d of each lane at
 // `at` (sentinel lanes pad both ends of the pixel).
-HWY_INLINE VU16 neighbourMin(const uint16_t* at) {
-  const DU16 d;
+template <class T>
+HWY_INLINE hn::Vec<PathTag<T>> neighbourMin(const T* at) {
+  const PathTag<T> d;
   return hn::Min(hn::LoadU(d, at - 1), hn::LoadU(d, at + 1));
 }
 
@@ -337,10 +383,9 @@ void finishRow(const SgmParams& p, StripBuffers& b, RowOutput output, float* dis
 #include "pipeline/stereo/sgm_full_search-inl.h"
 
 // Coarse-to-fine band search: aggregateRowBand().
-#include "pipeline/stereo/sgm_band-inl.h"
-
-// The band kernel in byte lanes: aggregateRowBandBytes(), bandFitsBytes().
+// What the band kernel needs to run in byte lanes: bandFitsBytes(), the census in bytes.
 #include "pipeline/stereo/sgm_band_bytes-inl.h"
+#include "pipeline/stereo/sgm_band-inl.h"
 
 void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int row_end, int overlap, SgmWorkspace& ws,
                     const SgmOutput& out) {
@@ -351,15 +396,15 @@ void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int 
   auto aggregateRow = &aggregateRowFull;
   const bool bytes = band && bandFitsBytes(p);
   if (bytes) {
-    aggregateRow = censusBytePlanes(p) == 1 ? &aggregateRowBandBytes<1> : &aggregateRowBandBytes<3>;
+    aggregateRow = censusBytePlanes(p) == 1 ? &aggregateRowBand<0, DU8, 1> : &aggregateRowBand<0, DU8, 3>;
   } else if (band) {
     switch (p.census ? 0 : p.window) {
-      case 0: aggregateRow = &aggregateRowBand<0>; break;
-      case 1: aggregateRow = &aggregateRowBand<1>; break;
-      case 3: aggregateRow = &aggregateRowBand<3>; break;
-      case 5: aggregateRow = &aggregateRowBand<5>; break;
-      case 7: aggregateRow = &aggregateRowBand<7>; break;
-      default: aggregateRow = &aggregateRowBand<9>; break;
+      case 0: aggregateRow = &aggregateRowBand<0, DU16>; break;
+      case 1: aggregateRow = &aggregateRowBand<1, DU16>; break;
+      case 3: aggregateRow = &aggregateRowBand<3, DU16>; break;
+      case 5: aggregateRow = &aggregateRowBand<5, DU16>; break;
+      case 7: aggregateRow = &aggregateRowBand<7, DU16>; break;
+      default: aggregateRow = &aggregateRowBand<9, DU16>; break;
     }
   }
   uint16_t* volume = nullptr;
@@ -375,7 +420,7 @@ void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int 
   auto outRow = [&](float* base, int y) { return base + y * out.stride; };
   auto reset = [&] {
     if (bytes) {
-      resetBytePaths(b, static_cast<uint8_t>(sentinel));
+      resetPaths(p, b, static_cast<uint8_t>(sentinel));
     } else {
       resetPaths(p, b, sentinel);
     }
