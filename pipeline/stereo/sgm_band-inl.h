@@ -128,6 +128,7 @@ HWY_INLINE void storeBandSums(V l0, V l1, V l2, V l3, const uint16_t* sums_in, u
     if constexpr (kFeedWinners) winners.add(sum, hn::Load(d16, iota + k));
   } else {
     constexpr int kParts = static_cast<int>(hn::MaxLanes(hn::DFromV<V>())) / kN16;
+    static_assert(kParts == 1 || kParts == 2, "widenBytes() gives one or two 16-bit vectors");
     VU16 sums[kParts];
     widenBytes(d16, hn::Add(hn::Add(l0, l1), hn::Add(l2, l3)), sums);
     for (int h = 0; h < kParts; ++h) {
@@ -233,11 +234,10 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   const int16_t* const shifts_vertical = b.band_shift[1];
   const int16_t* const shifts_back = b.band_shift[2];
   const int16_t* const shifts_fwd = b.band_shift[3];
-  CostSource src;
   if constexpr (kBytes) {
     beginCensusByteRow(p, im, b, y);
   } else if constexpr (kCensus) {
-    src = beginCostRow(p, im, b, y, dx, dx, first_row);
+    beginCostRow(p, im, b, y, dx, dx, first_row);  // the right row's descriptors, reversed
   } else {
     beginBandSadRow<kWindow>(p, im, b, y, dx, first_row);
   }
@@ -326,7 +326,9 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
     for (int j = 0; j < kVectors; ++j) {
       const int k = j * kN;
       V cost;
-      if constexpr (kBytes) {  // Hamming distance as the popcounts of the descriptors' bytes
+      if constexpr (kBytes) {
+        // Hamming distance as the popcounts of the descriptors' bytes: a descriptor has
+        // window^2 - 1 bits (CensusTransformImpl), all in its first kPlanes bytes.
         cost = hn::Zero(d);
         for (int plane = 0; plane < kPlanes; ++plane) {
           const V left = hn::Set(d, static_cast<T>(census >> (8 * plane)));
@@ -372,7 +374,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       // shifts cost more instructions than the loads they save.
       auto predecessor = [&](const T* at, int shift, V p2) HWY_ATTR {
         if (kVectors == 1 && shift == 0) {
-          const V same = hn::Load(d, at);
+          const V same = hn::Load(d, at + k);  // k = 0
           return step(same, hn::Min(shiftInPrevious(sentinel_v, same), shiftInNext(same, sentinel_v)), p2);
         }
         return step(hn::LoadU(d, at + k), neighbourMin(at + k), p2);

@@ -14,12 +14,6 @@
 // of four paths at most 216), so every byte holds the number the 16-bit lane would, and the sums,
 // widened to 16 bits, go through the same winner search and LR check.
 
-// Whether the band kernel may run in bytes: the largest value it forms (a sentinel plus P1) and
-// the sum of four path costs (each at most max_cost + P2) fit in a byte.
-bool bandFitsBytes(const SgmParams& p) {
-  return p.census && pathSentinel(p, true) + p.p1 <= 255 && 4 * (p.max_cost + p.p2) <= 255;
-}
-
 // The census descriptors of the right row, reversed, one byte plane per 8 bits (plane k holds
 // bits 8k..8k+7): a disparity's cost is the sum of the planes' popcounts.
 int censusBytePlanes(const SgmParams& p) { return (p.window * p.window - 1 + 7) / 8; }

@@ -46,7 +46,7 @@ namespace hn = hwy::HWY_NAMESPACE;
 using DU16 = hn::CappedTag<uint16_t, CENOTE_SGM_MAX_LANES>;
 using VU16 = hn::Vec<DU16>;
 // The band's path costs in byte lanes (census costs that fit a byte, sgm_band_bytes-inl.h): one
-// band per vector of 256 bits.
+// band per 256-bit vector (AVX2, AVX-512), two of 128 bits on SSE and NEON.
 using DU8 = hn::CappedTag<uint8_t, kBandDisparities>;
 // The vectors of path costs of lane type T.
 template <class T>
@@ -79,6 +79,7 @@ HWY_INLINE uint16_t minLane(D d, hn::Vec<D> v) {
 // PHMINPOSUW.
 template <class V>
 HWY_INLINE V minByteBroadcast(V v) {
+  static_assert(sizeof(hn::TFromV<V>) == 1, "byte lanes");
   const hn::DFromV<V> d;
   constexpr int kLanes = static_cast<int>(hn::MaxLanes(hn::DFromV<V>()));
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
@@ -238,7 +239,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   const std::size_t along = std::max<std::size_t>(Dp + 2 * N, 5 * kBandDisparities);
   const bool band_sad = band && !p.census;
   const std::size_t sad = p.census ? 0 : band_sad ? p.window * (rev + W) : W * Dp + (W * Dp * p.window + 1) / 2;
-  // Every piece is rounded up to 64 elements by take(); 32 pieces at most.
+  // Every piece is rounded up to 64 elements by take(); 31 pieces at most (32 * 64 to spare).
   const std::size_t total = 4 * (path_row + W + 2) + 2 * along + sad + 2 * Dp + kWinnerBatch * (Dp + 3 * N) + 2 * rev + W +
                             (rev / 2 + 32) + 2 * rev + 4 * W + 3 * (rev / 2 + 32) + 32 * 64;
   if (ws.buffer_elements < total) {
@@ -278,7 +279,10 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   b.census_reversed[0] = take(rev);
   b.census_reversed[1] = take(rev);
   for (int16_t*& shift : b.band_shift) shift = reinterpret_cast<int16_t*>(take(W));
-  for (uint8_t*& plane : b.census_bytes) plane = reinterpret_cast<uint8_t*>(take(rev / 2 + 32));
+  if (band && p.census) {
+    for (uint8_t*& plane : b.census_bytes) plane = reinterpret_cast<uint8_t*>(take(rev / 2 + 32));
+  }
+  HWY_DASSERT(next <= ws.buffer.get() + total);
   return b;
 }
 
@@ -287,15 +291,6 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
 
 // ---------------------------------------------------------------------------------------------
 // Aggregation along the paths, and the winner.
-
-// The path cost of a disparity a path pixel does not hold (lanes past D; in the band, outside the
-// pixel's band): it loses against every real predecessor even after + P1. Path costs are at most
-// max_cost + P2; in the band the minimum of a predecessor may be up to max_cost + P2 as well (a
-// pixel's band may miss its predecessor's entirely), so the sentinel must also lose against
-// min + P2 there.
-uint16_t pathSentinel(const SgmParams& p, bool band) {
-  return static_cast<uint16_t>(p.max_cost + (band ? 2 : 1) * p.p2 + p.p1);
-}
 
 // Every path row to "no predecessor": zero costs (so that a path starts with L = C), sentinels in
 // the lanes past D.

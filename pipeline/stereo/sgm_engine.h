@@ -4,7 +4,8 @@
 // up, up-left, up-right, as rSGM) or in two passes (8 paths; the first pass's path sums are kept in
 // a per-strip volume). The full cost volume is never stored: the matching cost of one row is built
 // from running box sums, aggregated along the paths, and the winner, second minimum and parabola
-// are taken on the fly. Costs, paths and the winner search are uint16 SIMD; disparity, sub-pixel
+// are taken on the fly. Costs, paths and the winner search are uint16 SIMD (a census band's paths
+// in bytes where they fit, bandFitsBytes()); disparity, sub-pixel
 // offset and PKRN are float SIMD over batches of pixels (Highway, dispatched at run time to the
 // best instruction set of the machine). The result depends only on the input and the strip
 // boundaries, never on the thread count.
@@ -45,6 +46,26 @@ struct SgmParams {
   int lr_max_diff = 1;
   float min_confidence = 0.0f;
 };
+
+// The engine's parameters of a matcher configuration (penalties and cost range resolved; strips
+// and the search mode are the matcher's).
+SgmParams paramsOf(const StereoConfig& config);
+
+// The path cost of a disparity a path pixel does not hold (lanes past D; in the band, outside the
+// pixel's band): it loses against every real predecessor even after + P1. Path costs are at most
+// max_cost + P2; in the band the minimum of a predecessor may be up to max_cost + P2 as well (a
+// pixel's band may miss its predecessor's entirely), so the sentinel must also lose against
+// min + P2 there.
+inline uint16_t pathSentinel(const SgmParams& p, bool band) {
+  return static_cast<uint16_t>(p.max_cost + (band ? 2 : 1) * p.p2 + p.p1);
+}
+
+// Whether the census band runs in byte lanes (sgm_band_bytes-inl.h): the largest value its
+// recurrence forms (a sentinel plus P1) and the sum of four path costs (each at most max_cost + P2)
+// fit in a byte. Census 5x5 and 3x3 at their default penalties do; the output is the same either way.
+inline bool bandFitsBytes(const SgmParams& p) {
+  return p.census && pathSentinel(p, true) + p.p1 <= 255 && 4 * (p.max_cost + p.p2) <= 255;
+}
 
 // Images with a border of `kImageBorder` replicated pixels on every side; pointers address pixel
 // (0, 0) inside the border. Census images hold one 32-bit descriptor per pixel (no border).

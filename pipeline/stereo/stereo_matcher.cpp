@@ -77,9 +77,7 @@ struct StereoMatcher::Impl {
   io::MatRecycler results{kRecycledResults};
 };
 
-namespace {
-
-detail::SgmParams paramsOf(const StereoConfig& config) {
+detail::SgmParams detail::paramsOf(const StereoConfig& config) {
   detail::SgmParams p;
   p.num_disparities = config.num_disparities;
   p.min_disparity = config.min_disparity_px;
@@ -100,6 +98,8 @@ detail::SgmParams paramsOf(const StereoConfig& config) {
   p.min_confidence = static_cast<float>(config.min_confidence);
   return p;
 }
+
+namespace {
 
 // Replicates the outermost pixels of `bordered`'s interior (all but `b` pixels on each side) into
 // its border, as cv::copyMakeBorder(BORDER_REPLICATE) would: rows first, then the top and bottom.
@@ -210,8 +210,8 @@ std::vector<int> stripBoundaries(int strips, int height, int overlap, bool eight
 
 StereoMatcher::StereoMatcher(const StereoConfig& config) : config_(config), impl_(std::make_unique<Impl>()) {
   throwIfInvalid(config_.validate(), "stereo configuration");
-  impl_->full.params = paramsOf(config_);
-  impl_->coarse.params = paramsOf(config_.coarseConfig());
+  impl_->full.params = detail::paramsOf(config_);
+  impl_->coarse.params = detail::paramsOf(config_.coarseConfig());
 }
 
 StereoMatcher::~StereoMatcher() = default;

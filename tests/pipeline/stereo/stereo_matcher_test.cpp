@@ -10,6 +10,7 @@
 #include <random>
 
 #include "common/error.h"
+#include "pipeline/stereo/sgm_engine.h"
 #include "tests/pipeline/stereo/sgm_reference.h"
 #include "tests/support/test_data.h"
 #include "tests/support/error_message.h"
@@ -204,32 +205,63 @@ INSTANTIATE_TEST_SUITE_P(
                                     Prefilter::kNone, SearchMode::kBand}),
     [](const ::testing::TestParamInfo<ReferenceCase>& info) { return std::string(info.param.name); });
 
-// The band kernel holds one band in one vector on AVX-512 and in several on narrower
-// instruction sets: every one of them the machine runs must match the reference. Not HWY_SCALAR:
-// the winner search needs at least 3 lanes per vector (see pickWinner()), in both search modes.
-// The depth step's box edges exercise the bands placed at depth edges (band_placement.h).
+// A census band runs in byte lanes where every value its recurrence forms fits a byte: census 5x5
+// (sentinel 94 + P1 10, four paths' sum at most 216) and 3x3 at their default penalties, not with
+// a larger P2 (sentinel 274), not where only the sum is too large (P2 50: 24 + 100 + 20 = 144, but
+// 4 (24 + 50) = 296), never for SAD.
+TEST(StereoMatcher, CensusBandsRunInBytesWhereTheirPathCostsFitAByte) {
+  auto fits = [](MatchingCost cost, int window, int p2) {
+    StereoConfig config;
+    config.cost = cost;
+    config.window_px = window;
+    config.p2 = p2;
+    return detail::bandFitsBytes(detail::paramsOf(config));
+  };
+  EXPECT_TRUE(fits(MatchingCost::kCensus, 5, -1));
+  EXPECT_TRUE(fits(MatchingCost::kCensus, 3, -1));
+  EXPECT_FALSE(fits(MatchingCost::kCensus, 5, 120));
+  EXPECT_FALSE(fits(MatchingCost::kCensus, 5, 50));
+  EXPECT_TRUE(fits(MatchingCost::kCensus, 5, 39));  // 4 (24 + 39) = 252
+  EXPECT_FALSE(fits(MatchingCost::kSad, 3, -1));
+}
+
+// The band kernel holds one band in one vector on AVX-512 (and in bytes on AVX2) and in several on
+// narrower instruction sets: every one of them the machine runs must match the reference, in
+// 16-bit lanes (SAD, census with P2 = 120) and in bytes (census 5x5 and 3x3). Not HWY_SCALAR: the
+// winner search needs at least 3 lanes per vector (see pickWinner()), in both search modes. The
+// depth step's box edges exercise the bands placed at depth edges (band_placement.h).
 TEST(StereoMatcher, BandMatchesTheReferenceOnEveryInstructionSet) {
+  struct Variant {
+    MatchingCost cost;
+    int window, p2;
+  };
+  const Variant variants[] = {{MatchingCost::kSad, 3, -1},
+                              {MatchingCost::kCensus, 5, -1},
+                              {MatchingCost::kCensus, 3, -1},
+                              {MatchingCost::kCensus, 5, 120}};
   const SyntheticPair plane = slantedPlane(120, 60, 20.0, 0.1, 0.05, 5);
   const SyntheticPair step = depthStep(200, 140, 6, 44, 9);
   for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
     if (target == HWY_SCALAR) continue;
     std::cout << "instruction set " << hwy::TargetName(target) << "\n";
     hwy::SetSupportedTargetsForTest(target);
-    for (const MatchingCost cost : {MatchingCost::kSad, MatchingCost::kCensus}) {
+    for (const Variant& variant : variants) {
       for (const SyntheticPair* scene : {&plane, &step}) {
         const SyntheticPair& pair = *scene;
         StereoConfig config;
-        config.cost = cost;
-        config.window_px = cost == MatchingCost::kSad ? 3 : 5;
+        config.cost = variant.cost;
+        config.window_px = variant.window;
+        config.p2 = variant.p2;
         // The step with 112: its box's left edge (x = 100) lies in the columns invalidated as truncated.
         config.num_disparities = scene == &step ? 112 : 64;
         config.search = SearchMode::kBand;
         config.lr_check = true;
         config.num_strips = 1;
         StereoMatcher matcher(config);
-        expectBitIdentical(
-            matcher.match(pair.left, pair.right), test::referenceSgm(pair.left, pair.right, config),
-            std::string(hwy::TargetName(target)) + " " + toString(cost) + (scene == &step ? " depth step" : " plane"));
+        expectBitIdentical(matcher.match(pair.left, pair.right), test::referenceSgm(pair.left, pair.right, config),
+                           std::string(hwy::TargetName(target)) + " " + toString(variant.cost) + " " +
+                               std::to_string(variant.window) + " P2 " + std::to_string(variant.p2) +
+                               (scene == &step ? " depth step" : " plane"));
       }
     }
   }
