@@ -368,12 +368,14 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         along_neighbours = neighbourMin(a);
       }
       const V l0 = step(along_same, along_neighbours, p2_along);
-      // A predecessor of the same band held in one vector: aligned, its lanes d -+ 1 beyond the
-      // band are sentinels, so its neighbours are shifted in registers instead of loaded across
-      // cache lines (5 % of the CPU time on AVX-512). Several vectors keep the loads: there the
-      // shifts cost more instructions than the loads they save.
+      // A predecessor of the same band in one 512-bit vector (16-bit lanes on AVX-512): aligned,
+      // its lanes d -+ 1 beyond the band are sentinels, so its neighbours are shifted in registers
+      // instead of loaded across cache lines (5 % of the CPU time there). Narrower vectors keep the
+      // loads: the shifts cost more instructions than the loads they save (AVX2 bytes: 224.8 M
+      // against 212.2 M a frame) and gain no time.
+      constexpr bool kShiftAligned = kVectors == 1 && kN * sizeof(T) == 64;
       auto predecessor = [&](const T* at, int shift, V p2) HWY_ATTR {
-        if (kVectors == 1 && shift == 0) {
+        if (kShiftAligned && shift == 0) {
           const V same = hn::Load(d, at + k);  // k = 0
           return step(same, hn::Min(shiftInPrevious(sentinel_v, same), shiftInNext(same, sentinel_v)), p2);
         }
