@@ -28,8 +28,12 @@ if [ -s "$work/long-out/report.json" ] && [ -s "$work/short-out/report.json" ]; 
   short_mb=$(json "$work/short-out/report.json" 'd["peak_memory_mb"]')
   long_mb=$(json "$work/long-out/report.json" 'd["peak_memory_mb"]')
   echo "peak memory: 60 frames $short_mb MiB, 300 frames $long_mb MiB"
-  /usr/bin/python3 -c "import sys; sys.exit(0 if $long_mb <= 1.1 * $short_mb else 1)" ||
-    fail "memory grows with the sequence: $short_mb MiB for 60 frames, $long_mb MiB for 300"
+  if [ -n "${CENOTE_SANITIZED:-}" ]; then
+    echo "bounded memory not judged: AddressSanitizer's quarantine holds freed memory"
+  else
+    /usr/bin/python3 -c "import sys; sys.exit(0 if $long_mb <= 1.1 * $short_mb else 1)" ||
+      fail "memory grows with the sequence: $short_mb MiB for 60 frames, $long_mb MiB for 300"
+  fi
 fi
 grep -q "stereo" "$work/long.txt" || fail "no timing table printed"
 

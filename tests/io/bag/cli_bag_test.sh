@@ -193,8 +193,12 @@ done
 short_mb=$(json "$work/png-lz4-memory/report.json" 'd["peak_memory_mb"]')
 long_mb=$(json "$work/long-memory/report.json" 'd["peak_memory_mb"]')
 echo "peak memory: $frames-frame bag $short_mb MiB, $((5 * frames))-frame bag $long_mb MiB"
-$py -c "import sys; sys.exit(0 if $long_mb <= 1.1 * $short_mb else 1)" ||
-  fail "memory grows with the bag: $short_mb MiB for $frames frames, $long_mb MiB for $((5 * frames))"
+if [ -n "${CENOTE_SANITIZED:-}" ]; then
+  echo "bounded memory not judged: AddressSanitizer's quarantine holds freed memory"
+else
+  $py -c "import sys; sys.exit(0 if $long_mb <= 1.1 * $short_mb else 1)" ||
+    fail "memory grows with the bag: $short_mb MiB for $frames frames, $long_mb MiB for $((5 * frames))"
+fi
 
 # bag info: topics, types, counts and rates, compression.
 "$cenote" bag info "$work/png-lz4.bag" >"$work/baginfo.txt" 2>&1 || fail "cenote bag info failed"
