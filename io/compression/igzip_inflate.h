@@ -1,7 +1,6 @@
 // igzip_inflate.h: inflating a whole deflate stream of known size with ISA-L's igzip, about 1.6x
-// libdeflate's speed on PNG frames (io/image/png_decoder.h) and on the frame store's point
-// sections (mapping/history/frame_codec.h). Its own library (cenote_inflate), so that the map,
-// which links no image code, uses the same one.
+// libdeflate's speed on PNG frames (io/image/png_decoder.h). In the library cenote_compression,
+// beside the frame store's zstd frames (zstd_block.h).
 // Threads: any thread; each keeps one inflate state (87 KB) between calls.
 #pragma once
 

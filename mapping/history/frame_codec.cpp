@@ -3,7 +3,6 @@
 #include <cstring>
 #include <string_view>
 #include <algorithm>
-#include <memory>
 
 #include "common/error.h"
 #include "io/compression/zstd_block.h"

@@ -4,16 +4,10 @@
 #include <cmath>
 
 #include "mapping/detail/block_table.h"
+#include "mapping/integration/voxel_ray.h"
 
 namespace cenote::mapping::history {
 namespace {
-
-// floor() of a voxel coordinate without a libm call (the x86-64 baseline has no SSE4.1 roundsd);
-// coordinates are within the map's +-2^20 voxels, far inside int's range.
-inline int floorToInt(double x) {
-  const int i = static_cast<int>(x);
-  return i - (x < i);
-}
 
 // A voxel is free only when the old voxel this far further along its ray is free too (see the
 // header: without it the bench's map had 4x the march's occupied voxels made free).
@@ -26,7 +20,7 @@ struct VoxelMove {
   VoxelMove(const Eigen::Isometry3d& T, double voxel_size_m) : R(T.linear()), t(T.translation() / voxel_size_m) {}
   // The voxel holding the moved centre of voxel ijk.
   VoxelIndex voxelOfCentre(const VoxelIndex& ijk) const {
-    const Eigen::Vector3d p = R * (ijk.cast<double>() + Eigen::Vector3d::Constant(0.5)) + t;
+    const Eigen::Vector3d p = R * voxelCentre(ijk, 1.0) + t;
     return {floorToInt(p.x()), floorToInt(p.y()), floorToInt(p.z())};
   }
 };
@@ -139,7 +133,7 @@ FrameUpdates resampleUpdates(const FrameUpdates& updates, const Eigen::Isometry3
   const size_t free_blocks = out.size();
   for (uint32_t slot = 0; slot < free_blocks; ++slot) {
     const BlockIndex block = detail::unpackIndex(out.keyOf(slot));
-    const Eigen::Vector3d p0 = back.R * ((block * kBlockSide).cast<double>() + Eigen::Vector3d::Constant(0.5)) + back.t;
+    const Eigen::Vector3d p0 = back.R * voxelCentre(block * kBlockSide, 1.0) + back.t;
     std::array<uint64_t, 8>& free = out.masks(slot).free;
     // The step to the guard sample, in old voxels: kGuardVoxels along the ray through the block's
     // centre (within a block the rays' directions differ little; the blocks around the origin,

@@ -267,6 +267,10 @@ int MapHistory::numThreads() const {
 
 size_t MapHistory::movesAtOnce() const { return static_cast<size_t>(numThreads()); }
 
+size_t MapHistory::movesPerStep() const {
+  return map_.config().correction_move == CorrectionMove::kResample ? movesAtOnce() : 1;
+}
+
 void MapHistory::moveFrame(CorrectionPlan& plan, size_t i) { moveFrames(plan, i, i + 1); }
 
 void MapHistory::moveFrames(CorrectionPlan& plan, size_t begin, size_t end) {

@@ -118,14 +118,17 @@ class MapHistory {
   // the writer, and no other correction starts before its finishCorrection().
   // moveFrames moves the frames [begin, end) side by side (up to map.num_threads at once, one
   // thread each; a lone frame's march on all of them; the same result as moveFrame of each in
-  // order); correct() takes movesAtOnce() of them per step, MapHost as many when resampling and
-  // one when marching (moveFrame: an ingest frame then waits for one frame's march at most).
+  // order); correct() takes movesAtOnce() of them per step. Steps between which ingest goes on
+  // (MapHost) take movesPerStep(): as many when resampling (one thread's work of a few ms a
+  // frame), one when marching (a lone frame's march uses every thread: an ingest frame then waits
+  // for one frame's march at most).
   // @throws IoError from the store, the frames before the failing one moved.
   CorrectionPlan planCorrection(std::span<const CorrectedPose> poses);
   void moveFrame(CorrectionPlan& plan, size_t i);
   void moveFrames(CorrectionPlan& plan, size_t begin, size_t end);
   CorrectionSummary finishCorrection(CorrectionPlan& plan);
   size_t movesAtOnce() const;
+  size_t movesPerStep() const;
 
   // Forgets every stored frame (after OccupancyMap::reset()).
   void clear();

@@ -97,15 +97,14 @@ mapping::CorrectionSummary MapHost::correctPoses(const std::vector<mapping::Corr
   if (!history_) {
     throw FailedPreconditionError("correct poses: the server keeps no frame history (server.frame_history is false)");
   }
-  // In steps on the writer thread: frames that arrive meanwhile are integrated between them, and
-  // the final replay includes them where they touch the affected blocks. A march takes one moved
-  // frame a step (on all the map's threads), not movesAtOnce() side by side: an ingest frame waits
-  // for at most one step, and ingest at 15 Hz during a correction ran at twice the rate
-  // (bench/correction_ingest_bench, docs/PERFORMANCE.md). A resampling is one thread's work of a
-  // few ms a frame: movesAtOnce() frames side by side make a step as short.
+  // In steps on the writer thread (MapHistory::movesPerStep() moved frames each): frames that
+  // arrive meanwhile are integrated between them, and the final replay includes them where they
+  // touch the affected blocks. An ingest frame waits for at most one step: with one march a step
+  // instead of movesAtOnce(), ingest at 15 Hz during a correction ran at twice the rate
+  // (bench/correction_ingest_bench, docs/PERFORMANCE.md).
   std::lock_guard<std::mutex> one_at_a_time(correction_mutex_);
   mapping::CorrectionPlan plan = writer_.run([&] { return history_->planCorrection(poses); });
-  const size_t step = map_->config().correction_move == mapping::CorrectionMove::kResample ? history_->movesAtOnce() : 1;
+  const size_t step = history_->movesPerStep();
   for (size_t i = 0; i < plan.moved.size(); i += step) writer_.run([&] { history_->moveFrames(plan, i, i + step); });
   mapping::CorrectionSummary summary;
   change(

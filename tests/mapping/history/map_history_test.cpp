@@ -267,6 +267,8 @@ void expectTheSameCorrectedMapForOneAndThreeThreads(CorrectionMove move) {
   }
   const auto poses = truePoses(frames);
   EXPECT_EQ(history_three.movesAtOnce(), 3u);
+  // Steps between which ingest goes on: three resamplings side by side, one march (on all threads).
+  EXPECT_EQ(history_three.movesPerStep(), move == CorrectionMove::kResample ? 3u : 1u);
   const CorrectionSummary summary_one = history_one.correct(poses);
   const CorrectionSummary summary_three = history_three.correct(poses);
   EXPECT_EQ(summary_one.frames_moved, 19u);

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 
+#include "mapping/integration/voxel_ray.h"
 #include "mapping/occupancy_map.h"
 #include "tests/mapping/support/analytic_scene.h"
 #include "tests/mapping/support/known_blocks.h"
@@ -21,9 +22,6 @@ struct MapAgreement {
   uint64_t reference_occupied = 0;     // occupied in the reference
   uint64_t occupied_made_free = 0;     // occupied in the reference, free in the map
   uint64_t occupied_made_unknown = 0;  // occupied in the reference, unknown in the map
-  uint64_t free_made_unknown = 0;      // free in the reference, unknown in the map
-  uint64_t unknown_made_free = 0;      // unknown in the reference, free in the map
-  uint64_t made_occupied = 0;          // occupied in the map, not in the reference
   double agreement() const { return known == 0 ? 1.0 : double(same) / known; }
   double madeFree() const { return reference_occupied == 0 ? 0.0 : double(occupied_made_free) / reference_occupied; }
 };
@@ -43,9 +41,6 @@ inline MapAgreement compareStates(const OccupancyMap& map, const OccupancyMap& r
       a.reference_occupied += __builtin_popcountll(orf[w]);
       a.occupied_made_free += __builtin_popcountll(orf[w] & km[w] & ~om[w]);
       a.occupied_made_unknown += __builtin_popcountll(orf[w] & ~km[w]);
-      a.free_made_unknown += __builtin_popcountll(kr[w] & ~orf[w] & ~km[w]);
-      a.unknown_made_free += __builtin_popcountll(~kr[w] & km[w] & ~om[w]);
-      a.made_occupied += __builtin_popcountll(om[w] & ~orf[w]);
     }
   }
   return a;
@@ -64,7 +59,7 @@ inline double occupiedNearSurfaces(const OccupancyMap& map, const Scene& scene, 
       for (uint64_t bits = occ[w]; bits != 0; bits &= bits - 1) {
         const VoxelIndex ijk = voxelOfOffset(block, w * 64 + __builtin_ctzll(bits));
         ++occupied;
-        near += scene.distanceToSurface((ijk.cast<double>() + Eigen::Vector3d::Constant(0.5)) * s) <= max_distance_m;
+        near += scene.distanceToSurface(voxelCentre(ijk, s)) <= max_distance_m;
       }
     }
   }

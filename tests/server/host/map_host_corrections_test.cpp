@@ -76,7 +76,7 @@ TEST(MapHostCorrections, TheMovedWallReachesTheFeedAndTheDistanceField) {
   movedWallReachesTheFeedAndTheDistanceField(mapping::CorrectionMove::kMarch);
 }
 
-// Resampled (its moves taken movesAtOnce() a step): a move by whole voxels, the same wall.
+// Resampled (its moves taken MapHistory::movesPerStep() a step): a move by whole voxels, the same wall.
 TEST(MapHostCorrections, TheResampledWallReachesTheFeedAndTheDistanceField) {
   movedWallReachesTheFeedAndTheDistanceField(mapping::CorrectionMove::kResample);
 }
