@@ -1,11 +1,14 @@
 // ros_image.h: the pixels of sensor_msgs/Image and sensor_msgs/CompressedImage as the 8-bit grey or
 // BGR cv::Mat the pipeline takes.
-//   Image: mono8 (grey), bgr8, rgb8 (to BGR), bgra8 / rgba8 (to BGR); mono16 and bayer_* are errors
-//   that name the topic and the encoding (a mosaic needs debayering first: record image_mono or
-//   image_color, or run image_proc).
+//   Image: mono8 / mono16 (grey); bgr8/16, rgb8/16, bgra8/16, rgba8/16 (to BGR); Bayer mosaics
+//   bayer_{rggb,bggr,gbrg,grbg}8/16, demosaiced to BGR (OpenCV's bilinear demosaicing); YUV 4:2:2,
+//   yuv422 (UYVY) and yuv422_yuy2 (YUYV), to BGR (BT.601). 16-bit samples become 8-bit full scale
+//   to full scale (x 255 / 65535, rounded) in the byte order the message gives (is_bigendian); a
+//   camera that fills only the low 12 bits of mono16 gives dark images. Any other encoding is an
+//   error that names the topic, the encoding and the ones read.
 //   CompressedImage: JPEG or PNG, told apart by the bytes' magic (FF D8 FF, 89 'PNG'), not by the
 //   `format` string (drivers write "jpeg", "mono8; jpeg compressed bgr8", ...); anything else is an
-//   error naming the topic and the format string.
+//   error naming the topic and the format string. A 16-bit PNG becomes 8-bit as above.
 // Threads: free functions; the Mat returned owns its pixels.
 #pragma once
 
@@ -16,12 +19,13 @@
 
 namespace cenote::io {
 
-/// @throws Error "topic /cam0/image_raw: image encoding bayer_rggb8 ..." for an encoding not read,
-///         and for a step or data size that does not hold height rows of width pixels.
+/// @throws Error "topic /cam0/image_raw: image encoding 32FC1 is not read; ..." for an encoding not
+///         read, for a step or data size that does not hold height rows of width pixels, and for
+///         YUV 4:2:2 of an odd width.
 cv::Mat imageToMat(const RosImage& image, const std::string& topic);
 
 /// @throws Error naming the topic and the format string when the bytes are neither JPEG nor PNG,
-///         cannot be decoded, or are not 8-bit.
+///         cannot be decoded, or are neither 8 nor 16 bits a sample.
 cv::Mat compressedImageToMat(const RosCompressedImage& image, const std::string& topic);
 
 }  // namespace cenote::io

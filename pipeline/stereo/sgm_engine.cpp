@@ -130,8 +130,8 @@ template <int kOffset, class V>
 HWY_INLINE V lanesFrom(V lo, V hi) {
   using T = hn::TFromV<V>;
   constexpr int kLanes = static_cast<int>(hn::MaxLanes(hn::DFromV<V>()));
-  constexpr int kBytes = kLanes * static_cast<int>(sizeof(T));
-  constexpr int kShift = kOffset * static_cast<int>(sizeof(T));  // in bytes
+  [[maybe_unused]] constexpr int kBytes = kLanes * static_cast<int>(sizeof(T));   // unused on the scalar target
+  [[maybe_unused]] constexpr int kShift = kOffset * static_cast<int>(sizeof(T));  // in bytes
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
   if constexpr (kBytes == 64 && sizeof(T) == 2) {
     alignas(64) static constexpr std::array<uint16_t, 32> kIndex = [] {

@@ -4,8 +4,9 @@
 # map as the folder it came from: the same voxels (and the same points.ply, byte for byte) with raw
 # or PNG images and uncompressed, bz2 or lz4 chunks, and with the calibration from CameraInfo and
 # poses from TF; with JPEG at quality 95 the points and voxels of OpenCV's decoding of the same bytes,
-# and at least 99 % of the voxels agreeing within one voxel with the folder's (strictly about 92 %). Jittered right stamps with one right image
-# dropped: every other frame paired, one unpaired image counted. A keyframe-only pose topic or TUM
+# and at least 99 % of the voxels agreeing within one voxel with the folder's (strictly about 92 %);
+# with Bayer mosaics the points of OpenCV's demosaicing and an F-score near the folder's. Jittered
+# right stamps with one right image dropped: every other frame paired, one unpaired image counted. A keyframe-only pose topic or TUM
 # file gives keyframe-only processing. A bag cut mid-chunk runs and says where it stopped; a damaged chunk is
 # stepped over and named. Memory does not grow with the bag. Bad input: the exact messages.
 # Usage: cli_bag_test.sh <cenote binary> <source dir>
@@ -80,6 +81,19 @@ f_png=$(json "$work/euroc-cloud.json" 'd["fscore"]')
 f_jpeg=$(json "$work/jpeg-cloud.json" 'd["fscore"]')
 echo "F-score at 5 cm against the true surface: PNG folder $f_png, JPEG bag $f_jpeg"
 $py -c "import sys; sys.exit(0 if $f_jpeg >= $f_png - 0.015 else 1)" || fail "jpeg: F-score $f_jpeg, PNG's $f_png"
+
+# A raw colour camera's Bayer mosaics (bayer_rggb8, made by numpy): the points of OpenCV's Python
+# demosaicing of the same mosaics, and against the true surface at most 4 points of F-score below
+# the PNG folder's (a mosaic holds a third of the colour samples; 2.4 points here).
+to_bag "$work/bayer.bag" --images bayer --decoded-folder "$work/bayer-pixels"
+bag_run bayer "$work/bayer.bag" --calibration "$calib"
+run bayer-pixels --dataset "$work/bayer-pixels"
+cmp -s "$work/bayer-pixels-out/points.ply" "$work/bayer-out/points.ply" || fail "bayer: points differ from OpenCV's demosaicing's"
+"$cenote" eval cloud --source "$work/bayer-out/points.ply" --target "$work/dive/groundtruth/surface.ply" --threshold 0.05 \
+  --json "$work/bayer-cloud.json" >/dev/null 2>&1 || fail "cenote eval cloud (bayer) failed"
+f_bayer=$(json "$work/bayer-cloud.json" 'd["fscore"]')
+echo "F-score at 5 cm against the true surface: Bayer bag $f_bayer"
+$py -c "import sys; sys.exit(0 if $f_bayer >= $f_png - 0.04 else 1)" || fail "bayer: F-score $f_bayer, PNG's $f_png"
 
 # Calibration from the two CameraInfo topics (K, D, R, P from cv2.stereoRectify), camera poses
 # (T_world_body * T_BS, composed by numpy) from TF: >= 99.9 % (1.0 here).
@@ -217,8 +231,8 @@ expect_error 1 "error: pose topic /left/image_raw in $work/raw-none.bag has type
 expect_error 1 "error: recording $work/raw-none.bag has no CameraInfo topic /left/camera_info for the calibration; give --calibration FILE" \
   run --dataset "$work/raw-none.bag" --pose-topic /odom --out "$work/x"
 $py "$source_dir/tests/io/bag/write_test_bags.py" "$work/small" || fail "write_test_bags.py failed"
-expect_error 1 "error: topic /cam/bayer: image encoding bayer_rggb8 is a raw Bayer mosaic; cenote reads mono8, bgr8, rgb8, bgra8 and rgba8 (debayer it first: record image_mono or image_color, or run image_proc)" \
-  run --dataset "$work/small/messages.bag" --left /cam/bayer --right /cam/mono --calibration "$calib" --pose-topic /odom --out "$work/x"
+expect_error 1 "error: topic /cam/float: image encoding 32FC1 is not read; cenote reads mono8/16, bgr8/16, rgb8/16, bgra8/16, rgba8/16, bayer_{rggb,bggr,gbrg,grbg}8/16, yuv422 (uyvy) and yuv422_yuy2 (yuyv)" \
+  run --dataset "$work/small/messages.bag" --left /cam/float --right /cam/mono --calibration "$calib" --pose-topic /odom --out "$work/x"
 expect_error 1 "error: calibration $calib is for 320x240 images, but those on /cam/mono are 3x2" \
   run --dataset "$work/small/messages.bag" --left /cam/mono --right /cam/bgr --calibration "$calib" --pose-topic /odom --out "$work/x"
 expect_error 1 "error: topic /odom in $work/small/messages.bag has type nav_msgs/Odometry, not sensor_msgs/Image or sensor_msgs/CompressedImage" \

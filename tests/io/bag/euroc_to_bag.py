@@ -1,16 +1,19 @@
 #!/usr/bin/env python3
 """Converts an EuRoC-layout dive (`cenote sim`) into a ROS 1 bag with ROS's own rosbag (python3-rosbag).
 
-Usage: euroc_to_bag.py EUROC_DIR OUT.bag [--images raw|png|jpeg] [--compression none|bz2|lz4]
+Usage: euroc_to_bag.py EUROC_DIR OUT.bag [--images raw|bayer|png|jpeg] [--compression none|bz2|lz4]
                        [--right-jitter-ms J] [--drop-right N,...] [--camera-info] [--poses odometry|tf]
                        [--pose-of body|camera] [--keyframe-poses N] [--decoded-folder DIR]
   raw:  sensor_msgs/Image (bgr8 or mono8, the PNGs' pixels) on /left/image_raw and /right/image_raw
+  bayer: sensor_msgs/Image bayer_rggb8 on the same topics: the colour filter mosaic of the PNGs' pixels
+        (numpy: R G on even rows, G B on odd rows), as a raw colour camera records
   png:  sensor_msgs/CompressedImage holding the PNG files' bytes, format "png", on
         /slave1/image_raw/compressed and /slave2/image_raw/compressed (the SVIn2 rig's topics)
   jpeg: the same topics, each image JPEG-encoded by OpenCV at quality 95, format
         "bgr8; jpeg compressed bgr8" (as ROS's compressed_image_transport writes it)
-  --decoded-folder DIR (with jpeg): also a copy of the EuRoC folder whose images are the bag's JPEG
-        bytes decoded by OpenCV (cv2.imdecode), as PNG: the pixels an independent decoder gets
+  --decoded-folder DIR (with jpeg or bayer): also a copy of the EuRoC folder whose images are the bag's
+        JPEG bytes decoded by OpenCV (cv2.imdecode) or its mosaics demosaiced by OpenCV (cv2.cvtColor),
+        as PNG: the pixels OpenCV's Python bindings get
   --right-jitter-ms: the right stamps moved by a seeded uniform offset in [-J, J] ms
   --drop-right: indices of right images left out
   --camera-info: sensor_msgs/CameraInfo of both cameras (<ns>/camera_info), K, D, R, P from
@@ -39,7 +42,7 @@ from tf2_msgs.msg import TFMessage
 ap = argparse.ArgumentParser()
 ap.add_argument("euroc")
 ap.add_argument("out")
-ap.add_argument("--images", default="raw", choices=["raw", "png", "jpeg"])
+ap.add_argument("--images", default="raw", choices=["raw", "bayer", "png", "jpeg"])
 ap.add_argument("--compression", default="none", choices=["none", "bz2", "lz4"])
 ap.add_argument("--right-jitter-ms", type=float, default=0.0)
 ap.add_argument("--drop-right", default="")
@@ -49,8 +52,8 @@ ap.add_argument("--pose-of", default="body", choices=["body", "camera"])
 ap.add_argument("--keyframe-poses", type=int, default=0)
 ap.add_argument("--decoded-folder", default="")
 a = ap.parse_args()
-if a.decoded_folder and a.images != "jpeg":
-    ap.error("--decoded-folder needs --images jpeg")
+if a.decoded_folder and a.images not in ("jpeg", "bayer"):
+    ap.error("--decoded-folder needs --images jpeg or bayer")
 mav0 = os.path.join(a.euroc, "mav0") if os.path.isdir(os.path.join(a.euroc, "mav0")) else a.euroc
 
 
@@ -78,9 +81,10 @@ def sensor(cam):
     return K, np.array(seq("distortion_coefficients") + [0.0]), T, size
 
 
-names = ("/left/image_raw", "/right/image_raw") if a.images == "raw" else (
+raw = a.images in ("raw", "bayer")
+names = ("/left/image_raw", "/right/image_raw") if raw else (
     "/slave1/image_raw/compressed", "/slave2/image_raw/compressed")
-infos = ("/left/camera_info", "/right/camera_info") if a.images == "raw" else (
+infos = ("/left/camera_info", "/right/camera_info") if raw else (
     "/slave1/camera_info", "/slave2/camera_info")
 rng = random.Random(15)
 if a.decoded_folder:
@@ -105,6 +109,19 @@ if a.camera_info:
         m.R = [float(v) for v in R.flatten()]
         m.P = [float(v) for v in P.flatten()]
         camera_infos.append(m)
+
+def bayer_rggb(bgr):
+    """The colour filter mosaic of a BGR image: R G on even rows, G B on odd rows."""
+    mosaic = bgr[..., 1].copy()
+    mosaic[0::2, 0::2] = bgr[0::2, 0::2, 2]
+    mosaic[1::2, 1::2] = bgr[1::2, 1::2, 0]
+    return mosaic
+
+
+def save_decoded(pixels, path):
+    """The pixels OpenCV gets from the bag's image, into --decoded-folder at the image's place."""
+    cv2.imwrite(os.path.join(a.decoded_folder, os.path.relpath(path, a.euroc)), pixels)
+
 
 def quat_to_matrix(w, x, y, z):
     n = (w * w + x * x + y * y + z * z) ** 0.5
@@ -190,7 +207,14 @@ with rosbag.Bag(a.out, "w", compression=a.compression) as bag:
             m.header.stamp = t
         else:
             pixels = cv2.imread(payload, cv2.IMREAD_UNCHANGED)
-            if a.images == "raw":
+            if a.images == "bayer":
+                mosaic = bayer_rggb(pixels)
+                m = Image()
+                m.height, m.width = mosaic.shape
+                m.encoding, m.step, m.data = "bayer_rggb8", m.width, mosaic.tobytes()
+                if a.decoded_folder:
+                    save_decoded(cv2.cvtColor(mosaic, cv2.COLOR_BayerRGGB2BGR), payload)
+            elif a.images == "raw":
                 m = Image()
                 m.height, m.width = pixels.shape[:2]
                 m.encoding = "bgr8" if pixels.ndim == 3 else "mono8"
@@ -205,8 +229,7 @@ with rosbag.Bag(a.out, "w", compression=a.compression) as bag:
                     m.format = "bgr8; jpeg compressed bgr8"
                     m.data = cv2.imencode(".jpg", pixels, [cv2.IMWRITE_JPEG_QUALITY, 95])[1].tobytes()
                     if a.decoded_folder:
-                        decoded = cv2.imdecode(np.frombuffer(m.data, np.uint8), cv2.IMREAD_UNCHANGED)
-                        cv2.imwrite(os.path.join(a.decoded_folder, os.path.relpath(payload, a.euroc)), decoded)
+                        save_decoded(cv2.imdecode(np.frombuffer(m.data, np.uint8), cv2.IMREAD_UNCHANGED), payload)
             m.header.stamp = t
             m.header.frame_id = "cam0" if order == 1 else "cam1"
         bag.write(topic, m, t)

@@ -3,6 +3,8 @@
 
 Usage: write_test_bags.py OUT_DIR. Writes:
   messages.bag          one message of each type cenote reads, with the values bag_test.cpp expects
+  encodings.bag         a 16x12 scene in the image encodings beyond 8-bit grey and colour (/enc/...),
+                        each made here with numpy from the scene's definition (see encoded_scenes())
   seq_{none,bz2,lz4}.bag  240 mono8 images (/cam/image, 16x8, pixel value = index) and 240 Odometry
                         (/odom) in 4 KiB chunks, so that there are many chunks
   cut_{none,bz2,lz4}.bag  the same cut in the middle of a chunk (the index gone)
@@ -62,7 +64,7 @@ with rosbag.Bag(os.path.join(out, "messages.bag"), "w") as bag:
     bag.write("/cam/mono", image("mono8", 3, 2, 1, range(6), t0), t0)
     bag.write("/cam/bgr", image("bgr8", 3, 2, 3, [v for i in range(6) for v in (i, 10 + i, 20 + i)], t0), t0)
     bag.write("/cam/rgb", image("rgb8", 3, 2, 3, [v for i in range(6) for v in (20 + i, 10 + i, i)], t0), t0)
-    bag.write("/cam/bayer", image("bayer_rggb8", 3, 2, 1, range(6), t0), t0)
+    bag.write("/cam/float", image("32FC1", 3, 2, 4, bytes(24), t0), t0)  # an encoding cenote does not read
     grey = (np.arange(48, dtype=np.uint8).reshape(6, 8) * 5).astype(np.uint8)
     for topic, ext, fmt in (("/cam/png", ".png", "png"), ("/cam/jpeg", ".jpg", "mono8; jpeg compressed bgr8")):
         c = CompressedImage()
@@ -99,6 +101,72 @@ with rosbag.Bag(os.path.join(out, "messages.bag"), "w") as bag:
     tf.transforms = [transform("odom", "base", t0, (9, 9, 9), (0, 0, 0, 1)),
                      transform("/world", "/cam0", t0, (1.5, -2.25, 3.0), (0.0, 0.0, 0.6, 0.8))]
     bag.write("/tf", tf, t0)
+
+
+# The scene of encodings.bag (ros1_bag_test.cpp defines it again): 16x12, the left 8 columns one
+# colour, the right 8 another (B, G, R); and a grey ramp 0..191 for the 16-bit grey images.
+SCENE_LEFT, SCENE_RIGHT = (20, 60, 200), (210, 120, 30)
+scene = np.zeros((12, 16, 3), np.uint8)
+scene[:, :8] = SCENE_LEFT
+scene[:, 8:] = SCENE_RIGHT
+ramp = np.arange(192, dtype=np.uint32).reshape(12, 16)
+
+
+def mosaic(bgr, pattern):
+    """The Bayer mosaic of a BGR image: `pattern` names the colours of (0, 0), (0, 1), (1, 0), (1, 1)."""
+    out = np.zeros(bgr.shape[:2], bgr.dtype)
+    for i, colour in enumerate(pattern):
+        out[i // 2::2, i % 2::2] = bgr[i // 2::2, i % 2::2, "bgr".index(colour)]
+    return out
+
+
+def yuv422(bgr, order):
+    """YUV 4:2:2 bytes (BT.601, video range, as cameras send it): each pixel pair shares the mean U, V."""
+    b, g, r = (bgr[..., k].astype(np.float64) / 255.0 for k in range(3))
+    y = 16 + 65.481 * r + 128.553 * g + 24.966 * b
+    u = 128 - 37.797 * r - 74.203 * g + 112.0 * b
+    v = 128 + 112.0 * r - 93.786 * g - 18.214 * b
+    u, v = (u[:, 0::2] + u[:, 1::2]) / 2, (v[:, 0::2] + v[:, 1::2]) / 2
+    planes = {"u": u, "v": v, "y0": y[:, 0::2], "y1": y[:, 1::2]}
+    out = np.stack([planes[k] for k in order], axis=2).reshape(bgr.shape[0], -1)
+    return np.clip(np.round(out), 0, 255).astype(np.uint8)
+
+
+def raw_image(encoding, samples, width, big_endian=False):
+    """sensor_msgs/Image of `samples` (rows of uint8 or uint16 samples) in the given byte order."""
+    a = np.ascontiguousarray(samples)
+    if a.dtype == np.uint16:
+        a = a.astype(">u2" if big_endian else "<u2")
+    m = Image()
+    m.header.stamp = t0
+    m.header.frame_id = "cam0"
+    m.height, m.width, m.encoding, m.is_bigendian = a.shape[0], width, encoding, int(big_endian)
+    m.step = a[0].nbytes
+    m.data = a.tobytes()
+    return m
+
+
+def encoded_scenes():
+    """(topic, message): the scene as every encoding tested; 16-bit samples are 257 v + 100 (v / 255
+    of full scale, plus less than half a step of 8 bits)."""
+    wide = lambda a: a.astype(np.uint16) * 257 + 100
+    for pattern in ("rggb", "bggr", "gbrg", "grbg"):
+        yield "/enc/bayer_%s8" % pattern, raw_image("bayer_%s8" % pattern, mosaic(scene, pattern), 16)
+    yield "/enc/bayer_rggb16", raw_image("bayer_rggb16", wide(mosaic(scene, "rggb")), 16)
+    yield "/enc/bayer_gbrg16_be", raw_image("bayer_gbrg16", wide(mosaic(scene, "gbrg")), 16, big_endian=True)
+    yield "/enc/mono16", raw_image("mono16", wide(ramp), 16)
+    yield "/enc/mono16_be", raw_image("mono16", wide(ramp), 16, big_endian=True)
+    yield "/enc/bgr16", raw_image("bgr16", wide(scene), 16)
+    yield "/enc/rgb16_be", raw_image("rgb16", wide(scene[..., ::-1]), 16, big_endian=True)
+    yield "/enc/rgba16", raw_image("rgba16", wide(np.dstack([scene[..., ::-1], np.full((12, 16), 200, np.uint8)])), 16)
+    yield "/enc/yuv422", raw_image("yuv422", yuv422(scene, ("u", "y0", "v", "y1")), 16)
+    yield "/enc/yuv422_yuy2", raw_image("yuv422_yuy2", yuv422(scene, ("y0", "u", "y1", "v")), 16)
+    yield "/enc/yuv422_odd", raw_image("yuv422", yuv422(scene, ("u", "y0", "v", "y1"))[:, :30], 15)
+
+
+with rosbag.Bag(os.path.join(out, "encodings.bag"), "w") as bag:
+    for topic, message in encoded_scenes():
+        bag.write(topic, message, t0)
 
 expected = {}
 for compression in ("none", "bz2", "lz4"):
