@@ -188,7 +188,18 @@ struct Pose {
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // unit
 };
 
-enum class ImageEncoding { kUnspecified = 0, kMono8 = 1, kBgr8 = 2, kRgb8 = 3 };
+// Raw pixels: grey, colour, or a raw colour camera's Bayer mosaic named by its first two rows
+// (kBayerRggb8: R G, then G B), which the server demosaics to BGR.
+enum class ImageEncoding {
+  kUnspecified = 0,
+  kMono8 = 1,
+  kBgr8 = 2,
+  kRgb8 = 3,
+  kBayerRggb8 = 4,
+  kBayerBggr8 = 5,
+  kBayerGbrg8 = 6,
+  kBayerGrbg8 = 7
+};
 
 // One camera image: encoded (PNG, JPEG: anything OpenCV's imdecode reads) or raw pixels.
 struct Image {

@@ -26,14 +26,31 @@ void checkPixels(uint64_t width, uint64_t height, const std::string& what, const
   }
 }
 
-cv::Mat decodeRaw(const v1::RawImage& raw, const std::string& what, const FrameLimits& limits) {
+// The cv::cvtColor code that makes a raw encoding's pixels grey or BGR (-1: they are), and its bytes a pixel.
+struct RawLayout {
   int channels = 0;
-  switch (raw.encoding()) {
-    case v1::IMAGE_ENCODING_MONO8: channels = 1; break;
-    case v1::IMAGE_ENCODING_BGR8:
-    case v1::IMAGE_ENCODING_RGB8: channels = 3; break;
-    default: throw invalidArgument(what + ": raw image encoding is unspecified (MONO8, BGR8 or RGB8)");
+  int to_bgr = -1;
+};
+
+RawLayout rawLayout(v1::ImageEncoding encoding, const std::string& what) {
+  switch (encoding) {
+    case v1::IMAGE_ENCODING_MONO8: return {1};
+    case v1::IMAGE_ENCODING_BGR8: return {3};
+    case v1::IMAGE_ENCODING_RGB8: return {3, cv::COLOR_RGB2BGR};
+    // OpenCV 4 names its Bayer codes by the first two rows too.
+    case v1::IMAGE_ENCODING_BAYER_RGGB8: return {1, cv::COLOR_BayerRGGB2BGR};
+    case v1::IMAGE_ENCODING_BAYER_BGGR8: return {1, cv::COLOR_BayerBGGR2BGR};
+    case v1::IMAGE_ENCODING_BAYER_GBRG8: return {1, cv::COLOR_BayerGBRG2BGR};
+    case v1::IMAGE_ENCODING_BAYER_GRBG8: return {1, cv::COLOR_BayerGRBG2BGR};
+    default:
+      throw invalidArgument(what + ": raw image encoding " + std::to_string(encoding) +
+                            " is not one of MONO8, BGR8, RGB8, BAYER_RGGB8, BAYER_BGGR8, BAYER_GBRG8 or BAYER_GRBG8");
   }
+}
+
+cv::Mat decodeRaw(const v1::RawImage& raw, const std::string& what, const FrameLimits& limits) {
+  const RawLayout layout = rawLayout(raw.encoding(), what);
+  const int channels = layout.channels;
   checkPixels(raw.width(), raw.height(), what, limits);
   const uint64_t expected = uint64_t{raw.width()} * raw.height() * channels;
   if (raw.data().size() != expected) {
@@ -43,12 +60,9 @@ cv::Mat decodeRaw(const v1::RawImage& raw, const std::string& what, const FrameL
   }
   const cv::Mat view(static_cast<int>(raw.height()), static_cast<int>(raw.width()), CV_8UC(channels),
                      const_cast<char*>(raw.data().data()));
+  if (layout.to_bgr < 0) return view.clone();  // the message's bytes go with the message
   cv::Mat image;
-  if (raw.encoding() == v1::IMAGE_ENCODING_RGB8) {
-    cv::cvtColor(view, image, cv::COLOR_RGB2BGR);
-  } else {
-    image = view.clone();
-  }
+  cv::cvtColor(view, image, layout.to_bgr);
   return image;
 }
 

@@ -50,6 +50,10 @@ void toWire(const Pose& pose, v1::Pose* out) {
   q->set_w(pose.orientation.w());
 }
 
+// ImageEncoding's values are the wire's (toWire() casts one into the other).
+static_assert(static_cast<int>(ImageEncoding::kRgb8) == v1::IMAGE_ENCODING_RGB8 &&
+              static_cast<int>(ImageEncoding::kBayerGrbg8) == v1::IMAGE_ENCODING_BAYER_GRBG8);
+
 void toWire(const Image& image, v1::Image* out) {
   if (!image.encoded.empty()) {
     out->set_encoded(image.encoded);

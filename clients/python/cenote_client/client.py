@@ -310,14 +310,16 @@ class MapClient:
             raise CenoteError(status_name(ack.status_code), ack.message, "Ingest/IntegratePoints")
         return IntegrateResult(ack.voxels_updated, ack.changed_blocks, ack.map_version)
 
-    def _image(self, msg, image):
+    def _image(self, msg, image, bayer=None):
         """Fills an Image message: bytes are sent as encoded (PNG / JPEG), a uint8 array (H, W) or
-        (H, W, 3) BGR as raw pixels."""
+        (H, W, 3) BGR as raw pixels; with `bayer` an (H, W) array is that Bayer mosaic."""
         if isinstance(image, (bytes, bytearray)):
             msg.encoded = bytes(image)
             return
         arr = np.ascontiguousarray(image, dtype=np.uint8)
-        if arr.ndim == 2:
+        if bayer is not None and arr.ndim == 2:
+            encoding = getattr(self.pb.ingest, "IMAGE_ENCODING_BAYER_" + bayer.upper() + "8")
+        elif arr.ndim == 2:
             encoding = self.pb.ingest.IMAGE_ENCODING_MONO8
         elif arr.ndim == 3 and arr.shape[2] == 3:
             encoding = self.pb.ingest.IMAGE_ENCODING_BGR8
@@ -343,20 +345,23 @@ class MapClient:
         except grpc.RpcError as e:
             raise from_rpc_error(e, method) from None
 
-    def stream_frames(self, frames, timeout_s=None):
+    def stream_frames(self, frames, timeout_s=None, bayer=None):
         """Sends stereo frames through the server's pipeline (rectify, stereo, fusion, map) in one
         stream and returns one Ack per frame. frames: iterable of (timestamp_s, left, right) or
         (timestamp_s, left, right, pose); images as encoded bytes or uint8 arrays; pose as in
-        stream_poses (without one, the server matches streamed poses by time). The call returns
-        once every frame's points are in the map. A bad frame is rejected in its Ack; the stream
-        goes on."""
+        stream_poses (without one, the server matches streamed poses by time). bayer: "rggb",
+        "bggr", "gbrg" or "grbg" to send (H, W) arrays as a raw colour camera's mosaics of that
+        pattern (the server demosaics them), None for grey. The call returns once every frame's
+        points are in the map. A bad frame is rejected in its Ack; the stream goes on."""
+        if bayer not in (None, "rggb", "bggr", "gbrg", "grbg"):
+            raise ValueError(f"bayer: expected None, 'rggb', 'bggr', 'gbrg' or 'grbg', got {bayer!r}")
         outcomes = {v: k.replace("FRAME_OUTCOME_", "") for k, v in self.pb.ingest.FrameOutcome.items()}
 
         def requests():
             for frame in frames:
                 msg = self.pb.ingest.StereoFrame(timestamp_s=float(frame[0]))
-                self._image(msg.left, frame[1])
-                self._image(msg.right, frame[2])
+                self._image(msg.left, frame[1], bayer)
+                self._image(msg.right, frame[2], bayer)
                 if len(frame) > 3 and frame[3] is not None:
                     self._pose(msg.pose, frame[3])
                 yield msg

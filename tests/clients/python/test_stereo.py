@@ -72,6 +72,25 @@ class StereoIngestTest(unittest.TestCase):
             self.assertEqual(rows[np.argmax(counts)], plane_k)
             self.assertGreater(np.mean(np.abs(occupied_k - plane_k) <= 1), 0.97)
 
+    def test_bayer_frames_are_demosaiced_and_map_the_plane(self):
+        # The textured pair in colour (blue and red weaker than green, as under water), sent as a raw
+        # colour camera's RGGB mosaics laid out here by numpy.
+        def rggb(grey):
+            bgr = np.dstack([grey * 0.5, grey * 1.0, grey * 0.8]).astype(np.uint8)
+            mosaic = bgr[..., 1].copy()
+            mosaic[0::2, 0::2] = bgr[0::2, 0::2, 2]
+            mosaic[1::2, 1::2] = bgr[1::2, 1::2, 0]
+            return mosaic
+        with self.server() as server, MapClient(server.target, timeout_s=60) as client:
+            left, right = textured_pair(3)
+            frames = [(0.1 * i, rggb(left), rggb(right), IDENTITY) for i in range(1, 6)]
+            acks = client.stream_frames(frames, bayer="rggb")
+            self.assertEqual([a.outcome for a in acks], ["PROCESSED"] * 5)
+            states, _ = client.voxels([[0.0, 0.0, DEPTH_M], [0.0, 0.0, 0.5]])
+            self.assertEqual(list(states), [VoxelState.OCCUPIED, VoxelState.FREE])
+            with self.assertRaisesRegex(ValueError, "bayer: expected None, 'rggb', 'bggr', 'gbrg' or 'grbg', got 'rgb'"):
+                client.stream_frames(frames, bayer="rgb")
+
     def test_frames_matched_to_streamed_poses_and_bad_frames_rejected(self):
         with self.server() as server, MapClient(server.target, timeout_s=60) as client:
             poses = client.stream_poses(np.arange(0.0, 1.01, 0.05), np.zeros((21, 3)), np.tile([0, 0, 0, 1.0], (21, 1)))

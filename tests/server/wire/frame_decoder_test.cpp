@@ -127,5 +127,62 @@ TEST(FrameDecoder, RawPixelCountIsComputedIn64Bits) {
                                                     std::string("left image is 65x48 but the calibration is for 64x48")));
 }
 
+// A raw colour camera's mosaic of a 64x48 scene whose left half is one colour and right half another,
+// laid out here pixel by pixel from the pattern's name (its first two rows), not by OpenCV.
+std::string bayerMosaic(const char* pattern, cv::Vec3b left, cv::Vec3b right) {
+  std::string bytes(64 * 48, '\0');
+  for (int y = 0; y < 48; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      const char colour = pattern[(y % 2) * 2 + x % 2];
+      const int channel = colour == 'b' ? 0 : colour == 'g' ? 1 : 2;
+      bytes[y * 64 + x] = static_cast<char>((x < 32 ? left : right)[channel]);
+    }
+  }
+  return bytes;
+}
+
+TEST(FrameDecoder, RawBayerMosaicsOfEveryPatternAreDemosaicedToTheirColours) {
+  const cv::Vec3b left(20, 60, 200), right(210, 120, 30);  // B, G, R
+  const std::pair<const char*, v1::ImageEncoding> patterns[] = {{"rggb", v1::IMAGE_ENCODING_BAYER_RGGB8},
+                                                                {"bggr", v1::IMAGE_ENCODING_BAYER_BGGR8},
+                                                                {"gbrg", v1::IMAGE_ENCODING_BAYER_GBRG8},
+                                                                {"grbg", v1::IMAGE_ENCODING_BAYER_GRBG8}};
+  for (const auto& [pattern, encoding] : patterns) {
+    v1::StereoFrame frame;
+    frame.set_timestamp_s(1.0);
+    for (v1::Image* image : {frame.mutable_left(), frame.mutable_right()}) {
+      v1::RawImage* raw = image->mutable_raw();
+      raw->set_width(64);
+      raw->set_height(48);
+      raw->set_encoding(encoding);
+      raw->set_data(bayerMosaic(pattern, left, right));
+    }
+    const pipeline::StereoFrame decoded = decodeStereoFrame(frame, kLimits);
+    ASSERT_EQ(decoded.left.type(), CV_8UC3) << pattern;
+    // A flat colour demosaics to itself away from the colour edge and the border.
+    for (int y = 2; y < 46; ++y) {
+      for (int x : {2, 15, 29, 34, 50, 61}) {
+        ASSERT_EQ(decoded.left.at<cv::Vec3b>(y, x), x < 32 ? left : right) << pattern << " at " << x << ", " << y;
+      }
+    }
+    EXPECT_EQ(cv::norm(decoded.left, decoded.right, cv::NORM_INF), 0.0) << pattern;
+  }
+}
+
+TEST(FrameDecoder, UnknownRawEncodingIsRefusedByNumber) {
+  v1::StereoFrame frame = frameOf("", encode(".png", noise(48, 64, CV_8UC1)));
+  v1::RawImage* raw = frame.mutable_left()->mutable_raw();
+  raw->set_width(64);
+  raw->set_height(48);
+  raw->set_data(std::string(64 * 48, '\0'));
+  for (int encoding : {0, 8}) {
+    raw->set_encoding(static_cast<v1::ImageEncoding>(encoding));
+    EXPECT_EQ(refusal(frame, kLimits),
+              std::make_pair(grpc::StatusCode::INVALID_ARGUMENT,
+                             "left: raw image encoding " + std::to_string(encoding) +
+                                 " is not one of MONO8, BGR8, RGB8, BAYER_RGGB8, BAYER_BGGR8, BAYER_GBRG8 or BAYER_GRBG8"));
+  }
+}
+
 }  // namespace
 }  // namespace cenote::server
