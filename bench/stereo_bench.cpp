@@ -7,7 +7,9 @@
 // An unknown flag or a bad value is an error (exit status not 0, the reason on stderr; --help lists the flags).
 // cenote's rows: the full search and the coarse-to-fine band (StereoConfig::search) of each mode.
 // Inputs: Middlebury Cloth3 resized to 800x600 (the paper's image size) with 112 disparities,
-// and the Middlebury pairs at their own size (cones 64, Cloth3 128 disparities).
+// the same stretched to twice its width (its left 800x600: depth edges almost everywhere, the band
+// placement's worst case), and the Middlebury pairs at their own size (cones 64, Cloth3 128
+// disparities).
 #include <CLI/CLI.hpp>
 #include <omp.h>
 #include <unistd.h>
@@ -89,6 +91,15 @@ int main(int argc, char** argv) {
     cv::resize(grey(cloth->left), big.left, cv::Size(800, 600), 0, 0, cv::INTER_AREA);
     cv::resize(grey(cloth->right), big.right, cv::Size(800, 600), 0, 0, cv::INTER_AREA);
     inputs.push_back(big);
+    // A stress case for the band placement: Cloth3 stretched to twice its width, its left 800
+    // columns: disparity gradients twice as steep, so that most coarse pixels are at depth edges.
+    Input steep{"Cloth3 stretched 1600x600, left 800x600", {}, {}, 112};
+    for (auto [image, out] : {std::pair{&cloth->left, &steep.left}, std::pair{&cloth->right, &steep.right}}) {
+      cv::Mat wide;
+      cv::resize(grey(*image), wide, cv::Size(1600, 600), 0, 0, cv::INTER_AREA);
+      *out = wide(cv::Rect(0, 0, 800, 600)).clone();
+    }
+    inputs.push_back(steep);
     inputs.push_back({"Cloth3 626x555", grey(cloth->left), grey(cloth->right), 128});
   }
   if (auto cones = test::loadCones()) inputs.push_back({"cones 450x375", grey(cones->left), grey(cones->right), 64});

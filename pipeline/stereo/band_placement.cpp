@@ -125,80 +125,164 @@ int windowSad(const EdgeCheckImages& im, int x, int y, int d) {
   return sum;
 }
 
-// The 5x5 SADs at disparity d of the `count` (<= kMaxBlock) pixels x0.. of row y, into `sads`;
-// d <= x0 + kEdgeCheckBorder - kEdgeCheckRadius, so that every window read lies inside the
-// borders (a pixel's own d <= x rule is the caller's). On x86 the pixels share their columns:
-// per window row one 8-byte load of each image (columns x0 - 2 .. x0 + 5; bytes past the row's
-// border are the next row's, never used), absolute differences summed over the rows in 16-bit
-// lanes, then each pixel's 5 columns added by shifts.
-void blockSads(const EdgeCheckImages& im, int x0, int count, int y, int d, int* sads) {
-#if defined(__SSE2__)
-  const uint8_t* left = im.left + (y - kEdgeCheckRadius) * im.stride + x0 - kEdgeCheckRadius;
-  const uint8_t* right = left - im.left + im.right - d;
-  const __m128i zero = _mm_setzero_si128();
-  __m128i columns = zero;
-  for (int wy = 0; wy < kWindow; ++wy, left += im.stride, right += im.stride) {
-    const __m128i l = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(left));
-    const __m128i r = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(right));
-    const __m128i diff = _mm_or_si128(_mm_subs_epu8(l, r), _mm_subs_epu8(r, l));
-    columns = _mm_add_epi16(columns, _mm_unpacklo_epi8(diff, zero));
-  }
-  const __m128i pairs = _mm_add_epi16(columns, _mm_srli_si128(columns, 2));  // columns i, i + 1
-  const __m128i fours = _mm_add_epi16(pairs, _mm_srli_si128(pairs, 4));      // i .. i + 3
-  const __m128i fives = _mm_add_epi16(fours, _mm_srli_si128(columns, 8));    // i .. i + 4
-  alignas(16) uint16_t lanes[8];
-  _mm_store_si128(reinterpret_cast<__m128i*>(lanes), fives);
-  for (int i = 0; i < count; ++i) sads[i] = lanes[i];
-#else
-  for (int i = 0; i < count; ++i) sads[i] = windowSad(im, x0 + i, y, d);
-#endif
-}
+// The edge check of one coarse pixel's block: up to kMaxBlock rows of up to kMaxBlock pixels
+// (x0.., rows y0..), each pixel's best 5x5 SAD so far and the index of the neighbourhood value
+// that gave it. Scores fit 16 bits (at most 25 x 255).
+struct EdgeBlock {
+  static constexpr int16_t kNone = INT16_MAX;
+  alignas(16) int16_t best[kMaxBlock][8];
+  alignas(16) int16_t winner[kMaxBlock][8];
+  int x0, y0, rows, count;
 
-// Band centres of the `count` pixels x0.. of row y (one coarse pixel's, at a depth edge), from
-// the neighbourhood's distinct coarse disparities `values` (ascending, n > 0): see
-// band_placement.h.
-void edgeCentres(const EdgeCheckImages& im, int scale, int x0, int count, int y, const int16_t* values, int n,
-                 int* centres) {
-  int winner[kMaxBlock], best[kMaxBlock], sads[kMaxBlock];
-  for (int i = 0; i < count; ++i) {
-    winner[i] = values[0];
-    best[i] = INT_MAX;
+  // Pixel (row r, i) keeps `sad` at value index k if it beats its best (strictly: the smaller value
+  // wins ties, and values come in ascending order).
+  void offer(int r, int i, int sad, int k) {
+    if (sad < best[r][i]) {
+      best[r][i] = static_cast<int16_t>(sad);
+      winner[r][i] = static_cast<int16_t>(k);
+    }
   }
-  const int last_x = x0 + count - 1;
-  for (int k = 0; k < n; ++k) {
-    const int centre = scale * values[k];
-    for (int d = centre - scale / 2; d <= std::min(centre + scale / 2, last_x); ++d) {
-      if (d <= x0 + kEdgeCheckBorder - kEdgeCheckRadius) {
-        blockSads(im, x0, count, y, d, sads);
-      } else {
-        for (int i = 0; i < count; ++i) sads[i] = d <= x0 + i ? windowSad(im, x0 + i, y, d) : INT_MAX;
-      }
+
+  // Every pixel's 5x5 SAD at disparity d, offered for value index k; d <= x0 + kEdgeCheckBorder -
+  // kEdgeCheckRadius, so that every window read lies inside the borders (the pixels with d > x
+  // are passed over). On x86 the pixels share their window rows and columns: per image row one
+  // 8-byte load of each image (columns x0 - 2 .. x0 + 5; bytes past the row's border are the next
+  // row's, never used), absolute differences in 16-bit lanes, each output row's five window rows
+  // added as a running sum, each pixel's five columns by shifts.
+  void offerInside(const EdgeCheckImages& im, int d, int k) {
+#if defined(__SSE2__)
+    const uint8_t* left = im.left + (y0 - kEdgeCheckRadius) * im.stride + x0 - kEdgeCheckRadius;
+    const uint8_t* right = left - im.left + im.right - d;
+    const __m128i zero = _mm_setzero_si128();
+    __m128i columns[kMaxBlock + kWindow - 1];
+    for (int j = 0; j < rows + kWindow - 1; ++j, left += im.stride, right += im.stride) {
+      const __m128i l = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(left));
+      const __m128i r = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(right));
+      columns[j] = _mm_unpacklo_epi8(_mm_or_si128(_mm_subs_epu8(l, r), _mm_subs_epu8(r, l)), zero);
+    }
+    // Pixel i takes part where d <= x0 + i.
+    const __m128i pixel_x = _mm_add_epi16(_mm_set1_epi16(static_cast<int16_t>(x0)), _mm_setr_epi16(0, 1, 2, 3, 4, 5, 6, 7));
+    const __m128i has_right = _mm_cmpgt_epi16(pixel_x, _mm_set1_epi16(static_cast<int16_t>(d - 1)));
+    const __m128i value = _mm_set1_epi16(static_cast<int16_t>(k));
+    __m128i window = columns[0];
+    for (int j = 1; j < kWindow - 1; ++j) window = _mm_add_epi16(window, columns[j]);
+    for (int r = 0; r < rows; ++r) {
+      window = _mm_add_epi16(window, columns[r + kWindow - 1]);                // rows r .. r + 4
+      const __m128i pairs = _mm_add_epi16(window, _mm_srli_si128(window, 2));  // columns i, i + 1
+      const __m128i fours = _mm_add_epi16(pairs, _mm_srli_si128(pairs, 4));    // i .. i + 3
+      const __m128i sads = _mm_add_epi16(fours, _mm_srli_si128(window, 8));    // i .. i + 4
+      auto* best_r = reinterpret_cast<__m128i*>(best[r]);
+      auto* winner_r = reinterpret_cast<__m128i*>(winner[r]);
+      const __m128i better = _mm_and_si128(has_right, _mm_cmplt_epi16(sads, *best_r));
+      *best_r = _mm_or_si128(_mm_and_si128(better, sads), _mm_andnot_si128(better, *best_r));
+      *winner_r = _mm_or_si128(_mm_and_si128(better, value), _mm_andnot_si128(better, *winner_r));
+      window = _mm_sub_epi16(window, columns[r]);
+    }
+#else
+    offerEach(im, d, k);
+#endif
+  }
+
+  // The same, pixel by pixel, for any d (those with d > x passed over).
+  void offerEach(const EdgeCheckImages& im, int d, int k) {
+    for (int r = 0; r < rows; ++r) {
       for (int i = 0; i < count; ++i) {
-        if (d <= x0 + i && sads[i] < best[i]) {
-          best[i] = sads[i];
-          winner[i] = values[k];
-        }
+        if (d <= x0 + i) offer(r, i, windowSad(im, x0 + i, y0 + r, d), k);
       }
     }
   }
-  for (int i = 0; i < count; ++i) centres[i] = windowAround(values, n, winner[i], scale);
+};
+
+// Band centres of the block's pixels (one coarse pixel's, at a depth edge), from the
+// neighbourhood's distinct coarse disparities `values` (ascending, n > 0): see band_placement.h.
+// A disparity that two neighbouring values' ranges share is scored once, for the smaller value,
+// which would win the tie anyway.
+void edgeCentres(const EdgeCheckImages& im, int scale, EdgeBlock& block, const int16_t* values, int n,
+                 int (&centres)[kMaxBlock][kMaxBlock]) {
+  for (int r = 0; r < block.rows; ++r) {
+    std::fill_n(block.best[r], 8, EdgeBlock::kNone);
+    std::fill_n(block.winner[r], 8, 0);
+  }
+  const int last_x = block.x0 + block.count - 1;
+  int scored = INT_MIN;  // the largest disparity scored so far
+  for (int k = 0; k < n; ++k) {
+    const int centre = scale * values[k];
+    for (int d = std::max(centre - scale / 2, scored + 1); d <= std::min(centre + scale / 2, last_x); ++d) {
+      if (d <= block.x0 + kEdgeCheckBorder - kEdgeCheckRadius) {
+        block.offerInside(im, d, k);
+      } else {
+        block.offerEach(im, d, k);
+      }
+      scored = d;
+    }
+  }
+  // The band around each winning value, once per value: the block's pixels mostly share a few.
+  int window_of[kNeighbourhood];
+  std::fill_n(window_of, n, kNoCentre);
+  for (int r = 0; r < block.rows; ++r) {
+    for (int i = 0; i < block.count; ++i) {
+      const int k = block.winner[r][i];
+      if (window_of[k] == kNoCentre) window_of[k] = windowAround(values, n, values[k], scale);
+      centres[r][i] = window_of[k];
+    }
+  }
 }
 
-// The centres of the `count` pixels x0.. of row y in edge coarse pixel cx (`own` its coarse
-// disparity times the scale), by the rules of band_placement.h.
-void edgeBlockCentres(const EdgeCheckImages& images, const StereoConfig& config, const BandScratch& scratch, int cx, int x0,
-                      int count, int y, int own, int truncated_end, int* centres) {
-  if (x0 + count - config.min_disparity_px <= kBandDisparities) {
+}  // namespace
+
+namespace {
+
+// Band starts of row `out` from the coarse row's centres (kNoCentre: from disparity 0; kEdge:
+// any value, placeEdgeBlock() overwrites it): StereoConfig::bandStartAround() for every pixel,
+// the clamp to the range once per coarse pixel and the left border's rule on its columns only.
+void placeRow(const StereoConfig& config, const std::vector<int>& centres, int width, int16_t* out) {
+  const int scale = config.coarse_scale, min_d = config.min_disparity_px;
+  const int last_start = config.num_disparities - kBandDisparities;
+  for (int cx = 0; cx < static_cast<int>(centres.size()); ++cx) {
+    const int centre = centres[cx] == kNoCentre || centres[cx] == kEdge ? min_d : centres[cx];
+    const auto start = static_cast<int16_t>(std::clamp(centre - min_d - kBandDisparities / 2, 0, last_start));
+    const int x0 = cx * scale;
+    std::fill(out + x0, out + std::min(width, x0 + scale), start);
+  }
+  // Where the range is cut by the image border, the band holds the disparities with a right pixel.
+  for (int x = 0; x < std::min(width, min_d + config.num_disparities - 1); ++x) {
+    out[x] = static_cast<int16_t>(std::min<int>(out[x], std::max(0, x - min_d + 1 - kBandDisparities)));
+  }
+}
+
+// The band starts of edge coarse pixel cx in the strip's rows y .. y + rows - 1 of its coarse row.
+void placeEdgeBlock(const cv::Mat& coarse_disparity, const StereoConfig& config, const EdgeCheckImages& images,
+                    const BandScratch& scratch, int cx, int y, int rows, int truncated_end, cv::Mat& band_start) {
+  const int scale = config.coarse_scale;
+  EdgeBlock block;
+  block.x0 = cx * scale;
+  block.y0 = y;
+  block.rows = rows;
+  block.count = std::min(scale, images.width - block.x0);
+  int centres[kMaxBlock][kMaxBlock];
+  if (block.x0 + block.count - config.min_disparity_px <= kBandDisparities) {
     // Even the block's last column has a band holding all its disparities with a right pixel: the
     // centre does not matter (StereoConfig::bandStartAround()), no check.
-    std::fill_n(centres, count, kNoCentre);
-    return;
+    for (auto& row : centres) std::fill_n(row, kMaxBlock, kNoCentre);
+  } else {
+    if (block.x0 + block.count > truncated_end) {
+      edgeCentres(images, scale, block, scratch.values.data() + static_cast<std::ptrdiff_t>(cx) * kNeighbourhood,
+                  scratch.counts[cx], centres);
+    }
+    // Columns whose output is invalidated: the pixel's own coarse disparity.
+    const float own = coarse_disparity.ptr<float>(y / scale)[cx];
+    for (int i = 0; i < block.count && block.x0 + i < truncated_end; ++i) {
+      for (int r = 0; r < rows; ++r) centres[r][i] = std::isfinite(own) ? scale * static_cast<int>(own) : kNoCentre;
+    }
   }
-  if (x0 + count > truncated_end) {
-    edgeCentres(images, config.coarse_scale, x0, count, y,
-                scratch.values.data() + static_cast<std::ptrdiff_t>(cx) * kNeighbourhood, scratch.counts[cx], centres);
+  for (int r = 0; r < rows; ++r) {
+    int16_t* out = band_start.ptr<int16_t>(y + r);
+    for (int i = 0; i < block.count; ++i) {
+      const int x = block.x0 + i;
+      out[x] = static_cast<int16_t>(centres[r][i] == kNoCentre ? config.bandStart(INFINITY, x)
+                                                               : config.bandStartAround(centres[r][i], x));
+    }
   }
-  for (int i = 0; i < count && x0 + i < truncated_end; ++i) centres[i] = own;
 }
 
 }  // namespace
@@ -210,32 +294,18 @@ void placeBands(const cv::Mat& coarse_disparity, const StereoConfig& config, con
   // Columns whose output the matcher invalidates (StereoConfig::invalidate_truncated) keep the
   // pixel's own coarse disparity at edges: their bands only feed the paths.
   const int truncated_end = config.invalidate_truncated ? config.min_disparity_px + config.num_disparities - 1 : 0;
-  int centres[kMaxBlock];
-  // The pixels of coarse pixel cx in row y.
-  auto placeBlock = [&](int y, int cx, int16_t* out) {
-    const int x0 = cx * scale, count = std::min(scale, width - x0);
-    std::fill_n(centres, count, scratch.centres[cx]);
-    if (scratch.centres[cx] == kEdge) {
-      const float own = coarse_disparity.ptr<float>(y / scale)[cx];
-      edgeBlockCentres(images, config, scratch, cx, x0, count, y,
-                       std::isfinite(own) ? scale * static_cast<int>(own) : kNoCentre, truncated_end, centres);
+  // The strip's rows of one coarse row at a time: they share their bands but at depth edges.
+  for (int y = y0; y < y1;) {
+    const int cy = y / scale;
+    const int rows = std::min(y1, (cy + 1) * scale) - y;
+    coarseRowCentres(coarse_disparity, scale, coarse_y0, coarse_y1, cy, scratch);
+    int16_t* first = band_start.ptr<int16_t>(y);
+    placeRow(config, scratch.centres, width, first);
+    for (int r = 1; r < rows; ++r) std::copy_n(first, width, band_start.ptr<int16_t>(y + r));
+    for (const int cx : scratch.edges) {
+      placeEdgeBlock(coarse_disparity, config, images, scratch, cx, y, rows, truncated_end, band_start);
     }
-    for (int i = 0; i < count; ++i) {
-      const int x = x0 + i;
-      out[x] = static_cast<int16_t>(centres[i] == kNoCentre ? config.bandStart(INFINITY, x)
-                                                            : config.bandStartAround(centres[i], x));
-    }
-  };
-  const int coarse_width = coarse_disparity.cols;
-  for (int y = y0; y < y1; ++y) {
-    int16_t* out = band_start.ptr<int16_t>(y);
-    if (y == y0 || y % scale == 0) {
-      coarseRowCentres(coarse_disparity, scale, coarse_y0, coarse_y1, y / scale, scratch);
-      for (int cx = 0; cx < coarse_width; ++cx) placeBlock(y, cx, out);
-    } else {  // the rows of one coarse row share their bands but at depth edges
-      std::copy_n(band_start.ptr<int16_t>(y - 1), width, out);
-      for (const int cx : scratch.edges) placeBlock(y, cx, out);
-    }
+    y += rows;
   }
 }
 

@@ -13,8 +13,10 @@
 //     where none has a right pixel). The band then covers as many neighbourhood values as
 //     fit beside the winner (the lowest such window on ties). Centring on the pixel's own coarse
 //     disparity instead left band search 0.83 points of bad-2 above full search on Motorcycle and
-//     1.56 on Aloe, against 0.36 and 0.40 with the check (middlebury_test.cpp); the check adds
-//     about 2 % to the instructions of an 800x600x112 frame (docs/PERFORMANCE.md).
+//     1.56 on Aloe, against 0.36 and 0.40 with the check (middlebury_test.cpp). The check runs
+//     once per coarse pixel's block of pixels, sharing window rows (docs/PERFORMANCE.md): about
+//     1 % of an 800x600x112 frame of Cloth3, and a fifth of the instructions where nearly every coarse
+//     pixel is at an edge.
 //     In the columns whose output StereoConfig::invalidate_truncated marks invalid (x < min_d + D - 1),
 //     where a band only feeds the paths, an edge pixel's band is centred on its own coarse disparity
 //     instead: on the 800x600x112 bench they hold most edge pixels.
