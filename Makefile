@@ -66,7 +66,7 @@ tsan-test: deps
 # build-fuzz/crashes/ (copy one into tests/fuzz/corpus/<harness>/ and ctest replays it from then on).
 FUZZ_DIR ?= build-fuzz
 FUZZ_RUNS ?= 200000
-FUZZ_HARNESSES = image_decode ply_reader map_file frame_decoder config_yaml
+FUZZ_HARNESSES = image_decode ply_reader map_file frame_decoder config_yaml recording
 fuzz:
 	bash scripts/install-deps.sh --fuzz
 	cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \

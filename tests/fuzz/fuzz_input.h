@@ -28,6 +28,17 @@ inline std::string writeInputFile(const uint8_t* data, std::size_t size, const s
   return path;
 }
 
+// An empty folder `name` beside writeInputFile's files, for readers that take a folder: emptied of
+// the previous input's files first.
+inline std::filesystem::path freshInputFolder(const std::string& name) {
+  const char* dir = std::getenv("TEST_TMPDIR");
+  const std::filesystem::path base = dir ? std::filesystem::path(dir) : std::filesystem::temp_directory_path();
+  const std::filesystem::path folder = base / ("fuzz-" + std::to_string(::getpid()) + "-" + name);
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  return folder;
+}
+
 }  // namespace cenote::fuzz
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size);
