@@ -15,38 +15,49 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A prepared statement, finalised when it goes: sqlite3_close leaves a connection with a statement
+// still open (and its file with it) open.
+struct FinalizeStatement {
+  void operator()(sqlite3_stmt* stmt) const { sqlite3_finalize(stmt); }
+};
+using Statement = std::unique_ptr<sqlite3_stmt, FinalizeStatement>;
+
 // One .db3 file opened read-only; closes itself.
 class Database {
  public:
   // Opens `path`; errors name `name` (the bag's file when `path` is its decompressed copy).
   explicit Database(const fs::path& path, const fs::path& name = {}) : path_(name.empty() ? path.string() : name.string()) {
     if (!fs::exists(path)) throw NotFoundError("cannot read ROS 2 bag file " + path_ + ": no such file");
-    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) fail("cannot open");
+    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+      const IoError error = failure("cannot open");
+      sqlite3_close(db_);  // sqlite hands out a connection even when the open fails
+      throw error;
+    }
   }
   ~Database() {
-    if (stmt_) sqlite3_finalize(stmt_);
+    stmt_.reset();
     sqlite3_close(db_);
   }
   Database(const Database&) = delete;
   Database& operator=(const Database&) = delete;
 
-  sqlite3_stmt* prepare(const char* sql) {
+  Statement prepare(const char* sql) {
     sqlite3_stmt* stmt = nullptr;
-    if (sqlite3_prepare_v2(db_, sql, -1, &stmt, nullptr) != SQLITE_OK) fail("cannot query");
-    return stmt;
+    if (sqlite3_prepare_v2(db_, sql, -1, &stmt, nullptr) != SQLITE_OK) throw failure("cannot query");
+    return Statement(stmt);
   }
   /// SQLITE_ROW or SQLITE_DONE; anything else throws.
-  int step(sqlite3_stmt* stmt) {
-    const int rc = sqlite3_step(stmt);
-    if (rc != SQLITE_ROW && rc != SQLITE_DONE) fail("cannot read");
+  int step(const Statement& stmt) {
+    const int rc = sqlite3_step(stmt.get());
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) throw failure("cannot read");
     return rc;
   }
-  [[noreturn]] void fail(const char* what) const {
-    throw IoError("ROS 2 bag file " + path_ + ": " + what + ": " + (db_ ? sqlite3_errmsg(db_) : "out of memory"));
+  IoError failure(const char* what) const {
+    return IoError("ROS 2 bag file " + path_ + ": " + what + ": " + (db_ ? sqlite3_errmsg(db_) : "out of memory"));
   }
   const std::string& path() const { return path_; }
 
-  sqlite3_stmt* stmt_ = nullptr;  // the streaming query of the messages, while it runs
+  Statement stmt_;  // the streaming query of the messages, while it runs
 
  private:
   std::string path_;
@@ -106,16 +117,17 @@ class Db3Recording final : public Recording {
         continue;
       }
       const auto& ids = topic_of_id_[file_index_];
-      const auto it = ids.find(sqlite3_column_int64(db_->stmt_, 0));
+      sqlite3_stmt* row = db_->stmt_.get();
+      const auto it = ids.find(sqlite3_column_int64(row, 0));
       if (it == ids.end() || it->second < 0) continue;
       const TopicInfo& topic = topics_[it->second];
       if (!wanted.empty() && std::find(wanted.begin(), wanted.end(), topic.name) == wanted.end()) continue;
       out.topic = &topic;
-      out.log_time_ns = sqlite3_column_int64(db_->stmt_, 1);
-      const void* blob = sqlite3_column_blob(db_->stmt_, 2);
-      const int size = sqlite3_column_bytes(db_->stmt_, 2);
+      out.log_time_ns = sqlite3_column_int64(row, 1);
+      const void* blob = sqlite3_column_blob(row, 2);
+      const int size = sqlite3_column_bytes(row, 2);
       out.data = std::span<const std::uint8_t>(static_cast<const std::uint8_t*>(blob), static_cast<std::size_t>(size));
-      out.file_offset = static_cast<std::uint64_t>(sqlite3_column_int64(db_->stmt_, 3));
+      out.file_offset = static_cast<std::uint64_t>(sqlite3_column_int64(row, 3));
       if (compression_ == Db3Compression::kMessage || (sniff_messages_ && isZstd(out.data))) {
         out.data = decompressed(out, topic);
       }
@@ -166,16 +178,16 @@ class Db3Recording final : public Recording {
   // metadata (FILE compression), where a topic it does not list is not read.
   void readTopics(Database& db, std::size_t index, bool count) {
     std::map<std::int64_t, int>& ids = topic_of_id_[index];
-    sqlite3_stmt* stmt = db.prepare("SELECT id, name, type, serialization_format FROM topics ORDER BY id");
+    const Statement stmt = db.prepare("SELECT id, name, type, serialization_format FROM topics ORDER BY id");
     while (db.step(stmt) == SQLITE_ROW) {
-      const std::int64_t id = sqlite3_column_int64(stmt, 0);
+      const std::int64_t id = sqlite3_column_int64(stmt.get(), 0);
       MessageEncoding encoding{};
-      if (!db3Encoding(column(stmt, 3), encoding)) {
+      if (!db3Encoding(column(stmt.get(), 3), encoding)) {
         ids[id] = -1;
         continue;
       }
-      const std::string name = column(stmt, 1);
-      const std::string type = ros1TypeName(column(stmt, 2));
+      const std::string name = column(stmt.get(), 1);
+      const std::string type = ros1TypeName(column(stmt.get(), 2));
       auto same = [&](const TopicInfo& t) { return t.name == name && t.type == type && t.encoding == encoding; };
       const auto found = std::find_if(topics_.begin(), topics_.end(), same);
       if (found != topics_.end()) {
@@ -187,24 +199,22 @@ class Db3Recording final : public Recording {
         ids[id] = -1;
       }
     }
-    sqlite3_finalize(stmt);
     if (count) countMessages(db, ids);
   }
 
   void countMessages(Database& db, const std::map<std::int64_t, int>& ids) {
-    sqlite3_stmt* stmt = db.prepare(
+    const Statement stmt = db.prepare(
         "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id");
     while (db.step(stmt) == SQLITE_ROW) {
-      const auto it = ids.find(sqlite3_column_int64(stmt, 0));
+      const auto it = ids.find(sqlite3_column_int64(stmt.get(), 0));
       if (it == ids.end() || it->second < 0) continue;
       TopicInfo& t = topics_[it->second];
-      const std::int64_t first = sqlite3_column_int64(stmt, 2);
-      const std::int64_t last = sqlite3_column_int64(stmt, 3);
+      const std::int64_t first = sqlite3_column_int64(stmt.get(), 2);
+      const std::int64_t last = sqlite3_column_int64(stmt.get(), 3);
       if (t.message_count == 0 || first < t.first_ns) t.first_ns = first;
       if (t.message_count == 0 || last > t.last_ns) t.last_ns = last;
-      t.message_count += static_cast<std::uint64_t>(sqlite3_column_int64(stmt, 1));
+      t.message_count += static_cast<std::uint64_t>(sqlite3_column_int64(stmt.get(), 1));
     }
-    sqlite3_finalize(stmt);
   }
 
   std::vector<fs::path> files_;

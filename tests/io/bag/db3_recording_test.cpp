@@ -2,7 +2,8 @@
 // the CDR bytes of Foxglove's serialiser: topics, counts, time spans and every message's bytes in
 // timestamp order across the bag's two files; a bag whose recorder never wrote metadata.yaml; the same
 // bag with rosbag2's zstd compression (python3-zstandard) of each message and of each file; the
-// errors for a file that is not a database, a missing bag, damaged or unknown compression.
+// errors for a file that is not a database or is damaged inside, a missing bag, damaged or unknown
+// compression.
 #include "io/bag/db3_recording.h"
 
 #include <gtest/gtest.h>
@@ -86,6 +87,24 @@ TEST(Db3Recording, NotADatabaseNamesTheFile) {
   } catch (const IoError& e) {
     EXPECT_EQ(std::string(e.what()), "ROS 2 bag file " + path.string() + ": cannot query: file is not a database");
   }
+}
+
+// Damage sqlite finds only when a query reads the page (malformed.db3: the messages table's root page)
+// names the file, and leaves neither the file nor its connection open.
+TEST(Db3Recording, MalformedDatabaseNamesTheFileAndLeavesItClosed) {
+  const fs::path path = kData / "malformed.db3";
+  const auto open_files = [] { return std::distance(fs::directory_iterator("/proc/self/fd"), fs::directory_iterator()); };
+  const auto before = open_files();
+  for (int i = 0; i < 3; ++i) {
+    try {
+      openDb3Recording(path);
+      FAIL() << "expected an IoError";
+    } catch (const IoError& e) {
+      EXPECT_EQ(std::string(e.what()),
+                "ROS 2 bag file " + path.string() + ": cannot read: database disk image is malformed");
+    }
+  }
+  EXPECT_EQ(open_files(), before);
 }
 
 TEST(Db3Recording, MissingBagAndMissingListedFile) {

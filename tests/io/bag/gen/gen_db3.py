@@ -12,6 +12,7 @@ the CDR bytes Foxglove's serialiser wrote for the MCAP files (OUT_DIR/expected.j
                                 recorder stopped with its second file open)
   dive_db3_unfinished_message/  dive_db3_message's files without metadata.yaml
   dive_db3_damaged/    dive_db3_message with one message's bytes not zstd (damaged.json: its file, row id, topic)
+  malformed.db3        dive_db3_0.db3 with the root page of its messages table damaged
   not_a_database.db3   text
 The tables are rosbag2's (Humble) and its zstd compression, written by rosbag2_db3.py.
 """
@@ -109,6 +110,18 @@ unfinished = os.path.join(out, "dive_db3_unfinished_message")
 shutil.rmtree(unfinished, ignore_errors=True)
 shutil.copytree(os.path.join(out, "dive_db3_message"), unfinished)
 os.remove(os.path.join(unfinished, "metadata.yaml"))
+
+# A file damaged inside the messages table: its root page's type byte zeroed. sqlite opens it and reads
+# the topics; reading the messages finds the damage.
+malformed = os.path.join(out, "malformed.db3")
+shutil.copy(os.path.join(bag, files[0]), malformed)
+db = sqlite3.connect(malformed)
+page_size = db.execute("PRAGMA page_size").fetchone()[0]
+root = db.execute("SELECT rootpage FROM sqlite_master WHERE name = 'messages'").fetchone()[0]
+db.close()
+with open(malformed, "r+b") as f:
+    f.seek((root - 1) * page_size)
+    f.write(b"\0")
 
 with open(os.path.join(out, "not_a_database.db3"), "w") as f:
     f.write("this is not a database, but it is long enough to have a header of a hundred bytes or so, "
