@@ -70,7 +70,8 @@ bool db3Encoding(const std::string& serialization_format, MessageEncoding& encod
 Db3Metadata readDb3Metadata(const fs::path& bag_folder) {
   const fs::path file = bag_folder / "metadata.yaml";
   const YAML::Node root = loadYamlFile(file.string());
-  const YAML::Node info = root["rosbag2_bagfile_information"];
+  // A document that is not a mapping (a scalar) has no keys to look up: yaml-cpp throws at the lookup.
+  const YAML::Node info = root.IsMap() ? root["rosbag2_bagfile_information"] : YAML::Node();
   const std::string where = file.string() + ": rosbag2_bagfile_information";
   if (!info || !info.IsMap()) throw IoError(file.string() + ": no rosbag2_bagfile_information mapping");
   try {

@@ -225,6 +225,21 @@ TEST(Db3Recording, DamagedCompressionNamesTheFileTheMessageOrTheCut) {
   }
 }
 
+TEST(Db3Recording, MetadataThatIsNotAMappingNamesTheFile) {
+  const fs::path bag = fs::path(::testing::TempDir()) / "scalar_metadata";
+  fs::create_directories(bag);
+  for (const char* yaml : {"rosbag2_bagfile_information\n", "- rosbag2_bagfile_information\n", ""}) {
+    std::ofstream(bag / "metadata.yaml") << yaml;
+    try {
+      openDb3Recording(bag);
+      FAIL() << "expected an IoError for '" << yaml << "'";
+    } catch (const IoError& e) {
+      EXPECT_EQ(std::string(e.what()), (bag / "metadata.yaml").string() + ": no rosbag2_bagfile_information mapping")
+          << "for '" << yaml << "'";
+    }
+  }
+}
+
 TEST(Db3Recording, UnknownCompressionIsAClearErrorNamingIt) {
   const fs::path bag = fs::path(::testing::TempDir()) / "compressed_bag";
   fs::create_directories(bag);
