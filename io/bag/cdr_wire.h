@@ -5,7 +5,8 @@
 // header; a string is a u32 length that counts its NUL,
 // its bytes and the NUL; a sequence is a u32 element count, then the elements.
 // Errors: IoError naming the field kind, its offset and the bytes left, e.g.
-//   "CDR message: f64 at byte 44 needs 8 bytes, 3 left"
+//   "CDR message: f64 at byte 44 needs 8 bytes, 3 left"; a sequence's count is checked against the
+// bytes left before anything is allocated, so a corrupt count never allocates gigabytes.
 // Threads: one reader per thread; it views the bytes it was given, which must outlive it.
 #pragma once
 
@@ -75,8 +76,16 @@ class CdrWire {
     return out;
   }
 
-  /// The element count of a variable-size sequence.
-  std::uint32_t length() { return scalar<std::uint32_t>("sequence length"); }
+  /// The element count of a variable-size sequence. Each element takes at least one byte, so a count
+  /// above the bytes left is damage, reported here before a caller allocates the elements.
+  std::uint32_t length() {
+    const std::uint32_t n = scalar<std::uint32_t>("sequence length");
+    if (n > data_.size() - pos_) {
+      throw IoError("CDR message: sequence of " + std::to_string(n) + " elements at byte " + std::to_string(pos_) +
+                    " needs at least " + std::to_string(n) + " bytes, " + std::to_string(data_.size() - pos_) + " left");
+    }
+    return n;
+  }
 
   /// builtin_interfaces/Time: i32 sec, u32 nanosec.
   std::int64_t stampNs() {

@@ -1,6 +1,6 @@
 // The message layer (io/bag/ros_messages.h) on CDR: every type it reads, decoded from the bytes
 // Foxglove's ROS 2 serialiser wrote (tests/io/bag/gen, values in expected.json); the images and
-// odometry of the MCAP and .db3 recordings opened through openRecording; the error for damaged bytes.
+// odometry of the MCAP and .db3 recordings opened through openRecording; the errors for damaged bytes.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -122,8 +122,38 @@ TEST(CdrMessages, DamagedBytesNameTopicOffsetTypeAndField) {
     FAIL() << "expected an IoError";
   } catch (const IoError& e) {
     EXPECT_EQ(std::string(e.what()),
-              "topic /image, message at byte 4242: sensor_msgs/Image.data: CDR message: byte array at "
-              "byte 52 needs 12 bytes, 10 left");
+              "topic /image, message at byte 4242: sensor_msgs/Image.data: CDR message: sequence of 12 elements at "
+              "byte 52 needs at least 12 bytes, 10 left");
+  }
+}
+
+// A sequence count larger than the bytes left (a float64[] or a message array) is refused as it is read,
+// before a vector of that many elements is allocated.
+TEST(CdrMessages, SequenceLongerThanItsBytesIsRefusedBeforeItIsAllocated) {
+  CdrMessage info("camera_info", "sensor_msgs/CameraInfo");
+  const std::size_t d = 48;  // D's count: after the header, height, width and "plumb_bob" (padded to 4)
+  ASSERT_EQ(info.bytes[d], info.v["d"].size());
+  info.bytes[d] = info.bytes[d + 1] = info.bytes[d + 2] = 0xff;
+  info.bytes[d + 3] = 0x7f;
+  const std::size_t size = info.bytes.size();
+  try {
+    decodeCameraInfo(info.message);
+    FAIL() << "expected an IoError";
+  } catch (const IoError& e) {
+    EXPECT_EQ(std::string(e.what()), "topic /camera_info, message at byte 4242: sensor_msgs/CameraInfo.D: CDR message: "
+                                     "sequence of 2147483647 elements at byte 52 needs at least 2147483647 bytes, " +
+                                         std::to_string(size - d - 4) + " left");
+  }
+  CdrMessage tf("tf_message", "tf2_msgs/TFMessage");
+  ASSERT_EQ(tf.bytes[4], tf.v["transforms"].size());  // the count of transforms, first after the encapsulation
+  tf.bytes[4] = tf.bytes[5] = tf.bytes[6] = tf.bytes[7] = 0xff;
+  try {
+    decodePose(tf.message, "world", "cam0");
+    FAIL() << "expected an IoError";
+  } catch (const IoError& e) {
+    EXPECT_EQ(std::string(e.what()), "topic /tf_message, message at byte 4242: tf2_msgs/TFMessage.transforms: CDR message: "
+                                     "sequence of 4294967295 elements at byte 8 needs at least 4294967295 bytes, " +
+                                         std::to_string(tf.bytes.size() - 8) + " left");
   }
 }
 
