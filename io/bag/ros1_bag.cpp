@@ -20,6 +20,15 @@ constexpr std::uint8_t kOpMessage = 0x02, kOpBagHeader = 0x03, kOpIndex = 0x04, 
 // A chunk's uncompressed size above this is damage, not a recording (rosbag writes 768 KiB chunks, or
 // one message if it is larger; no ROS message is 1 GiB).
 constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{1} << 30;
+// A compressed chunk's output buffer starts at its declared size only up to this many times its stored
+// bytes, then grows as the data decode: a damaged size field (1 GiB on a chunk of 100 bytes) allocates
+// nothing before the data show it, and a chunk that does compress further costs a few reallocations.
+constexpr std::uint64_t kPresizeRatio = 64;
+
+// The first size of the output buffer of `stored` compressed bytes that say they decode to `expected`.
+std::uint64_t initialOutputBytes(std::uint64_t expected, std::size_t stored) {
+  return std::max<std::uint64_t>(std::min<std::uint64_t>(expected, kPresizeRatio * stored), 1 << 16);
+}
 
 template <class T>
 T loadLe(const std::uint8_t* p) {
@@ -77,7 +86,7 @@ bool inflateBz2(const std::vector<std::uint8_t>& in, std::uint64_t expected, std
                 const std::string& what) {
   bz_stream s{};
   if (BZ2_bzDecompressInit(&s, 0, 0) != BZ_OK) throw IoError(what + ": bz2 decoder failed to start");
-  out.resize(std::max<std::uint64_t>(expected, 1 << 16));
+  out.resize(initialOutputBytes(expected, in.size()));
   s.next_in = const_cast<char*>(reinterpret_cast<const char*>(in.data()));
   s.avail_in = static_cast<unsigned>(in.size());
   std::size_t produced = 0;
@@ -110,7 +119,7 @@ bool inflateLz4(const std::vector<std::uint8_t>& in, std::uint64_t expected, std
   if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) {
     throw IoError(what + ": lz4 decoder failed to start");
   }
-  out.resize(std::max<std::uint64_t>(expected, 1 << 16));
+  out.resize(initialOutputBytes(expected, in.size()));
   std::size_t consumed = 0, produced = 0;
   std::size_t hint = 1;
   bool error = false;

@@ -3,11 +3,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -216,6 +218,43 @@ TEST(Ros1Bag, CorruptBz2ChunkIsSkippedNamingItsOffsetAndTopics) {
   }
   EXPECT_EQ(k, got.size());
   EXPECT_EQ(bag.truncation(), "");
+}
+
+// A chunk whose size field says 1 GiB but whose data decode to a few KiB is damage like any other, found
+// by decoding the data; its buffer grows with what decodes, never to the size the field claims.
+TEST(Ros1Bag, ChunkSizeFieldBeyondItsDataIsSkippedWithoutAllocatingIt) {
+  const std::uint32_t claimed = (std::uint32_t{1} << 30) - 1;  // just within the 1 GiB a chunk may hold
+  for (const char* c : {"bz2", "lz4"}) {
+    const std::string name = std::string("seq_") + c + ".bag";
+    const nlohmann::json x = expected().at(name);
+    const std::uint64_t chunk = x.at("middle_chunk_pos");
+    const fs::path path = test::freshScratchDirectory(std::string("huge_size_") + c) / "huge.bag";
+    fs::copy_file(bagDir() / name, path);
+    std::uint32_t size = 0;
+    {
+      std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+      std::string head(256, '\0');
+      f.seekg(static_cast<std::streamoff>(chunk));
+      f.read(head.data(), static_cast<std::streamsize>(head.size()));
+      const std::size_t at = head.find("size=") + 5;  // the chunk header's uncompressed size
+      std::memcpy(&size, head.data() + at, sizeof size);
+      f.seekp(static_cast<std::streamoff>(chunk + at));
+      f.write(reinterpret_cast<const char*>(&claimed), sizeof claimed);
+    }
+    rusage before{};
+    getrusage(RUSAGE_SELF, &before);
+    Ros1Bag bag(path);
+    readAll(bag);
+    rusage after{};
+    getrusage(RUSAGE_SELF, &after);
+    ASSERT_EQ(bag.skipped().size(), 1u) << c;
+    EXPECT_THAT(bag.skipped()[0],
+                testing::StartsWith("bag " + path.string() + ", byte " + std::to_string(chunk) + " (chunk): " + c +
+                                    " data are corrupt (" + std::to_string(size) + " of " + std::to_string(claimed) +
+                                    " bytes decoded); skipped the chunk (of its "))
+        << c;
+    EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 256 * 1024) << c << ": peak resident KiB grew";
+  }
 }
 
 TEST(Ros1Bag, NotABagAndMissingFileAreNamed) {
