@@ -273,6 +273,9 @@ void Ros1Bag::readIndex(std::uint64_t index_pos) {
       if (!readFileRecord(pos, r, false) || r.op != kOpIndex) break;
       const auto c = connections_.find(field<std::uint32_t>(r.fields, "conn", where(pos)));
       if (c == connections_.end()) throw IoError(where(pos) + ": index names an unknown connection");
+      if (r.data_len > file_size_ - r.data_pos) {  // before the buffer: a damaged length is up to 4 GiB
+        throw IoError(where(pos) + ": record data of " + std::to_string(r.data_len) + " bytes runs past the file");
+      }
       data.resize(r.data_len);
       readAt(r.data_pos, data.data(), data.size());
       TopicInfo& t = topics_[c->second.topic];

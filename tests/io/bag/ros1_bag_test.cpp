@@ -257,6 +257,34 @@ TEST(Ros1Bag, ChunkSizeFieldBeyondItsDataIsSkippedWithoutAllocatingIt) {
   }
 }
 
+// The index records after a chunk, read when the bag is opened for each topic's first and last time: a
+// data length past the end of the file is an error naming the record, not a buffer of that length.
+TEST(Ros1Bag, IndexRecordLongerThanTheFileIsAnIoErrorNamingIt) {
+  const nlohmann::json x = expected().at("seq_none.bag");
+  const fs::path path = test::freshScratchDirectory("long_index_record") / "long.bag";
+  fs::copy_file(bagDir() / "seq_none.bag", path);
+  std::uint64_t index_record = 0;
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    auto u32At = [&](std::uint64_t at) {
+      std::uint32_t v = 0;
+      f.seekg(static_cast<std::streamoff>(at));
+      f.read(reinterpret_cast<char*>(&v), sizeof v);
+      return v;
+    };
+    // The record after the middle chunk's data (u32 length before them): its header, then its data length.
+    const std::uint64_t data_pos = x.at("middle_chunk_data_pos");
+    index_record = data_pos + u32At(data_pos - 4);
+    const std::uint64_t data_len_at = index_record + 4 + u32At(index_record);
+    const std::uint32_t huge = 0xffffffff;
+    f.seekp(static_cast<std::streamoff>(data_len_at));
+    f.write(reinterpret_cast<const char*>(&huge), sizeof huge);
+  }
+  EXPECT_THAT([&] { Ros1Bag bag(path); },
+              testing::ThrowsMessage<IoError>("bag " + path.string() + ", byte " + std::to_string(index_record) +
+                                              ": record data of 4294967295 bytes runs past the file"));
+}
+
 TEST(Ros1Bag, NotABagAndMissingFileAreNamed) {
   const fs::path dir = test::freshScratchDirectory("not_a_bag");
   std::ofstream(dir / "x.bag") << "hello world, not a bag at all";
