@@ -15,7 +15,9 @@
 
 namespace cenote::io {
 
-/// Decompresses `in` (one or more zstd frames) into `out` (resized to the decompressed bytes).
+/// Decompresses `in` (one or more zstd frames) into `out` (resized to the decompressed bytes). `out` grows
+/// with what decodes: a frame's declared content size is allocated up front only when its bytes could
+/// plausibly hold it.
 /// @throws IoError "zstd: <reason>" for data that is not zstd, is cut short or exceeds `max_bytes`.
 void zstdDecompress(std::span<const std::uint8_t> in, std::vector<std::uint8_t>& out,
                     std::size_t max_bytes = std::size_t{1} << 30);
