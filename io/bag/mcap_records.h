@@ -6,7 +6,6 @@
 
 #include <libdeflate.h>
 #include <lz4frame.h>
-#include <zstd.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -20,12 +19,17 @@
 #include <vector>
 
 #include "common/error.h"
+#include "io/bag/zstd_stream.h"
 
 namespace cenote::io::detail {
 
 inline constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 inline constexpr std::uint64_t kRecordHeader = 9;                        // opcode u8 + content length u64
 inline constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{1} << 30;  // compressed or uncompressed
+// An LZ4 chunk's buffer starts at its declared size only up to this many times its stored bytes, then grows
+// as they decode: a damaged size allocates nothing of its own, a chunk that compresses further costs a few
+// reallocations.
+inline constexpr std::uint64_t kPresizeRatio = 64;
 
 enum Opcode : std::uint8_t {
   kHeader = 0x01,
@@ -253,20 +257,24 @@ class RecordCursor {
     if (h.uncompressed_size > kMaxChunkBytes)
       throw Malformed{std::to_string(h.uncompressed_size) +
                       " uncompressed bytes are more than the 1 GiB this reader holds"};
-    chunk_.resize(h.uncompressed_size);
+    // chunk_ holds what the records decode to, never the declared size before the data show it: a
+    // damaged size field (a gigabyte on a chunk of a hundred bytes) must not allocate it.
     if (h.compression.empty()) {
       if (records.size() != h.uncompressed_size)
         throw Malformed{"uncompressed chunk of " + std::to_string(records.size()) + " bytes declares " +
                         std::to_string(h.uncompressed_size)};
-      std::copy(records.begin(), records.end(), chunk_.begin());
+      chunk_.assign(records.begin(), records.end());
     } else if (h.compression == "zstd") {
-      const std::size_t n = ZSTD_decompress(chunk_.data(), chunk_.size(), records.data(), records.size());
-      if (ZSTD_isError(n)) throw Malformed{std::string("zstd: ") + ZSTD_getErrorName(n)};
-      if (n != h.uncompressed_size)
-        throw Malformed{"zstd gave " + std::to_string(n) + " bytes, the chunk declares " +
+      try {
+        zstdDecompress(records, chunk_, kMaxChunkBytes);
+      } catch (const IoError& e) {
+        throw Malformed{e.what()};
+      }
+      if (chunk_.size() != h.uncompressed_size)
+        throw Malformed{"zstd gave " + std::to_string(chunk_.size()) + " bytes, the chunk declares " +
                         std::to_string(h.uncompressed_size)};
     } else if (h.compression == "lz4") {
-      lz4Frame(records);
+      lz4Frame(records, h.uncompressed_size);
     } else {  // not damage of this chunk: an error, not a skip
       fail(at, "chunk: unknown compression '" + h.compression + "' (this reader reads none, zstd and lz4)");
     }
@@ -297,13 +305,18 @@ class RecordCursor {
     }
   }
 
-  void lz4Frame(std::span<const std::uint8_t> src) {
+  // The LZ4 frame `src` into chunk_, which starts at the `declared` size only up to kPresizeRatio times
+  // the frame's bytes and grows (up to `declared`) as they decode.
+  void lz4Frame(std::span<const std::uint8_t> src, std::uint64_t declared) {
     LZ4F_dctx* ctx = nullptr;
     if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) throw Malformed{"lz4: no context"};
+    chunk_.resize(std::min<std::uint64_t>(declared, kPresizeRatio * src.size()));
     std::size_t in_done = 0;
     std::size_t out_done = 0;
     std::size_t ret = 1;
     while (ret != 0 && in_done < src.size()) {
+      if (out_done == chunk_.size() && chunk_.size() < declared)
+        chunk_.resize(std::min<std::uint64_t>(std::max<std::uint64_t>(2 * chunk_.size(), 1 << 16), declared));
       std::size_t in_n = src.size() - in_done;
       std::size_t out_n = chunk_.size() - out_done;
       ret = LZ4F_decompress(ctx, chunk_.data() + out_done, &out_n, src.data() + in_done, &in_n, nullptr);
@@ -316,9 +329,9 @@ class RecordCursor {
       if (in_n == 0 && out_n == 0) break;
     }
     LZ4F_freeDecompressionContext(ctx);
-    if (ret != 0 || out_done != chunk_.size())
+    if (ret != 0 || out_done != declared)
       throw Malformed{"lz4 frame gave " + std::to_string(out_done) + " bytes" + (ret != 0 ? " and is incomplete" : "") +
-                      ", the chunk declares " + std::to_string(chunk_.size())};
+                      ", the chunk declares " + std::to_string(declared)};
   }
 
   bool nextInChunk(RawMessage& out) {

@@ -2,10 +2,11 @@
 // topics, counts, time spans and every message's bytes against what the generator wrote
 // (expected.json), for chunks uncompressed, zstd and lz4, unchunked files and files without a summary;
 // files cut short (inside a compressed chunk, inside an uncompressed one, between records); a CRC
-// mismatch and an unknown compression with their exact error text.
+// mismatch, a chunk size field beyond its records and an unknown compression with their exact error text.
 #include "io/bag/mcap_recording.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -204,6 +205,42 @@ TEST(McapRecording, CrcMismatchSkipsTheChunkAndNamesIt) {
   EXPECT_EQ(skipped[0].substr(0, damage.size()), damage);
   for (const auto& [topic, n] : held)
     EXPECT_NE(skipped[0].find(std::to_string(n) + " on " + topic), std::string::npos) << skipped[0];
+}
+
+// A chunk's uncompressed size field set to 1 GiB (the most a chunk may hold) on a chunk of a few hundred
+// bytes: the chunk is damaged like any other, found by decoding its records, and its buffer never takes
+// the size the field claims.
+TEST(McapRecording, ChunkSizeFieldBeyondItsRecordsSkipsTheChunkWithoutAllocatingIt) {
+  const std::uint64_t claimed = std::uint64_t{1} << 30;
+  const std::map<std::string, std::string> damage = {{"dive_none", "uncompressed chunk of N bytes declares "},
+                                                     {"dive_zstd", "zstd gave N bytes, the chunk declares "},
+                                                     {"dive_lz4", "lz4 frame gave N bytes, the chunk declares "}};
+  for (const auto& [name, what] : damage) {
+    Bytes file = readFile(kData / (name + ".mcap"));
+    const std::vector<Chunk> c = chunks(name);
+    const std::size_t at = c[3].start + 9 + 8 + 8;  // after opcode, length, message start and end time
+    std::uint64_t size = 0;
+    for (int i = 0; i < 8; ++i) {
+      size |= std::uint64_t{file[at + i]} << (8 * i);
+      file[at + i] = static_cast<std::uint8_t>(claimed >> (8 * i));
+    }
+    const fs::path path = writeFile("huge_" + name + ".mcap", file, file.size());
+    rusage before{};
+    getrusage(RUSAGE_SELF, &before);
+    const std::unique_ptr<Recording> rec = openMcapRecording(path);
+    const std::vector<Message> got = readAll(*rec);
+    rusage after{};
+    getrusage(RUSAGE_SELF, &after);
+    EXPECT_EQ(got.size(), expectedMessages().size() - (messagesBeforeChunk(name, 4) - messagesBeforeChunk(name, 3)))
+        << name << ": every message but chunk 3's";
+    ASSERT_EQ(rec->skipped().size(), 1u) << name;
+    std::string want = what;
+    want.replace(want.find('N'), 1, std::to_string(size));
+    want = path.string() + ": chunk at byte " + std::to_string(c[3].start) + ": " + want + std::to_string(claimed) +
+           "; skipped the chunk (of its ";
+    EXPECT_EQ(rec->skipped()[0].substr(0, want.size()), want) << name;
+    EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 256 * 1024) << name << ": peak resident KiB grew";
+  }
 }
 
 TEST(McapRecording, UnknownCompressionNamesTheFileAndTheChunk) {
