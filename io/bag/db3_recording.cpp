@@ -15,6 +15,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Throws NotFoundError when `file` (named `name` in the message) does not exist, IoError with the reason
+// when its name cannot even be looked up (a metadata.yaml may list any name, one too long for the file
+// system among them: std::filesystem's throwing overloads would throw their own filesystem_error).
+void requireFile(const fs::path& file, const std::string& name) {
+  std::error_code ec;
+  if (fs::exists(file, ec)) return;
+  if (ec) throw IoError("cannot read ROS 2 bag file " + name + ": " + ec.message());
+  throw NotFoundError("cannot read ROS 2 bag file " + name + ": no such file");
+}
+
 // A prepared statement, finalised when it goes: sqlite3_close leaves a connection with a statement
 // still open (and its file with it) open.
 struct FinalizeStatement {
@@ -27,7 +37,7 @@ class Database {
  public:
   // Opens `path`; errors name `name` (the bag's file when `path` is its decompressed copy).
   explicit Database(const fs::path& path, const fs::path& name = {}) : path_(name.empty() ? path.string() : name.string()) {
-    if (!fs::exists(path)) throw NotFoundError("cannot read ROS 2 bag file " + path_ + ": no such file");
+    requireFile(path, path_);
     if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
       const IoError error = failure("cannot open");
       sqlite3_close(db_);  // sqlite hands out a connection even when the open fails
@@ -151,7 +161,7 @@ class Db3Recording final : public Recording {
   // A FILE-compressed file's (.zstd) decompressed copy in the temporary folder; null for a plain file.
   static std::unique_ptr<TempFile> decompressedCopy(const fs::path& file) {
     if (file.extension() != ".zstd") return nullptr;
-    if (!fs::exists(file)) throw NotFoundError("cannot read ROS 2 bag file " + file.string() + ": no such file");
+    requireFile(file, file.string());
     auto copy = std::make_unique<TempFile>(file.stem().string());
     zstdDecompressFile(file, copy->path());
     return copy;

@@ -225,6 +225,32 @@ TEST(Db3Recording, DamagedCompressionNamesTheFileTheMessageOrTheCut) {
   }
 }
 
+// metadata.yaml may list any name: one too long for the file system is an IoError with the system's reason,
+// plain or compressed by file.
+TEST(Db3Recording, ListedFileNameTooLongIsAnIoErrorNamingIt) {
+  const fs::path bag = fs::path(::testing::TempDir()) / "name_too_long";
+  fs::create_directories(bag);
+  const std::string stem(300, 'a');  // above NAME_MAX (255)
+  for (const std::string& mode : {std::string("\"\""), std::string("FILE")}) {
+    const std::string name = stem + (mode == "FILE" ? ".db3.zstd" : ".db3");
+    std::ofstream(bag / "metadata.yaml") << "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n"
+                                            "  compression_format: "
+                                         << (mode == "FILE" ? "zstd" : "\"\"") << "\n  compression_mode: " << mode
+                                         << "\n  starting_time: {nanoseconds_since_epoch: 0}\n  duration: {nanoseconds: 0}"
+                                            "\n  topics_with_message_count: []\n  relative_file_paths: ["
+                                         << name << "]\n";
+    try {
+      const std::unique_ptr<Recording> rec = openDb3Recording(bag);
+      RecordedMessage m;
+      rec->next({}, m);  // a FILE-compressed bag opens its files as reading reaches them
+      FAIL() << "expected an IoError (" << mode << ")";
+    } catch (const IoError& e) {
+      EXPECT_EQ(std::string(e.what()), "cannot read ROS 2 bag file " + (bag / name).string() + ": File name too long")
+          << mode;
+    }
+  }
+}
+
 TEST(Db3Recording, MetadataThatIsNotAMappingNamesTheFile) {
   const fs::path bag = fs::path(::testing::TempDir()) / "scalar_metadata";
   fs::create_directories(bag);
