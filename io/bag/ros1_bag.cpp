@@ -175,6 +175,7 @@ Ros1Bag::Ros1Bag(const std::filesystem::path& path) : path_(path) {
     }
     if (index_pos_ == 0) scan();
     pos_ = first_record;
+    opened_ = true;
   } catch (...) {
     std::fclose(file_);
     file_ = nullptr;
@@ -223,6 +224,10 @@ void Ros1Bag::addConnection(std::uint32_t conn, const std::string& topic, const 
   if (connections_.count(conn)) return;
   const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == topic; });
   std::size_t index = static_cast<std::size_t>(it - topics_.begin());
+  if (it == topics_.end() && opened_) {  // a new topic now would move the topics callers point to
+    connections_[conn].topic = Connection::kNoTopic;
+    return;
+  }
   if (it == topics_.end()) {
     TopicInfo info;
     info.name = topic;
@@ -308,6 +313,10 @@ std::vector<Ros1Bag::IndexEntries> Ros1Bag::indexAfter(const Record& chunk) {
     if (!readFileRecord(pos, r, true) || r.op != kOpIndex || r.data_pos + r.data_len > file_size_) break;
     const auto c = connections_.find(field<std::uint32_t>(r.fields, "conn", where(pos)));
     if (c == connections_.end()) return {};  // a connection first defined inside this chunk
+    if (c->second.topic == Connection::kNoTopic) {
+      pos = r.data_pos + r.data_len;
+      continue;
+    }
     data.resize(r.data_len);
     readAt(r.data_pos, data.data(), data.size());
     IndexEntries e{c->second.topic, 0, 0, 0};
@@ -449,7 +458,7 @@ bool Ros1Bag::next(const std::vector<std::string>& wanted, RecordedMessage& out)
         } else if (op == kOpMessage) {
           const auto c = connections_.find(field<std::uint32_t>(fields, "conn", what));
           if (c == connections_.end()) throw IoError(what + ": message of a connection the bag never defines");
-          if (!wanted_topics_[c->second.topic]) continue;
+          if (c->second.topic == Connection::kNoTopic || !wanted_topics_[c->second.topic]) continue;
           out.topic = &topics_[c->second.topic];
           out.log_time_ns = timeNs(field<std::uint64_t>(fields, "time", what));
           out.data = std::span<const std::uint8_t>(data, data_len);

@@ -12,6 +12,8 @@
 // records are malformed, is stepped over: skipped() names it, its offset and the messages it held
 // (from the index records after it), and reading goes on with the next chunk. An unknown
 // compression or a malformed record outside chunks is an IoError naming the file and the byte offset.
+// topics() is complete once the bag is open: a connection of a new topic that a chunk defines later
+// (one the index does not list) is not a topic, and its messages are stepped over.
 // Threads: one user at a time.
 #pragma once
 
@@ -49,7 +51,8 @@ class Ros1Bag final : public Recording {
 
  private:
   struct Connection {
-    std::size_t topic = 0;  // index in topics_
+    static constexpr std::size_t kNoTopic = static_cast<std::size_t>(-1);
+    std::size_t topic = 0;  // index in topics_; kNoTopic: first defined after open, its messages stepped over
   };
   // One record's header fields and where its data lie.
   struct Record {
@@ -97,6 +100,7 @@ class Ros1Bag final : public Recording {
   Record chunk_record_;                           // of the current chunk
   std::string stop_;                              // where the scan stopped, the start of truncation_
   bool scanning_ = false;
+  bool opened_ = false;  // topics_ is complete: callers hold pointers into it
   std::uint64_t scanned_messages_ = 0;
 
   // Reading position: the next top-level record, and inside the current chunk.

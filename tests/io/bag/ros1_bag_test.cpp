@@ -285,6 +285,25 @@ TEST(Ros1Bag, IndexRecordLongerThanTheFileIsAnIoErrorNamingIt) {
                                               ": record data of 4294967295 bytes runs past the file"));
 }
 
+// A connection that a chunk defines but the index does not list would be a new topic while reading, and
+// a run holds pointers to the topics (its left topic, each image's topic): the topics stay those of the
+// open, the new connection is not one, and every message of the others is read.
+TEST(Ros1Bag, ConnectionTheIndexDoesNotListAddsNoTopicWhileReading) {
+  Ros1Bag bag(bagDir() / "unindexed_connection.bag");
+  const std::vector<TopicInfo>& topics = bag.topics();
+  ASSERT_EQ(topics.size(), 2u);
+  const TopicInfo* const first = topics.data();
+  Ros1Bag whole(bagDir() / "seq_none.bag");
+  const std::vector<Copied> got = readAll(bag), all = readAll(whole);
+  EXPECT_EQ(bag.topics().data(), first);
+  ASSERT_EQ(bag.topics().size(), 2u);
+  EXPECT_EQ(bag.topics()[0].name, "/cam/image");
+  EXPECT_EQ(bag.topics()[1].name, "/odom");
+  ASSERT_EQ(got.size(), all.size());
+  for (std::size_t i = 0; i < got.size(); ++i) ASSERT_EQ(got[i].data, all[i].data) << "message " << i;
+  EXPECT_TRUE(bag.skipped().empty());
+}
+
 TEST(Ros1Bag, NotABagAndMissingFileAreNamed) {
   const fs::path dir = test::freshScratchDirectory("not_a_bag");
   std::ofstream(dir / "x.bag") << "hello world, not a bag at all";

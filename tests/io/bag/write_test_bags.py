@@ -11,6 +11,8 @@ Usage: write_test_bags.py OUT_DIR. Writes:
   crashed_{none,bz2,lz4}.bag  cut as a killed recorder leaves them: index_pos 0 in the bag header,
                         data length and size 0 in the header of the chunk being written
   zstd.bag              seq_none.bag with its first chunk's compression renamed 'zstd'
+  unindexed_connection.bag  seq_none.bag whose first chunk defines a connection (id 99, /cam/imagX) that
+                        the index does not list
   expected.json         for each cut bag: its size, the cut chunk's position and the number of
                         complete messages before the cut, from rosbag's own index
 """
@@ -237,6 +239,27 @@ for compression in ("none", "bz2", "lz4"):
         with open(os.path.join(out, "zstd.bag"), "wb") as f:
             f.write(zstd)
         expected["zstd.bag"] = {"first_chunk_pos": chunks[0].pos}
+        # The first connection record inside the first chunk given an id (99) and a topic (/cam/imagX) the
+        # index does not list; the chunk's messages keep their connections.
+        unindexed = bytearray(raw)
+        at = headers[chunks[0].pos].data_pos
+        while True:
+            header_len = struct.unpack_from("<I", unindexed, at)[0]
+            fields, k = {}, at + 4
+            while k < at + 4 + header_len:
+                n = struct.unpack_from("<I", unindexed, k)[0]
+                name = bytes(unindexed[k + 4:k + 4 + n]).split(b"=", 1)[0]
+                fields[name] = (k + 4 + len(name) + 1, n - len(name) - 1)  # where the value is
+                k += 4 + n
+            if unindexed[fields[b"op"][0]] == 0x07:
+                struct.pack_into("<I", unindexed, fields[b"conn"][0], 99)
+                start, n = fields[b"topic"]
+                assert unindexed[start:start + n] == b"/cam/image"
+                unindexed[start + n - 1:start + n] = b"X"
+                break
+            at += 4 + header_len + 4 + struct.unpack_from("<I", unindexed, at + 4 + header_len)[0]
+        with open(os.path.join(out, "unindexed_connection.bag"), "wb") as f:
+            f.write(unindexed)
 
 with open(os.path.join(out, "expected.json"), "w") as f:
     json.dump(expected, f, indent=1)
