@@ -3,6 +3,8 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <charconv>
+#include <limits>
 #include <regex>
 
 #include "common/error.h"
@@ -248,7 +250,15 @@ std::vector<fs::path> db3FilesIn(const fs::path& folder) {
     if (!e.is_regular_file() || !isDb3FileName(e.path())) continue;
     std::smatch m;
     const std::string name = e.path().filename().string();
-    found.emplace_back(std::regex_search(name, m, index) ? std::stoll(m[1]) : -1, e.path());
+    long long i = -1;
+    if (std::regex_search(name, m, index)) {
+      // More digits than a long long holds (no recorder writes them) sort after every other file, where
+      // std::stoll would throw std::out_of_range.
+      const std::string digits = m[1];
+      if (std::from_chars(digits.data(), digits.data() + digits.size(), i).ec != std::errc())
+        i = std::numeric_limits<long long>::max();
+    }
+    found.emplace_back(i, e.path());
   }
   std::sort(found.begin(), found.end());
   std::vector<fs::path> files;

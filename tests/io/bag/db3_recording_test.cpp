@@ -71,6 +71,19 @@ TEST(Db3Recording, ABagWithoutMetadataIsReadFromItsFilesAndSaysSo) {
   expectBag("dive_db3_cut", "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder", "");
 }
 
+// The files of a folder without metadata.yaml come in the order of their index numbers; one with more
+// digits than a long long holds comes after the others.
+TEST(Db3Recording, FileIndexBeyondALongLongIsReadLast) {
+  const fs::path bag = fs::path(::testing::TempDir()) / "huge_index";
+  fs::remove_all(bag);
+  fs::create_directories(bag);
+  fs::copy_file(kData / "dive_db3_cut" / "dive_db3_1.db3", bag / "dive_db3_99999999999999999999.db3");
+  fs::copy_file(kData / "dive_db3_cut" / "dive_db3_0.db3", bag / "dive_db3_0.db3");
+  const std::unique_ptr<Recording> rec = openDb3Recording(bag);
+  EXPECT_EQ(rec->truncation(), "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder");
+  expectMessages(*rec, expectedJson()["messages"], {});
+}
+
 TEST(Db3Recording, OneDb3FileOnItsOwn) {
   const nlohmann::json want = expectedJson();
   const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3" / "dive_db3_0.db3");
