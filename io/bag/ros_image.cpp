@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "common/error.h"
+#include "io/image/image_header.h"
 #include "io/image/opencv_codecs.h"
 #include "io/image/png_decoder.h"
 
@@ -124,8 +125,16 @@ cv::Mat compressedImageToMat(const RosCompressedImage& image, const std::string&
   const std::string where = "topic " + topic + ": compressed image (format '" + image.format + "', " +
                             std::to_string(d.size()) + " bytes)";
   if (!png && !jpeg) throw Error(where + " is neither JPEG nor PNG");
+  // The header and the data's bound first (image_header.h): a decoder allocates the pixels a header
+  // claims before it reads the data, and a few KB that claim 30000x30000 would cost it 900 MB.
+  if (png) {
+    checkPngStructure(d.data(), d.size(), where);
+  } else if (const ImageHeader header = readImageHeader(d.data(), d.size(), where); !header.dataCanHold()) {
+    throw Error(where + ": JPEG claims " + std::to_string(header.width) + "x" + std::to_string(header.height) +
+                " pixels, more than its " + std::to_string(header.data_bytes) + " bytes of data can hold");
+  }
   cv::Mat out;
-  if (png) out = decodePngFast(d.data(), d.size());
+  if (png) out = decodePngFast(d.data(), d.size(), ChunkCrc::kAlreadyChecked);
   if (out.empty()) {
     out = opencvDecode(d.data(), d.size(), cv::IMREAD_UNCHANGED);
   }

@@ -24,7 +24,8 @@ namespace cenote::io {
 ///         YUV 4:2:2 of an odd width.
 cv::Mat imageToMat(const RosImage& image, const std::string& topic);
 
-/// @throws Error naming the topic and the format string when the bytes are neither JPEG nor PNG,
+/// @throws Error naming the topic and the format string when the bytes are neither JPEG nor PNG, claim
+///         more pixels than their data can hold (io/image/image_header.h: checked before decoding),
 ///         cannot be decoded, or are neither 8 nor 16 bits a sample.
 cv::Mat compressedImageToMat(const RosCompressedImage& image, const std::string& topic);
 

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <zlib.h>
 
 #include "common/error.h"
 #include "io/bag/recording.h"
@@ -428,6 +429,46 @@ TEST(RosMessages, CompressedImagesAreDecodedByTheirBytesNotTheFormatString) {
   EXPECT_THAT(
       [&] { compressedImageToMat(junk, "/cam/png"); },
       testing::ThrowsMessage<Error>("topic /cam/png: compressed image (format 'png', 8 bytes) is neither JPEG nor PNG"));
+}
+
+// A header that claims more pixels than the image's data can hold (image_header.h's bounds) is refused
+// before a decoder allocates them: 30000x30000 on the 6x8 images is 900 MB to OpenCV.
+TEST(RosMessages, CompressedImageClaimingMorePixelsThanItsDataHoldIsRefusedBeforeDecoding) {
+  const OneMessage png_message("/cam/png"), jpeg_message("/cam/jpeg");
+  RosCompressedImage png = decodeCompressedImage(*png_message), jpeg = decodeCompressedImage(*jpeg_message);
+  std::vector<std::uint8_t> png_bytes(png.data.begin(), png.data.end()), jpeg_bytes(jpeg.data.begin(), jpeg.data.end());
+  auto put16 = [](std::uint8_t* p, std::uint32_t v) { p[0] = v >> 8, p[1] = v & 0xff; };
+  auto put32 = [](std::uint8_t* p, std::uint32_t v) {
+    p[0] = v >> 24, p[1] = (v >> 16) & 0xff, p[2] = (v >> 8) & 0xff, p[3] = v & 0xff;
+  };
+  // PNG: IHDR's width and height (bytes 16..23), its CRC (29..32) made right again.
+  put32(&png_bytes[16], 30000);
+  put32(&png_bytes[20], 30000);
+  put32(&png_bytes[29], static_cast<std::uint32_t>(crc32(0, &png_bytes[12], 17)));
+  // JPEG: the baseline frame header (FF C0, length, precision, height, width).
+  const std::uint8_t kSof0[] = {0xff, 0xc0};
+  const std::size_t sof = static_cast<std::size_t>(
+      std::search(jpeg_bytes.begin(), jpeg_bytes.end(), std::begin(kSof0), std::end(kSof0)) - jpeg_bytes.begin());
+  ASSERT_LT(sof, jpeg_bytes.size());
+  put16(&jpeg_bytes[sof + 5], 30000);
+  put16(&jpeg_bytes[sof + 7], 30000);
+  const std::size_t after_frame_header = sof + 2 + (jpeg_bytes[sof + 2] << 8 | jpeg_bytes[sof + 3]);
+  png.data = png_bytes;
+  jpeg.data = jpeg_bytes;
+  rusage before{};
+  getrusage(RUSAGE_SELF, &before);
+  EXPECT_THAT([&] { compressedImageToMat(png, "/cam/png"); },
+              testing::ThrowsMessage<Error>(testing::StartsWith(
+                  "topic /cam/png: compressed image (format 'png', " + std::to_string(png_bytes.size()) +
+                  " bytes): PNG claims 30000x30000 pixels, 900030000 bytes inflated, but its ")));
+  EXPECT_THAT([&] { compressedImageToMat(jpeg, "/cam/jpeg"); },
+              testing::ThrowsMessage<Error>(
+                  "topic /cam/jpeg: compressed image (format 'mono8; jpeg compressed bgr8', " +
+                  std::to_string(jpeg_bytes.size()) + " bytes): JPEG claims 30000x30000 pixels, more than its " +
+                  std::to_string(jpeg_bytes.size() - after_frame_header) + " bytes of data can hold"));
+  rusage after{};
+  getrusage(RUSAGE_SELF, &after);
+  EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 256 * 1024) << "peak resident KiB grew";
 }
 
 TEST(RosMessages, CameraInfoFieldsAsWritten) {
