@@ -3,9 +3,10 @@
 independent writer, with the harness's first byte in front (0: one file; 1: a ROS 2 bag folder,
 metadata.yaml NUL file name NUL file bytes):
 
-  ros1_{images,poses}_{none,bz2,lz4}.bag  ROS's own rosbag (python3-rosbag): mono8 and bgr8 images, a PNG
-                       (OpenCV) and a JPEG CompressedImage, a CameraInfo; Odometry, PoseStamped,
-                       TransformStamped and a TFMessage; small chunks, so that there are several
+  ros1_{images,poses,encodings}_{none,bz2,lz4}.bag  ROS's own rosbag (python3-rosbag): mono8 and bgr8
+                       images, a PNG (OpenCV) and a JPEG CompressedImage, a CameraInfo; Odometry,
+                       PoseStamped, TransformStamped and a TFMessage; Bayer, 16-bit, RGBA and YUV 4:2:2
+                       images; small chunks, so that there are several
   ros1_cut_lz4.bag     ros1_images_lz4.bag cut inside its last chunk (no index); ros1_crashed_lz4.bag the
                        same as a killed recorder leaves it (index_pos 0, the open chunk's sizes 0)
   mcap_*.mcap          the MCAP team's writer (@mcap/core) and Foxglove's CDR serialiser, as the io/bag
@@ -107,6 +108,17 @@ def images_bag(path, compression):
                 bag.write("/cam1/image_raw/compressed", compressed(".jpg", "mono8; jpeg compressed bgr8", i), t(i))
 
 
+def encodings_bag(path, compression):
+    """One small image in each kind of encoding sensor_msgs/Image has beyond 8-bit grey and colour."""
+    with rosbag.Bag(path, "w", compression=compression, chunk_threshold=1024) as bag:
+        for i, (encoding, channels, sample_bytes, bigendian) in enumerate(
+                (("bayer_rggb8", 1, 1, 0), ("bayer_grbg16", 1, 2, 1), ("mono16", 1, 2, 0), ("rgb16", 3, 2, 1),
+                 ("rgba8", 4, 1, 0), ("yuv422", 2, 1, 0), ("yuyv", 2, 1, 0))):
+            m = image(encoding, 4, 4, channels * sample_bytes, i)
+            m.is_bigendian = bigendian
+            bag.write("/cam%d/image_raw" % i, m, t(i))
+
+
 def poses_bag(path, compression):
     with rosbag.Bag(path, "w", compression=compression, chunk_threshold=1024) as bag:
         for i in range(3):
@@ -126,7 +138,7 @@ def poses_bag(path, compression):
 
 
 for compression in ("none", "bz2", "lz4"):
-    for kind, writer in (("images", images_bag), ("poses", poses_bag)):
+    for kind, writer in (("images", images_bag), ("poses", poses_bag), ("encodings", encodings_bag)):
         path = os.path.join(out, "ros1_%s_%s.bag" % (kind, compression))
         writer(path, compression)
         data = read(path)
