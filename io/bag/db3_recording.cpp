@@ -3,7 +3,9 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
+#include <cstdio>
 #include <limits>
 #include <regex>
 
@@ -27,6 +29,22 @@ void requireFile(const fs::path& file, const std::string& name) {
   throw NotFoundError("cannot read ROS 2 bag file " + name + ": no such file");
 }
 
+// The "file:" URI of `path` that opens it immutable (sqlite's "immutable=1": no locks, no -wal or -shm
+// file beside it), its bytes other than letters, digits and "/._-" percent-encoded.
+std::string immutableUri(const fs::path& path) {
+  std::string uri = "file:";
+  for (const unsigned char c : path.string()) {
+    if (std::isalnum(c) || c == '/' || c == '.' || c == '_' || c == '-') {
+      uri += static_cast<char>(c);
+    } else {
+      char hex[4];
+      std::snprintf(hex, sizeof hex, "%%%02X", c);
+      uri += hex;
+    }
+  }
+  return uri + "?immutable=1";
+}
+
 // A prepared statement, finalised when it goes: sqlite3_close leaves a connection with a statement
 // still open (and its file with it) open.
 struct FinalizeStatement {
@@ -37,10 +55,15 @@ using Statement = std::unique_ptr<sqlite3_stmt, FinalizeStatement>;
 // One .db3 file opened read-only; closes itself.
 class Database {
  public:
-  // Opens `path`; errors name `name` (the bag's file when `path` is its decompressed copy).
-  explicit Database(const fs::path& path, const fs::path& name = {}) : path_(name.empty() ? path.string() : name.string()) {
+  // Opens `path`; errors name `name` (the bag's file when `path` is its decompressed copy). `immutable`:
+  // the file is the reader's own copy, which nothing else writes: sqlite then leaves no -wal and -shm
+  // files beside it (a .db3 in WAL mode, as rosbag2's resilient preset writes, would have them made in
+  // the temporary folder, and they would outlive the copy).
+  Database(const fs::path& path, const fs::path& name, bool immutable = false) : path_(name.string()) {
     requireFile(path, path_);
-    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    const std::string file = immutable ? immutableUri(path) : path.string();
+    if (sqlite3_open_v2(file.c_str(), &db_, SQLITE_OPEN_READONLY | (immutable ? SQLITE_OPEN_URI : 0), nullptr) !=
+        SQLITE_OK) {
       const IoError error = failure("cannot open");
       sqlite3_close(db_);  // sqlite hands out a connection even when the open fails
       throw error;
@@ -98,7 +121,7 @@ class Db3Recording final : public Recording {
     if (compression_ == Db3Compression::kFile) return;  // the topics came from metadata.yaml
     for (std::size_t i = 0; i < files_.size(); ++i) {
       const std::unique_ptr<TempFile> copy = decompressedCopy(files_[i]);
-      Database db(copy ? copy->path() : files_[i], files_[i]);
+      Database db(copy ? copy->path() : files_[i], files_[i], copy != nullptr);
       readTopics(db, i, true);
     }
     const std::vector<int> rank = sortTopicsByName(topics_);
@@ -154,7 +177,7 @@ class Db3Recording final : public Recording {
     if (file_index_ >= files_.size()) return false;
     const fs::path& file = files_[file_index_];
     copy_ = decompressedCopy(file);
-    db_ = std::make_unique<Database>(copy_ ? copy_->path() : file, file);
+    db_ = std::make_unique<Database>(copy_ ? copy_->path() : file, file, copy_ != nullptr);
     if (compression_ == Db3Compression::kFile) readTopics(*db_, file_index_, false);
     db_->stmt_ = db_->prepare("SELECT topic_id, timestamp, data, id FROM messages ORDER BY timestamp, id");
     return true;

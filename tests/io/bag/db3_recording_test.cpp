@@ -197,6 +197,23 @@ TEST(Db3Recording, FileCompressedBagGivesEveryMessageThroughOneTemporaryCopyAtAT
   EXPECT_EQ(tmp.files(), 0u) << "each copy is removed once read";
 }
 
+// A .db3 in WAL mode (rosbag2's resilient preset) makes sqlite create -wal and -shm files beside the file
+// it reads: beside a decompressed copy they would stay in TMPDIR after the copy went. The copy is the
+// reader's own and never changes, so it is read immutable, and nothing is left.
+TEST(Db3Recording, FileCompressedBagInWalModeLeavesNothingInTheTemporaryFolder) {
+  const TempDirScope tmp("db3_wal_tmp");
+  {
+    const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_file_wal");
+    RecordedMessage m;
+    ASSERT_TRUE(rec->next({}, m));
+    EXPECT_EQ(tmp.files(), 1u) << "the first file's decompressed copy alone";
+  }
+  EXPECT_EQ(tmp.files(), 0u);
+  const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_file_wal");
+  expectMessages(*rec, expectedJson()["messages"], {});
+  EXPECT_EQ(tmp.files(), 0u) << "each copy and whatever sqlite made beside it removed once read";
+}
+
 TEST(Db3Recording, AnUnfinishedCompressedBagIsReadFromItsFilesAndSaysSo) {
   const TempDirScope tmp("db3_unfinished_tmp");
   // Topics counted from the compressed file's decompressed copy; nothing says how the bag was compressed.

@@ -8,6 +8,7 @@ the CDR bytes Foxglove's serialiser wrote for the MCAP files (OUT_DIR/expected.j
   dive_db3_message/    the same bag with compression_mode MESSAGE: each message's bytes zstd-compressed
   dive_db3_file/       the same bag with compression_mode FILE: dive_db3_file_0.db3.zstd, ..._1.db3.zstd
                        (the second streamed, without its content size)
+  dive_db3_file_wal/   the same, its files in WAL mode (rosbag2's resilient storage preset)
   dive_db3_unfinished_file/     no metadata.yaml, dive_db3_0.db3.zstd and dive_db3_1.db3 (a FILE-compressing
                                 recorder stopped with its second file open)
   dive_db3_unfinished_message/  dive_db3_message's files without metadata.yaml
@@ -36,8 +37,9 @@ first = min(int(m["log_time_ns"]) for m in messages)
 last = max(int(m["log_time_ns"]) for m in messages)
 
 
-def write_bag(name, compression_mode=""):
-    """The bag OUT_DIR/name in two files, compressed as rosbag2's compression_mode says."""
+def write_bag(name, compression_mode="", wal=False):
+    """The bag OUT_DIR/name in two files, compressed as rosbag2's compression_mode says; `wal`: its files
+    in WAL mode, as rosbag2's resilient storage preset writes them."""
     bag = os.path.join(out, name)
     shutil.rmtree(bag, ignore_errors=True)
     os.makedirs(bag)
@@ -63,6 +65,8 @@ def write_bag(name, compression_mode=""):
         for row_id, k in enumerate(order):
             db.execute("INSERT INTO messages VALUES (?, ?, ?, ?)", (row_id + 1,) + rows[k])
         db.commit()
+        if wal:
+            db.execute("PRAGMA journal_mode = WAL")
         db.close()
         if compression_mode == "FILE":
             files[index] = compress_file(os.path.join(bag, file), streamed=index == 1)
@@ -74,6 +78,7 @@ def write_bag(name, compression_mode=""):
 bag, files = write_bag("dive_db3")
 write_bag("dive_db3_message", "MESSAGE")
 write_bag("dive_db3_file", "FILE")
+write_bag("dive_db3_file_wal", "FILE", wal=True)
 
 # One MESSAGE-compressed message's bytes replaced by bytes that are not zstd.
 damaged = os.path.join(out, "dive_db3_damaged")
