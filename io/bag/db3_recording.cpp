@@ -269,8 +269,13 @@ class Db3Recording final : public Recording {
 std::vector<fs::path> db3FilesIn(const fs::path& folder) {
   std::vector<std::pair<long long, fs::path>> found;
   const std::regex index(R"(_(\d+)\.db3(\.zstd)?$)");
-  for (const fs::directory_entry& e : fs::directory_iterator(folder)) {
-    if (!e.is_regular_file() || !isDb3FileName(e.path())) continue;
+  // The error_code forms: a folder or entry the user may not read is an IoError naming it.
+  std::error_code ec;
+  fs::directory_iterator entries(folder, ec), end;
+  for (; !ec && entries != end; entries.increment(ec)) {
+    const fs::directory_entry& e = *entries;
+    std::error_code type_ec;
+    if (!e.is_regular_file(type_ec) || !isDb3FileName(e.path())) continue;
     std::smatch m;
     const std::string name = e.path().filename().string();
     long long i = -1;
@@ -283,6 +288,7 @@ std::vector<fs::path> db3FilesIn(const fs::path& folder) {
     }
     found.emplace_back(i, e.path());
   }
+  if (ec) throw IoError("cannot list ROS 2 bag folder " + folder.string() + ": " + ec.message());
   std::sort(found.begin(), found.end());
   std::vector<fs::path> files;
   for (auto& [i, path] : found) files.push_back(path);

@@ -136,7 +136,11 @@ cv::Mat compressedImageToMat(const RosCompressedImage& image, const std::string&
   cv::Mat out;
   if (png) out = decodePngFast(d.data(), d.size(), ChunkCrc::kAlreadyChecked);
   if (out.empty()) {
-    out = opencvDecode(d.data(), d.size(), cv::IMREAD_UNCHANGED);
+    try {
+      out = opencvDecode(d.data(), d.size(), cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {  // OpenCV's decoders throw on some damaged data
+      throw Error(where + " cannot be decoded: " + e.err);
+    }
   }
   if (out.empty()) throw Error(where + " cannot be decoded");
   // A 16-bit PNG: decoded in this machine's byte order.
