@@ -13,7 +13,7 @@
 namespace cenote::client::test {
 
 struct ServerProcessOptions {
-  std::string token;                    // non-empty: written to a file passed as --token-file
+  std::string token = {};               // non-empty: written to a file passed as --token-file
   std::string listen = "127.0.0.1:0";   // --listen; target() is loopback at the bound port
   std::vector<std::string> extra_args;  // appended to the command line (e.g. --config F)
   double start_timeout_s = 60.0;        // until the port file appears
