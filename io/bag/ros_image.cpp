@@ -69,9 +69,10 @@ const RosEncoding* findEncoding(std::string_view name) {
   return nullptr;
 }
 
-// 16-bit samples as 8-bit, full scale to full scale (x 255 / 65535, rounded), after putting them
-// in this machine's byte order (the message says which order it was written in).
-cv::Mat eightBitSamples(const cv::Mat& samples16, bool big_endian) {
+// 16-bit samples holding `bits` significant bits as 8-bit, full scale to full scale
+// (x 255 / (2^bits - 1), rounded; larger values saturate), after putting them in this machine's
+// byte order (the message says which order it was written in).
+cv::Mat eightBitSamples(const cv::Mat& samples16, bool big_endian, int bits = 16) {
   cv::Mat host = samples16;
   if (big_endian != (std::endian::native == std::endian::big)) {
     host = samples16.clone();
@@ -81,13 +82,13 @@ cv::Mat eightBitSamples(const cv::Mat& samples16, bool big_endian) {
     }
   }
   cv::Mat out;
-  host.convertTo(out, CV_8U, 255.0 / 65535.0);
+  host.convertTo(out, CV_8U, 255.0 / ((1 << bits) - 1));
   return out;
 }
 
 }  // namespace
 
-cv::Mat imageToMat(const RosImage& image, const std::string& topic) {
+cv::Mat imageToMat(const RosImage& image, const std::string& topic, int sample_bits) {
   const std::string& enc = image.encoding;
   const RosEncoding* encoding = findEncoding(enc);
   if (encoding == nullptr) throw Error("topic " + topic + ": image encoding " + enc + " is not read; " + kEncodingsRead);
@@ -111,7 +112,7 @@ cv::Mat imageToMat(const RosImage& image, const std::string& topic) {
                      CV_MAKETYPE(encoding->depth, encoding->channels), const_cast<std::uint8_t*>(image.data.data()),
                      image.step);
   // The Mat returned owns its pixels: the message's bytes belong to the recording's buffer.
-  const cv::Mat samples = encoding->depth == CV_16U ? eightBitSamples(view, image.is_bigendian != 0) : view;
+  const cv::Mat samples = encoding->depth == CV_16U ? eightBitSamples(view, image.is_bigendian != 0, sample_bits) : view;
   if (encoding->to_bgr < 0) return samples.data == view.data ? view.clone() : samples;
   cv::Mat out;
   cv::cvtColor(samples, out, encoding->to_bgr);

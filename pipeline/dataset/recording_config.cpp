@@ -11,6 +11,7 @@ std::vector<ConfigError> RecordingConfig::validate() const {
   errors.check(sync_tolerance_s >= 0.0 && sync_tolerance_s < 1.0, "sync_tolerance_s", sync_tolerance_s,
                "must be in [0, 1)");
   errors.checkRange("sync_queue", sync_queue, 2, 4096);
+  errors.checkRange("image_bits", image_bits, 9, 16);
   const bool known = rig == "auto" ||
                      std::any_of(rigs.begin(), rigs.end(), [&](const RigPreset& p) { return p.name == rig; });
   errors.check(known, "rig", rig, "must be auto or one of the names under bag.rigs");
@@ -24,6 +25,7 @@ std::vector<ConfigError> RecordingConfig::validate() const {
 void RecordingConfig::read(YamlSection& section) {
   section.read("sync_tolerance_s", sync_tolerance_s);
   section.read("sync_queue", sync_queue);
+  section.read("image_bits", image_bits);
   section.read("rig", rig);
   YamlSection presets = section.section("rigs");
   for (RigPreset& p : rigs) {

@@ -25,6 +25,8 @@ struct RecordingConfig {
   double sync_tolerance_s = 0.01;  // a left and a right image pair when their stamps differ by at most
                                    // this and each is the other's nearest; >= 0, below half a frame period
   int sync_queue = 64;             // images held waiting for their partner, in [2, 4096]
+  int image_bits = 16;             // significant low bits of 16-bit image samples (mono16, bayer_*16, ...),
+                                   // in [9, 16]: 12 for a 12-bit camera writing 0..4095
   std::string rig = "auto";        // the preset whose topics are used when --left/--right are not given:
                                    // auto (the first below whose two topics the recording has) or a name
   std::vector<RigPreset> rigs = {

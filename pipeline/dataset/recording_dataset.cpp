@@ -61,8 +61,8 @@ std::int64_t checkedImageStampNs(const io::RecordedMessage& m) {
   return m.topic->type == kImage ? io::decodeImage(m).stamp_ns : io::decodeCompressedImage(m).stamp_ns;
 }
 
-cv::Mat imagePixels(const io::RecordedMessage& m) {
-  return m.topic->type == kImage ? io::imageToMat(io::decodeImage(m), m.topic->name)
+cv::Mat imagePixels(const io::RecordedMessage& m, int image_bits) {
+  return m.topic->type == kImage ? io::imageToMat(io::decodeImage(m), m.topic->name, image_bits)
                                  : io::compressedImageToMat(io::decodeCompressedImage(m), m.topic->name);
 }
 
@@ -93,6 +93,7 @@ class RecordingCursor final : public FrameCursor {
         rec_(io::openRecording(path)),
         left_(findTopic(*rec_, left)),
         wanted_{left, right},
+        image_bits_(config.image_bits),
         pairer_(static_cast<std::int64_t>(std::llround(config.sync_tolerance_s * 1e9)),
                 static_cast<size_t>(config.sync_queue)) {}
 
@@ -122,8 +123,8 @@ class RecordingCursor final : public FrameCursor {
   StereoFrame load() override {
     StereoFrame frame;
     frame.t_s = timestamp();
-    frame.left = imagePixels(current_.left.value.view());
-    frame.right = imagePixels(current_.right.value.view());
+    frame.left = imagePixels(current_.left.value.view(), image_bits_);
+    frame.right = imagePixels(current_.right.value.view(), image_bits_);
     return frame;
   }
   std::map<std::string, std::uint64_t> counts() const override {
@@ -139,6 +140,7 @@ class RecordingCursor final : public FrameCursor {
   std::unique_ptr<io::Recording> rec_;
   const io::TopicInfo* left_;
   std::vector<std::string> wanted_;
+  int image_bits_;  // RecordingConfig::image_bits
   StampPairer<HeldImage> pairer_;
   StampPairer<HeldImage>::Pair current_;
   bool ended_ = false;

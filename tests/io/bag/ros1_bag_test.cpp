@@ -393,6 +393,18 @@ TEST(RosMessages, SixteenBitImagesBecomeEightBitsInEitherByteOrder) {
   }
 }
 
+TEST(RosMessages, TwelveBitSamplesInSixteenBitImagesUseTheirOwnFullScale) {
+  const auto bag = openRecording(bagDir() / "encodings.bag");
+  RecordedMessage m;
+  ASSERT_TRUE(bag->next({"/enc/mono16_12bit"}, m));
+  const RosImage image = decodeImage(m);
+  const cv::Mat as_16 = imageToMat(image, "/enc/mono16_12bit"), as_12 = imageToMat(image, "/enc/mono16_12bit", 12);
+  for (int i = 0; i < 192; ++i) {  // samples 16 i of 0..4095
+    ASSERT_EQ(as_12.at<std::uint8_t>(i / 16, i % 16), std::lround(16 * i * 255.0 / 4095.0)) << "pixel " << i;
+    ASSERT_EQ(as_16.at<std::uint8_t>(i / 16, i % 16), std::lround(16 * i * 255.0 / 65535.0)) << "pixel " << i;
+  }
+}
+
 TEST(RosMessages, Yuv422InBothByteOrdersBecomesBgr) {
   for (const char* topic : {"/enc/yuv422", "/enc/yuv422_yuy2"}) {
     const cv::Mat bgr = encodedScene(topic);

@@ -158,6 +158,7 @@ def encoded_scenes():
     yield "/enc/bayer_gbrg16_be", raw_image("bayer_gbrg16", wide(mosaic(scene, "gbrg")), 16, big_endian=True)
     yield "/enc/mono16", raw_image("mono16", wide(ramp), 16)
     yield "/enc/mono16_be", raw_image("mono16", wide(ramp), 16, big_endian=True)
+    yield "/enc/mono16_12bit", raw_image("mono16", (ramp * 16).astype(np.uint16), 16)  # 0..4095 used
     yield "/enc/bgr16", raw_image("bgr16", wide(scene), 16)
     yield "/enc/rgb16_be", raw_image("rgb16", wide(scene[..., ::-1]), 16, big_endian=True)
     yield "/enc/rgba16", raw_image("rgba16", wide(np.dstack([scene[..., ::-1], np.full((12, 16), 200, np.uint8)])), 16)

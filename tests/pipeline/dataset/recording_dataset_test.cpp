@@ -17,12 +17,14 @@ TEST(RecordingConfig, DefaultsAreValidAndBadValuesAreNamed) {
   RecordingConfig bad;
   bad.sync_tolerance_s = -0.1;
   bad.sync_queue = 1;
+  bad.image_bits = 8;
   bad.rig = "aqua";
   const std::vector<ConfigError> errors = bad.validate();
-  ASSERT_EQ(errors.size(), 3u);
+  ASSERT_EQ(errors.size(), 4u);
   EXPECT_EQ(errors[0].key, "bag.sync_tolerance_s");
   EXPECT_EQ(errors[1].key, "bag.sync_queue");
-  EXPECT_EQ(errors[2].key, "bag.rig");
+  EXPECT_EQ(errors[2].key, "bag.image_bits");
+  EXPECT_EQ(errors[3].key, "bag.rig");
 }
 
 // The CameraInfo pair of a rig: K, D as calibrated; R, P from cv::stereoRectify (ROS's
