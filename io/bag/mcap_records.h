@@ -5,7 +5,6 @@
 #pragma once
 
 #include <libdeflate.h>
-#include <lz4frame.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -19,6 +18,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "io/bag/lz4_frame.h"
 #include "io/bag/zstd_stream.h"
 
 namespace cenote::io::detail {
@@ -26,10 +26,6 @@ namespace cenote::io::detail {
 inline constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 inline constexpr std::uint64_t kRecordHeader = 9;                        // opcode u8 + content length u64
 inline constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{1} << 30;  // compressed or uncompressed
-// An LZ4 chunk's buffer starts at its declared size only up to this many times its stored bytes, then grows
-// as they decode: a damaged size allocates nothing of its own, a chunk that compresses further costs a few
-// reallocations.
-inline constexpr std::uint64_t kPresizeRatio = 64;
 
 enum Opcode : std::uint8_t {
   kHeader = 0x01,
@@ -305,32 +301,13 @@ class RecordCursor {
     }
   }
 
-  // The LZ4 frame `src` into chunk_, which starts at the `declared` size only up to kPresizeRatio times
-  // the frame's bytes and grows (up to `declared`) as they decode.
+  // The LZ4 frame `src` into chunk_, grown up to the `declared` size as it decodes (lz4_frame.h, output_growth.h).
   void lz4Frame(std::span<const std::uint8_t> src, std::uint64_t declared) {
-    LZ4F_dctx* ctx = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) throw Malformed{"lz4: no context"};
-    chunk_.resize(std::min<std::uint64_t>(declared, kPresizeRatio * src.size()));
-    std::size_t in_done = 0;
-    std::size_t out_done = 0;
-    std::size_t ret = 1;
-    while (ret != 0 && in_done < src.size()) {
-      if (out_done == chunk_.size() && chunk_.size() < declared)
-        chunk_.resize(std::min<std::uint64_t>(std::max<std::uint64_t>(2 * chunk_.size(), 1 << 16), declared));
-      std::size_t in_n = src.size() - in_done;
-      std::size_t out_n = chunk_.size() - out_done;
-      ret = LZ4F_decompress(ctx, chunk_.data() + out_done, &out_n, src.data() + in_done, &in_n, nullptr);
-      if (LZ4F_isError(ret)) {
-        LZ4F_freeDecompressionContext(ctx);
-        throw Malformed{std::string("lz4: ") + LZ4F_getErrorName(ret)};
-      }
-      in_done += in_n;
-      out_done += out_n;
-      if (in_n == 0 && out_n == 0) break;
-    }
-    LZ4F_freeDecompressionContext(ctx);
-    if (ret != 0 || out_done != declared)
-      throw Malformed{"lz4 frame gave " + std::to_string(out_done) + " bytes" + (ret != 0 ? " and is incomplete" : "") +
+    std::string error;
+    const bool ended = lz4FrameDecompress(src, declared, declared, chunk_, error);
+    if (!error.empty()) throw Malformed{"lz4: " + error};
+    if (!ended || chunk_.size() != declared)
+      throw Malformed{"lz4 frame gave " + std::to_string(chunk_.size()) + " bytes" + (!ended ? " and is incomplete" : "") +
                       ", the chunk declares " + std::to_string(declared)};
   }
 

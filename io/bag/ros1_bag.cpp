@@ -1,7 +1,6 @@
 #include "io/bag/ros1_bag.h"
 
 #include <bzlib.h>
-#include <lz4frame.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -9,6 +8,8 @@
 #include <limits>
 
 #include "common/error.h"
+#include "io/bag/lz4_frame.h"
+#include "io/bag/output_growth.h"
 
 namespace cenote::io {
 namespace {
@@ -20,15 +21,6 @@ constexpr std::uint8_t kOpMessage = 0x02, kOpBagHeader = 0x03, kOpIndex = 0x04, 
 // A chunk's uncompressed size above this is damage, not a recording (rosbag writes 768 KiB chunks, or
 // one message if it is larger; no ROS message is 1 GiB).
 constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{1} << 30;
-// A compressed chunk's output buffer starts at its declared size only up to this many times its stored
-// bytes, then grows as the data decode: a damaged size field (1 GiB on a chunk of 100 bytes) allocates
-// nothing before the data show it, and a chunk that does compress further costs a few reallocations.
-constexpr std::uint64_t kPresizeRatio = 64;
-
-// The first size of the output buffer of `stored` compressed bytes that say they decode to `expected`.
-std::uint64_t initialOutputBytes(std::uint64_t expected, std::size_t stored) {
-  return std::max<std::uint64_t>(std::min<std::uint64_t>(expected, kPresizeRatio * stored), 1 << 16);
-}
 
 template <class T>
 T loadLe(const std::uint8_t* p) {
@@ -86,7 +78,8 @@ bool inflateBz2(const std::vector<std::uint8_t>& in, std::uint64_t expected, std
                 const std::string& what) {
   bz_stream s{};
   if (BZ2_bzDecompressInit(&s, 0, 0) != BZ_OK) throw IoError(what + ": bz2 decoder failed to start");
-  out.resize(initialOutputBytes(expected, in.size()));
+  // Sized as output_growth.h says: a damaged size field allocates nothing before the data show it.
+  out.resize(detail::initialOutputBytes(expected, in.size(), kMaxChunkBytes));
   s.next_in = const_cast<char*>(reinterpret_cast<const char*>(in.data()));
   s.avail_in = static_cast<unsigned>(in.size());
   std::size_t produced = 0;
@@ -94,7 +87,7 @@ bool inflateBz2(const std::vector<std::uint8_t>& in, std::uint64_t expected, std
   while (true) {
     if (produced == out.size()) {
       if (out.size() >= kMaxChunkBytes) break;
-      out.resize(std::min<std::uint64_t>(out.size() * 2, kMaxChunkBytes));
+      out.resize(detail::grownOutputBytes(out.size(), kMaxChunkBytes));
     }
     s.next_out = reinterpret_cast<char*>(out.data() + produced);
     s.avail_out = static_cast<unsigned>(out.size() - produced);
@@ -113,35 +106,10 @@ bool inflateBz2(const std::vector<std::uint8_t>& in, std::uint64_t expected, std
   return false;
 }
 
-bool inflateLz4(const std::vector<std::uint8_t>& in, std::uint64_t expected, std::vector<std::uint8_t>& out,
-                const std::string& what) {
-  LZ4F_dctx* ctx = nullptr;
-  if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) {
-    throw IoError(what + ": lz4 decoder failed to start");
-  }
-  out.resize(initialOutputBytes(expected, in.size()));
-  std::size_t consumed = 0, produced = 0;
-  std::size_t hint = 1;
-  bool error = false;
-  while (consumed < in.size()) {
-    if (produced == out.size()) {
-      if (out.size() >= kMaxChunkBytes) break;
-      out.resize(std::min<std::uint64_t>(out.size() * 2, kMaxChunkBytes));
-    }
-    std::size_t src = in.size() - consumed, dst = out.size() - produced;
-    hint = LZ4F_decompress(ctx, out.data() + produced, &dst, in.data() + consumed, &src, nullptr);
-    if (LZ4F_isError(hint)) {
-      error = true;
-      break;
-    }
-    consumed += src;
-    produced += dst;
-    if (hint == 0) break;  // end of the frame
-    if (src == 0 && dst == 0) break;
-  }
-  LZ4F_freeDecompressionContext(ctx);
-  out.resize(produced);
-  return !error && hint == 0;
+// The same for an LZ4 frame: false for corrupt data too (the caller decides: cut or corrupt).
+bool inflateLz4(const std::vector<std::uint8_t>& in, std::uint64_t expected, std::vector<std::uint8_t>& out) {
+  std::string error;
+  return detail::lz4FrameDecompress(in, expected, kMaxChunkBytes, out, error);
 }
 
 }  // namespace
@@ -405,7 +373,7 @@ bool Ros1Bag::loadChunk(const Record& r) {
     packed_.resize(stored);
     if (stored > 0) readAt(r.data_pos, packed_.data(), stored);
     const bool whole = compression == "bz2" ? inflateBz2(packed_, cut ? 0 : size, chunk_, what)
-                                            : inflateLz4(packed_, cut ? 0 : size, chunk_, what);
+                                            : inflateLz4(packed_, cut ? 0 : size, chunk_);
     if (!cut && (!whole || chunk_.size() != size)) {
       throw IoError(what + ": " + compression + " data are corrupt (" + std::to_string(chunk_.size()) + " of " +
                     std::to_string(size) + " bytes decoded)");

@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "common/error.h"
+#include "io/bag/output_growth.h"
 
 namespace cenote::io {
 namespace {
@@ -20,11 +21,10 @@ struct DStreamFree {
 };
 using DStream = std::unique_ptr<ZSTD_DStream, DStreamFree>;
 
-// A frame's declared content size becomes the output's size in one call only up to this many times the
-// frame's bytes: the field is as damaged as the rest can be, and a gigabyte declared by twenty bytes
-// must not be allocated before the data show it. A frame that compresses further (all-zero images) is
-// decompressed as a stream, its output growing with what decodes.
-constexpr std::size_t kOneCallMaxRatio = 64;
+// A frame's declared content size becomes the output's size in one call only up to kPresizeRatio times
+// the frame's bytes (output_growth.h: a declared size is as damaged as the rest can be). A frame that
+// compresses further (all-zero images) is decompressed as a stream, its output growing with what decodes.
+using detail::kPresizeRatio;
 
 DStream newStream() {
   DStream s(ZSTD_createDStream());
@@ -66,7 +66,7 @@ void zstdDecompress(std::span<const std::uint8_t> in, std::vector<std::uint8_t>&
   out.clear();
   const unsigned long long declared = ZSTD_getFrameContentSize(in.data(), in.size());
   if (declared == ZSTD_CONTENTSIZE_ERROR) throw IoError("zstd: not a zstd frame");
-  if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared <= max_bytes && declared <= kOneCallMaxRatio * in.size()) {
+  if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared <= max_bytes && declared <= kPresizeRatio * in.size()) {
     // One call where the frame says its size (rosbag2's messages do) and its bytes could hold it: no
     // stream, buffer or copies.
     out.resize(static_cast<std::size_t>(declared));
