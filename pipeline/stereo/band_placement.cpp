@@ -228,10 +228,6 @@ void edgeCentres(const EdgeCheckImages& im, int scale, EdgeBlock& block, const i
   }
 }
 
-}  // namespace
-
-namespace {
-
 // Band starts of row `out` from the coarse row's centres (kNoCentre: from disparity 0; kEdge:
 // any value, placeEdgeBlock() overwrites it): StereoConfig::bandStartAround() for every pixel,
 // the clamp to the range once per coarse pixel and the left border's rule on its columns only.

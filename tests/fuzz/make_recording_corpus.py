@@ -22,7 +22,6 @@ Run once and commit the files. Every file stays under the 64 KiB `make fuzz` giv
 """
 import os
 import re
-import struct
 import sys
 
 import cv2
@@ -33,6 +32,9 @@ from geometry_msgs.msg import PoseStamped, TransformStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from tf2_msgs.msg import TFMessage
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "io", "bag"))
+from bag_fixtures import killed_recorder  # noqa: E402
 
 out, ros2_data = sys.argv[1], sys.argv[2]
 os.makedirs(out, exist_ok=True)
@@ -155,14 +157,7 @@ with rosbag.Bag(path) as bag:
 raw = read(path)[:cut]
 os.remove(path)
 write("ros1_cut_lz4.bag", 0, raw)
-crashed = bytearray(raw)
-at = crashed.index(b"index_pos=") + len(b"index_pos=")
-crashed[at:at + 8] = struct.pack("<Q", 0)
-header_len = struct.unpack_from("<I", crashed, last.pos)[0]
-at = crashed.index(b"size=", last.pos, last.pos + 4 + header_len) + len(b"size=")
-crashed[at:at + 4] = struct.pack("<I", 0)
-struct.pack_into("<I", crashed, last.pos + 4 + header_len, 0)
-write("ros1_crashed_lz4.bag", 0, bytes(crashed))
+write("ros1_crashed_lz4.bag", 0, killed_recorder(raw, last.pos))
 
 for name in ("none", "zstd", "lz4", "unchunked", "nosummary"):
     write("mcap_%s.mcap" % name, 0, read(os.path.join(ros2_data, "dive_%s.mcap" % name)))

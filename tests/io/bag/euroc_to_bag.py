@@ -39,6 +39,8 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from tf2_msgs.msg import TFMessage
 
+from bag_fixtures import bayer_mosaic
+
 ap = argparse.ArgumentParser()
 ap.add_argument("euroc")
 ap.add_argument("out")
@@ -109,14 +111,6 @@ if a.camera_info:
         m.R = [float(v) for v in R.flatten()]
         m.P = [float(v) for v in P.flatten()]
         camera_infos.append(m)
-
-def bayer_rggb(bgr):
-    """The colour filter mosaic of a BGR image: R G on even rows, G B on odd rows."""
-    mosaic = bgr[..., 1].copy()
-    mosaic[0::2, 0::2] = bgr[0::2, 0::2, 2]
-    mosaic[1::2, 1::2] = bgr[1::2, 1::2, 0]
-    return mosaic
-
 
 def save_decoded(pixels, path):
     """The pixels OpenCV gets from the bag's image, into --decoded-folder at the image's place."""
@@ -208,7 +202,7 @@ with rosbag.Bag(a.out, "w", compression=a.compression) as bag:
         else:
             pixels = cv2.imread(payload, cv2.IMREAD_UNCHANGED)
             if a.images == "bayer":
-                mosaic = bayer_rggb(pixels)
+                mosaic = bayer_mosaic(pixels, "rggb")
                 m = Image()
                 m.height, m.width = mosaic.shape
                 m.encoding, m.step, m.data = "bayer_rggb8", m.width, mosaic.tobytes()

@@ -31,6 +31,8 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from tf2_msgs.msg import TFMessage
 
+from bag_fixtures import bayer_mosaic, killed_recorder
+
 out = sys.argv[1]
 os.makedirs(out, exist_ok=True)
 
@@ -114,14 +116,6 @@ scene[:, 8:] = SCENE_RIGHT
 ramp = np.arange(192, dtype=np.uint32).reshape(12, 16)
 
 
-def mosaic(bgr, pattern):
-    """The Bayer mosaic of a BGR image: `pattern` names the colours of (0, 0), (0, 1), (1, 0), (1, 1)."""
-    out = np.zeros(bgr.shape[:2], bgr.dtype)
-    for i, colour in enumerate(pattern):
-        out[i // 2::2, i % 2::2] = bgr[i // 2::2, i % 2::2, "bgr".index(colour)]
-    return out
-
-
 def yuv422(bgr, order):
     """YUV 4:2:2 bytes (BT.601, video range, as cameras send it): each pixel pair shares the mean U, V."""
     b, g, r = (bgr[..., k].astype(np.float64) / 255.0 for k in range(3))
@@ -153,9 +147,9 @@ def encoded_scenes():
     of full scale, plus less than half a step of 8 bits)."""
     wide = lambda a: a.astype(np.uint16) * 257 + 100
     for pattern in ("rggb", "bggr", "gbrg", "grbg"):
-        yield "/enc/bayer_%s8" % pattern, raw_image("bayer_%s8" % pattern, mosaic(scene, pattern), 16)
-    yield "/enc/bayer_rggb16", raw_image("bayer_rggb16", wide(mosaic(scene, "rggb")), 16)
-    yield "/enc/bayer_gbrg16_be", raw_image("bayer_gbrg16", wide(mosaic(scene, "gbrg")), 16, big_endian=True)
+        yield "/enc/bayer_%s8" % pattern, raw_image("bayer_%s8" % pattern, bayer_mosaic(scene, pattern), 16)
+    yield "/enc/bayer_rggb16", raw_image("bayer_rggb16", wide(bayer_mosaic(scene, "rggb")), 16)
+    yield "/enc/bayer_gbrg16_be", raw_image("bayer_gbrg16", wide(bayer_mosaic(scene, "gbrg")), 16, big_endian=True)
     yield "/enc/mono16", raw_image("mono16", wide(ramp), 16)
     yield "/enc/mono16_be", raw_image("mono16", wide(ramp), 16, big_endian=True)
     yield "/enc/mono16_12bit", raw_image("mono16", (ramp * 16).astype(np.uint16), 16)  # 0..4095 used
@@ -221,17 +215,8 @@ for compression in ("none", "bz2", "lz4"):
         f.write(raw[:cut])
     expected["cut_%s.bag" % compression] = {"size": cut, "chunk_pos": cut_chunk.pos, "complete": complete,
                                             "first_chunk_pos": chunks[0].pos}
-    # As a killed recorder leaves it: rosbag writes index_pos 0 when it opens the bag and a chunk
-    # header with data length and size 0 when it opens a chunk, and fills them in only on closing.
-    crashed = bytearray(raw[:cut])
-    at = crashed.index(b"index_pos=") + len(b"index_pos=")
-    crashed[at:at + 8] = struct.pack("<Q", 0)
-    header_len = struct.unpack_from("<I", crashed, cut_chunk.pos)[0]
-    at = crashed.index(b"size=", cut_chunk.pos, cut_chunk.pos + 4 + header_len) + len(b"size=")
-    crashed[at:at + 4] = struct.pack("<I", 0)
-    struct.pack_into("<I", crashed, cut_chunk.pos + 4 + header_len, 0)
     with open(os.path.join(out, "crashed_%s.bag" % compression), "wb") as f:
-        f.write(crashed)
+        f.write(killed_recorder(raw[:cut], cut_chunk.pos))
     expected["crashed_%s.bag" % compression] = dict(expected["cut_%s.bag" % compression])
     if compression == "none":
         zstd = bytearray(raw)
