@@ -68,6 +68,27 @@ HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uin
     for (int k = 0; k < Dp; k += N) lanes.add(hn::Load(d, s + k), hn::Load(d, b.iota + k));
   }
   const VU16 best = lanes.best, best_index = lanes.best_index;
+  const int reach = p.pkrn_exclude_neighbours ? 1 : 0;
+#if HWY_TARGET <= HWY_AVX3
+  if (Dp == 32 && N == 32) {
+    // One vector (the band on AVX-512): the smallest sum in every lane, its first lane from the
+    // comparison's mask bits, and the span around it masked with the same bits, without a trip
+    // of the winner through a general register and back into a vector.
+    const VU16 c1_lanes = minWordBroadcast(d, best);
+    const uint32_t equal = _mm512_cmpeq_epi16_mask(best.raw, c1_lanes.raw);
+    const uint32_t first_bit = equal & (0u - equal);
+    const uint32_t near = reach ? first_bit | (first_bit << 1) | (first_bit >> 1) : first_bit;
+    const int winner = __builtin_ctz(equal);
+    const uint16_t c1 = static_cast<uint16_t>(_mm_cvtsi128_si32(_mm512_castsi512_si128(c1_lanes.raw)));
+    out.winner[j] = first + winner;
+    out.c1[j] = c1;
+    out.c2[j] = minLane(d, VU16{_mm512_mask_mov_epi16(best.raw, near, _mm512_set1_epi16(static_cast<int16_t>(kNoCost)))});
+    const bool subpixel = p.subpixel && winner > 0 && winner + 1 < valid;
+    out.below[j] = subpixel ? s[winner - 1] : c1;
+    out.above[j] = subpixel ? s[winner + 1] : c1;
+    return;
+  }
+#endif
   // Smallest sum, and the smallest disparity that has it: each lane already holds its own
   // minimum and first index (branch-free; searching the vectors for the winner mispredicts).
   const uint16_t c1 = minLane(d, best);
@@ -80,7 +101,6 @@ HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uin
   // minimum, the lane's smallest outside the span is its second smallest, otherwise its minimum.
   // In unsigned arithmetic, indices below winner - reach wrap around to large values, so one
   // comparison finds the span.
-  const int reach = p.pkrn_exclude_neighbours ? 1 : 0;
   const VU16 first_near = hn::Set(d, static_cast<uint16_t>(winner - reach));
   const VU16 span = hn::Set(d, static_cast<uint16_t>(2 * reach + 1));
   const auto best_is_near = hn::Lt(hn::Sub(best_index, first_near), span);
