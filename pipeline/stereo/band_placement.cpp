@@ -230,19 +230,16 @@ void edgeCentres(const EdgeCheckImages& im, int scale, EdgeBlock& block, const i
 
 // Band starts of row `out` from the coarse row's centres (kNoCentre: from disparity 0; kEdge:
 // any value, placeEdgeBlock() overwrites it): StereoConfig::bandStartAround() for every pixel,
-// the clamp to the range once per coarse pixel and the left border's rule on its columns only.
+// its range part once per coarse pixel and its border part on the columns it limits only.
 void placeRow(const StereoConfig& config, const std::vector<int>& centres, int width, int16_t* out) {
-  const int scale = config.coarse_scale, min_d = config.min_disparity_px;
-  const int last_start = config.num_disparities - kBandDisparities;
+  const int scale = config.coarse_scale;
   for (int cx = 0; cx < static_cast<int>(centres.size()); ++cx) {
-    const int centre = centres[cx] == kNoCentre || centres[cx] == kEdge ? min_d : centres[cx];
-    const auto start = static_cast<int16_t>(std::clamp(centre - min_d - kBandDisparities / 2, 0, last_start));
+    const int centre = centres[cx] == kNoCentre || centres[cx] == kEdge ? config.min_disparity_px : centres[cx];
     const int x0 = cx * scale;
-    std::fill(out + x0, out + std::min(width, x0 + scale), start);
+    std::fill(out + x0, out + std::min(width, x0 + scale), static_cast<int16_t>(config.bandStartInRange(centre)));
   }
-  // Where the range is cut by the image border, the band holds the disparities with a right pixel.
-  for (int x = 0; x < std::min(width, min_d + config.num_disparities - 1); ++x) {
-    out[x] = static_cast<int16_t>(std::min<int>(out[x], std::max(0, x - min_d + 1 - kBandDisparities)));
+  for (int x = 0; x < std::min(width, config.min_disparity_px + config.num_disparities - 1); ++x) {
+    out[x] = static_cast<int16_t>(std::min<int>(out[x], config.bandStartWithRightPixels(x)));
   }
 }
 

@@ -45,6 +45,49 @@ HWY_INLINE LaneWinners noWinners() {
   return {hn::Set(d, kNoCost), hn::Zero(d), hn::Set(d, kNoCost)};
 }
 
+// One pixel's winner (its index from the sums' first disparity), smallest sum c1 and second
+// smallest c2 outside the winner's span of `reach` disparities on either side, from its lane-wise
+// search (`lanes`, vectors of N lanes, Dp sums).
+struct PixelWinner {
+  int winner;
+  uint16_t c1, c2;
+};
+
+HWY_INLINE PixelWinner winnerOf(const LaneWinners& lanes, int N, int Dp, int reach) {
+  const DU16 d;
+  const VU16 best = lanes.best, best_index = lanes.best_index;
+#if HWY_TARGET <= HWY_AVX3
+  if (Dp == 32 && N == 32) {
+    // One vector (the band on AVX-512): the smallest sum in every lane, its first lane from the
+    // comparison's mask bits, and the span around it masked with the same bits, without a trip
+    // of the winner through a general register and back into a vector.
+    const VU16 c1_lanes = minWordBroadcast(d, best);
+    const uint32_t equal = _mm512_cmpeq_epi16_mask(best.raw, c1_lanes.raw);
+    const uint32_t first_bit = equal & (0u - equal);
+    const uint32_t near = reach ? first_bit | (first_bit << 1) | (first_bit >> 1) : first_bit;
+    const VU16 outside{_mm512_mask_mov_epi16(best.raw, near, _mm512_set1_epi16(static_cast<int16_t>(kNoCost)))};
+    return {__builtin_ctz(equal), static_cast<uint16_t>(_mm_cvtsi128_si32(_mm512_castsi512_si128(c1_lanes.raw))),
+            minLane(d, outside)};
+  }
+#endif
+  // Smallest sum, and the smallest disparity that has it: each lane already holds its own
+  // minimum and first index (branch-free; searching the vectors for the winner mispredicts).
+  const uint16_t c1 = minLane(d, best);
+  // With one vector (a band, or a short range) lane i holds disparity i: the first lane with c1.
+  const int winner = Dp <= N ? static_cast<int>(hn::FindKnownFirstTrue(d, hn::Eq(best, hn::Set(d, c1))))
+                             : minLane(d, hn::IfThenElse(hn::Eq(best, hn::Set(d, c1)), best_index, hn::Set(d, kNoCost)));
+  // Second minimum: outside winner-1..winner+1 (neighbours of the winner are the same match
+  // seen at a sub-pixel offset), or anywhere but the winner. A lane holds disparities N apart,
+  // so the excluded span takes at most one disparity from it: if that is the lane's first
+  // minimum, the lane's smallest outside the span is its second smallest, otherwise its minimum.
+  // In unsigned arithmetic, indices below winner - reach wrap around to large values, so one
+  // comparison finds the span.
+  const VU16 first_near = hn::Set(d, static_cast<uint16_t>(winner - reach));
+  const VU16 span = hn::Set(d, static_cast<uint16_t>(2 * reach + 1));
+  const auto best_is_near = hn::Lt(hn::Sub(best_index, first_near), span);
+  return {winner, c1, minLane(d, hn::IfThenElse(best_is_near, lanes.second_best, best))};
+}
+
 // Winner and second minimum of one pixel's path sums `s` (searched lane by lane in `lanes`), into
 // slot j of the batch. The sums are those of disparities [first, first + D) (the band, or the
 // whole range with first = 0), padded to Dp; indices and `lanes.best_index` count from `first`.
@@ -67,49 +110,13 @@ HWY_INLINE void pickWinner(const SgmParams& p, const StripBuffers& b, int x, uin
     lanes.second_best = lanes.best;
     for (int k = 0; k < Dp; k += N) lanes.add(hn::Load(d, s + k), hn::Load(d, b.iota + k));
   }
-  const VU16 best = lanes.best, best_index = lanes.best_index;
-  const int reach = p.pkrn_exclude_neighbours ? 1 : 0;
-#if HWY_TARGET <= HWY_AVX3
-  if (Dp == 32 && N == 32) {
-    // One vector (the band on AVX-512): the smallest sum in every lane, its first lane from the
-    // comparison's mask bits, and the span around it masked with the same bits, without a trip
-    // of the winner through a general register and back into a vector.
-    const VU16 c1_lanes = minWordBroadcast(d, best);
-    const uint32_t equal = _mm512_cmpeq_epi16_mask(best.raw, c1_lanes.raw);
-    const uint32_t first_bit = equal & (0u - equal);
-    const uint32_t near = reach ? first_bit | (first_bit << 1) | (first_bit >> 1) : first_bit;
-    const int winner = __builtin_ctz(equal);
-    const uint16_t c1 = static_cast<uint16_t>(_mm_cvtsi128_si32(_mm512_castsi512_si128(c1_lanes.raw)));
-    out.winner[j] = first + winner;
-    out.c1[j] = c1;
-    out.c2[j] = minLane(d, VU16{_mm512_mask_mov_epi16(best.raw, near, _mm512_set1_epi16(static_cast<int16_t>(kNoCost)))});
-    const bool subpixel = p.subpixel && winner > 0 && winner + 1 < valid;
-    out.below[j] = subpixel ? s[winner - 1] : c1;
-    out.above[j] = subpixel ? s[winner + 1] : c1;
-    return;
-  }
-#endif
-  // Smallest sum, and the smallest disparity that has it: each lane already holds its own
-  // minimum and first index (branch-free; searching the vectors for the winner mispredicts).
-  const uint16_t c1 = minLane(d, best);
-  // With one vector (a band, or a short range) lane i holds disparity i: the first lane with c1.
-  const int winner = Dp <= N ? static_cast<int>(hn::FindKnownFirstTrue(d, hn::Eq(best, hn::Set(d, c1))))
-                             : minLane(d, hn::IfThenElse(hn::Eq(best, hn::Set(d, c1)), best_index, hn::Set(d, kNoCost)));
-  // Second minimum: outside winner-1..winner+1 (neighbours of the winner are the same match
-  // seen at a sub-pixel offset), or anywhere but the winner. A lane holds disparities N apart,
-  // so the excluded span takes at most one disparity from it: if that is the lane's first
-  // minimum, the lane's smallest outside the span is its second smallest, otherwise its minimum.
-  // In unsigned arithmetic, indices below winner - reach wrap around to large values, so one
-  // comparison finds the span.
-  const VU16 first_near = hn::Set(d, static_cast<uint16_t>(winner - reach));
-  const VU16 span = hn::Set(d, static_cast<uint16_t>(2 * reach + 1));
-  const auto best_is_near = hn::Lt(hn::Sub(best_index, first_near), span);
-  out.winner[j] = first + winner;
-  out.c1[j] = c1;
-  out.c2[j] = minLane(d, hn::IfThenElse(best_is_near, lanes.second_best, best));
-  const bool subpixel = p.subpixel && winner > 0 && winner + 1 < valid;
-  out.below[j] = subpixel ? s[winner - 1] : c1;
-  out.above[j] = subpixel ? s[winner + 1] : c1;
+  const PixelWinner w = winnerOf(lanes, N, Dp, p.pkrn_exclude_neighbours ? 1 : 0);
+  out.winner[j] = first + w.winner;
+  out.c1[j] = w.c1;
+  out.c2[j] = w.c2;
+  const bool subpixel = p.subpixel && w.winner > 0 && w.winner + 1 < valid;
+  out.below[j] = subpixel ? s[w.winner - 1] : w.c1;
+  out.above[j] = subpixel ? s[w.winner + 1] : w.c1;
 }
 
 // Disparity, sub-pixel offset and PKRN of batch slots [0, count): pixel j of the batch is image

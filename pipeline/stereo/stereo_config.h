@@ -88,10 +88,15 @@ struct StereoConfig {
   }
   // The band of column x centred on disparity centre_px (full-size pixels), placed as bandStart().
   int bandStartAround(int centre_px, int x) const {
-    const int width = kBandDisparities;
-    const int lo = std::clamp(centre_px - min_disparity_px - width / 2, 0, num_disparities - width);
-    return std::min(lo, std::max(0, x - min_disparity_px + 1 - width));
+    return std::min(bandStartInRange(centre_px), bandStartWithRightPixels(x));
   }
+  // The band centred on centre_px, kept inside the range (any column's, before the border's rule).
+  int bandStartInRange(int centre_px) const {
+    return std::clamp(centre_px - min_disparity_px - kBandDisparities / 2, 0, num_disparities - kBandDisparities);
+  }
+  // The largest start whose band holds only disparities with a right pixel in column x; at least
+  // num_disparities - kBandDisparities (no limit) from column min_d + num_disparities - 1 on.
+  int bandStartWithRightPixels(int x) const { return std::max(0, x - min_disparity_px + 1 - kBandDisparities); }
   // Right shift applied to SAD window sums so that maxCost() <= 4095.
   int sadShift() const;
   // Largest difference of one pixel pair that SAD sees (255, or 2 * prefilter_cap).
