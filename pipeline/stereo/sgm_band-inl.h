@@ -226,6 +226,10 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
   const T sentinel = static_cast<T>(pathSentinel(p, true));
   const V sentinel_v = hn::Set(d, sentinel);
   const V worst_cost = hn::Set(d, static_cast<T>(p.max_cost));
+  // Fewer than kB disparities (a full search in one band starting at 0, MatchStripImpl): the lanes
+  // past D hold the full search's sentinel, as its path rows do.
+  const int searched = std::min(kB, p.num_disparities);
+  const V beyond_range = hn::Set(d, static_cast<T>(pathSentinel(p, false)));
   const uint8_t* row = im.guide + y * im.image_stride;
   const uint8_t* prev_row = im.guide + (y - dx) * im.image_stride;  // inside the image border
   const int16_t* starts = im.band_start + y * im.band_stride;
@@ -367,7 +371,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         along_same = hn::LoadU(d, a);
         along_neighbours = neighbourMin(a);
       }
-      const V l0 = step(along_same, along_neighbours, p2_along);
+      V l0 = step(along_same, along_neighbours, p2_along);
       // A predecessor of the same band in one 512-bit vector (16-bit lanes on AVX-512): aligned,
       // its lanes d -+ 1 beyond the band are sentinels, so its neighbours are shifted in registers
       // instead of loaded across cache lines (5 % of the CPU time there). Narrower vectors keep the
@@ -381,9 +385,16 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
         }
         return step(hn::LoadU(d, at + k), neighbourMin(at + k), p2);
       };
-      const V l1 = predecessor(vertical_in, shift_vertical, p2_vertical);
-      const V l2 = predecessor(back, shift_back, p2_back);
-      const V l3 = predecessor(fwd, shift_fwd, p2_fwd);
+      V l1 = predecessor(vertical_in, shift_vertical, p2_vertical);
+      V l2 = predecessor(back, shift_back, p2_back);
+      V l3 = predecessor(fwd, shift_fwd, p2_fwd);
+      if (searched < kB) {
+        const auto in_range = hn::FirstN(d, static_cast<std::size_t>(std::clamp(searched - k, 0, kN)));
+        l0 = hn::IfThenElse(in_range, l0, beyond_range);
+        l1 = hn::IfThenElse(in_range, l1, beyond_range);
+        l2 = hn::IfThenElse(in_range, l2, beyond_range);
+        l3 = hn::IfThenElse(in_range, l3, beyond_range);
+      }
       // Stored once their minima are known (the vertical path after every vector has read the
       // old values).
       along_new[j] = l0;
@@ -420,7 +431,7 @@ void aggregateRowBand(const SgmParams& p, const SgmImages& im, StripBuffers& b, 
       if (p.lr_check) updateRightMinimum(p, b, x, sums_out, dx, start, kB);
       if constexpr (kB > kN16) winners.store(b, slot);
       if (slot == kWinnerBatch - 1 || i == W - 1) {
-        flushWinnerBatch(p, b, i, slot, dx, kN16, band_first, kB, kB, false, disparity, confidence);
+        flushWinnerBatch(p, b, i, slot, dx, kN16, band_first, searched, kB, false, disparity, confidence);
       }
     }
   }

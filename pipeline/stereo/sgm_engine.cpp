@@ -216,6 +216,7 @@ struct StripBuffers {
   uint16_t* census_reversed[2] = {};  // census: right row's low and high 16 bits, reversed
   uint8_t* census_bytes[3] = {};      // census, band in bytes: right row's bytes 0, 1, 2, reversed
   int16_t* band_shift[4] = {};        // band: W each, the predecessors' shifts of a row (bandShifts())
+  int16_t* zero_starts = nullptr;     // W zeros: the band starts of a full search in one band (MatchStripImpl)
   int reversed_length = 0;
 
   uint16_t* pathPixel(uint16_t* row, int x) const { return row + lead + static_cast<std::ptrdiff_t>(x + 1) * pixel_stride; }
@@ -229,7 +230,8 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   b.width = p.width;
   b.lanes = static_cast<int>(hn::Lanes(d));
   b.band = band;
-  b.padded = static_cast<int>(alignUp(p.num_disparities, b.lanes));
+  // The band kernel's sums and path pixels hold kBandDisparities values, even for a shorter range.
+  b.padded = static_cast<int>(alignUp(std::max(p.num_disparities, band ? kBandDisparities : 0), b.lanes));
   b.pixel_stride = band ? 3 * kBandDisparities : b.padded + (b.padded > p.num_disparities ? 0 : b.lanes);
   b.lead = band ? 2 * kBandDisparities : b.lanes;
   const std::size_t W = p.width, Dp = b.padded, N = b.lanes;
@@ -239,9 +241,9 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   const std::size_t along = std::max<std::size_t>(Dp + 2 * N, 5 * kBandDisparities);
   const bool band_sad = band && !p.census;
   const std::size_t sad = p.census ? 0 : band_sad ? p.window * (rev + W) : W * Dp + (W * Dp * p.window + 1) / 2;
-  // Every piece is rounded up to 64 elements by take(); 31 pieces at most (32 * 64 to spare).
+  // Every piece is rounded up to 64 elements by take(); 32 pieces at most (32 * 64 to spare).
   const std::size_t total = 4 * (path_row + W + 2) + 2 * along + sad + 2 * Dp + kWinnerBatch * (Dp + 3 * N) + 2 * rev + W +
-                            (rev / 2 + 32) + 2 * rev + 4 * W + 3 * (rev / 2 + 32) + 32 * 64;
+                            (rev / 2 + 32) + 2 * rev + 5 * W + 3 * (rev / 2 + 32) + 32 * 64;
   if (ws.buffer_elements < total) {
     ws.buffer = hwy::AllocateAligned<uint16_t>(total);
     ws.buffer_elements = total;
@@ -279,6 +281,8 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   b.census_reversed[0] = take(rev);
   b.census_reversed[1] = take(rev);
   for (int16_t*& shift : b.band_shift) shift = reinterpret_cast<int16_t*>(take(W));
+  b.zero_starts = reinterpret_cast<int16_t*>(take(W));
+  std::fill(b.zero_starts, b.zero_starts + W, int16_t{0});
   if (band && p.census) {
     for (uint8_t*& plane : b.census_bytes) plane = reinterpret_cast<uint8_t*>(take(rev / 2 + 32));
   }
@@ -382,14 +386,25 @@ void finishRow(const SgmParams& p, StripBuffers& b, RowOutput output, float* dis
 #include "pipeline/stereo/sgm_band_bytes-inl.h"
 #include "pipeline/stereo/sgm_band-inl.h"
 
-void MatchStripImpl(const SgmParams& p, const SgmImages& im, int row_begin, int row_end, int overlap, SgmWorkspace& ws,
+void MatchStripImpl(const SgmParams& p, const SgmImages& images, int row_begin, int row_end, int overlap, SgmWorkspace& ws,
                     const SgmOutput& out) {
-  const bool band = im.band_start != nullptr;
+  // A full search of at most kBandDisparities disparities (the coarse level) is one band that
+  // starts at 0 everywhere: the band kernel, with the lanes past D held at the full search's
+  // sentinel (aggregateRowBand), gives the same path costs and winners, with its paths in
+  // registers and stored less their minimum (no rows of minima).
+  const bool one_band = images.band_start == nullptr && p.num_disparities <= kBandDisparities;
+  const bool band = images.band_start != nullptr || one_band;
   StripBuffers b = carveBuffers(p, ws, band);
+  SgmImages im = images;
+  if (one_band) {
+    im.band_start = b.zero_starts;
+    im.band_stride = 0;  // every row the same
+  }
   const PenaltyTable pen = makePenaltyTable(p);
   const uint16_t sentinel = pathSentinel(p, band);
   auto aggregateRow = &aggregateRowFull;
-  const bool bytes = band && bandFitsBytes(p);
+  // Not in one band: the four paths' sum of the lanes past D (the sentinel) would wrap in a byte.
+  const bool bytes = band && !one_band && bandFitsBytes(p);
   if (bytes) {
     aggregateRow = censusBytePlanes(p) == 1 ? &aggregateRowBand<0, DU8, 1> : &aggregateRowBand<0, DU8, 3>;
   } else if (band) {

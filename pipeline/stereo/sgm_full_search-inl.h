@@ -1,5 +1,6 @@
 // sgm_full_search-inl.h: the SGM engine's full-search row kernel (aggregateRowFull): every pixel
-// searches all disparities, the matching cost built on the fly, the four paths advanced and summed,
+// searches all disparities (more than kBandDisparities of them; a shorter range runs as one band,
+// see MatchStripImpl), the matching cost built on the fly, the four paths advanced and summed,
 // the winners taken in batches. Compiled once per instruction set as part of sgm_engine.cpp, which
 // includes it inside its Highway namespace after the helpers it shares with the band search (cost
 // columns, path resets, winners, LR check): not a standalone header.

@@ -176,6 +176,14 @@ INSTANTIATE_TEST_SUITE_P(
                       ReferenceCase{"sad3_grey_levels", MatchingCost::kSad, 3, 4, 0, false, false, false, Prefilter::kNone},
                       ReferenceCase{"sad9_grey_levels_8paths", MatchingCost::kSad, 9, 8, 0, true, true, false,
                                     Prefilter::kNone},
+                      // A full search of at most 32 disparities runs as one band that starts at 0
+                      // (the coarse level's match): its lanes past the range hold sentinels.
+                      ReferenceCase{"one_band_sad3_32_disparities_lr_check", MatchingCost::kSad, 3, 4, 0, false, true,
+                                    false, Prefilter::kSobelX, SearchMode::kFull, 32},
+                      ReferenceCase{"one_band_census5_16_disparities_8paths", MatchingCost::kCensus, 5, 8, 0, false, false,
+                                    false, Prefilter::kSobelX, SearchMode::kFull, 16},
+                      ReferenceCase{"one_band_sad5_16_disparities_adaptive_lr_min_disparity", MatchingCost::kSad, 5, 8, 9,
+                                    true, true, false, Prefilter::kSobelX, SearchMode::kFull, 16},
                       // Coarse to fine: bands of 32 of the 48 (or 80) disparities.
                       ReferenceCase{"band_sad3_4paths", MatchingCost::kSad, 3, 4, 0, false, false, false,
                                     Prefilter::kSobelX, SearchMode::kBand},
