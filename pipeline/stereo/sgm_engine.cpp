@@ -281,8 +281,7 @@ StripBuffers carveBuffers(const SgmParams& p, SgmWorkspace& ws, bool band) {
   b.census_reversed[0] = take(rev);
   b.census_reversed[1] = take(rev);
   for (int16_t*& shift : b.band_shift) shift = reinterpret_cast<int16_t*>(take(W));
-  b.zero_starts = reinterpret_cast<int16_t*>(take(W));
-  std::fill(b.zero_starts, b.zero_starts + W, int16_t{0});
+  b.zero_starts = reinterpret_cast<int16_t*>(take(W));  // filled by MatchStripImpl where it is used
   if (band && p.census) {
     for (uint8_t*& plane : b.census_bytes) plane = reinterpret_cast<uint8_t*>(take(rev / 2 + 32));
   }
@@ -397,6 +396,7 @@ void MatchStripImpl(const SgmParams& p, const SgmImages& images, int row_begin, 
   StripBuffers b = carveBuffers(p, ws, band);
   SgmImages im = images;
   if (one_band) {
+    std::fill(b.zero_starts, b.zero_starts + p.width, int16_t{0});
     im.band_start = b.zero_starts;
     im.band_stride = 0;  // every row the same
   }
