@@ -6,6 +6,7 @@
 #include <cctype>
 #include <charconv>
 #include <cstdio>
+#include <fstream>
 #include <limits>
 #include <regex>
 
@@ -52,15 +53,34 @@ struct FinalizeStatement {
 };
 using Statement = std::unique_ptr<sqlite3_stmt, FinalizeStatement>;
 
+// Whether the sqlite file at `path` is in WAL mode (its header's read and write versions, bytes 18 and
+// 19, are 2), as rosbag2's resilient storage preset writes. False for anything unreadable or shorter:
+// the open that follows names the problem.
+bool inWalMode(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  char header[20] = {};
+  return in.read(header, sizeof header) && header[18] == 2 && header[19] == 2;
+}
+
+// Whether a plain .db3 is read immutable: in WAL mode, sqlite would otherwise make -wal and -shm files
+// beside the recording (and could not open it at all where the folder is read-only, as a shared
+// dataset often is). Without a -wal file beside it every message is in the file itself; with one, a
+// recorder was killed before its last checkpoint or is still writing, and sqlite must read it.
+bool readImmutable(const fs::path& path) {
+  std::error_code ec;
+  return inWalMode(path) && !fs::exists(fs::path(path.string() + "-wal"), ec) && !ec;
+}
+
 // One .db3 file opened read-only; closes itself.
 class Database {
  public:
-  // Opens `path`; errors name `name` (the bag's file when `path` is its decompressed copy). `immutable`:
-  // the file is the reader's own copy, which nothing else writes: sqlite then leaves no -wal and -shm
-  // files beside it (a .db3 in WAL mode, as rosbag2's resilient preset writes, would have them made in
-  // the temporary folder, and they would outlive the copy).
-  Database(const fs::path& path, const fs::path& name, bool immutable = false) : path_(name.string()) {
+  // Opens `path`; errors name `name` (the bag's file when `path` is its decompressed copy). `copy`: the
+  // file is the reader's own copy, which nothing else writes, and is always read immutable: sqlite then
+  // leaves no -wal and -shm files beside it (a .db3 in WAL mode would have them made in the temporary
+  // folder, and they would outlive the copy). A bag's own file: readImmutable().
+  Database(const fs::path& path, const fs::path& name, bool copy = false) : path_(name.string()) {
     requireFile(path, path_);
+    const bool immutable = copy || readImmutable(path);
     const std::string file = immutable ? immutableUri(path) : path.string();
     if (sqlite3_open_v2(file.c_str(), &db_, SQLITE_OPEN_READONLY | (immutable ? SQLITE_OPEN_URI : 0), nullptr) !=
         SQLITE_OK) {

@@ -1,9 +1,10 @@
 // ROS 2 sqlite3 bags written by Python's sqlite3 in rosbag2's tables (tests/io/bag/gen/gen_db3.py) with
 // the CDR bytes of Foxglove's serialiser: topics, counts, time spans and every message's bytes in
 // timestamp order across the bag's two files; a bag whose recorder never wrote metadata.yaml; the same
-// bag with rosbag2's zstd compression (python3-zstandard) of each message and of each file; the
-// errors for a file that is not a database or is damaged inside, a missing bag, damaged or unknown
-// compression.
+// bag with rosbag2's zstd compression (python3-zstandard) of each message and of each file; bags in
+// WAL mode (rosbag2's resilient preset), read without files made beside them, and from their -wal
+// files where a recorder was killed before a checkpoint; the errors for a file that is not a database
+// or is damaged inside, a missing bag, damaged or unknown compression.
 #include "io/bag/db3_recording.h"
 
 #include <gtest/gtest.h>
@@ -16,6 +17,7 @@
 
 #include "common/error.h"
 #include "tests/io/bag/ros2_test_data.h"
+#include "tests/support/scratch_dir.h"
 
 namespace cenote::io::test {
 namespace {
@@ -212,6 +214,46 @@ TEST(Db3Recording, FileCompressedBagInWalModeLeavesNothingInTheTemporaryFolder) 
   const std::unique_ptr<Recording> rec = openDb3Recording(kData / "dive_db3_file_wal");
   expectMessages(*rec, expectedJson()["messages"], {});
   EXPECT_EQ(tmp.files(), 0u) << "each copy and whatever sqlite made beside it removed once read";
+}
+
+// The bag kData/name copied into a fresh scratch folder (sqlite may write beside what it reads there),
+// and the names of the files in it.
+fs::path scratchCopyOfBag(const std::string& name) {
+  const fs::path dir = cenote::test::freshScratchDirectory("db3_" + name) / name;
+  fs::copy(kData / name, dir);
+  return dir;
+}
+std::vector<std::string> fileNames(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// rosbag2's resilient preset records in WAL mode. Read as sqlite reads a WAL file, such a bag would get
+// -wal and -shm files made beside it (and would not open in a read-only folder); with every message in
+// the .db3 files themselves (no -wal file beside them), it is read immutable and its folder is left
+// as it was.
+TEST(Db3Recording, PlainBagInWalModeIsReadWithoutMakingFilesBesideIt) {
+  const fs::path bag = scratchCopyOfBag("dive_db3_wal");
+  const std::vector<std::string> before = fileNames(bag);
+  ASSERT_EQ(before, (std::vector<std::string>{"dive_db3_wal_0.db3", "dive_db3_wal_1.db3", "metadata.yaml"}));
+  {
+    const std::unique_ptr<Recording> rec = openDb3Recording(bag);
+    expectTopics(*rec, expectedJson()["topics"]);
+    expectMessages(*rec, expectedJson()["messages"], {});
+  }
+  EXPECT_EQ(fileNames(bag), before);
+}
+
+// A WAL-mode recorder killed before its first checkpoint leaves its messages in the -wal files
+// (gen_db3.py checks that the .db3 files alone hold none): those are read, every message of both files.
+TEST(Db3Recording, WalModeRecorderKilledBeforeACheckpointIsReadFromItsWalFiles) {
+  const fs::path bag = scratchCopyOfBag("dive_db3_wal_killed");
+  const std::unique_ptr<Recording> rec = openDb3Recording(bag);
+  EXPECT_EQ(rec->truncation(), "no metadata.yaml (the recorder did not finish): read the 2 .db3 files in the folder");
+  expectTopics(*rec, expectedJson()["topics"]);
+  expectMessages(*rec, expectedJson()["messages"], {});
 }
 
 TEST(Db3Recording, AnUnfinishedCompressedBagIsReadFromItsFilesAndSaysSo) {

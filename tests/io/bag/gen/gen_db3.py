@@ -9,6 +9,9 @@ the CDR bytes Foxglove's serialiser wrote for the MCAP files (OUT_DIR/expected.j
   dive_db3_file/       the same bag with compression_mode FILE: dive_db3_file_0.db3.zstd, ..._1.db3.zstd
                        (the second streamed, without its content size)
   dive_db3_file_wal/   the same, its files in WAL mode (rosbag2's resilient storage preset)
+  dive_db3_wal/        dive_db3 in WAL mode
+  dive_db3_wal_killed/ a WAL-mode recorder killed before its first checkpoint: each .db3 with its -wal
+                       file, the messages in the -wal files only, no metadata.yaml
   dive_db3_unfinished_file/     no metadata.yaml, dive_db3_0.db3.zstd and dive_db3_1.db3 (a FILE-compressing
                                 recorder stopped with its second file open)
   dive_db3_unfinished_message/  dive_db3_message's files without metadata.yaml
@@ -37,6 +40,29 @@ first = min(int(m["log_time_ns"]) for m in messages)
 last = max(int(m["log_time_ns"]) for m in messages)
 
 
+def fill_file(db, index, rng, compression_mode=""):
+    """Writes file `index` of a bag's two (the first half of the messages, or the rest) into `db`, its row
+    ids shuffled by `rng`."""
+    part = messages[:split] if index == 0 else messages[split:]
+    # Topic ids differ between the files (each file numbers its own topics), in another order.
+    ordered = expected["topics"] if index == 0 else list(reversed(expected["topics"]))
+    ids = {}
+    for i, t in enumerate(ordered):
+        ids[t["name"]] = i + 1 + 10 * index
+        ros2type = t["type"].replace("/", "/msg/", 1)
+        db.execute("INSERT INTO topics VALUES (?, ?, ?, 'cdr', '')", (ids[t["name"]], t["name"], ros2type))
+    db.execute("INSERT INTO topics VALUES (99, '/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'json', '')")
+    rows = [(ids[m["topic"]], int(m["log_time_ns"]), bytes.fromhex(m["data"])) for m in part]
+    rows.append((99, int(part[0]["log_time_ns"]), b'{"level":0}'))
+    if compression_mode == "MESSAGE":
+        rows = [(topic, stamp, compress_message(data)) for topic, stamp, data in rows]
+    order = list(range(len(rows)))
+    rng.shuffle(order)  # row ids out of time order: the reader must sort by timestamp
+    for row_id, k in enumerate(order):
+        db.execute("INSERT INTO messages VALUES (?, ?, ?, ?)", (row_id + 1,) + rows[k])
+    db.commit()
+
+
 def write_bag(name, compression_mode="", wal=False):
     """The bag OUT_DIR/name in two files, compressed as rosbag2's compression_mode says; `wal`: its files
     in WAL mode, as rosbag2's resilient storage preset writes them."""
@@ -46,25 +72,8 @@ def write_bag(name, compression_mode="", wal=False):
     files = [f"{name}_0.db3", f"{name}_1.db3"]
     rng = random.Random(15)
     for index, file in enumerate(files):
-        part = messages[:split] if index == 0 else messages[split:]
         db = create_db3(os.path.join(bag, file))
-        # Topic ids differ between the files (each file numbers its own topics), in another order.
-        ordered = expected["topics"] if index == 0 else list(reversed(expected["topics"]))
-        ids = {}
-        for i, t in enumerate(ordered):
-            ids[t["name"]] = i + 1 + 10 * index
-            ros2type = t["type"].replace("/", "/msg/", 1)
-            db.execute("INSERT INTO topics VALUES (?, ?, ?, 'cdr', '')", (ids[t["name"]], t["name"], ros2type))
-        db.execute("INSERT INTO topics VALUES (99, '/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'json', '')")
-        rows = [(ids[m["topic"]], int(m["log_time_ns"]), bytes.fromhex(m["data"])) for m in part]
-        rows.append((99, int(part[0]["log_time_ns"]), b'{"level":0}'))
-        if compression_mode == "MESSAGE":
-            rows = [(topic, stamp, compress_message(data)) for topic, stamp, data in rows]
-        order = list(range(len(rows)))
-        rng.shuffle(order)  # row ids out of time order: the reader must sort by timestamp
-        for row_id, k in enumerate(order):
-            db.execute("INSERT INTO messages VALUES (?, ?, ?, ?)", (row_id + 1,) + rows[k])
-        db.commit()
+        fill_file(db, index, rng, compression_mode)
         if wal:
             db.execute("PRAGMA journal_mode = WAL")
         db.close()
@@ -75,10 +84,39 @@ def write_bag(name, compression_mode="", wal=False):
     return bag, files
 
 
+def write_killed_wal_bag(name):
+    """A recorder in WAL mode killed before its first checkpoint: OUT_DIR/name holds each .db3 with its
+    -wal file, the messages in the -wal files only, and no metadata.yaml."""
+    bag = os.path.join(out, name)
+    work = bag + ".work"
+    for folder in (bag, work):
+        shutil.rmtree(folder, ignore_errors=True)
+        os.makedirs(folder)
+    rng = random.Random(15)
+    for index in range(2):
+        file = f"{name}_{index}.db3"
+        db = create_db3(os.path.join(work, file))
+        db.commit()  # the journal mode changes outside a transaction only
+        assert db.execute("PRAGMA journal_mode = WAL").fetchone()[0] == "wal"
+        db.execute("PRAGMA wal_autocheckpoint = 0")  # every message stays in the -wal file
+        fill_file(db, index, rng)
+        for suffix in ("", "-wal"):  # copied while the writer still has them open, as a kill leaves them
+            shutil.copyfile(os.path.join(work, file + suffix), os.path.join(bag, file + suffix))
+        db.close()
+        # The .db3 alone (sqlite's immutable=1 ignores the -wal file) holds no message: the test reads
+        # what only the -wal file has.
+        alone = sqlite3.connect(f"file:{os.path.join(bag, file)}?immutable=1", uri=True)
+        assert alone.execute("SELECT COUNT(*) FROM messages").fetchone()[0] == 0
+        alone.close()
+    shutil.rmtree(work)
+
+
 bag, files = write_bag("dive_db3")
 write_bag("dive_db3_message", "MESSAGE")
 write_bag("dive_db3_file", "FILE")
 write_bag("dive_db3_file_wal", "FILE", wal=True)
+write_bag("dive_db3_wal", wal=True)
+write_killed_wal_bag("dive_db3_wal_killed")
 
 # One MESSAGE-compressed message's bytes replaced by bytes that are not zstd.
 damaged = os.path.join(out, "dive_db3_damaged")
