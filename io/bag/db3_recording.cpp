@@ -62,10 +62,12 @@ bool inWalMode(const fs::path& path) {
   return in.read(header, sizeof header) && header[18] == 2 && header[19] == 2;
 }
 
-// Whether a plain .db3 is read immutable: in WAL mode, sqlite would otherwise make -wal and -shm files
-// beside the recording (and could not open it at all where the folder is read-only, as a shared
-// dataset often is). Without a -wal file beside it every message is in the file itself; with one, a
-// recorder was killed before its last checkpoint or is still writing, and sqlite must read it.
+// Whether a .db3 is read immutable: in WAL mode, sqlite would otherwise make -wal and -shm files beside
+// it (beside a bag's own file, in a folder that may be read-only, as a shared dataset often is, where
+// the open would fail; beside the decompressed copy of a FILE-compressed one, in the temporary folder,
+// where they would outlive the copy). Without a -wal file beside it every message is in the file
+// itself; with one, a recorder was killed before its last checkpoint or is still writing, and sqlite
+// must read it. A file in rollback-journal mode is read as it is: a reader makes nothing beside it.
 bool readImmutable(const fs::path& path) {
   std::error_code ec;
   return inWalMode(path) && !fs::exists(fs::path(path.string() + "-wal"), ec) && !ec;
@@ -74,13 +76,11 @@ bool readImmutable(const fs::path& path) {
 // One .db3 file opened read-only; closes itself.
 class Database {
  public:
-  // Opens `path`; errors name `name` (the bag's file when `path` is its decompressed copy). `copy`: the
-  // file is the reader's own copy, which nothing else writes, and is always read immutable: sqlite then
-  // leaves no -wal and -shm files beside it (a .db3 in WAL mode would have them made in the temporary
-  // folder, and they would outlive the copy). A bag's own file: readImmutable().
-  Database(const fs::path& path, const fs::path& name, bool copy = false) : path_(name.string()) {
+  // Opens `path`, immutable where readImmutable() says; errors name `name` (the bag's file when `path`
+  // is its decompressed copy).
+  Database(const fs::path& path, const fs::path& name) : path_(name.string()) {
     requireFile(path, path_);
-    const bool immutable = copy || readImmutable(path);
+    const bool immutable = readImmutable(path);
     const std::string file = immutable ? immutableUri(path) : path.string();
     if (sqlite3_open_v2(file.c_str(), &db_, SQLITE_OPEN_READONLY | (immutable ? SQLITE_OPEN_URI : 0), nullptr) !=
         SQLITE_OK) {
@@ -141,7 +141,7 @@ class Db3Recording final : public Recording {
     if (compression_ == Db3Compression::kFile) return;  // the topics came from metadata.yaml
     for (std::size_t i = 0; i < files_.size(); ++i) {
       const std::unique_ptr<TempFile> copy = decompressedCopy(files_[i]);
-      Database db(copy ? copy->path() : files_[i], files_[i], copy != nullptr);
+      Database db(copy ? copy->path() : files_[i], files_[i]);
       readTopics(db, i, true);
     }
     const std::vector<int> rank = sortTopicsByName(topics_);
@@ -197,7 +197,7 @@ class Db3Recording final : public Recording {
     if (file_index_ >= files_.size()) return false;
     const fs::path& file = files_[file_index_];
     copy_ = decompressedCopy(file);
-    db_ = std::make_unique<Database>(copy_ ? copy_->path() : file, file, copy_ != nullptr);
+    db_ = std::make_unique<Database>(copy_ ? copy_->path() : file, file);
     if (compression_ == Db3Compression::kFile) readTopics(*db_, file_index_, false);
     db_->stmt_ = db_->prepare("SELECT topic_id, timestamp, data, id FROM messages ORDER BY timestamp, id");
     return true;

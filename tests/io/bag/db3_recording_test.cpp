@@ -200,8 +200,8 @@ TEST(Db3Recording, FileCompressedBagGivesEveryMessageThroughOneTemporaryCopyAtAT
 }
 
 // A .db3 in WAL mode (rosbag2's resilient preset) makes sqlite create -wal and -shm files beside the file
-// it reads: beside a decompressed copy they would stay in TMPDIR after the copy went. The copy is the
-// reader's own and never changes, so it is read immutable, and nothing is left.
+// it reads: beside a decompressed copy they would stay in TMPDIR after the copy went. Nothing lies
+// beside the fresh copy (no -wal file), so it is read immutable, and nothing is left.
 TEST(Db3Recording, FileCompressedBagInWalModeLeavesNothingInTheTemporaryFolder) {
   const TempDirScope tmp("db3_wal_tmp");
   {
